@@ -1,0 +1,416 @@
+//! The checked scenario: names resolved, units converted to SI (m, s, m/s, rad, Hz), values that
+//! the seed decides still as distributions. This is the input of the sample pass. Spans are kept
+//! only where a later pass reports errors (placement), and are not serialised.
+
+use crate::source::Span;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// A value the seed decides: fixed, or uniform in [lo, hi].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Dist {
+    Fixed(f64),
+    Uniform(f64, f64),
+}
+
+impl Dist {
+    pub fn lo(self) -> f64 {
+        match self {
+            Dist::Fixed(v) | Dist::Uniform(v, _) => v,
+        }
+    }
+    pub fn hi(self) -> f64 {
+        match self {
+            Dist::Fixed(v) | Dist::Uniform(_, v) => v,
+        }
+    }
+    pub fn map(self, f: impl Fn(f64) -> f64) -> Dist {
+        match self {
+            Dist::Fixed(v) => Dist::Fixed(f(v)),
+            Dist::Uniform(a, b) => {
+                let (x, y) = (f(a), f(b));
+                Dist::Uniform(x.min(y), x.max(y))
+            }
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Scenario {
+    pub name: String,
+    pub seed: u64,
+    /// Clip length, seconds.
+    pub duration: f64,
+    /// Frame rate, Hz.
+    pub rate: f64,
+    /// Agents (indices into `agents`) that each get an ego-centric clip.
+    pub egos: Vec<usize>,
+    pub road: Road,
+    /// Movers and static objects, in declaration order.
+    pub agents: Vec<Agent>,
+    pub rows: Vec<Row>,
+    pub conflicts: Vec<Conflict>,
+    pub traffic: Option<Traffic>,
+    /// Every kind the scenario names (after `one_of`), with its priors.
+    pub kinds: BTreeMap<String, Kind>,
+}
+
+impl Scenario {
+    pub fn frame_count(&self) -> usize {
+        (self.duration * self.rate).round() as usize
+    }
+    pub fn agent(&self, name: &str) -> Option<usize> {
+        self.agents.iter().position(|a| a.name == name)
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Template {
+    Straight,
+    Curve,
+    FourWay,
+    TJunction,
+    Merge,
+    Roundabout,
+}
+
+impl Template {
+    pub const ALL: [(&'static str, Template); 6] = [
+        ("straight", Template::Straight),
+        ("curve", Template::Curve),
+        ("four_way", Template::FourWay),
+        ("t_junction", Template::TJunction),
+        ("merge", Template::Merge),
+        ("roundabout", Template::Roundabout),
+    ];
+    pub fn name(self) -> &'static str {
+        Template::ALL.iter().find(|(_, t)| *t == self).map(|(n, _)| *n).expect("every template is listed")
+    }
+    pub fn arms(self) -> &'static [Arm] {
+        match self {
+            Template::Straight | Template::Curve => &[Arm::West, Arm::East],
+            Template::FourWay | Template::Roundabout => &[Arm::North, Arm::East, Arm::South, Arm::West],
+            Template::TJunction => &[Arm::West, Arm::East, Arm::South],
+            Template::Merge => &[Arm::Main, Arm::Ramp],
+        }
+    }
+    /// Templates with a junction area (and `junction` landmarks).
+    pub fn has_junction(self) -> bool {
+        !matches!(self, Template::Straight | Template::Curve)
+    }
+    /// Templates with stop (or yield) lines on their in-lanes, where turns are chosen.
+    pub fn has_stop_lines(self) -> bool {
+        matches!(self, Template::FourWay | Template::TJunction | Template::Roundabout)
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Arm {
+    North,
+    East,
+    South,
+    West,
+    Main,
+    Ramp,
+}
+
+impl Arm {
+    pub const ALL: [(&'static str, Arm); 6] = [
+        ("north", Arm::North),
+        ("east", Arm::East),
+        ("south", Arm::South),
+        ("west", Arm::West),
+        ("main", Arm::Main),
+        ("ramp", Arm::Ramp),
+    ];
+    pub fn name(self) -> &'static str {
+        Arm::ALL.iter().find(|(_, a)| *a == self).map(|(n, _)| *n).expect("every arm is listed")
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Dir {
+    In,
+    Out,
+}
+
+/// Road template and its parameters, with the template's defaults filled in (SI units).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Road {
+    pub template: Template,
+    /// Lanes per direction.
+    pub lanes: u32,
+    pub lane_width: f64,
+    pub speed_limit: f64,
+    pub shoulder: f64,
+    pub median: f64,
+    pub crosswalks: bool,
+    pub sidewalks: bool,
+    /// Length of a straight road, or of each junction arm / curve tangent.
+    pub length: f64,
+    /// Curve or roundabout radius.
+    pub radius: f64,
+    /// Curve deflection angle (rad).
+    pub angle: f64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Class {
+    Vehicle,
+    Bicycle,
+    Pedestrian,
+    TrafficCone,
+    Barrier,
+    CzoneSign,
+    GenericObject,
+    /// Trees, poles, walls, buildings: rocc's extra `structure` BEV channel.
+    Structure,
+}
+
+impl Class {
+    pub const ALL: [(&'static str, Class); 8] = [
+        ("vehicle", Class::Vehicle),
+        ("bicycle", Class::Bicycle),
+        ("pedestrian", Class::Pedestrian),
+        ("traffic_cone", Class::TrafficCone),
+        ("barrier", Class::Barrier),
+        ("czone_sign", Class::CzoneSign),
+        ("generic_object", Class::GenericObject),
+        ("structure", Class::Structure),
+    ];
+    pub fn name(self) -> &'static str {
+        Class::ALL.iter().find(|(_, c)| *c == self).map(|(n, _)| *n).expect("every class is listed")
+    }
+    /// How a kind of this class moves unless its definition says otherwise.
+    pub fn default_motion(self) -> Motion {
+        match self {
+            Class::Vehicle | Class::Bicycle => Motion::Vehicle,
+            Class::Pedestrian => Motion::Holonomic,
+            _ => Motion::Static,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Motion {
+    /// Kinematic bicycle model along lanes.
+    Vehicle,
+    /// Walks in any direction (pedestrians, animals).
+    Holonomic,
+    /// Never moves.
+    Static,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Kind {
+    pub name: String,
+    pub class: Class,
+    pub motion: Motion,
+    pub length: Dist,
+    pub width: Dist,
+    pub height: Dist,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Agent {
+    pub name: String,
+    /// One kind, or the `one_of` choices (all of the same class and motion).
+    pub kinds: Vec<String>,
+    pub class: Class,
+    pub motion: Motion,
+    /// Declared with `object`: never moves.
+    pub is_object: bool,
+    /// Per-agent box overrides of the kind's priors.
+    pub length: Option<Dist>,
+    pub width: Option<Dist>,
+    pub height: Option<Dist>,
+    pub place: Place,
+    /// Initial speed, m/s.
+    pub speed: Dist,
+    pub goal: Option<Goal>,
+    /// Replayed keyframes (from the box-stream importer); `place` is `Place::Track` then.
+    pub track: Option<Vec<Keyframe>>,
+    #[serde(skip)]
+    pub span: Span,
+    #[serde(skip)]
+    pub place_span: Span,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct LaneId {
+    pub arm: Arm,
+    pub dir: Dir,
+    /// 1 = nearest the centre line.
+    pub index: u32,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Landmark {
+    Center,
+    Junction,
+    StopLine,
+}
+
+/// A distance along a lane or sidewalk from a landmark; positive = `after` (further along the
+/// direction of travel), negative = `before`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Along {
+    pub landmark: Landmark,
+    pub dist: Dist,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Place {
+    /// Lateral offset in metres, positive to the left of the direction of travel.
+    Lane { lane: LaneId, along: Along, offset: f64, heading: Option<Dist> },
+    World { x: Dist, y: Dist, heading: Option<Dist> },
+    /// Fraction across the crosswalk, 0..1, from the right-hand kerb of the in-lanes.
+    Crosswalk { arm: Arm, fraction: Dist },
+    Sidewalk { arm: Arm, dir: Dir, along: Along, offset: f64, heading: Option<Dist> },
+    /// Pose comes from the first keyframe of the agent's track.
+    Track,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Side {
+    Left,
+    Right,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Goal {
+    /// Target speed, m/s (`None`: keep the initial speed).
+    pub speed: Option<Dist>,
+    pub lateral: Lateral,
+    pub stop: Option<Stop>,
+    pub turn: Option<Turn>,
+    /// Delay before the goal starts, s.
+    pub start_after: f64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Lateral {
+    HoldLane,
+    ChangeLane(Side),
+    PullToShoulder,
+    /// Ease aside as the agent (index) approaches.
+    AwayFrom(usize),
+    Cross,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Stop {
+    AtStopLine,
+    /// Queue behind the agent (index) with a gap.
+    Behind(usize),
+    /// Stop after travelling this many metres.
+    After(f64),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Turn {
+    Left,
+    Right,
+    Straight,
+    UTurn,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Keyframe {
+    pub t: f64,
+    pub x: f64,
+    pub y: f64,
+    pub yaw: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Row {
+    pub kinds: Vec<String>,
+    pub class: Class,
+    pub from: Place,
+    pub to: Place,
+    /// Spacing, m.
+    pub every: f64,
+    #[serde(skip)]
+    pub span: Span,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Impact {
+    RearEnd,
+    HeadOn,
+    Angle,
+    Sideswipe,
+    Pedestrian,
+    Object,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Point {
+    Front,
+    Rear,
+    Left,
+    Right,
+    FrontLeft,
+    FrontRight,
+    RearLeft,
+    RearRight,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Conflict {
+    pub at_fault: usize,
+    pub struck: usize,
+    pub impact: Impact,
+    /// Side of the struck agent that is hit.
+    pub point: Point,
+    /// Target time of impact, s.
+    pub at: Option<f64>,
+    #[serde(skip)]
+    pub span: Span,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Traffic {
+    /// Fraction of free lane length filled with background vehicles, 0..1.
+    pub density: f64,
+    /// Spread of their speeds and gaps, 0..1.
+    pub randomness: f64,
+}
+
+/// Closed vocabularies: (word in `.scn`, value).
+pub const IMPACTS: [(&str, Impact); 6] = [
+    ("rear_end", Impact::RearEnd),
+    ("head_on", Impact::HeadOn),
+    ("angle", Impact::Angle),
+    ("sideswipe", Impact::Sideswipe),
+    ("pedestrian", Impact::Pedestrian),
+    ("object", Impact::Object),
+];
+pub const POINTS: [(&str, Point); 8] = [
+    ("front", Point::Front),
+    ("rear", Point::Rear),
+    ("left", Point::Left),
+    ("right", Point::Right),
+    ("front_left", Point::FrontLeft),
+    ("front_right", Point::FrontRight),
+    ("rear_left", Point::RearLeft),
+    ("rear_right", Point::RearRight),
+];
+pub const TURNS: [(&str, Turn); 4] =
+    [("left", Turn::Left), ("right", Turn::Right), ("straight", Turn::Straight), ("u_turn", Turn::UTurn)];
+pub const SIDES: [(&str, Side); 2] = [("left", Side::Left), ("right", Side::Right)];
+pub const LANDMARKS: [(&str, Landmark); 3] =
+    [("center", Landmark::Center), ("junction", Landmark::Junction), ("stop_line", Landmark::StopLine)];
+pub const MOTIONS: [(&str, Motion); 3] =
+    [("vehicle", Motion::Vehicle), ("holonomic", Motion::Holonomic), ("static", Motion::Static)];

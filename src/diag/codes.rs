@@ -1,0 +1,216 @@
+//! Every diagnostic code rocc can emit, with the long explanation `rocc explain CODE` prints.
+//! E00xx: files and syntax. E01xx: the checker. E02xx: road and placement. E04xx: I/O.
+
+pub struct Code {
+    pub code: &'static str,
+    pub title: &'static str,
+    pub explanation: &'static str,
+}
+
+pub const CODES: &[Code] = &[
+    Code {
+        code: "E0001",
+        title: "syntax error",
+        explanation: "The file does not follow the grammar of the `.scn` language. The error points at the\n\
+first token the parser could not accept; when a block was left open, the label also shows\n\
+where it was opened.\n\n\
+    agent ego: sedan { at west.in[1], 20 m before center     // `}` missing here\n\
+    agent other: sedan { ... }\n\n\
+Close every `{` with `}`. Statements are separated by newlines or `;`.",
+    },
+    Code {
+        code: "E0002",
+        title: "cannot read file",
+        explanation: "A scenario or an imported file could not be read: it does not exist, is a directory,\n\
+is not UTF-8 text, or is larger than the 4 MiB rocc accepts for one source file.",
+    },
+    Code {
+        code: "E0003",
+        title: "import cycle",
+        explanation: "`use` imports form a cycle: a file imports itself, directly or through others.\n\n\
+    // a.scn\n    use \"b.scn\"\n    // b.scn\n    use \"a.scn\"      // error: cycle a.scn -> b.scn -> a.scn\n\n\
+Move the shared kinds into a third file that both import.",
+    },
+    Code {
+        code: "E0004",
+        title: "import escapes the project",
+        explanation: "`use` paths are relative to the importing file and must stay inside the directory of\n\
+the scenario being compiled: absolute paths and paths that climb out with `..` are rejected, so\n\
+a scenario library can be moved and compiled anywhere.\n\n\
+    use \"kinds/trucks.scn\"      // fine\n    use \"/etc/kinds.scn\"        // error\n    use \"../../kinds.scn\"       // error",
+    },
+    Code {
+        code: "E0005",
+        title: "wrong items in a file",
+        explanation: "A scenario file holds exactly one `scenario` block (plus `use` and `kind` items); an\n\
+imported file holds only `kind` items and further `use` imports.",
+    },
+    Code {
+        code: "E0101",
+        title: "unit of the wrong dimension",
+        explanation: "Numbers carry units and each statement expects one dimension:\n\
+  length m, cm, km; speed m/s, km/h, mph; time s, ms; angle deg, rad; frequency Hz; ratio %.\n\
+Bare numbers are counts.\n\n\
+    speed 5 m          // error: a speed needs m/s, km/h or mph\n    speed 5 m/s        // fine",
+    },
+    Code {
+        code: "E0102",
+        title: "missing unit",
+        explanation: "A physical quantity was written without a unit. rocc never guesses units: write\n\
+`20 m`, `30 km/h`, `4 s`.",
+    },
+    Code {
+        code: "E0103",
+        title: "value out of range",
+        explanation: "A value is outside what rocc accepts for that statement: a negative speed or size, a\n\
+duration over 120 s, a rate over 100 Hz, a lane count outside 1..=6, a density outside 0..1, a\n\
+percentage outside 0..100 %.",
+    },
+    Code {
+        code: "E0104",
+        title: "empty or reversed range",
+        explanation: "A range `a..b` samples uniformly in [a, b]; it needs a <= b.\n\n\
+    length 4.9..4.4 m     // error\n    length 4.4..4.9 m     // fine",
+    },
+    Code {
+        code: "E0105",
+        title: "duplicate statement",
+        explanation: "A block states the same property twice (two `speed`s, two `road`s, two agents of\n\
+the same name). Keep one; both places are shown.",
+    },
+    Code {
+        code: "E0106",
+        title: "missing statement",
+        explanation: "Something required is missing: a scenario needs `duration` and `road`; an agent or\n\
+object needs a placement `at ...` (or a replayed `track`); a conflict needs `at_fault`, `struck`,\n\
+`impact` and `point`.",
+    },
+    Code {
+        code: "E0107",
+        title: "unknown agent",
+        explanation: "A statement names an agent that the scenario does not declare. Agent names are used by\n\
+`egos [...]`, `stop behind NAME`, `lateral away_from NAME` and `conflict` fields.\n\n\
+    agent front: sedan { at south.in[1], 2 m before stop_line }\n\
+    agent ego: sedan { at south.in[1], 12 m before stop_line; goal { stop behind frnt } }\n\
+                                                                  // error: did you mean `front`?",
+    },
+    Code {
+        code: "E0108",
+        title: "unknown kind",
+        explanation: "`agent NAME: KIND` names a kind that neither the stdlib prelude (`stdlib/kinds.scn`)\n\
+nor a `use`d file defines. Define new kinds in a kind file:\n\n\
+    kind tractor: vehicle { length 3.5..4.5 m; width 2.0..2.4 m; height 2.5..3.0 m }",
+    },
+    Code {
+        code: "E0109",
+        title: "unknown road template",
+        explanation: "`road TEMPLATE` must be one of straight, curve, four_way, t_junction, merge, roundabout.",
+    },
+    Code {
+        code: "E0110",
+        title: "unknown or inapplicable parameter",
+        explanation: "A `road` or `traffic` block sets a parameter that does not exist or does not apply to\n\
+the template (`radius` on a straight road). Road parameters: lanes, lane_width, speed_limit,\n\
+shoulder, median, crosswalks, sidewalks, length, and radius/angle on curve, radius on roundabout.\n\
+Traffic parameters: density, randomness.",
+    },
+    Code {
+        code: "E0111",
+        title: "unknown road arm or landmark",
+        explanation: "A placement names an arm the template does not have (`north` on a straight road) or a\n\
+landmark that does not exist there: `stop_line` and `junction` exist on junction templates only\n\
+(four_way, t_junction, roundabout, merge); `center` exists everywhere.\n\n\
+  straight, curve: west, east\n  four_way, roundabout: north, east, south, west\n\
+  t_junction: west, east, south\n  merge: main, ramp",
+    },
+    Code {
+        code: "E0112",
+        title: "lane index out of range",
+        explanation: "`ARM.in[k]` and `ARM.out[k]` count lanes from 1 (nearest the centre line) to the road's\n\
+`lanes` per direction.\n\n\
+    road straight { lanes 2 }\n    agent ego: sedan { at west.in[3], 20 m before center }   // error: 2 lanes",
+    },
+    Code {
+        code: "E0113",
+        title: "goal not valid for this agent",
+        explanation: "Goals depend on how a kind moves. Static kinds (cones, barriers, signs, structures)\n\
+have no goal and no speed. Pedestrians and animals walk: they may `cross`, keep a speed and stop,\n\
+but cannot change lane, pull to the shoulder or turn. Vehicles cannot `cross`. A goal that\n\
+cannot be met from the placement is rejected too: `stop at stop_line` or `turn` from an\n\
+out-lane, or on a road without a junction.",
+    },
+    Code {
+        code: "E0114",
+        title: "invalid conflict",
+        explanation: "A `conflict` stages a crash between two different agents. `at_fault` must be a mover;\n\
+`impact` is one of rear_end, head_on, angle, sideswipe, pedestrian, object; `point` is a side of\n\
+the struck agent: front, rear, left, right, front_left, front_right, rear_left, rear_right.\n\
+`impact pedestrian` needs a pedestrian as `struck`, `impact object` a static one.\n\n\
+    conflict { at_fault v1; struck v2; impact sideswipe; point right; at 3 s }",
+    },
+    Code {
+        code: "E0115",
+        title: "invalid ego",
+        explanation: "`egos [a, b]` lists agents whose viewpoint gets a clip; each must be a mover (a vehicle,\n\
+bicycle, pedestrian or animal), not a static object. `egos vehicles` takes every vehicle.",
+    },
+    Code {
+        code: "E0116",
+        title: "unknown word",
+        explanation: "A closed vocabulary got a word it does not contain: a lateral goal (hold_lane,\n\
+change_lane left|right, pull_to_shoulder, away_from NAME, cross), a turn (left, right, straight,\n\
+u_turn), a side (left, right), a landmark (center, junction, stop_line), a class or motion in a\n\
+kind definition.",
+    },
+    Code {
+        code: "E0117",
+        title: "invalid track",
+        explanation: "A `track` replays recorded keyframes `TIME: (X, Y) yaw ANGLE` in the world frame. Times\n\
+must strictly increase and start at or after 0 s; an agent with a track has no `at` and no goal.",
+    },
+    Code {
+        code: "E0118",
+        title: "invalid row",
+        explanation: "`row KIND from PLACE to PLACE every DIST` lines up static objects. Both ends must use\n\
+the same placement form on the same lane or sidewalk (or both world coordinates), the spacing\n\
+must be positive, and a row may hold at most 500 objects.",
+    },
+    Code {
+        code: "E0119",
+        title: "kinds of different classes in one_of",
+        explanation: "`one_of [a, b]` picks a kind with the seed; all choices must map to the same class and\n\
+motion so that the rest of the agent (its goal, its placement) stays valid whatever is picked.",
+    },
+    Code {
+        code: "E0201",
+        title: "placement off a valid surface",
+        explanation: "Each class has surfaces it may start on: vehicles on lanes or shoulders; pedestrians\n\
+and bicycles on sidewalks, crosswalks, shoulders (and lanes for bicycles), or wherever a `cross`\n\
+goal starts; static objects anywhere on the map.\n\n\
+    agent ego: sedan { at sidewalk(east.out), 10 m after center }   // error",
+    },
+    Code {
+        code: "E0202",
+        title: "initial boxes overlap",
+        explanation: "Two agents' boxes overlap at their initial placement. Both are named with their spans;\n\
+move one further along the lane, to another lane, or shorten the boxes.",
+    },
+    Code {
+        code: "E0203",
+        title: "placement off the road",
+        explanation: "A lane-relative placement lies beyond the end of the lane (the road is `length` long;\n\
+default 120 m, junction arms 60 m), or a crosswalk/sidewalk named by the placement does not\n\
+exist because `crosswalks`/`sidewalks` is off.",
+    },
+    Code {
+        code: "E0401",
+        title: "cannot write output",
+        explanation: "An output file or directory could not be created or written. rocc writes to a\n\
+temporary name and renames, so no truncated file is left behind.",
+    },
+];
+
+pub fn lookup(code: &str) -> Option<&'static Code> {
+    let code = code.trim().to_ascii_uppercase();
+    CODES.iter().find(|c| c.code == code)
+}

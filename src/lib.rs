@@ -1,0 +1,8 @@
+//! rocc: a compiler from declarative driving-scenario files (`.scn`) to the sensor data that
+//! perception and planning stacks train on. See ARCHITECTURE.md for the passes.
+
+pub mod check;
+pub mod diag;
+pub mod sample;
+pub mod source;
+pub mod syntax;

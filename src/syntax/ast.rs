@@ -1,0 +1,367 @@
+//! The syntax tree of a `.scn` file. Every node carries the byte span it was parsed from; numbers
+//! keep their literal text so the formatter reprints exactly what the user wrote.
+
+use crate::source::Span;
+use serde::Serialize;
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Ident {
+    pub name: String,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct File {
+    pub items: Vec<Item>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum Item {
+    Use(Use),
+    Kind(KindDecl),
+    Scenario(Scenario),
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Use {
+    /// The path between the quotes.
+    pub path: String,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct KindDecl {
+    pub name: Ident,
+    pub class: Ident,
+    pub stmts: Vec<KindStmt>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum KindStmt {
+    Size(SizeStmt),
+    Motion { motion: Ident, span: Span },
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Scenario {
+    pub name: Ident,
+    pub stmts: Vec<ScenarioStmt>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum ScenarioStmt {
+    Seed { value: u64, literal: String, span: Span },
+    Duration { value: Value, span: Span },
+    Rate { value: Value, span: Span },
+    Egos { egos: Egos, span: Span },
+    Road(Road),
+    Agent(Agent),
+    Row(Row),
+    Conflict(Conflict),
+    Traffic(ParamBlock),
+}
+
+impl ScenarioStmt {
+    pub fn span(&self) -> Span {
+        match self {
+            ScenarioStmt::Seed { span, .. }
+            | ScenarioStmt::Duration { span, .. }
+            | ScenarioStmt::Rate { span, .. }
+            | ScenarioStmt::Egos { span, .. } => *span,
+            ScenarioStmt::Road(r) => r.span,
+            ScenarioStmt::Agent(a) => a.span,
+            ScenarioStmt::Row(r) => r.span,
+            ScenarioStmt::Conflict(c) => c.span,
+            ScenarioStmt::Traffic(t) => t.span,
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum Egos {
+    List(Vec<Ident>),
+    Vehicles,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Road {
+    pub template: Ident,
+    pub params: Vec<Param>,
+    pub span: Span,
+}
+
+/// `traffic { ... }`: a block of named parameters.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ParamBlock {
+    pub params: Vec<Param>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Param {
+    pub name: Ident,
+    pub value: ParamValue,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum ParamValue {
+    Value(Value),
+    Switch { on: bool, span: Span },
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Agent {
+    /// `object` declarations never move; `agent` ones may.
+    pub is_object: bool,
+    pub name: Ident,
+    pub kind: KindRef,
+    pub stmts: Vec<AgentStmt>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum KindRef {
+    Named(Ident),
+    OneOf { kinds: Vec<Ident>, span: Span },
+}
+
+impl KindRef {
+    pub fn span(&self) -> Span {
+        match self {
+            KindRef::Named(i) => i.span,
+            KindRef::OneOf { span, .. } => *span,
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum AgentStmt {
+    At { place: Placement, span: Span },
+    Speed { value: Value, span: Span },
+    Size(SizeStmt),
+    Goal(Goal),
+    Track(Track),
+}
+
+impl AgentStmt {
+    pub fn span(&self) -> Span {
+        match self {
+            AgentStmt::At { span, .. } | AgentStmt::Speed { span, .. } => *span,
+            AgentStmt::Size(s) => s.span,
+            AgentStmt::Goal(g) => g.span,
+            AgentStmt::Track(t) => t.span,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum SizeKey {
+    Length,
+    Width,
+    Height,
+}
+
+impl SizeKey {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SizeKey::Length => "length",
+            SizeKey::Width => "width",
+            SizeKey::Height => "height",
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SizeStmt {
+    pub key: SizeKey,
+    pub value: Value,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Row {
+    pub kind: KindRef,
+    pub from: Placement,
+    pub to: Placement,
+    pub every: Value,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum Placement {
+    /// `ARM.in[k], 20 m before stop_line [offset 1 m right] [heading 10 deg]`
+    Lane { lane: LaneRef, along: Along, offset: Option<Offset>, heading: Option<Value>, span: Span },
+    /// `(12 m, -3 m) [heading 90 deg]`
+    World { x: Value, y: Value, heading: Option<Value>, span: Span },
+    /// `crosswalk(north), 30 %`
+    Crosswalk { arm: Ident, fraction: Value, span: Span },
+    /// `sidewalk(north.out), 3 m after junction`
+    Sidewalk { side: SideRef, along: Along, offset: Option<Offset>, heading: Option<Value>, span: Span },
+}
+
+impl Placement {
+    pub fn span(&self) -> Span {
+        match self {
+            Placement::Lane { span, .. }
+            | Placement::World { span, .. }
+            | Placement::Crosswalk { span, .. }
+            | Placement::Sidewalk { span, .. } => *span,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Dir {
+    In,
+    Out,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SideRef {
+    pub arm: Ident,
+    pub dir: Dir,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LaneRef {
+    pub arm: Ident,
+    pub dir: Dir,
+    pub index: u32,
+    pub index_span: Span,
+    pub span: Span,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Rel {
+    Before,
+    After,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Along {
+    pub dist: Value,
+    pub rel: Rel,
+    pub landmark: Ident,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Offset {
+    pub dist: Value,
+    pub side: Ident,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Goal {
+    pub stmts: Vec<GoalStmt>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum GoalStmt {
+    Speed { value: Value, span: Span },
+    Lateral { lateral: Lateral, span: Span },
+    Stop { stop: Stop, span: Span },
+    Turn { turn: Ident, span: Span },
+    Start { after: Value, span: Span },
+}
+
+impl GoalStmt {
+    pub fn span(&self) -> Span {
+        match self {
+            GoalStmt::Speed { span, .. }
+            | GoalStmt::Lateral { span, .. }
+            | GoalStmt::Stop { span, .. }
+            | GoalStmt::Turn { span, .. }
+            | GoalStmt::Start { span, .. } => *span,
+        }
+    }
+    pub fn keyword(&self) -> &'static str {
+        match self {
+            GoalStmt::Speed { .. } => "speed",
+            GoalStmt::Lateral { .. } => "lateral",
+            GoalStmt::Stop { .. } => "stop",
+            GoalStmt::Turn { .. } => "turn",
+            GoalStmt::Start { .. } => "start",
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum Lateral {
+    /// `hold_lane`, `pull_to_shoulder`, `cross`, or a misspelling the checker reports.
+    Word(Ident),
+    ChangeLane(Ident),
+    AwayFrom(Ident),
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum Stop {
+    /// `stop at stop_line` (the word is kept to report misspellings).
+    At(Ident),
+    Behind(Ident),
+    After(Value),
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Track {
+    pub keys: Vec<Keyframe>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Keyframe {
+    pub t: Value,
+    pub x: Value,
+    pub y: Value,
+    pub yaw: Value,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Conflict {
+    pub fields: Vec<ConflictField>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ConflictField {
+    pub key: String,
+    pub key_span: Span,
+    pub value: FieldValue,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum FieldValue {
+    Ident(Ident),
+    Value(Value),
+}
+
+/// A number or a range with an optional unit, exactly as written.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Value {
+    pub lo: Number,
+    /// `Some` for a range `lo..hi`.
+    pub hi: Option<Number>,
+    pub unit: Option<Unit>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Number {
+    pub value: f64,
+    pub literal: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Unit {
+    pub text: String,
+    pub span: Span,
+}

@@ -1,0 +1,372 @@
+//! The canonical layout of a `.scn` file. The AST is lowered to a small document tree (lines and
+//! blocks), printed with 4-space indentation; short parameter blocks (road, traffic, conflict,
+//! goal, kind) stay on one line when they fit in 100 columns and hold no comment. Comments are
+//! not in the AST: they are re-attached by position, own-line or trailing as they were written.
+//! Single blank lines between statements are kept.
+
+use super::ast::*;
+use crate::source::Span;
+
+const WIDTH: usize = 100;
+
+enum Doc {
+    Line { span: Span, text: String },
+    Block { header: String, span: Span, items: Vec<Doc>, fit: bool },
+}
+
+struct Comment {
+    start: usize,
+    end: usize,
+    trailing: bool,
+}
+
+/// Format a parsed file whose source is `src`.
+pub fn format_file(file: &File, src: &str) -> String {
+    let docs: Vec<Doc> = file.items.iter().map(item).collect();
+    let mut p = Printer { src, out: String::new(), indent: 0, comments: comments(src), next: 0, last_end: 0, opened: true };
+    for d in &docs {
+        p.print(d);
+    }
+    p.flush_before(src.len());
+    let mut out = p.out;
+    while out.ends_with("\n\n") {
+        out.pop();
+    }
+    if !out.ends_with('\n') {
+        out.push('\n');
+    }
+    out
+}
+
+fn item(it: &Item) -> Doc {
+    match it {
+        Item::Use(u) => Doc::Line { span: u.span, text: format!("use \"{}\"", u.path) },
+        Item::Kind(k) => Doc::Block {
+            header: format!("kind {}: {}", k.name.name, k.class.name),
+            span: k.span,
+            items: k
+                .stmts
+                .iter()
+                .map(|s| match s {
+                    KindStmt::Size(s) => size(s),
+                    KindStmt::Motion { motion, span } => Doc::Line { span: *span, text: format!("motion {}", motion.name) },
+                })
+                .collect(),
+            fit: true,
+        },
+        Item::Scenario(s) => Doc::Block {
+            header: format!("scenario {}", s.name.name),
+            span: s.span,
+            items: s.stmts.iter().map(scenario_stmt).collect(),
+            fit: false,
+        },
+    }
+}
+
+fn scenario_stmt(s: &ScenarioStmt) -> Doc {
+    let line = |text: String| Doc::Line { span: s.span(), text };
+    match s {
+        ScenarioStmt::Seed { literal, .. } => line(format!("seed {literal}")),
+        ScenarioStmt::Duration { value, .. } => line(format!("duration {}", val(value))),
+        ScenarioStmt::Rate { value, .. } => line(format!("rate {}", val(value))),
+        ScenarioStmt::Egos { egos, .. } => line(match egos {
+            Egos::Vehicles => "egos vehicles".to_string(),
+            Egos::List(l) => format!("egos [{}]", l.iter().map(|i| i.name.as_str()).collect::<Vec<_>>().join(", ")),
+        }),
+        ScenarioStmt::Road(r) if r.params.is_empty() => line(format!("road {}", r.template.name)),
+        ScenarioStmt::Road(r) => Doc::Block {
+            header: format!("road {}", r.template.name),
+            span: r.span,
+            items: r.params.iter().map(param).collect(),
+            fit: true,
+        },
+        ScenarioStmt::Traffic(t) => {
+            Doc::Block { header: "traffic".into(), span: t.span, items: t.params.iter().map(param).collect(), fit: true }
+        }
+        ScenarioStmt::Agent(a) => Doc::Block {
+            header: format!("{} {}: {}", if a.is_object { "object" } else { "agent" }, a.name.name, kind_ref(&a.kind)),
+            span: a.span,
+            items: a.stmts.iter().map(agent_stmt).collect(),
+            fit: a.is_object,
+        },
+        ScenarioStmt::Row(r) => line(format!(
+            "row {} from {} to {} every {}",
+            kind_ref(&r.kind),
+            placement(&r.from),
+            placement(&r.to),
+            val(&r.every)
+        )),
+        ScenarioStmt::Conflict(c) => Doc::Block {
+            header: "conflict".into(),
+            span: c.span,
+            items: c
+                .fields
+                .iter()
+                .map(|f| Doc::Line {
+                    span: f.span,
+                    text: format!(
+                        "{} {}",
+                        f.key,
+                        match &f.value {
+                            FieldValue::Ident(i) => i.name.clone(),
+                            FieldValue::Value(v) => val(v),
+                        }
+                    ),
+                })
+                .collect(),
+            fit: true,
+        },
+    }
+}
+
+fn agent_stmt(s: &AgentStmt) -> Doc {
+    match s {
+        AgentStmt::At { place, span } => Doc::Line { span: *span, text: format!("at {}", placement(place)) },
+        AgentStmt::Speed { value, span } => Doc::Line { span: *span, text: format!("speed {}", val(value)) },
+        AgentStmt::Size(s) => size(s),
+        AgentStmt::Goal(g) => Doc::Block {
+            header: "goal".into(),
+            span: g.span,
+            items: g.stmts.iter().map(|s| Doc::Line { span: s.span(), text: goal_stmt(s) }).collect(),
+            fit: true,
+        },
+        AgentStmt::Track(t) => Doc::Block {
+            header: "track".into(),
+            span: t.span,
+            items: t
+                .keys
+                .iter()
+                .map(|k| Doc::Line {
+                    span: k.span,
+                    text: format!("{}: ({}, {}) yaw {}", val(&k.t), val(&k.x), val(&k.y), val(&k.yaw)),
+                })
+                .collect(),
+            fit: false,
+        },
+    }
+}
+
+fn goal_stmt(s: &GoalStmt) -> String {
+    match s {
+        GoalStmt::Speed { value, .. } => format!("speed {}", val(value)),
+        GoalStmt::Lateral { lateral, .. } => match lateral {
+            Lateral::Word(w) => format!("lateral {}", w.name),
+            Lateral::ChangeLane(side) => format!("lateral change_lane {}", side.name),
+            Lateral::AwayFrom(n) => format!("lateral away_from {}", n.name),
+        },
+        GoalStmt::Stop { stop, .. } => match stop {
+            Stop::At(w) => format!("stop at {}", w.name),
+            Stop::Behind(n) => format!("stop behind {}", n.name),
+            Stop::After(v) => format!("stop after {}", val(v)),
+        },
+        GoalStmt::Turn { turn, .. } => format!("turn {}", turn.name),
+        GoalStmt::Start { after, .. } => format!("start after {}", val(after)),
+    }
+}
+
+fn size(s: &SizeStmt) -> Doc {
+    Doc::Line { span: s.span, text: format!("{} {}", s.key.as_str(), val(&s.value)) }
+}
+
+fn param(p: &Param) -> Doc {
+    let v = match &p.value {
+        ParamValue::Value(v) => val(v),
+        ParamValue::Switch { on, .. } => (if *on { "on" } else { "off" }).to_string(),
+    };
+    Doc::Line { span: p.span, text: format!("{} {v}", p.name.name) }
+}
+
+fn kind_ref(k: &KindRef) -> String {
+    match k {
+        KindRef::Named(i) => i.name.clone(),
+        KindRef::OneOf { kinds, .. } => {
+            format!("one_of [{}]", kinds.iter().map(|i| i.name.as_str()).collect::<Vec<_>>().join(", "))
+        }
+    }
+}
+
+/// The canonical text of a placement (also used by importers that write `.scn`).
+pub fn placement(p: &Placement) -> String {
+    let tail = |offset: &Option<Offset>, heading: &Option<Value>| {
+        let mut s = String::new();
+        if let Some(o) = offset {
+            s += &format!(" offset {} {}", val(&o.dist), o.side.name);
+        }
+        if let Some(h) = heading {
+            s += &format!(" heading {}", val(h));
+        }
+        s
+    };
+    let along = |a: &Along| {
+        format!("{} {} {}", val(&a.dist), if a.rel == Rel::Before { "before" } else { "after" }, a.landmark.name)
+    };
+    let dir = |d: Dir| if d == Dir::In { "in" } else { "out" };
+    match p {
+        Placement::Lane { lane, along: a, offset, heading, .. } => format!(
+            "{}.{}[{}], {}{}",
+            lane.arm.name,
+            dir(lane.dir),
+            lane.index,
+            along(a),
+            tail(offset, heading)
+        ),
+        Placement::World { x, y, heading, .. } => format!("({}, {}){}", val(x), val(y), tail(&None, heading)),
+        Placement::Crosswalk { arm, fraction, .. } => format!("crosswalk({}), {}", arm.name, val(fraction)),
+        Placement::Sidewalk { side, along: a, offset, heading, .. } => {
+            format!("sidewalk({}.{}), {}{}", side.arm.name, dir(side.dir), along(a), tail(offset, heading))
+        }
+    }
+}
+
+/// The canonical text of a value: the literals as written, one space before the unit.
+pub fn val(v: &Value) -> String {
+    let mut s = v.lo.literal.clone();
+    if let Some(hi) = &v.hi {
+        s += "..";
+        s += &hi.literal;
+    }
+    if let Some(u) = &v.unit {
+        s += " ";
+        s += &u.text;
+    }
+    s
+}
+
+fn comments(src: &str) -> Vec<Comment> {
+    let b = src.as_bytes();
+    let mut out = Vec::new();
+    let mut i = 0;
+    let mut line_has_code = false;
+    while i < b.len() {
+        match b[i] {
+            b'\n' => line_has_code = false,
+            b'"' => {
+                line_has_code = true;
+                i += 1;
+                while i < b.len() && b[i] != b'"' && b[i] != b'\n' {
+                    i += 1;
+                }
+                if i < b.len() && b[i] == b'\n' {
+                    line_has_code = false;
+                }
+            }
+            b'/' if b.get(i + 1) == Some(&b'/') => {
+                let start = i;
+                while i < b.len() && b[i] != b'\n' {
+                    i += 1;
+                }
+                out.push(Comment { start, end: i, trailing: line_has_code });
+                continue;
+            }
+            c if !c.is_ascii_whitespace() => line_has_code = true,
+            _ => {}
+        }
+        i += 1;
+    }
+    out
+}
+
+struct Printer<'a> {
+    src: &'a str,
+    out: String,
+    indent: usize,
+    comments: Vec<Comment>,
+    next: usize,
+    /// End of the last thing printed, in the source: blank lines after it are kept.
+    last_end: usize,
+    /// True right after a `{` line: no blank line there.
+    opened: bool,
+}
+
+impl Printer<'_> {
+    fn blank_line_before(&mut self, pos: usize) {
+        if self.opened || self.out.is_empty() {
+            return;
+        }
+        let gap = &self.src[self.last_end.min(pos)..pos];
+        let blank = gap.split('\n').skip(1).collect::<Vec<_>>();
+        // A blank line is a line in the gap (not the first, not the last) holding only spaces.
+        if blank.len() >= 2 && blank[..blank.len() - 1].iter().any(|l| l.trim().is_empty()) {
+            self.out.push('\n');
+        }
+    }
+
+    fn line(&mut self, text: &str) {
+        for _ in 0..self.indent {
+            self.out.push_str("    ");
+        }
+        self.out.push_str(text);
+        self.out.push('\n');
+        self.opened = false;
+    }
+
+    fn flush_before(&mut self, pos: usize) {
+        while self.next < self.comments.len() && self.comments[self.next].start < pos {
+            let c = &self.comments[self.next];
+            let (start, end, trailing) = (c.start, c.end, c.trailing);
+            let text = self.src[start..end].trim_end().to_string();
+            if trailing && self.out.ends_with('\n') && !self.out.is_empty() {
+                self.out.pop();
+                self.out.push_str("  ");
+                self.out.push_str(&text);
+                self.out.push('\n');
+            } else {
+                self.blank_line_before(start);
+                self.line(&text);
+            }
+            self.last_end = end;
+            self.next += 1;
+        }
+    }
+
+    fn has_comment_in(&self, span: Span) -> bool {
+        self.comments[self.next..].iter().any(|c| c.start >= span.start as usize && c.start < span.end as usize)
+    }
+
+    fn print(&mut self, d: &Doc) {
+        match d {
+            Doc::Line { span, text } => {
+                self.flush_before(span.start as usize);
+                self.blank_line_before(span.start as usize);
+                self.line(text);
+                self.last_end = span.end as usize;
+                self.flush_before(span.end as usize);
+            }
+            Doc::Block { header, span, items, .. } => {
+                self.flush_before(span.start as usize);
+                self.blank_line_before(span.start as usize);
+                let inline = inline(d);
+                let fits = inline.as_ref().is_some_and(|s| s.len() + 4 * self.indent <= WIDTH);
+                if fits && !self.has_comment_in(*span) {
+                    self.line(&inline.expect("checked above"));
+                    self.last_end = span.end as usize;
+                    return;
+                }
+                self.line(&format!("{header} {{"));
+                self.opened = true;
+                self.indent += 1;
+                for it in items {
+                    self.print(it);
+                }
+                // Comments before the closing brace stay inside the block.
+                self.flush_before((span.end as usize).saturating_sub(1));
+                self.indent -= 1;
+                self.line("}");
+                self.last_end = span.end as usize;
+            }
+        }
+    }
+}
+
+/// One-line form of a block that allows it (`fit`), recursively.
+fn inline(d: &Doc) -> Option<String> {
+    match d {
+        Doc::Line { text, .. } => Some(text.clone()),
+        Doc::Block { fit: false, .. } => None,
+        Doc::Block { header, items, .. } if items.is_empty() => Some(format!("{header} {{}}")),
+        Doc::Block { header, items, .. } => {
+            let parts: Option<Vec<String>> = items.iter().map(inline).collect();
+            Some(format!("{header} {{ {} }}", parts?.join("; ")))
+        }
+    }
+}

@@ -1,0 +1,500 @@
+//! pest parse tree -> AST. The pest grammar guarantees the shape of each pair, so the tree walk
+//! uses `expect` only on what the grammar makes impossible.
+
+use super::ast::*;
+use crate::diag::{self, Diagnostic};
+use crate::source::{FileId, Span};
+use pest::Parser;
+use pest::iterators::Pair;
+
+#[derive(pest_derive::Parser)]
+#[grammar = "../grammar/scn.pest"]
+struct ScnParser;
+
+type P<'a> = Pair<'a, Rule>;
+
+/// Parse one file. A syntax error yields exactly one diagnostic.
+pub fn parse(file: FileId, text: &str) -> Result<File, Diagnostic> {
+    let mut pairs = ScnParser::parse(Rule::file, text).map_err(|e| syntax_error(file, text, e))?;
+    let root = pairs.next().expect("grammar: file is the root rule");
+    let b = Builder { file };
+    let span = b.span(&root);
+    let items = root.into_inner().filter(|p| p.as_rule() != Rule::EOI).map(|p| b.item(p)).collect();
+    Ok(File { items, span })
+}
+
+struct Builder {
+    file: FileId,
+}
+
+fn inner(p: P<'_>) -> Vec<P<'_>> {
+    p.into_inner().collect()
+}
+
+impl Builder {
+    fn span(&self, p: &P<'_>) -> Span {
+        let s = p.as_span();
+        Span::new(self.file, s.start(), s.end())
+    }
+
+    fn ident(&self, p: P<'_>) -> Ident {
+        debug_assert_eq!(p.as_rule(), Rule::ident);
+        Ident { name: p.as_str().to_string(), span: self.span(&p) }
+    }
+
+    fn item(&self, p: P<'_>) -> Item {
+        let span = self.span(&p);
+        match p.as_rule() {
+            Rule::use_decl => {
+                let s = inner(p).into_iter().find(|q| q.as_rule() == Rule::string).expect("grammar: use has a string");
+                let raw = s.as_str();
+                Item::Use(Use { path: raw[1..raw.len() - 1].to_string(), span })
+            }
+            Rule::kind_decl => {
+                let mut it = inner(p).into_iter().filter(|q| q.as_rule() != Rule::kw_kind);
+                let name = self.ident(it.next().expect("grammar: kind name"));
+                let class = self.ident(it.next().expect("grammar: kind class"));
+                let stmts = it
+                    .map(|q| match q.as_rule() {
+                        Rule::size_stmt => KindStmt::Size(self.size(q)),
+                        Rule::motion_stmt => {
+                            let span = self.span(&q);
+                            let m = inner(q).pop().expect("grammar: motion word");
+                            KindStmt::Motion { motion: self.ident(m), span }
+                        }
+                        r => unreachable!("grammar: kind statement {r:?}"),
+                    })
+                    .collect();
+                Item::Kind(KindDecl { name, class, stmts, span })
+            }
+            Rule::scenario => {
+                let mut it = inner(p).into_iter().skip(1);
+                let name = self.ident(it.next().expect("grammar: scenario name"));
+                let stmts = it.map(|q| self.scenario_stmt(q)).collect();
+                Item::Scenario(Scenario { name, stmts, span })
+            }
+            r => unreachable!("grammar: item {r:?}"),
+        }
+    }
+
+    fn scenario_stmt(&self, p: P<'_>) -> ScenarioStmt {
+        let span = self.span(&p);
+        match p.as_rule() {
+            Rule::seed_stmt => {
+                let n = inner(p).pop().expect("grammar: seed value");
+                let literal = n.as_str().to_string();
+                // An integer too large for u64 saturates; the checker reports it.
+                let value = literal.parse().unwrap_or(u64::MAX);
+                ScenarioStmt::Seed { value, literal, span }
+            }
+            Rule::duration_stmt => ScenarioStmt::Duration { value: self.value(last(p)), span },
+            Rule::rate_stmt => ScenarioStmt::Rate { value: self.value(last(p)), span },
+            Rule::egos_stmt => {
+                let q = last(p);
+                let egos = match q.as_rule() {
+                    Rule::ego_list => Egos::List(inner(q).into_iter().map(|i| self.ident(i)).collect()),
+                    _ => Egos::Vehicles,
+                };
+                ScenarioStmt::Egos { egos, span }
+            }
+            Rule::road => {
+                let mut it = inner(p).into_iter().skip(1);
+                let template = self.ident(it.next().expect("grammar: road template"));
+                let params = it.map(|q| self.param(q)).collect();
+                ScenarioStmt::Road(Road { template, params, span })
+            }
+            Rule::traffic => {
+                let params = inner(p).into_iter().skip(1).map(|q| self.param(q)).collect();
+                ScenarioStmt::Traffic(ParamBlock { params, span })
+            }
+            Rule::agent | Rule::object => {
+                let is_object = p.as_rule() == Rule::object;
+                let mut it = inner(p).into_iter().skip(1);
+                let name = self.ident(it.next().expect("grammar: agent name"));
+                let kind = self.kind_ref(it.next().expect("grammar: agent kind"));
+                let stmts = it.map(|q| self.agent_stmt(q)).collect();
+                ScenarioStmt::Agent(Agent { is_object, name, kind, stmts, span })
+            }
+            Rule::row => {
+                let parts: Vec<_> = inner(p)
+                    .into_iter()
+                    .filter(|q| !matches!(q.as_rule(), Rule::kw_row | Rule::kw_from | Rule::kw_to | Rule::kw_every))
+                    .collect();
+                let [kind, from, to, every]: [P<'_>; 4] = parts.try_into().expect("grammar: row has four parts");
+                ScenarioStmt::Row(Row {
+                    kind: self.kind_ref(kind),
+                    from: self.placement(from),
+                    to: self.placement(to),
+                    every: self.value(every),
+                    span,
+                })
+            }
+            Rule::conflict => {
+                let fields = inner(p)
+                    .into_iter()
+                    .skip(1)
+                    .map(|f| {
+                        let span = self.span(&f);
+                        let mut it = inner(f).into_iter();
+                        let k = it.next().expect("grammar: conflict key");
+                        let v = it.next().expect("grammar: conflict value");
+                        let value = match v.as_rule() {
+                            Rule::ident => FieldValue::Ident(self.ident(v)),
+                            _ => FieldValue::Value(self.value(v)),
+                        };
+                        ConflictField { key: k.as_str().to_string(), key_span: self.span(&k), value, span }
+                    })
+                    .collect();
+                ScenarioStmt::Conflict(Conflict { fields, span })
+            }
+            r => unreachable!("grammar: scenario statement {r:?}"),
+        }
+    }
+
+    fn param(&self, p: P<'_>) -> Param {
+        let span = self.span(&p);
+        let mut it = inner(p).into_iter();
+        let name = self.ident(it.next().expect("grammar: param name"));
+        let v = it.next().expect("grammar: param value");
+        let value = match v.as_rule() {
+            Rule::switch => ParamValue::Switch { on: v.as_str().starts_with("on"), span: self.span(&v) },
+            _ => ParamValue::Value(self.value(v)),
+        };
+        Param { name, value, span }
+    }
+
+    fn kind_ref(&self, p: P<'_>) -> KindRef {
+        let q = last(p);
+        match q.as_rule() {
+            Rule::ident => KindRef::Named(self.ident(q)),
+            _ => {
+                let span = self.span(&q);
+                let kinds = inner(q).into_iter().skip(1).map(|i| self.ident(i)).collect();
+                KindRef::OneOf { kinds, span }
+            }
+        }
+    }
+
+    fn agent_stmt(&self, p: P<'_>) -> AgentStmt {
+        let span = self.span(&p);
+        match p.as_rule() {
+            Rule::at_stmt => AgentStmt::At { place: self.placement(last(p)), span },
+            Rule::speed_stmt => AgentStmt::Speed { value: self.value(last(p)), span },
+            Rule::size_stmt => AgentStmt::Size(self.size(p)),
+            Rule::goal => {
+                let stmts = inner(p).into_iter().skip(1).map(|q| self.goal_stmt(q)).collect();
+                AgentStmt::Goal(Goal { stmts, span })
+            }
+            Rule::track => {
+                let keys = inner(p)
+                    .into_iter()
+                    .skip(1)
+                    .map(|k| {
+                        let span = self.span(&k);
+                        let v: Vec<_> = inner(k).into_iter().filter(|q| q.as_rule() == Rule::value).collect();
+                        let [t, x, y, yaw]: [P<'_>; 4] = v.try_into().expect("grammar: keyframe has four values");
+                        Keyframe { t: self.value(t), x: self.value(x), y: self.value(y), yaw: self.value(yaw), span }
+                    })
+                    .collect();
+                AgentStmt::Track(Track { keys, span })
+            }
+            r => unreachable!("grammar: agent statement {r:?}"),
+        }
+    }
+
+    fn size(&self, p: P<'_>) -> SizeStmt {
+        let span = self.span(&p);
+        let mut it = inner(p).into_iter();
+        let key = match it.next().expect("grammar: size key").as_str() {
+            "length" => SizeKey::Length,
+            "width" => SizeKey::Width,
+            _ => SizeKey::Height,
+        };
+        SizeStmt { key, value: self.value(it.next().expect("grammar: size value")), span }
+    }
+
+    fn goal_stmt(&self, p: P<'_>) -> GoalStmt {
+        let span = self.span(&p);
+        match p.as_rule() {
+            Rule::speed_stmt => GoalStmt::Speed { value: self.value(last(p)), span },
+            Rule::lateral => {
+                let q = last(p);
+                let lateral = match q.as_rule() {
+                    Rule::lat_away => Lateral::AwayFrom(self.ident(last(q))),
+                    Rule::lat_change => Lateral::ChangeLane(self.ident(last(q))),
+                    _ => Lateral::Word(self.ident(q)),
+                };
+                GoalStmt::Lateral { lateral, span }
+            }
+            Rule::stop => {
+                let q = last(p);
+                let stop = match q.as_rule() {
+                    Rule::stop_line => Stop::At(self.ident(last(q))),
+                    Rule::stop_behind => Stop::Behind(self.ident(last(q))),
+                    _ => Stop::After(self.value(last(q))),
+                };
+                GoalStmt::Stop { stop, span }
+            }
+            Rule::turn => GoalStmt::Turn { turn: self.ident(last(p)), span },
+            Rule::start => GoalStmt::Start { after: self.value(last(p)), span },
+            r => unreachable!("grammar: goal statement {r:?}"),
+        }
+    }
+
+    fn placement(&self, p: P<'_>) -> Placement {
+        let q = last(p);
+        let span = self.span(&q);
+        let parts = inner(q.clone());
+        let heading = parts.iter().find(|x| x.as_rule() == Rule::heading).map(|h| self.value(last(h.clone())));
+        let offset = parts.iter().find(|x| x.as_rule() == Rule::offset).map(|o| {
+            let span = self.span(o);
+            let v: Vec<_> = inner(o.clone()).into_iter().skip(1).collect();
+            let [dist, side]: [P<'_>; 2] = v.try_into().expect("grammar: offset has a distance and a side");
+            Offset { dist: self.value(dist), side: self.ident(side), span }
+        });
+        let along = parts.iter().find(|x| x.as_rule() == Rule::along).map(|a| self.along(a.clone()));
+        match q.as_rule() {
+            Rule::world_place => {
+                let v: Vec<_> = parts.iter().filter(|x| x.as_rule() == Rule::value).cloned().collect();
+                let [x, y]: [P<'_>; 2] = v.try_into().expect("grammar: world placement has x and y");
+                Placement::World { x: self.value(x), y: self.value(y), heading, span }
+            }
+            Rule::crosswalk_place => {
+                let arm = parts.iter().find(|x| x.as_rule() == Rule::ident).expect("grammar: crosswalk arm");
+                let v = parts.iter().find(|x| x.as_rule() == Rule::value).expect("grammar: crosswalk fraction");
+                Placement::Crosswalk { arm: self.ident(arm.clone()), fraction: self.value(v.clone()), span }
+            }
+            Rule::sidewalk_place => {
+                let s = parts.iter().find(|x| x.as_rule() == Rule::side_ref).expect("grammar: sidewalk side");
+                let sspan = self.span(s);
+                let mut it = inner(s.clone()).into_iter();
+                let arm = self.ident(it.next().expect("grammar: side arm"));
+                let dir = dir(it.next().expect("grammar: side dir").as_str());
+                Placement::Sidewalk {
+                    side: SideRef { arm, dir, span: sspan },
+                    along: along.expect("grammar: sidewalk placement has a distance"),
+                    offset,
+                    heading,
+                    span,
+                }
+            }
+            _ => {
+                let l = parts.iter().find(|x| x.as_rule() == Rule::lane_ref).expect("grammar: lane ref");
+                let lspan = self.span(l);
+                let mut it = inner(l.clone()).into_iter();
+                let arm = self.ident(it.next().expect("grammar: lane arm"));
+                let d = dir(it.next().expect("grammar: lane dir").as_str());
+                let idx = it.next().expect("grammar: lane index");
+                Placement::Lane {
+                    lane: LaneRef {
+                        arm,
+                        dir: d,
+                        index: idx.as_str().parse().unwrap_or(u32::MAX),
+                        index_span: self.span(&idx),
+                        span: lspan,
+                    },
+                    along: along.expect("grammar: lane placement has a distance"),
+                    offset,
+                    heading,
+                    span,
+                }
+            }
+        }
+    }
+
+    fn along(&self, p: P<'_>) -> Along {
+        let span = self.span(&p);
+        let v: Vec<_> = inner(p);
+        let [dist, rel, landmark]: [P<'_>; 3] = v.try_into().expect("grammar: along has three parts");
+        Along {
+            dist: self.value(dist),
+            rel: if rel.as_str() == "before" { Rel::Before } else { Rel::After },
+            landmark: self.ident(landmark),
+            span,
+        }
+    }
+
+    fn value(&self, p: P<'_>) -> Value {
+        debug_assert_eq!(p.as_rule(), Rule::value);
+        let span = self.span(&p);
+        let q = last(p);
+        let is_range = q.as_rule() == Rule::range;
+        let mut nums = Vec::new();
+        let mut unit = None;
+        for x in inner(q) {
+            match x.as_rule() {
+                Rule::number => nums.push(Number {
+                    value: x.as_str().parse().expect("grammar: numbers are decimal literals"),
+                    literal: x.as_str().to_string(),
+                }),
+                Rule::unit => unit = Some(Unit { text: x.as_str().to_string(), span: self.span(&x) }),
+                r => unreachable!("grammar: value part {r:?}"),
+            }
+        }
+        let mut nums = nums.into_iter();
+        let lo = nums.next().expect("grammar: value has a number");
+        let hi = if is_range { nums.next() } else { None };
+        Value { lo, hi, unit, span }
+    }
+}
+
+fn last(p: P<'_>) -> P<'_> {
+    p.into_inner().last().expect("grammar: rule has children")
+}
+
+fn dir(s: &str) -> Dir {
+    if s.starts_with("in") { Dir::In } else { Dir::Out }
+}
+
+/// Words the grammar knows as keywords: a misspelt statement keyword gets "did you mean".
+const KEYWORDS: &[&str] = &[
+    "use", "kind", "scenario", "seed", "duration", "rate", "egos", "vehicles", "road", "traffic", "agent",
+    "object", "row", "from", "to", "every", "one_of", "at", "speed", "length", "width", "height", "crosswalk",
+    "sidewalk", "offset", "heading", "goal", "lateral", "away_from", "change_lane", "stop", "behind", "after",
+    "before", "turn", "start", "track", "yaw", "conflict", "at_fault", "struck", "impact", "point", "motion",
+    "on", "off",
+];
+
+const UNITS: &[&str] = &["m", "cm", "km", "m/s", "km/h", "mph", "s", "ms", "deg", "rad", "Hz", "%"];
+
+fn rule_name(r: &Rule) -> Option<String> {
+    let s = format!("{r:?}");
+    if let Some(k) = s.strip_prefix("kw_") {
+        return Some(format!("`{k}`"));
+    }
+    Some(
+        match r {
+            Rule::EOI => "end of file",
+            Rule::ident => "a name",
+            Rule::value | Rule::number | Rule::quantity | Rule::range => "a number",
+            Rule::integer => "a whole number",
+            Rule::unit => "a unit",
+            Rule::string => "a quoted path",
+            Rule::switch => "`on` or `off`",
+            Rule::size_key => "`length`, `width` or `height`",
+            Rule::lane_dir => "`in` or `out`",
+            Rule::rel => "`before` or `after`",
+            Rule::conflict_key => "a conflict field (at_fault, struck, impact, point, at)",
+            Rule::placement | Rule::lane_place | Rule::world_place => "a placement",
+            Rule::lane_ref => "a lane like `west.in[1]`",
+            Rule::offset => "`offset`",
+            Rule::heading => "`heading`",
+            Rule::param => "a parameter",
+            Rule::keyframe => "a keyframe `TIME: (X, Y) yaw ANGLE`",
+            Rule::conflict_field => "a conflict field",
+            _ => return Some(format!("{}", s.replace('_', " "))),
+        }
+        .to_string(),
+    )
+}
+
+fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagnostic {
+    let pos = match e.location {
+        pest::error::InputLocation::Pos(p) => p,
+        pest::error::InputLocation::Span((s, _)) => s,
+    };
+    let (expected, unexpected) = match &e.variant {
+        pest::error::ErrorVariant::ParsingError { positives, negatives } => (positives.clone(), negatives.clone()),
+        pest::error::ErrorVariant::CustomError { .. } => (vec![], vec![]),
+    };
+    let _ = unexpected;
+    let word = word_at(text, pos);
+    let found = if pos >= text.len() {
+        "end of file".to_string()
+    } else if word.is_empty() {
+        format!("`{}`", text[pos..].chars().next().unwrap_or(' '))
+    } else {
+        format!("`{word}`")
+    };
+    let mut names: Vec<String> = expected.iter().filter_map(rule_name).collect();
+    names.sort();
+    names.dedup();
+    let expects_close = unclosed_brace(text, pos);
+    let message = if let Some(open) = expects_close.filter(|_| !word.is_empty() && is_block_keyword(word)) {
+        let _ = open;
+        format!("expected `}}` before {found}: the block above is not closed")
+    } else if names.is_empty() {
+        format!("unexpected {found}")
+    } else {
+        format!("expected {}, found {found}", join_or(&names))
+    };
+    let end = (pos + word.len().max(1)).min(text.len()).max(pos);
+    let mut d = Diagnostic::error("E0001", message).label(Span::new(file, pos, end), "here");
+    if let Some(open) = expects_close {
+        d = d.label(Span::new(file, open, open + 1), "this block is not closed");
+    }
+    let help = if let Some(open) = expects_close.filter(|_| !word.is_empty() && is_block_keyword(word)) {
+        let _ = open;
+        "add `}` to close the block before the next statement".to_string()
+    } else if !word.is_empty() && word.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+        let unit_expected = expected.contains(&Rule::unit);
+        let candidates: &[&str] = if unit_expected { UNITS } else { KEYWORDS };
+        match diag::suggest(word, candidates.iter().copied()) {
+            Some(s) => format!("did you mean `{s}`?"),
+            None if unit_expected => {
+                format!("units: {}", UNITS.join(", "))
+            }
+            None => "statements are separated by newlines or `;`; see DSL reference in the README".to_string(),
+        }
+    } else {
+        "statements are separated by newlines or `;`; see the language section of the README".to_string()
+    };
+    d.help(help)
+}
+
+fn is_block_keyword(w: &str) -> bool {
+    matches!(w, "agent" | "object" | "row" | "road" | "conflict" | "traffic" | "scenario" | "kind" | "use")
+}
+
+/// The byte offset of the innermost `{` still open at `pos` (comments and strings skipped).
+fn unclosed_brace(text: &str, pos: usize) -> Option<usize> {
+    let bytes = text.as_bytes();
+    let mut stack = Vec::new();
+    let mut i = 0;
+    let mut depth_needed = false;
+    while i < pos.min(bytes.len()) {
+        match bytes[i] {
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+                continue;
+            }
+            b'"' => {
+                i += 1;
+                while i < bytes.len() && bytes[i] != b'"' && bytes[i] != b'\n' {
+                    i += 1;
+                }
+            }
+            b'{' => stack.push(i),
+            b'}' => {
+                stack.pop();
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    // Only the scenario brace open is normal; a deeper open block is the likely culprit.
+    if stack.len() >= 2 {
+        depth_needed = true;
+    }
+    if depth_needed { stack.last().copied() } else { None }
+}
+
+fn word_at(text: &str, pos: usize) -> &str {
+    if pos >= text.len() {
+        return "";
+    }
+    let rest = &text[pos..];
+    let end = rest.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(rest.len());
+    &rest[..end]
+}
+
+fn join_or(items: &[String]) -> String {
+    match items.len() {
+        0 => String::new(),
+        1 => items[0].clone(),
+        n if n > 8 => format!("{}, ... ({} choices)", items[..6].join(", "), n),
+        n => format!("{} or {}", items[..n - 1].join(", "), items[n - 1]),
+    }
+}
