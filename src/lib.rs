@@ -3,6 +3,9 @@
 
 pub mod check;
 pub mod diag;
+pub mod geom;
+pub mod place;
+pub mod road;
 pub mod sample;
 pub mod source;
 pub mod syntax;

@@ -260,19 +260,21 @@ pub enum Landmark {
 /// A distance along a lane or sidewalk from a landmark; positive = `after` (further along the
 /// direction of travel), negative = `before`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Along {
+pub struct Along<V = Dist> {
     pub landmark: Landmark,
-    pub dist: Dist,
+    pub dist: V,
 }
 
+/// Where an agent starts. `V` is `Dist` in the checked scenario and `f64` once sampled.
+/// Headings given here are absolute (world yaw, rad); without one, vehicles face along the lane.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub enum Place {
+pub enum Place<V = Dist> {
     /// Lateral offset in metres, positive to the left of the direction of travel.
-    Lane { lane: LaneId, along: Along, offset: f64, heading: Option<Dist> },
-    World { x: Dist, y: Dist, heading: Option<Dist> },
+    Lane { lane: LaneId, along: Along<V>, offset: f64, heading: Option<V> },
+    World { x: V, y: V, heading: Option<V> },
     /// Fraction across the crosswalk, 0..1, from the right-hand kerb of the in-lanes.
-    Crosswalk { arm: Arm, fraction: Dist },
-    Sidewalk { arm: Arm, dir: Dir, along: Along, offset: f64, heading: Option<Dist> },
+    Crosswalk { arm: Arm, fraction: V },
+    Sidewalk { arm: Arm, dir: Dir, along: Along<V>, offset: f64, heading: Option<V> },
     /// Pose comes from the first keyframe of the agent's track.
     Track,
 }
@@ -285,9 +287,9 @@ pub enum Side {
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Goal {
+pub struct Goal<V = Dist> {
     /// Target speed, m/s (`None`: keep the initial speed).
-    pub speed: Option<Dist>,
+    pub speed: Option<V>,
     pub lateral: Lateral,
     pub stop: Option<Stop>,
     pub turn: Option<Turn>,
