@@ -1,6 +1,6 @@
 //! The canonical layout of a `.scn` file. The AST is lowered to a small document tree (lines and
-//! blocks), printed with 4-space indentation; short parameter blocks (road, traffic, conflict,
-//! goal, kind) stay on one line when they fit in 100 columns and hold no comment. Comments are
+//! blocks), printed with 4-space indentation; a block written on one line stays on one line when
+//! it fits in 100 columns and holds no comment, otherwise it is expanded. Comments are
 //! not in the AST: they are re-attached by position, own-line or trailing as they were written.
 //! Single blank lines between statements are kept.
 
@@ -87,7 +87,7 @@ fn scenario_stmt(s: &ScenarioStmt) -> Doc {
             header: format!("{} {}: {}", if a.is_object { "object" } else { "agent" }, a.name.name, kind_ref(&a.kind)),
             span: a.span,
             items: a.stmts.iter().map(agent_stmt).collect(),
-            fit: a.is_object,
+            fit: true,
         },
         ScenarioStmt::Row(r) => line(format!(
             "row {} from {} to {} every {}",
@@ -335,9 +335,12 @@ impl Printer<'_> {
             Doc::Block { header, span, items, .. } => {
                 self.flush_before(span.start as usize);
                 self.blank_line_before(span.start as usize);
+                // Like prettier's objects: a block the author wrote on one line stays on one line
+                // if it fits; one written across lines stays expanded.
+                let one_line = !self.src[span.range()].contains('\n');
                 let inline = inline(d);
                 let fits = inline.as_ref().is_some_and(|s| s.len() + 4 * self.indent <= WIDTH);
-                if fits && !self.has_comment_in(*span) {
+                if one_line && fits && !self.has_comment_in(*span) {
                     self.line(&inline.expect("checked above"));
                     self.last_end = span.end as usize;
                     return;

@@ -357,6 +357,19 @@ const KEYWORDS: &[&str] = &[
 
 const UNITS: &[&str] = &["m", "cm", "km", "m/s", "km/h", "mph", "s", "ms", "deg", "rad", "Hz", "%"];
 
+/// The literal words a rule accepts (for suggestions).
+fn rule_words(r: &Rule) -> &'static [&'static str] {
+    match r {
+        Rule::size_key => &["length", "width", "height"],
+        Rule::conflict_key => &["at_fault", "struck", "impact", "point", "at"],
+        Rule::lane_dir => &["in", "out"],
+        Rule::rel => &["before", "after"],
+        Rule::switch => &["on", "off"],
+        Rule::unit => UNITS,
+        _ => KEYWORDS.iter().find(|k| format!("{r:?}").strip_prefix("kw_") == Some(**k)).map_or(&[], std::slice::from_ref),
+    }
+}
+
 fn rule_name(r: &Rule) -> Option<String> {
     let s = format!("{r:?}");
     if let Some(k) = s.strip_prefix("kw_") {
@@ -371,7 +384,7 @@ fn rule_name(r: &Rule) -> Option<String> {
             Rule::unit => "a unit",
             Rule::string => "a quoted path",
             Rule::switch => "`on` or `off`",
-            Rule::size_key => "`length`, `width` or `height`",
+            Rule::size_key => "`length`/`width`/`height`",
             Rule::lane_dir => "`in` or `out`",
             Rule::rel => "`before` or `after`",
             Rule::conflict_key => "a conflict field (at_fault, struck, impact, point, at)",
@@ -382,7 +395,7 @@ fn rule_name(r: &Rule) -> Option<String> {
             Rule::param => "a parameter",
             Rule::keyframe => "a keyframe `TIME: (X, Y) yaw ANGLE`",
             Rule::conflict_field => "a conflict field",
-            _ => return Some(format!("{}", s.replace('_', " "))),
+            _ => return Some(s.replace('_', " ")),
         }
         .to_string(),
     )
@@ -393,11 +406,10 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
         pest::error::InputLocation::Pos(p) => p,
         pest::error::InputLocation::Span((s, _)) => s,
     };
-    let (expected, unexpected) = match &e.variant {
-        pest::error::ErrorVariant::ParsingError { positives, negatives } => (positives.clone(), negatives.clone()),
-        pest::error::ErrorVariant::CustomError { .. } => (vec![], vec![]),
+    let expected = match &e.variant {
+        pest::error::ErrorVariant::ParsingError { positives, .. } => positives.clone(),
+        pest::error::ErrorVariant::CustomError { .. } => vec![],
     };
-    let _ = unexpected;
     let word = word_at(text, pos);
     let found = if pos >= text.len() {
         "end of file".to_string()
@@ -409,9 +421,14 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
     let mut names: Vec<String> = expected.iter().filter_map(rule_name).collect();
     names.sort();
     names.dedup();
-    let expects_close = unclosed_brace(text, pos);
-    let message = if let Some(open) = expects_close.filter(|_| !word.is_empty() && is_block_keyword(word)) {
-        let _ = open;
+    let open_block = unclosed_brace(text, pos);
+    if open_block.is_some() {
+        names.push("`}`".to_string());
+    }
+    // A block keyword where a statement of the enclosing block was expected means the block
+    // above was never closed: say so, and point at the `{` that is still open.
+    let unclosed = open_block.filter(|_| is_block_keyword(word));
+    let message = if unclosed.is_some() {
         format!("expected `}}` before {found}: the block above is not closed")
     } else if names.is_empty() {
         format!("unexpected {found}")
@@ -420,16 +437,17 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
     };
     let end = (pos + word.len().max(1)).min(text.len()).max(pos);
     let mut d = Diagnostic::error("E0001", message).label(Span::new(file, pos, end), "here");
-    if let Some(open) = expects_close {
+    if let Some(open) = unclosed {
         d = d.label(Span::new(file, open, open + 1), "this block is not closed");
     }
-    let help = if let Some(open) = expects_close.filter(|_| !word.is_empty() && is_block_keyword(word)) {
-        let _ = open;
+    let help = if unclosed.is_some() {
         "add `}` to close the block before the next statement".to_string()
     } else if !word.is_empty() && word.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
         let unit_expected = expected.contains(&Rule::unit);
+        // Prefer the words that are valid right here; fall back to every keyword.
+        let here: Vec<&str> = expected.iter().flat_map(rule_words).copied().collect();
         let candidates: &[&str] = if unit_expected { UNITS } else { KEYWORDS };
-        match diag::suggest(word, candidates.iter().copied()) {
+        match diag::suggest(word, here.iter().copied()).or_else(|| diag::suggest(word, candidates.iter().copied())) {
             Some(s) => format!("did you mean `{s}`?"),
             None if unit_expected => {
                 format!("units: {}", UNITS.join(", "))
@@ -451,7 +469,6 @@ fn unclosed_brace(text: &str, pos: usize) -> Option<usize> {
     let bytes = text.as_bytes();
     let mut stack = Vec::new();
     let mut i = 0;
-    let mut depth_needed = false;
     while i < pos.min(bytes.len()) {
         match bytes[i] {
             b'/' if bytes.get(i + 1) == Some(&b'/') => {
@@ -474,11 +491,8 @@ fn unclosed_brace(text: &str, pos: usize) -> Option<usize> {
         }
         i += 1;
     }
-    // Only the scenario brace open is normal; a deeper open block is the likely culprit.
-    if stack.len() >= 2 {
-        depth_needed = true;
-    }
-    if depth_needed { stack.last().copied() } else { None }
+    // Inside the scenario block is normal; a deeper open block is the likely culprit.
+    if stack.len() >= 2 { stack.last().copied() } else { None }
 }
 
 fn word_at(text: &str, pos: usize) -> &str {

@@ -1,0 +1,203 @@
+//! The `.scn` language end to end: every scenario checks (snapshot of the checked scenario),
+//! every invalid file fails with its expected code (snapshot of the rendered diagnostic), and
+//! the formatter is idempotent, keeps comments and never changes meaning.
+
+use rocc::check::{self, scenario::Scenario};
+use rocc::diag::Diagnostic;
+use rocc::source::SourceMap;
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn scn_files(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("reading {}: {e}", dir.display()))
+        .map(|e| e.expect("dir entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "scn"))
+        .collect();
+    v.sort();
+    v
+}
+
+/// Check a file under a stable display name (so snapshots do not contain machine paths).
+fn check_named(path: &Path) -> (Result<Scenario, Vec<Diagnostic>>, SourceMap) {
+    let text = std::fs::read_to_string(path).expect("read scenario");
+    let name = path.strip_prefix(root()).or_else(|_| path.strip_prefix(root().join(".."))).unwrap_or(path);
+    let mut sources = SourceMap::default();
+    let r = check::check_text(&name.display().to_string(), &text, path.parent().expect("file has a dir"), &mut sources);
+    (r, sources)
+}
+
+fn corpus() -> Vec<PathBuf> {
+    let mut v = scn_files(&root().join("scenarios"));
+    v.extend(scn_files(&root().join("../shared/examples")));
+    v
+}
+
+#[test]
+fn every_scenario_checks_and_matches_its_snapshot() {
+    for path in scn_files(&root().join("scenarios")) {
+        let (r, sources) = check_named(&path);
+        let s = r.unwrap_or_else(|d| {
+            panic!("{} failed:\n{}", path.display(), d.iter().map(|d| d.render_plain(&sources)).collect::<String>())
+        });
+        let name = path.file_stem().expect("stem").to_string_lossy().into_owned();
+        insta::assert_ron_snapshot!(format!("checked_{name}"), s);
+    }
+}
+
+#[test]
+fn shared_examples_check_unchanged() {
+    for path in scn_files(&root().join("../shared/examples")) {
+        let (r, sources) = check_named(&path);
+        if let Err(d) = r {
+            panic!("{} failed:\n{}", path.display(), d.iter().map(|d| d.render_plain(&sources)).collect::<String>());
+        }
+    }
+}
+
+#[test]
+fn ast_snapshot_of_a_representative_file() {
+    let path = root().join("scenarios/deer_crossing.scn");
+    let text = std::fs::read_to_string(&path).expect("read");
+    let ast = rocc::syntax::parse(0, &text).expect("parses");
+    insta::assert_ron_snapshot!("ast_deer_crossing", ast);
+}
+
+/// Expected (code, words in the message or help) of the shared invalid examples; their first
+/// line describes the error in prose.
+const SHARED_INVALID: &[(&str, &str, &[&str])] = &[
+    ("car_on_sidewalk.scn", "E0201", &["vehicle", "sidewalk"]),
+    ("lane_out_of_range.scn", "E0112", &["lane 3", "2 lanes per direction"]),
+    ("self_conflict.scn", "E0114", &["two different agents"]),
+    ("syntax_error.scn", "E0001", &["expected `}`"]),
+    ("unit_mismatch.scn", "E0101", &["`5 m`", "m/s, km/h or mph"]),
+    ("unknown_agent.scn", "E0107", &["frnt", "did you mean `front`"]),
+];
+
+fn render_all(d: &[Diagnostic], sources: &SourceMap) -> String {
+    d.iter().map(|d| d.render_plain(sources)).collect()
+}
+
+#[test]
+fn shared_invalid_examples_fail_with_the_described_error() {
+    for (file, code, words) in SHARED_INVALID {
+        let path = root().join("../shared/examples/invalid").join(file);
+        let (r, sources) = check_named(&path);
+        let diags = r.err().unwrap_or_else(|| panic!("{file} should fail"));
+        let d = &diags[0];
+        assert_eq!(d.code, *code, "{file}: {}", render_all(&diags, &sources));
+        let text = format!("{} {}", d.message, d.help.clone().unwrap_or_default());
+        for w in *words {
+            assert!(text.contains(w), "{file}: `{w}` not in `{text}`");
+        }
+        assert!(d.span().is_some(), "{file}: diagnostic has no span");
+        insta::assert_snapshot!(format!("invalid_shared_{file}"), render_all(&diags, &sources));
+    }
+    // The parse error points at the statement after the unclosed block (line 6), not at EOF,
+    // and labels the `{` that was left open (line 5).
+    let path = root().join("../shared/examples/invalid/syntax_error.scn");
+    let (r, sources) = check_named(&path);
+    let d = &r.err().expect("fails")[0];
+    let file = d.labels[0].span.file;
+    assert_eq!(sources.line_col(file, d.labels[0].span.start as usize).0, 6);
+    assert_eq!(sources.line_col(file, d.labels[1].span.start as usize).0, 5);
+}
+
+#[test]
+fn own_invalid_files_fail_with_the_code_in_their_first_line() {
+    let files = scn_files(&root().join("tests/invalid"));
+    assert!(files.len() >= 20, "the invalid corpus shrank");
+    for path in files {
+        let text = std::fs::read_to_string(&path).expect("read");
+        let first = text.lines().next().unwrap_or_default();
+        let rest = first.strip_prefix("// expect ").unwrap_or_else(|| panic!("{}: first line must be `// expect CODE: words`", path.display()));
+        let (code, words) = rest.split_once(": ").expect("`CODE: words`");
+        let (r, sources) = check_named(&path);
+        let diags = r.err().unwrap_or_else(|| panic!("{} should fail", path.display()));
+        let d = &diags[0];
+        let all = render_all(&diags, &sources);
+        assert_eq!(d.code, code, "{}: {all}", path.display());
+        let text = format!("{} {}", d.message, d.help.clone().unwrap_or_default());
+        assert!(text.contains(words), "{}: `{words}` not in `{text}`", path.display());
+        assert!(!d.labels.is_empty(), "{}: no span", path.display());
+        let name = path.file_name().expect("name").to_string_lossy().into_owned();
+        insta::assert_snapshot!(format!("invalid_{name}"), all);
+    }
+}
+
+#[test]
+fn json_diagnostics_carry_code_span_position_and_help() {
+    let path = root().join("../shared/examples/invalid/unknown_agent.scn");
+    let (r, sources) = check_named(&path);
+    let d = &r.err().expect("fails")[0];
+    let j = d.to_json(&sources);
+    assert_eq!(j["code"], "E0107");
+    assert_eq!(j["span"]["line"], 6);
+    assert_eq!(j["help"], "did you mean `front`?");
+    let (start, end) = (j["span"]["start"].as_u64().expect("start") as usize, j["span"]["end"].as_u64().expect("end") as usize);
+    assert_eq!(&sources.text(d.labels[0].span.file)[start..end], "frnt");
+    assert!(j["file"].as_str().expect("file").ends_with("unknown_agent.scn"));
+}
+
+#[test]
+fn explain_covers_every_code_the_sources_emit() {
+    let mut missing = vec![];
+    for dir in ["src/check", "src/syntax", "src/diag", "src"] {
+        for e in std::fs::read_dir(root().join(dir)).expect("src dir") {
+            let p = e.expect("entry").path();
+            if p.extension().is_none_or(|e| e != "rs") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&p).expect("read source");
+            for (i, _) in text.match_indices("\"E0") {
+                let code = &text[i + 1..i + 6];
+                if rocc::diag::codes::lookup(code).is_none() {
+                    missing.push(format!("{code} in {}", p.display()));
+                }
+            }
+        }
+    }
+    assert!(missing.is_empty(), "codes without an explanation: {missing:?}");
+}
+
+fn comments(text: &str) -> Vec<String> {
+    text.lines().filter_map(|l| l.find("//").map(|i| l[i..].trim_end().to_string())).collect()
+}
+
+#[test]
+fn formatting_is_idempotent_keeps_comments_and_meaning() {
+    for path in corpus() {
+        let text = std::fs::read_to_string(&path).expect("read");
+        let once = rocc::syntax::format_source(&text).expect("formats");
+        let twice = rocc::syntax::format_source(&once).expect("formats again");
+        assert_eq!(once, twice, "{}: not idempotent", path.display());
+        assert_eq!(comments(&text), comments(&once), "{}: comments changed", path.display());
+        let dir = path.parent().expect("dir");
+        let a = check::check_text("a.scn", &text, dir, &mut SourceMap::default()).expect("original checks");
+        let b = check::check_text("a.scn", &once, dir, &mut SourceMap::default()).expect("formatted checks");
+        // Compared as serialised data: spans (which formatting moves) are not part of the meaning.
+        let (a, b) = (ron::to_string(&a).expect("ron"), ron::to_string(&b).expect("ron"));
+        assert_eq!(a, b, "{}: formatting changed the checked scenario", path.display());
+    }
+}
+
+#[test]
+fn scenario_library_is_canonically_formatted() {
+    let mut files = scn_files(&root().join("scenarios"));
+    files.extend(scn_files(&root().join("scenarios/kinds")));
+    files.push(root().join("stdlib/kinds.scn"));
+    for path in files {
+        let text = std::fs::read_to_string(&path).expect("read");
+        assert_eq!(rocc::syntax::format_source(&text).expect("formats"), text, "run `rocc fmt {}`", path.display());
+    }
+}
+
+#[test]
+fn formatter_expands_long_blocks_and_keeps_blank_lines() {
+    let src = "scenario s { duration 4 s\n\n\n  road straight { lanes 2; lane_width 3.5 m; speed_limit 50 km/h; shoulder 2.0 m; median 1.0 m; sidewalks on }   // wide\n agent ego: sedan { at west.in[1], 20 m before center } }\n";
+    let out = rocc::syntax::format_source(src).expect("formats");
+    insta::assert_snapshot!("fmt_expand", out);
+}
