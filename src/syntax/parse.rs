@@ -378,6 +378,7 @@ fn rule_name(r: &Rule) -> Option<String> {
     Some(
         match r {
             Rule::EOI => "end of file",
+            Rule::file => "`scenario`, `kind` or `use`",
             Rule::ident => "a name",
             Rule::value | Rule::number | Rule::quantity | Rule::range => "a number",
             Rule::integer => "a whole number",
@@ -435,7 +436,8 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
     } else {
         format!("expected {}, found {found}", join_or(&names))
     };
-    let end = (pos + word.len().max(1)).min(text.len()).max(pos);
+    let width = if word.is_empty() { text[pos.min(text.len())..].chars().next().map_or(0, char::len_utf8) } else { word.len() };
+    let end = (pos + width).min(text.len());
     let mut d = Diagnostic::error("E0001", message).label(Span::new(file, pos, end), "here");
     if let Some(open) = unclosed {
         d = d.label(Span::new(file, open, open + 1), "this block is not closed");
