@@ -71,7 +71,11 @@ fn check(files: &[PathBuf], format: MessageFormat) -> ExitCode {
         let mut sources = SourceMap::default();
         match rocc::check::check_path(f, &mut sources) {
             Ok(s) => {
-                let movers = s.agents.iter().filter(|a| !a.is_object && a.motion != rocc::check::scenario::Motion::Static).count();
+                let movers = s
+                    .agents
+                    .iter()
+                    .filter(|a| !a.is_object && a.motion != rocc::check::scenario::Motion::Static)
+                    .count();
                 let egos: Vec<&str> = s.egos.iter().map(|i| s.agents[*i].name.as_str()).collect();
                 match format {
                     MessageFormat::Json => println!(
@@ -116,7 +120,11 @@ fn fmt(files: &[PathBuf], check_only: bool) -> ExitCode {
             Ok(t) => t,
             Err(m) => {
                 bad += 1;
-                print_diags(&[Diagnostic::error("E0002", m).help("pass a readable UTF-8 `.scn` file")], &sources, MessageFormat::Human);
+                print_diags(
+                    &[Diagnostic::error("E0002", m).help("pass a readable UTF-8 `.scn` file")],
+                    &sources,
+                    MessageFormat::Human,
+                );
                 continue;
             }
         };

@@ -113,7 +113,9 @@ fn own_invalid_files_fail_with_the_code_in_their_first_line() {
     for path in files {
         let text = std::fs::read_to_string(&path).expect("read");
         let first = text.lines().next().unwrap_or_default();
-        let rest = first.strip_prefix("// expect ").unwrap_or_else(|| panic!("{}: first line must be `// expect CODE: words`", path.display()));
+        let rest = first
+            .strip_prefix("// expect ")
+            .unwrap_or_else(|| panic!("{}: first line must be `// expect CODE: words`", path.display()));
         let (code, words) = rest.split_once(": ").expect("`CODE: words`");
         let (r, sources) = check_named(&path);
         let diags = r.err().unwrap_or_else(|| panic!("{} should fail", path.display()));
@@ -137,7 +139,8 @@ fn json_diagnostics_carry_code_span_position_and_help() {
     assert_eq!(j["code"], "E0107");
     assert_eq!(j["span"]["line"], 6);
     assert_eq!(j["help"], "did you mean `front`?");
-    let (start, end) = (j["span"]["start"].as_u64().expect("start") as usize, j["span"]["end"].as_u64().expect("end") as usize);
+    let (start, end) =
+        (j["span"]["start"].as_u64().expect("start") as usize, j["span"]["end"].as_u64().expect("end") as usize);
     assert_eq!(&sources.text(d.labels[0].span.file)[start..end], "frnt");
     assert!(j["file"].as_str().expect("file").ends_with("unknown_agent.scn"));
 }

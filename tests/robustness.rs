@@ -10,7 +10,8 @@ fn corpus() -> Vec<String> {
     let mut v = vec![];
     for dir in ["scenarios", "../shared/examples", "tests/invalid"] {
         let Ok(rd) = std::fs::read_dir(root.join(dir)) else { continue };
-        let mut paths: Vec<_> = rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|e| e == "scn")).collect();
+        let mut paths: Vec<_> =
+            rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|e| e == "scn")).collect();
         paths.sort();
         v.extend(paths.iter().filter_map(|p| std::fs::read_to_string(p).ok()));
     }
@@ -19,10 +20,61 @@ fn corpus() -> Vec<String> {
 }
 
 const TOKENS: &[&str] = &[
-    "scenario", "agent", "object", "row", "road", "goal", "conflict", "traffic", "track", "use", "kind", "{", "}",
-    ";", ",", ":", "(", ")", "[", "]", ".", "..", "in", "out", "at", "speed", "m", "km/h", "s", "deg", "%", "Hz",
-    "before", "after", "center", "stop_line", "junction", "west", "east", "north", "sedan", "one_of", "0", "-1",
-    "3.5", "99999999999999999999999", "1e9", "\"x.scn\"", "//c\n", "\n", " ", "é", "\u{0}", "lanes", "duration",
+    "scenario",
+    "agent",
+    "object",
+    "row",
+    "road",
+    "goal",
+    "conflict",
+    "traffic",
+    "track",
+    "use",
+    "kind",
+    "{",
+    "}",
+    ";",
+    ",",
+    ":",
+    "(",
+    ")",
+    "[",
+    "]",
+    ".",
+    "..",
+    "in",
+    "out",
+    "at",
+    "speed",
+    "m",
+    "km/h",
+    "s",
+    "deg",
+    "%",
+    "Hz",
+    "before",
+    "after",
+    "center",
+    "stop_line",
+    "junction",
+    "west",
+    "east",
+    "north",
+    "sedan",
+    "one_of",
+    "0",
+    "-1",
+    "3.5",
+    "99999999999999999999999",
+    "1e9",
+    "\"x.scn\"",
+    "//c\n",
+    "\n",
+    " ",
+    "é",
+    "\u{0}",
+    "lanes",
+    "duration",
 ];
 
 /// Parse, check and format; assert every diagnostic's spans lie on char boundaries inside

@@ -35,7 +35,8 @@ pub fn read_source(path: &Path) -> Result<String, String> {
 
 /// Load a scenario file from disk.
 pub fn load_path(path: &Path, sources: &mut SourceMap) -> Result<Program, Vec<Diagnostic>> {
-    let text = read_source(path).map_err(|m| vec![Diagnostic::error("E0002", m).help("pass a readable UTF-8 `.scn` file")])?;
+    let text =
+        read_source(path).map_err(|m| vec![Diagnostic::error("E0002", m).help("pass a readable UTF-8 `.scn` file")])?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
     load_text(&path.display().to_string(), &text, &base, sources)
 }
@@ -137,7 +138,9 @@ impl Loader<'_> {
                 Ok(t) => t,
                 Err(m) => {
                     self.diags.push(
-                        Diagnostic::error("E0002", m).label(u.span, "imported here").help("check the path; it is relative to this file"),
+                        Diagnostic::error("E0002", m)
+                            .label(u.span, "imported here")
+                            .help("check the path; it is relative to this file"),
                     );
                     continue;
                 }

@@ -84,7 +84,14 @@ impl Checker {
             } else {
                 let written = crate::syntax::fmt::val(v);
                 Diagnostic::error("E0101", format!("{what} needs {}, but `{written}` is {}", dim.units(), got.name()))
-                    .label(v.span, format!("{} here, expected {}", got.name().trim_start_matches("a ").trim_start_matches("an "), dim.name()))
+                    .label(
+                        v.span,
+                        format!(
+                            "{} here, expected {}",
+                            got.name().trim_start_matches("a ").trim_start_matches("an "),
+                            dim.name()
+                        ),
+                    )
                     .help(format!("{what} needs {}{}", dim.units(), unit_hint(dim, got)))
             };
             self.err(d);
@@ -99,7 +106,11 @@ impl Checker {
                     self.err(
                         Diagnostic::error("E0104", format!("range of {what} is reversed"))
                             .label(v.span, "lower bound is larger than upper bound")
-                            .help(format!("write it as {}..{}", v.hi.as_ref().map_or("", |h| &h.literal), v.lo.literal)),
+                            .help(format!(
+                                "write it as {}..{}",
+                                v.hi.as_ref().map_or("", |h| &h.literal),
+                                v.lo.literal
+                            )),
                     );
                     return None;
                 }
@@ -174,7 +185,9 @@ impl Checker {
             let missing: Vec<&str> =
                 ["length", "width", "height"].iter().zip(size).filter(|(_, s)| s.is_none()).map(|(n, _)| *n).collect();
             if !missing.is_empty() {
-                if !self.diags.iter().any(|d| d.span().is_some_and(|s| s.file == k.span.file && s.start >= k.span.start && s.end <= k.span.end)) {
+                if !self.diags.iter().any(|d| {
+                    d.span().is_some_and(|s| s.file == k.span.file && s.start >= k.span.start && s.end <= k.span.end)
+                }) {
                     self.err(
                         Diagnostic::error("E0106", format!("kind `{}` has no {}", k.name.name, missing.join(", ")))
                             .label(k.name.span, "incomplete kind")
@@ -192,7 +205,11 @@ impl Checker {
     }
 
     /// Resolve a kind reference; `one_of` choices must share class and motion.
-    fn kind_ref(&mut self, r: &ast::KindRef, used: &mut BTreeMap<String, Kind>) -> Option<(Vec<String>, Class, Motion)> {
+    fn kind_ref(
+        &mut self,
+        r: &ast::KindRef,
+        used: &mut BTreeMap<String, Kind>,
+    ) -> Option<(Vec<String>, Class, Motion)> {
         let idents: Vec<&ast::Ident> = match r {
             ast::KindRef::Named(i) => vec![i],
             ast::KindRef::OneOf { kinds, .. } => kinds.iter().collect(),
@@ -219,7 +236,16 @@ impl Checker {
         if let Some(other) = found.iter().find(|k| k.class != first.class || k.motion != first.motion) {
             self.err(
                 Diagnostic::error("E0119", "the kinds of `one_of` differ in class or motion")
-                    .label(r.span(), format!("`{}` is a {} but `{}` is a {}", first.name, first.class.name(), other.name, other.class.name()))
+                    .label(
+                        r.span(),
+                        format!(
+                            "`{}` is a {} but `{}` is a {}",
+                            first.name,
+                            first.class.name(),
+                            other.name,
+                            other.class.name()
+                        ),
+                    )
                     .help("list kinds of one class, e.g. `one_of [sedan, suv, pickup_truck]`"),
             );
             return None;
@@ -274,10 +300,12 @@ impl Checker {
                     seed = Some(*value);
                 }
                 ast::ScenarioStmt::Duration { value, span } => {
-                    duration = self.fixed(value, Dim::Time, "duration", 0.1, MAX_DURATION_S, "0.1..120 s").map(|d| (d, *span));
+                    duration =
+                        self.fixed(value, Dim::Time, "duration", 0.1, MAX_DURATION_S, "0.1..120 s").map(|d| (d, *span));
                 }
                 ast::ScenarioStmt::Rate { value, span } => {
-                    rate = self.fixed(value, Dim::Frequency, "rate", 0.5, MAX_RATE_HZ, "0.5..100 Hz").map(|r| (r, *span));
+                    rate =
+                        self.fixed(value, Dim::Frequency, "rate", 0.5, MAX_RATE_HZ, "0.5..100 Hz").map(|r| (r, *span));
                 }
                 ast::ScenarioStmt::Egos { egos, span } => egos_stmt = Some((egos, *span)),
                 ast::ScenarioStmt::Road(r) => road_ast = Some(r),
@@ -362,12 +390,19 @@ impl Checker {
         None
     }
 
-    fn egos(&mut self, stmt: Option<(&ast::Egos, Span)>, order: &[&str], agents: &[Option<Agent>], header: Span) -> Option<Vec<usize>> {
+    fn egos(
+        &mut self,
+        stmt: Option<(&ast::Egos, Span)>,
+        order: &[&str],
+        agents: &[Option<Agent>],
+        header: Span,
+    ) -> Option<Vec<usize>> {
         let movers = |i: &usize| agents[*i].as_ref().is_some_and(|a| a.motion != Motion::Static && !a.is_object);
         match stmt {
             None => {
                 // Default: the agent called `ego`, else the first mover.
-                let pick = order.iter().position(|n| *n == "ego").filter(movers).or_else(|| (0..agents.len()).find(movers));
+                let pick =
+                    order.iter().position(|n| *n == "ego").filter(movers).or_else(|| (0..agents.len()).find(movers));
                 match pick {
                     Some(i) => Some(vec![i]),
                     None if agents.iter().any(Option::is_none) => None,
@@ -418,9 +453,12 @@ impl Checker {
                     if let Some(a) = &agents[idx] {
                         if a.motion == Motion::Static || a.is_object {
                             self.err(
-                                Diagnostic::error("E0115", format!("`{}` cannot be an ego: it is a static {}", i.name, a.class.name()))
-                                    .label(i.span, "not a mover")
-                                    .help("egos are vehicles, bicycles, pedestrians or animals declared with `agent`"),
+                                Diagnostic::error(
+                                    "E0115",
+                                    format!("`{}` cannot be an ego: it is a static {}", i.name, a.class.name()),
+                                )
+                                .label(i.span, "not a mover")
+                                .help("egos are vehicles, bicycles, pedestrians or animals declared with `agent`"),
                             );
                         }
                     }
@@ -460,9 +498,8 @@ impl Checker {
             },
             angle: 45f64.to_radians(),
         };
-        let mut allowed = vec![
-            "lanes", "lane_width", "speed_limit", "shoulder", "median", "crosswalks", "sidewalks", "length",
-        ];
+        let mut allowed =
+            vec!["lanes", "lane_width", "speed_limit", "shoulder", "median", "crosswalks", "sidewalks", "length"];
         match template {
             Template::Curve => allowed.extend(["radius", "angle"]),
             Template::Roundabout => allowed.push("radius"),
@@ -473,7 +510,18 @@ impl Checker {
         for p in &r.params {
             let n = p.name.name.as_str();
             if !allowed.contains(&n) {
-                let all = ["lanes", "lane_width", "speed_limit", "shoulder", "median", "crosswalks", "sidewalks", "length", "radius", "angle"];
+                let all = [
+                    "lanes",
+                    "lane_width",
+                    "speed_limit",
+                    "shoulder",
+                    "median",
+                    "crosswalks",
+                    "sidewalks",
+                    "length",
+                    "radius",
+                    "angle",
+                ];
                 let msg = if all.contains(&n) {
                     format!("`{n}` does not apply to a {} road", template.name())
                 } else {
@@ -529,24 +577,35 @@ impl Checker {
                     .fixed(v, Dim::Count, "lanes", 1.0, MAX_LANES as f64, "1..6 lanes per direction")
                     .and_then(|x| {
                         if x.fract() != 0.0 {
-                            self.err(Diagnostic::error("E0103", "lanes must be a whole number").label(v.span, "not whole").help("e.g. `lanes 2`"));
+                            self.err(
+                                Diagnostic::error("E0103", "lanes must be a whole number")
+                                    .label(v.span, "not whole")
+                                    .help("e.g. `lanes 2`"),
+                            );
                             None
                         } else {
                             road.lanes = x as u32;
                             Some(())
                         }
                     }),
-                "lane_width" => self.fixed(v, Dim::Length, "lane_width", 2.5, 6.0, "2.5..6 m").map(|x| road.lane_width = x),
-                "speed_limit" => self.fixed(v, Dim::Speed, "speed_limit", 1.0, MAX_SPEED_MS, "1..324 km/h").map(|x| road.speed_limit = x),
+                "lane_width" => {
+                    self.fixed(v, Dim::Length, "lane_width", 2.5, 6.0, "2.5..6 m").map(|x| road.lane_width = x)
+                }
+                "speed_limit" => self
+                    .fixed(v, Dim::Speed, "speed_limit", 1.0, MAX_SPEED_MS, "1..324 km/h")
+                    .map(|x| road.speed_limit = x),
                 "shoulder" => self.fixed(v, Dim::Length, "shoulder", 0.0, 6.0, "0..6 m").map(|x| road.shoulder = x),
                 "median" => self.fixed(v, Dim::Length, "median", 0.0, 20.0, "0..20 m").map(|x| road.median = x),
                 "length" => self.fixed(v, Dim::Length, "length", 20.0, 1000.0, "20..1000 m").map(|x| road.length = x),
                 "radius" => {
-                    let (min, shown) = if template == Template::Roundabout { (8.0, "8..60 m") } else { (20.0, "20..2000 m") };
+                    let (min, shown) =
+                        if template == Template::Roundabout { (8.0, "8..60 m") } else { (20.0, "20..2000 m") };
                     let max = if template == Template::Roundabout { 60.0 } else { 2000.0 };
                     self.fixed(v, Dim::Length, "radius", min, max, shown).map(|x| road.radius = x)
                 }
-                "angle" => self.fixed(v, Dim::Angle, "angle", 1f64.to_radians(), 180f64.to_radians(), "1..180 deg").map(|x| road.angle = x),
+                "angle" => self
+                    .fixed(v, Dim::Angle, "angle", 1f64.to_radians(), 180f64.to_radians(), "1..180 deg")
+                    .map(|x| road.angle = x),
                 _ => unreachable!("parameter names are filtered above"),
             };
             ok &= got.is_some();
@@ -577,7 +636,11 @@ impl Checker {
             }
             seen.insert(n, p.span);
             let ast::ParamValue::Value(v) = &p.value else {
-                self.err(Diagnostic::error("E0101", format!("`{n}` takes a number 0..1")).label(p.span, "not on/off").help(format!("e.g. `{n} 0.5`")));
+                self.err(
+                    Diagnostic::error("E0101", format!("`{n}` takes a number 0..1"))
+                        .label(p.span, "not on/off")
+                        .help(format!("e.g. `{n} 0.5`")),
+                );
                 ok = false;
                 continue;
             };
@@ -612,8 +675,12 @@ impl Checker {
         let landmark = landmark?;
         let bad = match landmark {
             Landmark::Center => None,
-            Landmark::Junction if !road.template.has_junction() => Some(format!("a {} road has no junction", road.template.name())),
-            Landmark::StopLine if !road.template.has_stop_lines() => Some(format!("a {} road has no stop lines", road.template.name())),
+            Landmark::Junction if !road.template.has_junction() => {
+                Some(format!("a {} road has no junction", road.template.name()))
+            }
+            Landmark::StopLine if !road.template.has_stop_lines() => {
+                Some(format!("a {} road has no stop lines", road.template.name()))
+            }
             Landmark::StopLine if dir == Dir::Out || sidewalk => Some("stop lines are on in-lanes only".to_string()),
             _ => None,
         };
@@ -639,7 +706,16 @@ impl Checker {
     fn heading(&mut self, h: &Option<ast::Value>) -> Option<Option<Dist>> {
         match h {
             None => Some(None),
-            Some(v) => self.bounded(v, Dim::Angle, "heading", -4.0 * std::f64::consts::PI, 4.0 * std::f64::consts::PI, "-720..720 deg").map(Some),
+            Some(v) => self
+                .bounded(
+                    v,
+                    Dim::Angle,
+                    "heading",
+                    -4.0 * std::f64::consts::PI,
+                    4.0 * std::f64::consts::PI,
+                    "-720..720 deg",
+                )
+                .map(Some),
         }
     }
 
@@ -666,9 +742,16 @@ impl Checker {
                 let lanes = lane_count(road, arm, dir);
                 if lanes == 0 {
                     self.err(
-                        Diagnostic::error("E0112", format!("the {} arm has no {} lanes", arm.name(), if dir == Dir::In { "in" } else { "out" }))
-                            .label(lane.span, "no such lanes")
-                            .help("the ramp of a merge has one in-lane: `ramp.in[1]`"),
+                        Diagnostic::error(
+                            "E0112",
+                            format!(
+                                "the {} arm has no {} lanes",
+                                arm.name(),
+                                if dir == Dir::In { "in" } else { "out" }
+                            ),
+                        )
+                        .label(lane.span, "no such lanes")
+                        .help("the ramp of a merge has one in-lane: `ramp.in[1]`"),
                     );
                     return None;
                 }
@@ -676,14 +759,28 @@ impl Checker {
                     self.err(
                         Diagnostic::error(
                             "E0112",
-                            format!("lane {} does not exist on a road with {} lane{} per direction", lane.index, lanes, if lanes == 1 { "" } else { "s" }),
+                            format!(
+                                "lane {} does not exist on a road with {} lane{} per direction",
+                                lane.index,
+                                lanes,
+                                if lanes == 1 { "" } else { "s" }
+                            ),
                         )
                         .label(lane.index_span, format!("lanes are numbered 1..={lanes}"))
-                        .help(format!("use {}.{}[1] (nearest the centre line) .. [{lanes}], or raise `lanes`", arm.name(), if dir == Dir::In { "in" } else { "out" })),
+                        .help(format!(
+                            "use {}.{}[1] (nearest the centre line) .. [{lanes}], or raise `lanes`",
+                            arm.name(),
+                            if dir == Dir::In { "in" } else { "out" }
+                        )),
                     );
                     return None;
                 }
-                Some(Place::Lane { lane: LaneId { arm, dir, index: lane.index }, along: along?, offset: offset?, heading: heading? })
+                Some(Place::Lane {
+                    lane: LaneId { arm, dir, index: lane.index },
+                    along: along?,
+                    offset: offset?,
+                    heading: heading?,
+                })
             }
             ast::Placement::Crosswalk { arm, fraction, span } => {
                 let road = road?;
@@ -750,7 +847,9 @@ impl Checker {
             let (slot_first, what): (Option<Span>, &str) = match st {
                 ast::AgentStmt::At { place: p, span } => (place.replace((p, *span)).map(|x| x.1), "placement `at`"),
                 ast::AgentStmt::Speed { value, span } => (speed.replace((value, *span)).map(|x| x.1), "`speed`"),
-                ast::AgentStmt::Size(s) => (sizes[s.key as usize].replace((&s.value, s.span)).map(|x| x.1), s.key.as_str()),
+                ast::AgentStmt::Size(s) => {
+                    (sizes[s.key as usize].replace((&s.value, s.span)).map(|x| x.1), s.key.as_str())
+                }
                 ast::AgentStmt::Goal(g) => (goal.replace(g).map(|x| x.span), "`goal`"),
                 ast::AgentStmt::Track(t) => (track.replace(t).map(|x| x.span), "`track`"),
             };
@@ -760,7 +859,11 @@ impl Checker {
         }
         let what = if a.is_object { "object" } else { "agent" };
         if is_static {
-            let label = if a.is_object { "an object never moves".to_string() } else { format!("a {} never moves", class.map_or("static kind", |c| c.name())) };
+            let label = if a.is_object {
+                "an object never moves".to_string()
+            } else {
+                format!("a {} never moves", class.map_or("static kind", |c| c.name()))
+            };
             if let Some(g) = goal {
                 self.err(
                     Diagnostic::error("E0113", format!("`{}` cannot have a goal: {label}", a.name.name))
@@ -866,7 +969,14 @@ impl Checker {
             let tt = self.fixed(&k.t, Dim::Time, "keyframe time", 0.0, MAX_DURATION_S, "0..120 s");
             let x = self.fixed(&k.x, Dim::Length, "x", -1000.0, 1000.0, "-1000..1000 m");
             let y = self.fixed(&k.y, Dim::Length, "y", -1000.0, 1000.0, "-1000..1000 m");
-            let yaw = self.fixed(&k.yaw, Dim::Angle, "yaw", -4.0 * std::f64::consts::PI, 4.0 * std::f64::consts::PI, "-720..720 deg");
+            let yaw = self.fixed(
+                &k.yaw,
+                Dim::Angle,
+                "yaw",
+                -4.0 * std::f64::consts::PI,
+                4.0 * std::f64::consts::PI,
+                "-720..720 deg",
+            );
             let (Some(tt), Some(x), Some(y), Some(yaw)) = (tt, x, y, yaw) else { return None };
             if let Some((pt, pspan)) = prev {
                 if tt <= pt {
@@ -919,15 +1029,24 @@ impl Checker {
                     out.speed = self.bounded(value, Dim::Speed, "goal speed", 0.0, MAX_SPEED_MS, "0..324 km/h");
                     ok &= out.speed.is_some();
                 }
-                ast::GoalStmt::Start { after, .. } => match self.fixed(after, Dim::Time, "start delay", 0.0, MAX_DURATION_S, "0..120 s") {
-                    Some(t) => out.start_after = t,
-                    None => ok = false,
-                },
+                ast::GoalStmt::Start { after, .. } => {
+                    match self.fixed(after, Dim::Time, "start delay", 0.0, MAX_DURATION_S, "0..120 s") {
+                        Some(t) => out.start_after = t,
+                        None => ok = false,
+                    }
+                }
                 ast::GoalStmt::Lateral { lateral, span } => {
                     let l = match lateral {
-                        ast::Lateral::Word(w) => {
-                            word(self, w, &[("hold_lane", Lateral::HoldLane), ("pull_to_shoulder", Lateral::PullToShoulder), ("cross", Lateral::Cross)], "lateral goal")
-                        }
+                        ast::Lateral::Word(w) => word(
+                            self,
+                            w,
+                            &[
+                                ("hold_lane", Lateral::HoldLane),
+                                ("pull_to_shoulder", Lateral::PullToShoulder),
+                                ("cross", Lateral::Cross),
+                            ],
+                            "lateral goal",
+                        ),
                         ast::Lateral::ChangeLane(side) => word(self, side, &SIDES, "side").map(Lateral::ChangeLane),
                         ast::Lateral::AwayFrom(n) => {
                             let idx = self.resolve(n, order);
@@ -952,16 +1071,24 @@ impl Checker {
                             Some(format!("{who}; it cannot {}", lateral_name(l)))
                         }
                         Lateral::Cross if !walker => Some(format!("{who}; only pedestrians and animals `cross`")),
-                        Lateral::ChangeLane(_) | Lateral::PullToShoulder | Lateral::AwayFrom(_) if lane_in.is_none() => {
+                        Lateral::ChangeLane(_) | Lateral::PullToShoulder | Lateral::AwayFrom(_)
+                            if lane_in.is_none() =>
+                        {
                             Some(format!("{} needs a lane placement", lateral_name(l)))
                         }
                         Lateral::ChangeLane(side) => match (place, road) {
                             (Some(Place::Lane { lane, .. }), Some(r)) => {
                                 let lanes = lane_count(r, lane.arm, lane.dir);
                                 // Lane 1 is nearest the centre line: moving left lowers the index.
-                                let target = if side == Side::Left { lane.index as i64 - 1 } else { lane.index as i64 + 1 };
+                                let target =
+                                    if side == Side::Left { lane.index as i64 - 1 } else { lane.index as i64 + 1 };
                                 (target < 1 || target > lanes as i64).then(|| {
-                                    format!("there is no lane to the {} of lane {} ({} lanes per direction)", side_name(side), lane.index, lanes)
+                                    format!(
+                                        "there is no lane to the {} of lane {} ({} lanes per direction)",
+                                        side_name(side),
+                                        lane.index,
+                                        lanes
+                                    )
                                 })
                             }
                             _ => None,
@@ -969,15 +1096,13 @@ impl Checker {
                         _ => None,
                     };
                     if let Some(msg) = bad {
-                        self.err(
-                            Diagnostic::error("E0113", msg)
-                                .label(*span, "not possible here")
-                                .help(match l {
-                                    Lateral::Cross => "vehicles keep to lanes: use `lateral hold_lane` or `change_lane`".to_string(),
-                                    _ if walker => "walkers use `lateral cross` or keep their course".to_string(),
-                                    _ => "change the placement or the goal".to_string(),
-                                }),
-                        );
+                        self.err(Diagnostic::error("E0113", msg).label(*span, "not possible here").help(match l {
+                            Lateral::Cross => {
+                                "vehicles keep to lanes: use `lateral hold_lane` or `change_lane`".to_string()
+                            }
+                            _ if walker => "walkers use `lateral cross` or keep their course".to_string(),
+                            _ => "change the placement or the goal".to_string(),
+                        }));
                         ok = false;
                         continue;
                     }
@@ -989,9 +1114,12 @@ impl Checker {
                             if w.name != "stop_line" {
                                 let help = did_you_mean(&w.name, &["stop_line"], "landmark");
                                 self.err(
-                                    Diagnostic::error("E0116", format!("`stop at` takes `stop_line`, not `{}`", w.name))
-                                        .label(w.span, "unknown stop target")
-                                        .help(format!("{help} (to stop after a distance write `stop after 20 m`)")),
+                                    Diagnostic::error(
+                                        "E0116",
+                                        format!("`stop at` takes `stop_line`, not `{}`", w.name),
+                                    )
+                                    .label(w.span, "unknown stop target")
+                                    .help(format!("{help} (to stop after a distance write `stop after 20 m`)")),
                                 );
                                 None
                             } else if walker {
@@ -1043,7 +1171,9 @@ impl Checker {
                                 idx.map(Stop::Behind)
                             }
                         }
-                        ast::Stop::After(v) => self.fixed(v, Dim::Length, "stop distance", 0.0, 2000.0, "0..2000 m").map(Stop::After),
+                        ast::Stop::After(v) => {
+                            self.fixed(v, Dim::Length, "stop distance", 0.0, 2000.0, "0..2000 m").map(Stop::After)
+                        }
                     };
                     match s {
                         Some(s) => out.stop = Some(s),
@@ -1122,11 +1252,14 @@ impl Checker {
             return None;
         }
         let extent = match (&from, &to) {
-            (Place::Lane { along: a, .. }, Place::Lane { along: b, .. }) | (Place::Sidewalk { along: a, .. }, Place::Sidewalk { along: b, .. }) => {
+            (Place::Lane { along: a, .. }, Place::Lane { along: b, .. })
+            | (Place::Sidewalk { along: a, .. }, Place::Sidewalk { along: b, .. }) => {
                 // Different landmarks are a few metres apart at most; the road pass measures exactly.
                 (b.dist.hi() - a.dist.lo()).abs() + 100.0 * f64::from(u8::from(a.landmark != b.landmark))
             }
-            (Place::World { x: x0, y: y0, .. }, Place::World { x: x1, y: y1, .. }) => (x1.hi() - x0.lo()).hypot(y1.hi() - y0.lo()),
+            (Place::World { x: x0, y: y0, .. }, Place::World { x: x1, y: y1, .. }) => {
+                (x1.hi() - x0.lo()).hypot(y1.hi() - y0.lo())
+            }
             _ => 0.0,
         };
         if extent / every > MAX_ROW_OBJECTS as f64 {
@@ -1140,7 +1273,13 @@ impl Checker {
         Some(Row { kinds: kind.0, class: kind.1, from, to, every, span: r.span })
     }
 
-    fn conflict(&mut self, c: &ast::Conflict, order: &[&str], agents: &[Option<Agent>], duration: Option<f64>) -> Option<Conflict> {
+    fn conflict(
+        &mut self,
+        c: &ast::Conflict,
+        order: &[&str],
+        agents: &[Option<Agent>],
+        duration: Option<f64>,
+    ) -> Option<Conflict> {
         let mut fields: BTreeMap<&str, &ast::ConflictField> = BTreeMap::new();
         let mut ok = true;
         for f in &c.fields {
@@ -1157,17 +1296,31 @@ impl Checker {
             match &f.value {
                 ast::FieldValue::Ident(i) => Some(i),
                 ast::FieldValue::Value(v) => {
-                    c.err(Diagnostic::error("E0114", format!("`{key}` takes a name, not a number")).label(v.span, "expected a name").help(format!("e.g. `{key} {}`", match key { "impact" => "rear_end", "point" => "rear", _ => "ego" })));
+                    c.err(
+                        Diagnostic::error("E0114", format!("`{key}` takes a name, not a number"))
+                            .label(v.span, "expected a name")
+                            .help(format!(
+                                "e.g. `{key} {}`",
+                                match key {
+                                    "impact" => "rear_end",
+                                    "point" => "rear",
+                                    _ => "ego",
+                                }
+                            )),
+                    );
                     None
                 }
             }
         };
-        let missing: Vec<&str> = ["at_fault", "struck", "impact", "point"].into_iter().filter(|k| !fields.contains_key(k)).collect();
+        let missing: Vec<&str> =
+            ["at_fault", "struck", "impact", "point"].into_iter().filter(|k| !fields.contains_key(k)).collect();
         if !missing.is_empty() {
             self.err(
                 Diagnostic::error("E0106", format!("conflict has no {}", missing.join(", ")))
                     .label(c.span, "incomplete conflict")
-                    .help("a conflict needs `at_fault A; struck B; impact TYPE; point SIDE` (and optionally `at TIME`)"),
+                    .help(
+                        "a conflict needs `at_fault A; struck B; impact TYPE; point SIDE` (and optionally `at TIME`)",
+                    ),
             );
             return None;
         }
@@ -1182,7 +1335,11 @@ impl Checker {
                 self.fixed(v, Dim::Time, "impact time", 0.0, max, &format!("0..{max} s (the clip)")).map(Some)
             }
             Some(ast::FieldValue::Ident(i)) => {
-                self.err(Diagnostic::error("E0101", "`at` takes a time").label(i.span, "expected a time").help("e.g. `at 4 s`"));
+                self.err(
+                    Diagnostic::error("E0101", "`at` takes a time")
+                        .label(i.span, "expected a time")
+                        .help("e.g. `at 4 s`"),
+                );
                 None
             }
         };
@@ -1209,7 +1366,11 @@ impl Checker {
                 None
             };
             if let Some((span, msg)) = bad {
-                self.err(Diagnostic::error("E0114", msg).label(span, "here").help("see `rocc explain E0114` for the impact types"));
+                self.err(
+                    Diagnostic::error("E0114", msg)
+                        .label(span, "here")
+                        .help("see `rocc explain E0114` for the impact types"),
+                );
                 ok = false;
             }
         }
@@ -1271,5 +1432,9 @@ fn turn_exists(t: Template, from: Arm, turn: Turn) -> Option<String> {
         (Arm::South, Turn::Straight) => Some("north"),
         _ => None,
     }?;
-    Some(format!("a t_junction has no {missing} arm: from {} there is no `{}`", from.name(), TURNS.iter().find(|(_, x)| *x == turn).map_or("", |(n, _)| *n)))
+    Some(format!(
+        "a t_junction has no {missing} arm: from {} there is no `{}`",
+        from.name(),
+        TURNS.iter().find(|(_, x)| *x == turn).map_or("", |(n, _)| *n)
+    ))
 }

@@ -270,11 +270,29 @@ pub struct Along<V = Dist> {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Place<V = Dist> {
     /// Lateral offset in metres, positive to the left of the direction of travel.
-    Lane { lane: LaneId, along: Along<V>, offset: f64, heading: Option<V> },
-    World { x: V, y: V, heading: Option<V> },
+    Lane {
+        lane: LaneId,
+        along: Along<V>,
+        offset: f64,
+        heading: Option<V>,
+    },
+    World {
+        x: V,
+        y: V,
+        heading: Option<V>,
+    },
     /// Fraction across the crosswalk, 0..1, from the right-hand kerb of the in-lanes.
-    Crosswalk { arm: Arm, fraction: V },
-    Sidewalk { arm: Arm, dir: Dir, along: Along<V>, offset: f64, heading: Option<V> },
+    Crosswalk {
+        arm: Arm,
+        fraction: V,
+    },
+    Sidewalk {
+        arm: Arm,
+        dir: Dir,
+        along: Along<V>,
+        offset: f64,
+        heading: Option<V>,
+    },
     /// Pose comes from the first keyframe of the agent's track.
     Track,
 }

@@ -136,7 +136,9 @@ fn place(p: &Place, r: &mut Rng) -> Place<f64> {
         Place::Lane { lane, along: a, offset, heading } => {
             Place::Lane { lane: *lane, along: along(a, r), offset: *offset, heading: heading.map(|h| r.draw(h)) }
         }
-        Place::World { x, y, heading } => Place::World { x: r.draw(*x), y: r.draw(*y), heading: heading.map(|h| r.draw(h)) },
+        Place::World { x, y, heading } => {
+            Place::World { x: r.draw(*x), y: r.draw(*y), heading: heading.map(|h| r.draw(h)) }
+        }
         Place::Crosswalk { arm, fraction } => Place::Crosswalk { arm: *arm, fraction: r.draw(*fraction) },
         Place::Sidewalk { arm, dir, along: a, offset, heading } => Place::Sidewalk {
             arm: *arm,

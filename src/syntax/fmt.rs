@@ -23,7 +23,8 @@ struct Comment {
 /// Format a parsed file whose source is `src`.
 pub fn format_file(file: &File, src: &str) -> String {
     let docs: Vec<Doc> = file.items.iter().map(item).collect();
-    let mut p = Printer { src, out: String::new(), indent: 0, comments: comments(src), next: 0, last_end: 0, opened: true };
+    let mut p =
+        Printer { src, out: String::new(), indent: 0, comments: comments(src), next: 0, last_end: 0, opened: true };
     for d in &docs {
         p.print(d);
     }
@@ -49,7 +50,9 @@ fn item(it: &Item) -> Doc {
                 .iter()
                 .map(|s| match s {
                     KindStmt::Size(s) => size(s),
-                    KindStmt::Motion { motion, span } => Doc::Line { span: *span, text: format!("motion {}", motion.name) },
+                    KindStmt::Motion { motion, span } => {
+                        Doc::Line { span: *span, text: format!("motion {}", motion.name) }
+                    }
                 })
                 .collect(),
             fit: true,
@@ -80,9 +83,12 @@ fn scenario_stmt(s: &ScenarioStmt) -> Doc {
             items: r.params.iter().map(param).collect(),
             fit: true,
         },
-        ScenarioStmt::Traffic(t) => {
-            Doc::Block { header: "traffic".into(), span: t.span, items: t.params.iter().map(param).collect(), fit: true }
-        }
+        ScenarioStmt::Traffic(t) => Doc::Block {
+            header: "traffic".into(),
+            span: t.span,
+            items: t.params.iter().map(param).collect(),
+            fit: true,
+        },
         ScenarioStmt::Agent(a) => Doc::Block {
             header: format!("{} {}: {}", if a.is_object { "object" } else { "agent" }, a.name.name, kind_ref(&a.kind)),
             span: a.span,
@@ -202,14 +208,9 @@ pub fn placement(p: &Placement) -> String {
     };
     let dir = |d: Dir| if d == Dir::In { "in" } else { "out" };
     match p {
-        Placement::Lane { lane, along: a, offset, heading, .. } => format!(
-            "{}.{}[{}], {}{}",
-            lane.arm.name,
-            dir(lane.dir),
-            lane.index,
-            along(a),
-            tail(offset, heading)
-        ),
+        Placement::Lane { lane, along: a, offset, heading, .. } => {
+            format!("{}.{}[{}], {}{}", lane.arm.name, dir(lane.dir), lane.index, along(a), tail(offset, heading))
+        }
         Placement::World { x, y, heading, .. } => format!("({}, {}){}", val(x), val(y), tail(&None, heading)),
         Placement::Crosswalk { arm, fraction, .. } => format!("crosswalk({}), {}", arm.name, val(fraction)),
         Placement::Sidewalk { side, along: a, offset, heading, .. } => {

@@ -348,11 +348,52 @@ fn dir(s: &str) -> Dir {
 
 /// Words the grammar knows as keywords: a misspelt statement keyword gets "did you mean".
 const KEYWORDS: &[&str] = &[
-    "use", "kind", "scenario", "seed", "duration", "rate", "egos", "vehicles", "road", "traffic", "agent",
-    "object", "row", "from", "to", "every", "one_of", "at", "speed", "length", "width", "height", "crosswalk",
-    "sidewalk", "offset", "heading", "goal", "lateral", "away_from", "change_lane", "stop", "behind", "after",
-    "before", "turn", "start", "track", "yaw", "conflict", "at_fault", "struck", "impact", "point", "motion",
-    "on", "off",
+    "use",
+    "kind",
+    "scenario",
+    "seed",
+    "duration",
+    "rate",
+    "egos",
+    "vehicles",
+    "road",
+    "traffic",
+    "agent",
+    "object",
+    "row",
+    "from",
+    "to",
+    "every",
+    "one_of",
+    "at",
+    "speed",
+    "length",
+    "width",
+    "height",
+    "crosswalk",
+    "sidewalk",
+    "offset",
+    "heading",
+    "goal",
+    "lateral",
+    "away_from",
+    "change_lane",
+    "stop",
+    "behind",
+    "after",
+    "before",
+    "turn",
+    "start",
+    "track",
+    "yaw",
+    "conflict",
+    "at_fault",
+    "struck",
+    "impact",
+    "point",
+    "motion",
+    "on",
+    "off",
 ];
 
 const UNITS: &[&str] = &["m", "cm", "km", "m/s", "km/h", "mph", "s", "ms", "deg", "rad", "Hz", "%"];
@@ -366,7 +407,10 @@ fn rule_words(r: &Rule) -> &'static [&'static str] {
         Rule::rel => &["before", "after"],
         Rule::switch => &["on", "off"],
         Rule::unit => UNITS,
-        _ => KEYWORDS.iter().find(|k| format!("{r:?}").strip_prefix("kw_") == Some(**k)).map_or(&[], std::slice::from_ref),
+        _ => KEYWORDS
+            .iter()
+            .find(|k| format!("{r:?}").strip_prefix("kw_") == Some(**k))
+            .map_or(&[], std::slice::from_ref),
     }
 }
 
@@ -436,7 +480,8 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
     } else {
         format!("expected {}, found {found}", join_or(&names))
     };
-    let width = if word.is_empty() { text[pos.min(text.len())..].chars().next().map_or(0, char::len_utf8) } else { word.len() };
+    let width =
+        if word.is_empty() { text[pos.min(text.len())..].chars().next().map_or(0, char::len_utf8) } else { word.len() };
     let end = (pos + width).min(text.len());
     let mut d = Diagnostic::error("E0001", message).label(Span::new(file, pos, end), "here");
     if let Some(open) = unclosed {
