@@ -100,7 +100,7 @@ fn shared_invalid_examples_fail_with_the_described_error() {
     // and labels the `{` that was left open (line 5).
     let path = root().join("../shared/examples/invalid/syntax_error.scn");
     let (r, sources) = check_named(&path);
-    let d = &r.err().expect("fails")[0];
+    let d = &r.expect_err("fails")[0];
     let file = d.labels[0].span.file;
     assert_eq!(sources.line_col(file, d.labels[0].span.start as usize).0, 6);
     assert_eq!(sources.line_col(file, d.labels[1].span.start as usize).0, 5);
@@ -134,7 +134,7 @@ fn own_invalid_files_fail_with_the_code_in_their_first_line() {
 fn json_diagnostics_carry_code_span_position_and_help() {
     let path = root().join("../shared/examples/invalid/unknown_agent.scn");
     let (r, sources) = check_named(&path);
-    let d = &r.err().expect("fails")[0];
+    let d = &r.expect_err("fails")[0];
     let j = d.to_json(&sources);
     assert_eq!(j["code"], "E0107");
     assert_eq!(j["span"]["line"], 6);

@@ -450,17 +450,17 @@ impl Checker {
                         );
                         continue;
                     }
-                    if let Some(a) = &agents[idx] {
-                        if a.motion == Motion::Static || a.is_object {
-                            self.err(
-                                Diagnostic::error(
-                                    "E0115",
-                                    format!("`{}` cannot be an ego: it is a static {}", i.name, a.class.name()),
-                                )
-                                .label(i.span, "not a mover")
-                                .help("egos are vehicles, bicycles, pedestrians or animals declared with `agent`"),
-                            );
-                        }
+                    if let Some(a) = &agents[idx]
+                        && (a.motion == Motion::Static || a.is_object)
+                    {
+                        self.err(
+                            Diagnostic::error(
+                                "E0115",
+                                format!("`{}` cannot be an ego: it is a static {}", i.name, a.class.name()),
+                            )
+                            .label(i.span, "not a mover")
+                            .help("egos are vehicles, bicycles, pedestrians or animals declared with `agent`"),
+                        );
                     }
                     out.push(idx);
                 }
@@ -871,14 +871,14 @@ impl Checker {
                         .help("remove the goal, or declare a moving kind with `agent`"),
                 );
             }
-            if let Some((v, span)) = speed {
-                if v.lo.value != 0.0 || v.hi.is_some() {
-                    self.err(
-                        Diagnostic::error("E0113", format!("`{}` cannot have a speed: {label}", a.name.name))
-                            .label(span, "speed on a static thing")
-                            .help("remove the speed"),
-                    );
-                }
+            if let Some((v, span)) = speed
+                && (v.lo.value != 0.0 || v.hi.is_some())
+            {
+                self.err(
+                    Diagnostic::error("E0113", format!("`{}` cannot have a speed: {label}", a.name.name))
+                        .label(span, "speed on a static thing")
+                        .help("remove the speed"),
+                );
             }
         }
         let track_keys = track.and_then(|t| self.track(t, duration));
@@ -978,16 +978,16 @@ impl Checker {
                 "-720..720 deg",
             );
             let (Some(tt), Some(x), Some(y), Some(yaw)) = (tt, x, y, yaw) else { return None };
-            if let Some((pt, pspan)) = prev {
-                if tt <= pt {
-                    self.err(
-                        Diagnostic::error("E0117", "keyframe times must strictly increase")
-                            .label(k.t.span, format!("{tt} s is not after {pt} s"))
-                            .label(pspan, "previous keyframe")
-                            .help("sort the keyframes by time and drop duplicates"),
-                    );
-                    return None;
-                }
+            if let Some((pt, pspan)) = prev
+                && tt <= pt
+            {
+                self.err(
+                    Diagnostic::error("E0117", "keyframe times must strictly increase")
+                        .label(k.t.span, format!("{tt} s is not after {pt} s"))
+                        .label(pspan, "previous keyframe")
+                        .help("sort the keyframes by time and drop duplicates"),
+                );
+                return None;
             }
             prev = Some((tt, k.t.span));
             out.push(Keyframe { t: tt, x, y, yaw });
@@ -1144,16 +1144,17 @@ impl Checker {
                                 );
                                 None
                             } else {
-                                if let Some(Place::Lane { along, .. }) = place {
-                                    if along.landmark == Landmark::StopLine && along.dist.lo() > 0.0 {
-                                        self.err(
-                                            Diagnostic::error("E0113", "the agent starts past the stop line")
-                                                .label(*span, "the stop line is behind it")
-                                                .help("place it `before stop_line`, or use `stop after DIST`"),
-                                        );
-                                        ok = false;
-                                        continue;
-                                    }
+                                if let Some(Place::Lane { along, .. }) = place
+                                    && along.landmark == Landmark::StopLine
+                                    && along.dist.lo() > 0.0
+                                {
+                                    self.err(
+                                        Diagnostic::error("E0113", "the agent starts past the stop line")
+                                            .label(*span, "the stop line is behind it")
+                                            .help("place it `before stop_line`, or use `stop after DIST`"),
+                                    );
+                                    ok = false;
+                                    continue;
                                 }
                                 Some(Stop::AtStopLine)
                             }
@@ -1215,17 +1216,16 @@ impl Checker {
     /// Checks on goals that name other agents, once every agent's class is known.
     fn goal_refs(&mut self, a: &Agent, ast_a: &ast::Agent, agents: &[Option<Agent>]) {
         let Some(g) = &a.goal else { return };
-        if let Lateral::AwayFrom(i) = g.lateral {
-            if let Some(other) = &agents[i] {
-                if other.motion == Motion::Static {
-                    let span = find_goal_span(ast_a, "lateral");
-                    self.err(
-                        Diagnostic::error("E0113", format!("`{}` never moves, so nothing approaches", other.name))
-                            .label(span, "away_from a static thing")
-                            .help("`away_from` names an approaching mover; to pass an object use `change_lane`"),
-                    );
-                }
-            }
+        if let Lateral::AwayFrom(i) = g.lateral
+            && let Some(other) = &agents[i]
+            && other.motion == Motion::Static
+        {
+            let span = find_goal_span(ast_a, "lateral");
+            self.err(
+                Diagnostic::error("E0113", format!("`{}` never moves, so nothing approaches", other.name))
+                    .label(span, "away_from a static thing")
+                    .help("`away_from` names an approaching mover; to pass an object use `change_lane`"),
+            );
         }
     }
 

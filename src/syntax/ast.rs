@@ -51,6 +51,8 @@ pub struct Scenario {
     pub span: Span,
 }
 
+// Built once per file and walked once: boxing the large variants would only add noise.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub enum ScenarioStmt {
     Seed { value: u64, literal: String, span: Span },
@@ -138,6 +140,7 @@ impl KindRef {
     }
 }
 
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub enum AgentStmt {
     At { place: Placement, span: Span },
