@@ -44,7 +44,7 @@ pub fn load_path(path: &Path, sources: &mut SourceMap) -> Result<Program, Vec<Di
 /// Load scenario text; `use` paths resolve against `base` and may not leave it.
 pub fn load_text(name: &str, text: &str, base: &Path, sources: &mut SourceMap) -> Result<Program, Vec<Diagnostic>> {
     let std_id = sources.add(STDLIB_NAME, STDLIB_KINDS);
-    let stdlib = syntax::parse(std_id, STDLIB_KINDS).map_err(|d| vec![d])?;
+    let stdlib = stdlib_ast(std_id).map_err(|d| vec![d])?;
     let root_id = sources.add(name, text);
     let root = syntax::parse(root_id, text).map_err(|d| vec![d])?;
     let root_dir = absolute(base);
@@ -79,6 +79,16 @@ pub fn load_text(name: &str, text: &str, base: &Path, sources: &mut SourceMap) -
         return Err(loader.diags);
     }
     Ok(Program { scenario, kinds: loader.kinds })
+}
+
+/// The prelude is parsed once per process (a batch compile checks thousands of files); the
+/// cached tree carries file id 0, the id it gets in a fresh `SourceMap`.
+fn stdlib_ast(id: FileId) -> Result<ast::File, Diagnostic> {
+    static CACHE: std::sync::OnceLock<Result<ast::File, Diagnostic>> = std::sync::OnceLock::new();
+    if id != 0 {
+        return syntax::parse(id, STDLIB_KINDS);
+    }
+    CACHE.get_or_init(|| syntax::parse(0, STDLIB_KINDS)).clone()
 }
 
 struct Loader<'a> {
