@@ -8,6 +8,7 @@ pub use rng::Rng;
 
 use crate::check::scenario::*;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Concrete {
@@ -21,6 +22,10 @@ pub struct Concrete {
     pub rows: Vec<ConcreteRow>,
     pub conflicts: Vec<Conflict>,
     pub traffic: Option<Traffic>,
+    /// The kinds the scenario names, with their size priors: rows draw each element's kind and
+    /// box from them when the place pass lays the row out.
+    #[serde(default)]
+    pub kinds: BTreeMap<String, Kind>,
 }
 
 impl Concrete {
@@ -127,6 +132,7 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
         rows,
         conflicts: s.conflicts.clone(),
         traffic: s.traffic,
+        kinds: s.kinds.clone(),
     }
 }
 

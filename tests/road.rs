@@ -1,0 +1,357 @@
+//! Road and place passes. In: random template parameters and the shared example scenarios. Out:
+//! pass/fail on the map invariants (lanes on drivable paving, crosswalks inside it, lane counts,
+//! dividers clear of lane centres, four-way symmetry) and on placement (examples place, overlaps
+//! and off-road placements are reported).
+
+use glam::DVec2;
+use proptest::prelude::*;
+use rocc::check::lane_count;
+use rocc::check::scenario::{Dir, Road, Template};
+use rocc::geom::point_in_polygon;
+use rocc::road::{self, Map};
+use rocc::source::SourceMap;
+use std::path::{Path, PathBuf};
+
+const EXAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/examples");
+
+fn road(template: Template) -> Road {
+    Road {
+        template,
+        lanes: 2,
+        lane_width: 3.5,
+        speed_limit: 50.0 / 3.6,
+        shoulder: 0.0,
+        median: 0.0,
+        crosswalks: false,
+        sidewalks: false,
+        length: if template.has_junction() { 60.0 } else { 120.0 },
+        radius: if template == Template::Roundabout { 15.0 } else { 100.0 },
+        angle: 45f64.to_radians(),
+    }
+}
+
+fn dist_to_edges(p: DVec2, poly: &[DVec2]) -> f64 {
+    let n = poly.len();
+    (0..n)
+        .map(|i| {
+            let (a, b) = (poly[i], poly[(i + 1) % n]);
+            let d = b - a;
+            let t = if d.length_squared() > 0.0 { ((p - a).dot(d) / d.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+            p.distance(a + d * t)
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Inside one of `polys`, or within `tol` of one's edge.
+fn covered(p: DVec2, polys: &[Vec<DVec2>], tol: f64) -> bool {
+    polys.iter().any(|poly| point_in_polygon(p, poly)) || polys.iter().any(|poly| dist_to_edges(p, poly) <= tol)
+}
+
+/// Lane centre lines cut into short runs with bounding boxes, for fast "is a centre line near"
+/// queries over thousands of divider points.
+struct Centres(Vec<(DVec2, DVec2, Vec<DVec2>)>);
+
+impl Centres {
+    fn new(m: &Map) -> Self {
+        let mut runs = Vec::new();
+        for l in &m.lanes {
+            for run in l.centre.points.windows(2).collect::<Vec<_>>().chunks(16) {
+                let pts: Vec<DVec2> = run.iter().flat_map(|w| [w[0], w[1]]).collect();
+                let lo = pts.iter().fold(DVec2::INFINITY, |a, p| a.min(*p));
+                let hi = pts.iter().fold(DVec2::NEG_INFINITY, |a, p| a.max(*p));
+                runs.push((lo, hi, pts));
+            }
+        }
+        Centres(runs)
+    }
+    fn within(&self, p: DVec2, r: f64) -> bool {
+        self.0.iter().filter(|(lo, hi, _)| p.cmpge(*lo - r).all() && p.cmple(*hi + r).all()).any(|(_, _, pts)| {
+            pts.chunks(2).any(|w| {
+                let d = w[1] - w[0];
+                let t = if d.length_squared() > 0.0 {
+                    ((p - w[0]).dot(d) / d.length_squared()).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                p.distance(w[0] + d * t) <= r
+            })
+        })
+    }
+}
+
+/// Every invariant a map must keep whatever its parameters.
+fn check_map(r: &Road, m: &Map) -> Result<(), TestCaseError> {
+    for l in &m.lanes {
+        for p in l.centre.points.iter().step_by(5).chain(l.centre.points.last()) {
+            prop_assert!(covered(*p, &m.drivable, 1e-6), "lane {:?} point {p} off the drivable area", l.id);
+        }
+        prop_assert!(l.centre.length() > 1.0);
+        prop_assert!(l.center_s >= 0.0 && l.center_s <= l.centre.length() + 1e-9);
+        if let Some(s) = l.stop_line_s {
+            prop_assert!(s > 0.0 && s < l.centre.length(), "stop line at {s} on {:?}", l.id);
+        }
+    }
+    for c in &m.connectors {
+        for p in c.path.points.iter().step_by(3) {
+            prop_assert!(covered(*p, &m.drivable, 0.05), "connector {:?} point {p} off the drivable area", c.turn);
+        }
+        let from = &m.lanes[c.from];
+        let to = &m.lanes[c.to];
+        prop_assert!(from.id.dir == Dir::In && to.id.dir == Dir::Out);
+        let a = *from.centre.points.last().unwrap();
+        prop_assert!(c.path.points[0].distance(a) < 1e-6);
+        prop_assert!(c.path.points.last().unwrap().distance(to.centre.points[0]) < 1e-6);
+        // Finely sampled: no jumps.
+        prop_assert!(c.path.s.windows(2).all(|w| w[1] - w[0] < 1.5), "coarse connector {:?}", c.turn);
+    }
+    // Crosswalks cut across a curved road's vertices, so allow 2 cm (a tenth of a BEV pixel).
+    for poly in &m.crosswalk_polygons {
+        for p in poly {
+            prop_assert!(covered(*p, &m.drivable, 0.02), "crosswalk corner {p} off the drivable area");
+        }
+    }
+    prop_assert_eq!(m.crosswalks.is_empty(), !r.crosswalks || r.template == Template::Merge);
+    prop_assert_eq!(m.sidewalks.is_empty(), !r.sidewalks);
+    for &arm in r.template.arms() {
+        for dir in [Dir::In, Dir::Out] {
+            let mut idx: Vec<u32> =
+                m.lanes.iter().filter(|l| l.id.arm == arm && l.id.dir == dir).map(|l| l.id.index).collect();
+            idx.sort_unstable();
+            let want: Vec<u32> = (1..=lane_count(r, arm, dir)).collect();
+            prop_assert_eq!(idx, want, "lanes of {:?} {:?}", arm, dir);
+        }
+    }
+    prop_assert_eq!(m.lanes.iter().map(|l| l.id.arm).filter(|a| !r.template.arms().contains(a)).count(), 0);
+    let centres = Centres::new(m);
+    for d in &m.dividers {
+        for w in d.windows(2) {
+            let n = (w[0].distance(w[1]) / 0.5).ceil().max(1.0) as usize;
+            for i in 0..=n {
+                let p = w[0].lerp(w[1], i as f64 / n as f64);
+                prop_assert!(!centres.within(p, 0.3), "divider point {p} within 0.3 m of a lane centre");
+            }
+        }
+    }
+    let (lo, hi) = m.bounds;
+    let inside = |p: &DVec2| p.x >= lo.x - 1e-9 && p.y >= lo.y - 1e-9 && p.x <= hi.x + 1e-9 && p.y <= hi.y + 1e-9;
+    prop_assert!(m.drivable.iter().flatten().all(inside) && m.walkways.iter().flatten().all(inside));
+    prop_assert!(m.lanes.iter().flat_map(|l| &l.centre.points).all(inside));
+    Ok(())
+}
+
+fn any_road(template: Template) -> impl Strategy<Value = Road> {
+    (
+        1u32..=4,
+        2.8f64..4.5,
+        prop_oneof![Just(0.0), 0.5f64..3.0],
+        prop_oneof![Just(0.0), 0.5f64..4.0],
+        any::<bool>(),
+        any::<bool>(),
+        40f64..200.0,
+        (0.0f64..1.0, 0.0f64..1.0),
+    )
+        .prop_map(move |(lanes, lane_width, shoulder, median, crosswalks, sidewalks, length, (a, b))| {
+            let mut r = road(template);
+            r.lanes = lanes;
+            r.lane_width = lane_width;
+            r.shoulder = shoulder;
+            r.median = median;
+            r.crosswalks = crosswalks;
+            r.sidewalks = sidewalks;
+            r.length = length;
+            match template {
+                Template::Curve => {
+                    r.radius = 60.0 + 240.0 * a;
+                    r.angle = (5.0 + 175.0 * b).to_radians();
+                }
+                Template::Roundabout => r.radius = 8.0 + 52.0 * a,
+                _ => {}
+            }
+            r
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    #[test]
+    fn straight_maps_keep_invariants(r in any_road(Template::Straight)) { check_map(&r, &road::build(&r))?; }
+    #[test]
+    fn curve_maps_keep_invariants(r in any_road(Template::Curve)) { check_map(&r, &road::build(&r))?; }
+    #[test]
+    fn four_way_maps_keep_invariants(r in any_road(Template::FourWay)) { check_map(&r, &road::build(&r))?; }
+    #[test]
+    fn t_junction_maps_keep_invariants(r in any_road(Template::TJunction)) { check_map(&r, &road::build(&r))?; }
+    #[test]
+    fn merge_maps_keep_invariants(r in any_road(Template::Merge)) { check_map(&r, &road::build(&r))?; }
+    #[test]
+    fn roundabout_maps_keep_invariants(r in any_road(Template::Roundabout)) { check_map(&r, &road::build(&r))?; }
+
+    #[test]
+    fn four_way_is_symmetric_under_quarter_turns(r in any_road(Template::FourWay)) {
+        let m = road::build(&r);
+        let key = |p: DVec2| ((p.x * 1e6).round() as i64, (p.y * 1e6).round() as i64);
+        let mut pts: Vec<_> = m.lanes.iter().flat_map(|l| l.centre.points.iter().copied()).map(key).collect();
+        let mut turned: Vec<_> =
+            m.lanes.iter().flat_map(|l| l.centre.points.iter().copied()).map(|p| key(p.perp())).collect();
+        pts.sort_unstable();
+        turned.sort_unstable();
+        prop_assert_eq!(pts, turned);
+    }
+}
+
+#[test]
+fn t_junction_has_the_turns_it_should() {
+    use rocc::check::scenario::{Arm, Turn};
+    let m = road::build(&road(Template::TJunction));
+    let has = |arm: Arm, t: Turn| m.connectors.iter().any(|c| m.lanes[c.from].id.arm == arm && c.turn == t);
+    assert!(!has(Arm::South, Turn::Straight) && !has(Arm::West, Turn::Left) && !has(Arm::East, Turn::Right));
+    assert!(has(Arm::South, Turn::Left) && has(Arm::South, Turn::Right) && has(Arm::West, Turn::Straight));
+    assert!(has(Arm::West, Turn::Right) && has(Arm::East, Turn::Left) && has(Arm::East, Turn::UTurn));
+    // The stem is painted: its centre line runs along x = 0 below the junction.
+    assert!(m.dividers.iter().any(|d| d.iter().all(|p| p.x.abs() < 1e-9 && p.y < -10.0)));
+    assert_eq!(m.stop_lines.len(), 3 * 2);
+}
+
+#[test]
+fn four_way_turns_go_the_right_way() {
+    use rocc::check::scenario::{Arm, Turn};
+    let m = road::build(&road(Template::FourWay));
+    for c in &m.connectors {
+        let (from, to) = (m.lanes[c.from].id.arm, m.lanes[c.to].id.arm);
+        if from == Arm::South {
+            let want = match c.turn {
+                Turn::Left => Arm::West,
+                Turn::Right => Arm::East,
+                Turn::Straight => Arm::North,
+                Turn::UTurn => Arm::South,
+            };
+            assert_eq!(to, want, "{:?}", c.turn);
+        }
+    }
+    assert_eq!(m.connectors.len(), 4 * 4 * 2);
+}
+
+// ------------------------------------------------------------------ placement
+
+fn examples(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .expect("shared examples directory")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "scn"))
+        .collect();
+    v.sort();
+    v
+}
+
+fn place_file(path: &Path) -> Result<rocc::place::Placed, Vec<rocc::diag::Diagnostic>> {
+    let scn = rocc::check::check_path(path, &mut SourceMap::default())?;
+    let c = rocc::sample::sample(&scn, scn.seed);
+    let map = road::build(&c.road);
+    rocc::place::place(&c, &map)
+}
+
+fn place_src(src: &str) -> Result<rocc::place::Placed, Vec<rocc::diag::Diagnostic>> {
+    let dir = std::env::temp_dir().join(format!("rocc_road_test_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let name = format!("t{}.scn", src.len() ^ (src.bytes().map(u64::from).sum::<u64>() as usize));
+    let path = dir.join(name);
+    std::fs::write(&path, src).expect("write scenario");
+    place_file(&path)
+}
+
+#[test]
+fn every_example_places() {
+    let files = examples(Path::new(EXAMPLES));
+    assert!(files.len() >= 9);
+    for f in files {
+        let placed = place_file(&f).unwrap_or_else(|e| panic!("{}: {:?}", f.display(), e));
+        assert!(!placed.agents.is_empty());
+    }
+}
+
+#[test]
+fn every_project_scenario_places() {
+    for f in examples(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios")) {
+        place_file(&f).unwrap_or_else(|e| panic!("{}: {:?}", f.display(), e));
+    }
+}
+
+#[test]
+fn overlap_example_names_both_agents() {
+    let errs = place_file(&Path::new(EXAMPLES).join("invalid/overlap.scn")).expect_err("a and b overlap");
+    let e = errs.iter().find(|e| e.code == "E0202").expect("an E0202");
+    assert!(e.message.contains("`a`") && e.message.contains("`b`"), "{}", e.message);
+    assert_eq!(e.labels.len(), 2);
+}
+
+#[test]
+fn rows_are_laid_out_along_the_lane_and_continue_past_the_centre() {
+    let placed = place_file(&Path::new(EXAMPLES).join("construction_lane_closure.scn")).expect("places");
+    let cones: Vec<_> = placed.agents.iter().filter(|a| a.name.starts_with("traffic_cone_row1_")).collect();
+    assert_eq!(cones.len(), 11, "20 m before to 30 m after center every 5 m");
+    assert_eq!(cones[2].name, "traffic_cone_row1_3");
+    assert!((cones[0].pose.x + 20.0).abs() < 1e-9 && (cones[10].pose.x - 30.0).abs() < 1e-9);
+    // west.in[2] is the outer eastbound lane.
+    assert!(cones.iter().all(|c| (c.pose.y + 5.25).abs() < 1e-9 && c.pose.yaw.abs() < 1e-9));
+}
+
+#[test]
+fn lane_placement_past_the_road_end_is_e0203() {
+    let errs = place_src(
+        "scenario s { duration 4 s\n road straight { lanes 1 }\n agent ego: sedan { at west.in[1], 70 m before center }\n}\n",
+    )
+    .expect_err("the road is 120 m long");
+    assert_eq!(errs[0].code, "E0203", "{errs:?}");
+    assert!(errs[0].message.contains("60.0 m before"), "{}", errs[0].message);
+}
+
+#[test]
+fn pedestrian_on_a_lane_needs_a_cross_goal() {
+    let src = |goal: &str| {
+        format!(
+            "scenario s {{ duration 4 s\n road straight {{ lanes 1 }}\n agent p: pedestrian {{ at west.in[1], 10 m before center {goal} }}\n}}\n"
+        )
+    };
+    let errs = place_src(&src("")).expect_err("pedestrians do not start on lanes");
+    assert_eq!(errs[0].code, "E0201");
+    assert!(errs[0].message.contains("pedestrian") && errs[0].message.contains("on a lane"), "{}", errs[0].message);
+    place_src(&src("; goal { speed 1.4 m/s; lateral cross }")).expect("a crossing pedestrian may start anywhere");
+}
+
+#[test]
+fn vehicle_off_the_road_is_e0201() {
+    let errs = place_src(
+        "scenario s { duration 4 s\n road four_way { lanes 1 }\n agent ego: sedan { at (30 m, 30 m) heading 0 deg }\n}\n",
+    )
+    .expect_err("between two arms");
+    assert_eq!(errs[0].code, "E0201");
+    assert!(errs[0].message.contains("off the road"), "{}", errs[0].message);
+}
+
+#[test]
+fn placements_on_every_template_land_where_they_say() {
+    for (t, lane) in [
+        ("straight", "west.in[1], 10 m before center"),
+        ("curve", "east.in[1], 10 m before center"),
+        ("four_way", "north.in[2], 5 m before stop_line"),
+        ("t_junction", "south.in[1], 5 m before junction"),
+        ("merge", "ramp.in[1], 10 m before junction"),
+        ("merge", "main.out[2], 10 m after junction"),
+        ("roundabout", "east.in[1], 3 m before stop_line"),
+    ] {
+        let src = format!(
+            "scenario s {{ duration 4 s\n road {t} {{ lanes 2; sidewalks on; crosswalks on }}\n agent ego: sedan {{ at {lane} }}\n}}\n"
+        );
+        let p = place_src(&src).unwrap_or_else(|e| panic!("{t}: {e:?}"));
+        assert_eq!(p.agents.len(), 1);
+    }
+    let p = place_src(
+        "scenario s { duration 4 s\n road four_way { lanes 2; crosswalks on; sidewalks on }\n agent w: pedestrian { at crosswalk(south), 25 % }\n agent v: pedestrian { at sidewalk(east.in), 5 m before junction }\n}\n",
+    )
+    .expect("pedestrians on a crosswalk and a sidewalk");
+    // South's in-lanes drive north on the east side: the walk starts at the east kerb.
+    assert!(p.agents[0].pose.x > 0.0 && (p.agents[0].pose.yaw - std::f64::consts::PI).abs() < 1e-9);
+    // East's in-lanes are north of the axis; their sidewalk is further north.
+    assert!(p.agents[1].pose.y > 7.0);
+}
