@@ -1,11 +1,17 @@
 //! rocc: a compiler from declarative driving-scenario files (`.scn`) to the sensor data that
 //! perception and planning stacks train on. See ARCHITECTURE.md for the passes.
 
+pub mod backend;
 pub mod check;
 pub mod diag;
 pub mod geom;
+pub mod lidar;
+pub mod output;
 pub mod place;
+pub mod raster;
 pub mod road;
+pub mod rollout;
 pub mod sample;
 pub mod source;
 pub mod syntax;
+pub mod view;

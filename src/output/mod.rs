@@ -1,0 +1,239 @@
+//! Output writers. In: a `Bev`, per-frame `EgoBox`es, run metadata and a destination directory
+//! (`OUT/<scenario>/<ego>/`). Out: `bev/NNNNNN.npz`, `preview/bev.png`, `boxes.json` and
+//! `manifest.json` laid out as SPEC.md "Output layout of `rocc compile`" says, each written
+//! atomically: to a temporary name in the same directory, then renamed, so an interrupted run
+//! never leaves a truncated file under a final name and a re-run can resume. (No fsync: that
+//! protects against a crash of the process, not of the machine.)
+
+mod preview;
+
+pub use preview::{CHANNEL_COLOURS, STRUCTURE_COLOUR, render_preview, write_preview_png};
+
+use crate::raster::Bev;
+use crate::raster::layout::{KEY_AUX, KEY_MASKS, KEY_STRUCTURE, class_index};
+use crate::view::EgoBox;
+use ndarray_npy::{NpzReader, NpzWriter};
+use serde::{Deserialize, Serialize};
+use std::fs::{self, File};
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// One file written into the output directory: path relative to it, and size in bytes.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct OutputFile {
+    pub path: String,
+    pub bytes: u64,
+}
+
+static TMP_COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// Write `path` through `fill` under a temporary sibling name, then rename it into place; returns
+/// the final size. Parent directories are created. The temporary file is removed on error.
+pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>) -> io::Result<u64> {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    fs::create_dir_all(dir)?;
+    let name = path
+        .file_name()
+        .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, format!("`{}` names no file", path.display())))?;
+    // Unique per process and call, so parallel writers never share a temporary.
+    let n = TMP_COUNTER.fetch_add(1, Ordering::Relaxed);
+    let tmp = dir.join(format!(".{}.tmp-{}-{n}", name.to_string_lossy(), std::process::id()));
+    let result = (|| {
+        let mut w = BufWriter::new(File::create(&tmp)?);
+        fill(&mut w)?;
+        let f = w.into_inner().map_err(|e| e.into_error())?;
+        let bytes = f.metadata()?.len();
+        drop(f);
+        fs::rename(&tmp, path)?;
+        Ok(bytes)
+    })();
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result
+}
+
+fn npz_err(e: impl std::fmt::Display) -> io::Error {
+    io::Error::other(format!("npz: {e}"))
+}
+
+/// Write one BEV as a compressed `.npz` with keys `gt_bev_masks` (int8, 18x400x400),
+/// `gt_aux_bev` (int32, 7x400x400) and `structure` (int8, 400x400). Returns the size in bytes.
+pub fn write_npz(path: &Path, bev: &Bev) -> io::Result<u64> {
+    write_atomic(path, |w| {
+        let mut npz = NpzWriter::new_compressed(w);
+        npz.add_array(KEY_MASKS, &bev.masks).map_err(npz_err)?;
+        npz.add_array(KEY_AUX, &bev.aux).map_err(npz_err)?;
+        npz.add_array(KEY_STRUCTURE, &bev.structure).map_err(npz_err)?;
+        npz.finish().map_err(npz_err)?;
+        Ok(())
+    })
+}
+
+/// Read back a `.npz` written by `write_npz` (or any nuPlan-Occ BEV; a missing `structure` key
+/// reads as zeros).
+pub fn read_npz(path: &Path) -> io::Result<Bev> {
+    let mut npz = NpzReader::new(File::open(path)?).map_err(npz_err)?;
+    let masks = npz.by_name(KEY_MASKS).map_err(npz_err)?;
+    let aux = npz.by_name(KEY_AUX).map_err(npz_err)?;
+    let structure = match npz.by_name(KEY_STRUCTURE) {
+        Ok(s) => s,
+        Err(_) => Bev::zeros().structure,
+    };
+    Ok(Bev { masks, aux, structure })
+}
+
+/// `dir/bev/NNNNNN.npz` for frame `frame` (SPEC output layout).
+pub fn bev_frame_path(dir: &Path, frame: usize) -> PathBuf {
+    dir.join("bev").join(format!("{frame:06}.npz"))
+}
+
+/// Write frame `frame` of the clip in `dir` (`OUT/<scenario>/<ego>/`) as `bev/NNNNNN.npz`.
+pub fn write_bev_frame(dir: &Path, frame: usize, bev: &Bev) -> io::Result<OutputFile> {
+    let bytes = write_npz(&bev_frame_path(dir, frame), bev)?;
+    Ok(OutputFile { path: format!("bev/{frame:06}.npz"), bytes })
+}
+
+/// The boxes of one frame, in that frame's ego frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameBoxes {
+    pub frame: usize,
+    /// Seconds since the clip start.
+    pub t: f64,
+    pub boxes: Vec<EgoBox>,
+}
+
+#[derive(Serialize)]
+struct BoxRecord<'a> {
+    agent: &'a str,
+    kind: &'a str,
+    /// Index in UniScene's `object_classes` (vehicle 0 .. generic_object 6; structure 7), as
+    /// SPEC.md "Boxes" asks for a class index.
+    class: u8,
+    class_name: &'a str,
+    track: u32,
+    x: f64,
+    y: f64,
+    z: f64,
+    l: f64,
+    w: f64,
+    h: f64,
+    yaw: f64,
+}
+
+#[derive(Serialize)]
+struct FrameRecord<'a> {
+    frame: usize,
+    t: f64,
+    boxes: Vec<BoxRecord<'a>>,
+}
+
+/// `boxes.json`: `[{"frame", "t", "boxes": [{"agent", "kind", "class", "class_name", "track",
+/// "x", "y", "z", "l", "w", "h", "yaw"}]}]` (SPEC output layout; `class_name` is an addition).
+pub fn boxes_json(frames: &[FrameBoxes]) -> serde_json::Value {
+    let recs: Vec<FrameRecord> = frames
+        .iter()
+        .map(|f| FrameRecord {
+            frame: f.frame,
+            t: f.t,
+            boxes: f
+                .boxes
+                .iter()
+                .map(|b| BoxRecord {
+                    agent: &b.agent,
+                    kind: &b.kind,
+                    class: class_index(b.class),
+                    class_name: b.class.name(),
+                    track: b.track,
+                    x: b.x,
+                    y: b.y,
+                    z: b.z,
+                    l: b.l,
+                    w: b.w,
+                    h: b.h,
+                    yaw: b.yaw,
+                })
+                .collect(),
+        })
+        .collect();
+    serde_json::to_value(recs).expect("box records hold only strings and numbers")
+}
+
+/// Write `dir/boxes.json`.
+pub fn write_boxes_json(dir: &Path, frames: &[FrameBoxes]) -> io::Result<OutputFile> {
+    write_json(dir, "boxes.json", &boxes_json(frames))
+}
+
+/// Wall time of one pipeline stage.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StageTiming {
+    pub stage: String,
+    pub seconds: f64,
+}
+
+/// `manifest.json` (SPEC output layout).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    pub compiler: String,
+    pub compiler_version: String,
+    /// The scenario file as given on the command line.
+    pub input: String,
+    /// `input_hash(bytes of the input)`.
+    pub input_hash: String,
+    pub seed: u64,
+    pub backend: String,
+    /// Sensor rig name or description; `None` when no LiDAR was produced.
+    pub rig: Option<String>,
+    pub frame_count: usize,
+    pub rate_hz: f64,
+    pub ego: String,
+    /// In pipeline order.
+    pub timings: Vec<StageTiming>,
+    pub files: Vec<OutputFile>,
+}
+
+impl Manifest {
+    /// A manifest with this build's compiler name and version filled in.
+    pub fn new(input: &str, input_bytes: &[u8], seed: u64, ego: &str, frame_count: usize, rate_hz: f64) -> Self {
+        Manifest {
+            compiler: env!("CARGO_PKG_NAME").to_string(),
+            compiler_version: env!("CARGO_PKG_VERSION").to_string(),
+            input: input.to_string(),
+            input_hash: input_hash(input_bytes),
+            seed,
+            backend: "procedural".to_string(),
+            rig: None,
+            frame_count,
+            rate_hz,
+            ego: ego.to_string(),
+            timings: Vec::new(),
+            files: Vec::new(),
+        }
+    }
+}
+
+/// Write `dir/manifest.json`. The manifest does not list itself.
+pub fn write_manifest(dir: &Path, m: &Manifest) -> io::Result<OutputFile> {
+    let v = serde_json::to_value(m).map_err(io::Error::other)?;
+    write_json(dir, "manifest.json", &v)
+}
+
+/// Content hash used in manifests: FNV-1a 64, hex, prefixed by its name. It identifies inputs
+/// (did the file change?); it is not a cryptographic digest.
+pub fn input_hash(bytes: &[u8]) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for &b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    format!("fnv1a64:{h:016x}")
+}
+
+fn write_json(dir: &Path, name: &str, v: &serde_json::Value) -> io::Result<OutputFile> {
+    let bytes = write_atomic(&dir.join(name), |w| {
+        serde_json::to_writer_pretty(&mut *w, v).map_err(io::Error::other)?;
+        w.write_all(b"\n")
+    })?;
+    Ok(OutputFile { path: name.to_string(), bytes })
+}
