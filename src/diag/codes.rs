@@ -203,6 +203,16 @@ default 120 m, junction arms 60 m), or a crosswalk/sidewalk named by the placeme
 exist because `crosswalks`/`sidewalks` is off.",
     },
     Code {
+        code: "E0204",
+        title: "goal cannot be met on this map",
+        explanation: "An agent's goal asks for something the road does not offer from where the agent starts:\n\
+a `turn` where its lane has no junction connector of that kind, a `change_lane` toward a lane\n\
+that does not exist, `stop at stop_line` on a lane with no stop line ahead, or `cross` with no\n\
+road nearby to cross.\n\n\
+    road straight { lanes 1 }\n    agent ego: sedan { at west.in[1], 20 m before center; goal { turn left } }   // error\n\n\
+Place the agent on a lane that reaches a junction offering the turn, or change the goal.",
+    },
+    Code {
         code: "E0401",
         title: "cannot write output",
         explanation: "An output file or directory could not be created or written. rocc writes to a\n\

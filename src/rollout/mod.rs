@@ -1,0 +1,115 @@
+//! Rollout pass. In: a `Concrete` scenario, its `Map` and the `Placed` initial poses. Out:
+//! `Tracks` — a world pose and speed for every agent at every frame (`rate` Hz over `duration`),
+//! seeded background traffic appended after the placed agents, and one record per staged crash —
+//! or E0204 diagnostics when a goal asks for geometry the map does not have.
+//!
+//! One controller drives every agent; nothing in here knows a scenario by name:
+//! - longitudinal: IDM toward the goal speed (capped by the lane limit unless the goal names a
+//!   speed, and by the curvature ahead), against every agent found in the agent's own corridor
+//!   along its path — now, or predicted to cut into it within a few seconds — plus a stopping law
+//!   that lands exactly on stop targets (stop line, queue gap, distance);
+//! - lateral: offsets from the route's centre line, moved along quintic profiles that pause while
+//!   the target side is occupied;
+//! - a last safety net: a move that would make two boxes overlap is undone (the agent holds its
+//!   previous pose), so the only overlaps in `Tracks` are conflict pairs from their impact on.
+//!
+//! Conflicts are staged in two passes: pass 1 predicts every agent's natural motion; the at-fault
+//! agent's departure and impact time are chosen from it; pass 2 replays with the at-fault agent
+//! following a Hermite intercept, re-planned each frame, to a pose that puts its striking face
+//! on the requested side of the struck box at the impact frame.
+
+mod path;
+mod sim;
+mod stage;
+mod traffic;
+
+pub use stage::{contact_centroid, side_of};
+
+use crate::check::scenario::{Class, Motion, Point};
+use crate::diag::Diagnostic;
+use crate::place::{Placed, Pose};
+use crate::road::Map;
+use crate::sample::Concrete;
+use serde::{Deserialize, Serialize};
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Tracks {
+    pub rate: f64,
+    pub frames: usize,
+    /// Placed agents first, in `Placed` order (indices match), then background traffic.
+    pub agents: Vec<TrackAgent>,
+    /// `[agent][frame]`, world frame.
+    pub poses: Vec<Vec<Pose>>,
+    /// `[agent][frame]`, m/s along the heading.
+    pub speeds: Vec<Vec<f64>>,
+    pub impacts: Vec<ImpactRecord>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrackAgent {
+    pub name: String,
+    pub kind: String,
+    pub class: Class,
+    pub motion: Motion,
+    /// Box length, width, height (m).
+    pub size: [f64; 3],
+    /// Seeded background traffic rather than a declared agent.
+    pub background: bool,
+}
+
+/// The latched frame of one staged conflict.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ImpactRecord {
+    /// Index into `Concrete::conflicts`.
+    pub conflict: usize,
+    pub frame: usize,
+    /// Track indices (into `Tracks::agents`).
+    pub at_fault: usize,
+    pub struck: usize,
+    /// Centroid of the overlap of the two boxes, world frame.
+    pub point_world: [f64; 2],
+    /// The same point in each box's frame (x forward, y left, m).
+    pub at_fault_local: [f64; 2],
+    pub struck_local: [f64; 2],
+    /// Which side of the struck box the contact lies on (thirds of each face; see `side_of`).
+    pub struck_side: Point,
+    /// Penetration depth at the latched frame, m.
+    pub depth: f64,
+}
+
+/// Motion limits of a class; the controller never plans beyond them (the overlap safety net may:
+/// it stops an agent in one frame, which only an unavoidable situation triggers).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Limits {
+    /// Comfortable acceleration, m/s^2.
+    pub accel: f64,
+    /// Comfortable braking, m/s^2.
+    pub brake: f64,
+    /// Emergency braking, m/s^2.
+    pub brake_max: f64,
+    /// Yaw rate, rad/s.
+    pub yaw_rate: f64,
+    /// Lateral acceleration in curves, m/s^2.
+    pub lat_acc: f64,
+    /// Time headway of the car-following law, s.
+    pub headway: f64,
+    /// Standstill gap to a leader, m.
+    pub min_gap: f64,
+}
+
+pub fn limits(class: Class, motion: Motion) -> Limits {
+    match (motion, class) {
+        (Motion::Vehicle, Class::Bicycle) => {
+            Limits { accel: 1.5, brake: 2.5, brake_max: 5.0, yaw_rate: 1.5, lat_acc: 2.5, headway: 1.0, min_gap: 1.5 }
+        }
+        (Motion::Vehicle, _) => {
+            Limits { accel: 2.5, brake: 3.0, brake_max: 8.0, yaw_rate: 1.2, lat_acc: 3.0, headway: 1.2, min_gap: 2.0 }
+        }
+        _ => Limits { accel: 1.5, brake: 2.0, brake_max: 4.0, yaw_rate: 3.0, lat_acc: 4.0, headway: 0.8, min_gap: 0.8 },
+    }
+}
+
+/// Roll the placed scenario out over its frames.
+pub fn rollout(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Vec<Diagnostic>> {
+    sim::run(c, map, placed)
+}

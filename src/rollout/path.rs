@@ -1,0 +1,257 @@
+//! Agent routes: the lane, connector and out-lane polylines an agent will drive, joined and
+//! resampled at a fixed step so that every lookup in the per-frame loop is O(1).
+
+use crate::geom::wrap_angle;
+use glam::DVec2;
+
+/// Sample spacing of a resampled path, m. Fine enough that linear interpolation between samples
+/// is indistinguishable from the source polylines at BEV resolution (0.25 m).
+pub const STEP: f64 = 0.5;
+
+#[derive(Clone, Debug, Default)]
+pub struct Path {
+    pts: Vec<DVec2>,
+    heading: Vec<f64>,
+    /// Unit tangents (the headings as vectors), so projections need no trigonometry.
+    tangent: Vec<DVec2>,
+    curvature: Vec<f64>,
+    /// Highest speed at each sample that still lets the agent slow for the curves ahead.
+    cap: Vec<f64>,
+}
+
+impl Path {
+    /// Resample a chain of points (consecutive duplicates allowed) at `STEP`.
+    pub fn new(points: &[DVec2]) -> Path {
+        let mut cum = Vec::with_capacity(points.len());
+        let mut pts_in: Vec<DVec2> = Vec::with_capacity(points.len());
+        let mut acc = 0.0;
+        for &p in points {
+            if let Some(&last) = pts_in.last() {
+                let d = p.distance(last);
+                if d < 1e-6 {
+                    continue;
+                }
+                acc += d;
+            }
+            pts_in.push(p);
+            cum.push(acc);
+        }
+        if pts_in.len() < 2 {
+            let p = pts_in.first().copied().unwrap_or(DVec2::ZERO);
+            return Path {
+                pts: vec![p, p],
+                heading: vec![0.0; 2],
+                tangent: vec![DVec2::X; 2],
+                curvature: vec![0.0; 2],
+                cap: vec![f64::INFINITY; 2],
+            };
+        }
+        let n = (acc / STEP).floor() as usize + 1;
+        let mut pts = Vec::with_capacity(n + 1);
+        let mut seg = 0;
+        for k in 0..=n {
+            let s = (k as f64 * STEP).min(acc);
+            while seg + 2 < cum.len() && cum[seg + 1] < s {
+                seg += 1;
+            }
+            let (a, b) = (pts_in[seg], pts_in[seg + 1]);
+            let len = cum[seg + 1] - cum[seg];
+            let t = if len > 0.0 { ((s - cum[seg]) / len).clamp(0.0, 1.0) } else { 0.0 };
+            pts.push(a + (b - a) * t);
+        }
+        let m = pts.len();
+        // Headings from a 2 m wide central difference: polylines from templates have corners at
+        // their vertices, and an agent's yaw must not jump there.
+        let w = 2;
+        let heading: Vec<f64> = (0..m)
+            .map(|i| {
+                let d = pts[(i + w).min(m - 1)] - pts[i.saturating_sub(w)];
+                d.y.atan2(d.x)
+            })
+            .collect();
+        let curvature: Vec<f64> = (0..m)
+            .map(|i| {
+                let (a, b) = (i.saturating_sub(w), (i + w).min(m - 1));
+                if b > a { wrap_angle(heading[b] - heading[a]) / ((b - a) as f64 * STEP) } else { 0.0 }
+            })
+            .collect();
+        let tangent = heading.iter().map(|&h| DVec2::from_angle(h)).collect();
+        Path { pts, heading, tangent, curvature, cap: vec![f64::INFINITY; m] }
+    }
+
+    /// A straight path from `p` along `yaw`.
+    pub fn straight(p: DVec2, yaw: f64, length: f64) -> Path {
+        Path::new(&[p, p + DVec2::from_angle(yaw) * length.max(1.0)])
+    }
+
+    /// Fill the curve speed cap: `lat_acc` bounds v^2 * curvature, `yaw_rate` bounds
+    /// v * curvature, and braking at `decel` from any
+    /// sample must reach the cap of every sample ahead.
+    pub fn set_caps(&mut self, lat_acc: f64, yaw_rate: f64, decel: f64) {
+        let m = self.pts.len();
+        let mut next = f64::INFINITY;
+        for i in (0..m).rev() {
+            let k = self.curvature[i].abs();
+            let local = if k > 1e-4 { (lat_acc / k).sqrt().min(yaw_rate / k) } else { f64::INFINITY };
+            next = local.min((next * next + 2.0 * decel * STEP).sqrt());
+            self.cap[i] = next;
+        }
+    }
+
+    pub fn length(&self) -> f64 {
+        (self.pts.len() - 1) as f64 * STEP
+    }
+
+    #[inline]
+    fn locate(&self, s: f64) -> (usize, f64) {
+        let x = (s / STEP).clamp(0.0, (self.pts.len() - 1) as f64);
+        let i = (x as usize).min(self.pts.len() - 2);
+        (i, x - i as f64)
+    }
+
+    /// Position and heading at arc length `s` (clamped to the ends).
+    #[inline]
+    pub fn at(&self, s: f64) -> (DVec2, f64) {
+        let (i, t) = self.locate(s);
+        let p = self.pts[i].lerp(self.pts[i + 1], t);
+        let h = self.heading[i] + wrap_angle(self.heading[i + 1] - self.heading[i]) * t;
+        (p, h)
+    }
+
+    #[inline]
+    pub fn cap(&self, s: f64) -> f64 {
+        let (i, _) = self.locate(s);
+        self.cap[i].min(self.cap[i + 1])
+    }
+
+    #[cfg(test)]
+    pub fn curvature(&self, s: f64) -> f64 {
+        let (i, t) = self.locate(s);
+        self.curvature[i] * (1.0 - t) + self.curvature[i + 1] * t
+    }
+
+    /// Point at `s` shifted `d` metres to the left.
+    #[inline]
+    pub fn point(&self, s: f64, d: f64) -> (DVec2, f64) {
+        let (p, h) = self.at(s);
+        (p + DVec2::from_angle(h).perp() * d, h)
+    }
+
+    /// Arc length and left offset of `p`, searched from `guess` by Newton steps along the
+    /// tangent (O(1), good near the guess), how far beyond either end `p` lies, and the path
+    /// heading there.
+    #[inline]
+    pub fn frenet(&self, p: DVec2, guess: f64) -> (f64, f64, f64, f64) {
+        let len = self.length();
+        let mut s = guess.clamp(0.0, len);
+        let mut along = 0.0;
+        for _ in 0..4 {
+            let (q, t) = self.at_vec(s);
+            along = (p - q).dot(t);
+            let ns = (s + along).clamp(0.0, len);
+            let done = (ns - s).abs() < 0.02;
+            s = ns;
+            if done {
+                break;
+            }
+        }
+        let (q, t) = self.at_vec(s);
+        let off = p - q;
+        let beyond = if s <= 0.0 || s >= len { along.abs().min(off.dot(t).abs()) } else { 0.0 };
+        let (i, u) = self.locate(s);
+        let h = self.heading[i] + wrap_angle(self.heading[i + 1] - self.heading[i]) * u;
+        (s, off.dot(t.perp()), beyond, h)
+    }
+
+    #[inline]
+    fn at_vec(&self, s: f64) -> (DVec2, DVec2) {
+        let (i, u) = self.locate(s);
+        (self.pts[i].lerp(self.pts[i + 1], u), self.tangent[i].lerp(self.tangent[i + 1], u))
+    }
+}
+
+/// A cubic Hermite curve sampled by arc length: the intercept path of an at-fault agent.
+pub struct Hermite {
+    pts: [DVec2; HN + 1],
+    cum: [f64; HN + 1],
+}
+
+const HN: usize = 24;
+
+impl Hermite {
+    pub fn new(p0: DVec2, yaw0: f64, p1: DVec2, yaw1: f64) -> Hermite {
+        let k = p0.distance(p1).max(0.5);
+        let (t0, t1) = (DVec2::from_angle(yaw0) * k, DVec2::from_angle(yaw1) * k);
+        let mut pts = [DVec2::ZERO; HN + 1];
+        let mut cum = [0.0; HN + 1];
+        for (i, q) in pts.iter_mut().enumerate() {
+            let u = i as f64 / HN as f64;
+            let (u2, u3) = (u * u, u * u * u);
+            *q = p0 * (2.0 * u3 - 3.0 * u2 + 1.0)
+                + t0 * (u3 - 2.0 * u2 + u)
+                + p1 * (-2.0 * u3 + 3.0 * u2)
+                + t1 * (u3 - u2);
+        }
+        for i in 1..=HN {
+            cum[i] = cum[i - 1] + pts[i].distance(pts[i - 1]);
+        }
+        Hermite { pts, cum }
+    }
+
+    pub fn length(&self) -> f64 {
+        self.cum[HN]
+    }
+
+    /// Position and heading at arc length `s`; beyond the end it continues straight.
+    pub fn at(&self, s: f64, end_yaw: f64) -> (DVec2, f64) {
+        if s >= self.cum[HN] {
+            return (self.pts[HN] + DVec2::from_angle(end_yaw) * (s - self.cum[HN]), end_yaw);
+        }
+        let i = self.cum.partition_point(|&c| c <= s).clamp(1, HN) - 1;
+        let seg = self.cum[i + 1] - self.cum[i];
+        let t = if seg > 0.0 { (s - self.cum[i]) / seg } else { 0.0 };
+        let d = self.pts[i + 1] - self.pts[i];
+        (self.pts[i].lerp(self.pts[i + 1], t), d.y.atan2(d.x))
+    }
+
+    /// Largest curvature along the curve (1/m).
+    pub fn max_curvature(&self) -> f64 {
+        let mut k: f64 = 0.0;
+        for i in 1..HN {
+            let (a, b) = (self.pts[i] - self.pts[i - 1], self.pts[i + 1] - self.pts[i]);
+            let ds = 0.5 * (a.length() + b.length());
+            if ds > 1e-6 {
+                k = k.max(wrap_angle(b.y.atan2(b.x) - a.y.atan2(a.x)).abs() / ds);
+            }
+        }
+        k
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resampled_arc_keeps_length_heading_and_curvature() {
+        let r = 20.0;
+        let pts: Vec<DVec2> =
+            (0..=90).map(|i| DVec2::from_angle(i as f64 / 90.0 * std::f64::consts::FRAC_PI_2) * r).collect();
+        let p = Path::new(&pts);
+        assert!((p.length() - r * std::f64::consts::FRAC_PI_2).abs() < 0.6);
+        let (q, h) = p.at(10.0);
+        assert!((q.length() - r).abs() < 0.05);
+        assert!((wrap_angle(h - (q.y.atan2(q.x) + std::f64::consts::FRAC_PI_2))).abs() < 0.02);
+        assert!((p.curvature(10.0) - 1.0 / r).abs() < 0.005);
+        let (s, d, beyond, _) = p.frenet(q + DVec2::from_angle(h).perp() * 1.5, 6.0);
+        assert!((s - 10.0).abs() < 0.05 && (d - 1.5).abs() < 0.05 && beyond == 0.0, "{s} {d}");
+    }
+
+    #[test]
+    fn hermite_ends_where_asked() {
+        let h = Hermite::new(DVec2::ZERO, 0.0, DVec2::new(30.0, 3.0), 0.0);
+        let (p, _) = h.at(h.length(), 0.0);
+        assert!(p.distance(DVec2::new(30.0, 3.0)) < 1e-9);
+        assert!(h.max_curvature() < 0.05);
+    }
+}

@@ -1,0 +1,932 @@
+//! The controller and the frame loop. Agents are set up once (routes, goals, limits); every frame
+//! then computes each agent's next state from everyone's current state (a Jacobi update, so the
+//! result does not depend on agent order), undoes moves that would overlap, and latches crashes.
+
+use super::path::{Hermite, Path};
+use super::stage::{self, Plan};
+use super::traffic;
+use super::{ImpactRecord, Limits, TrackAgent, Tracks, limits};
+use crate::check::scenario::{Class, Keyframe, LaneId, Lateral, Motion, Side, Stop, Turn};
+use crate::diag::Diagnostic;
+use crate::geom::{Obb, wrap_angle};
+use crate::place::{Placed, Pose};
+use crate::road::Map;
+use crate::sample::Concrete;
+use glam::DVec2;
+
+/// Length of the straight run appended after a route's last lane, m: agents that reach the end
+/// of the map keep going instead of piling up at the edge.
+const RUN_OUT: f64 = 300.0;
+/// Lateral manoeuvre durations, s.
+const LANE_CHANGE_S: f64 = 4.0;
+const ASIDE_S: f64 = 2.5;
+
+pub(super) enum Drive {
+    Static,
+    Replay(Vec<Keyframe>),
+    Mover,
+}
+
+pub(super) enum Lat {
+    Hold,
+    Shift {
+        target: f64,
+        dur: f64,
+    },
+    /// Ease to `target` once agent `who` closes in from behind.
+    Away {
+        who: usize,
+        target: f64,
+        dur: f64,
+    },
+}
+
+pub(super) enum StopGoal {
+    None,
+    /// Front bumper stops at this arc length.
+    Front(f64),
+    /// Queue behind agent (track index).
+    Behind(usize),
+    /// Centre stops at this arc length.
+    Centre(f64),
+}
+
+pub(super) struct Actor {
+    pub drive: Drive,
+    /// Heading follows the path with bounded turning radius (vehicles, bicycles); otherwise
+    /// holonomic.
+    pub vehicle: bool,
+    pub hl: f64,
+    pub hw: f64,
+    pub radius: f64,
+    pub lim: Limits,
+    pub path: Path,
+    pub init: Pose,
+    pub s0: f64,
+    pub d0: f64,
+    pub v0: f64,
+    pub v_goal: f64,
+    pub v_hold: f64,
+    pub start: f64,
+    pub lateral: Lat,
+    pub stop: StopGoal,
+    pub info: TrackAgent,
+}
+
+impl Actor {
+    fn obb(&self, st: &State) -> Obb {
+        Obb { center: st.pos, yaw: st.yaw, length: 2.0 * self.hl, width: 2.0 * self.hw }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct State {
+    pub pos: DVec2,
+    pub yaw: f64,
+    pub v: f64,
+    pub s: f64,
+    pub d: f64,
+    pub phase: f64,
+    pub triggered: bool,
+    pub stopped: bool,
+    pub frozen: bool,
+}
+
+/// A conflict with its agents as track indices.
+pub(super) struct Conf {
+    pub index: usize,
+    pub af: usize,
+    pub st: usize,
+    pub c: crate::check::scenario::Conflict,
+}
+
+pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Vec<Diagnostic>> {
+    // Concrete agent index -> track index.
+    let mut track_of = vec![None; c.agents.len()];
+    for (i, p) in placed.agents.iter().enumerate() {
+        if let Some(src) = p.source
+            && src < track_of.len()
+            && track_of[src].is_none()
+        {
+            track_of[src] = Some(i);
+        }
+    }
+    let mut errs = vec![];
+    let mut actors: Vec<Actor> = placed.agents.iter().map(|p| build_actor(c, map, p, &track_of, &mut errs)).collect();
+    if !errs.is_empty() {
+        return Err(errs);
+    }
+    if let Some(t) = c.traffic {
+        let boxes: Vec<Obb> = actors.iter().map(|a| a.obb(&initial(a))).collect();
+        for s in traffic::spawn(map, &boxes, t, c.seed) {
+            actors.push(background_actor(map, s));
+        }
+    }
+    let mut confs = vec![];
+    for (index, k) in c.conflicts.iter().enumerate() {
+        let (Some(Some(af)), Some(Some(st))) = (track_of.get(k.at_fault), track_of.get(k.struck)) else { continue };
+        // An agent strikes once: a second conflict naming the same at-fault agent is not staged.
+        if af == st || confs.iter().any(|x: &Conf| x.af == *af) {
+            continue;
+        }
+        confs.push(Conf { index, af: *af, st: *st, c: k.clone() });
+    }
+    let frames = c.frame_count();
+    let dt = if c.rate > 0.0 { 1.0 / c.rate } else { 0.1 };
+    let mut out = empty_tracks(&actors, c.rate, frames);
+    if confs.is_empty() {
+        Sim::new(&actors, &confs, &[], None, dt).run(&mut out);
+    } else {
+        let mut pass1 = empty_tracks(&actors, c.rate, frames);
+        Sim::new(&actors, &confs, &[], None, dt).run(&mut pass1);
+        let plans: Vec<Option<Plan>> =
+            confs.iter().map(|k| stage::choose(k, &actors, &pass1, dt, c.duration)).collect();
+        Sim::new(&actors, &confs, &plans, Some(&pass1), dt).run(&mut out);
+    }
+    Ok(out)
+}
+
+fn empty_tracks(actors: &[Actor], rate: f64, frames: usize) -> Tracks {
+    Tracks {
+        rate,
+        frames,
+        agents: actors.iter().map(|a| a.info.clone()).collect(),
+        poses: actors.iter().map(|_| Vec::with_capacity(frames)).collect(),
+        speeds: actors.iter().map(|_| Vec::with_capacity(frames)).collect(),
+        impacts: vec![],
+    }
+}
+
+fn initial(a: &Actor) -> State {
+    let v = match a.drive {
+        Drive::Mover => a.v0,
+        _ => 0.0,
+    };
+    State {
+        pos: DVec2::new(a.init.x, a.init.y),
+        yaw: a.init.yaw,
+        v,
+        s: a.s0,
+        d: a.d0,
+        phase: 0.0,
+        triggered: false,
+        stopped: false,
+        frozen: false,
+    }
+}
+
+// ---------------------------------------------------------------- set-up
+
+fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Class, drive: Drive) -> Actor {
+    let [l, w, _] = info.size;
+    Actor {
+        drive,
+        vehicle: motion == Motion::Vehicle,
+        hl: l / 2.0,
+        hw: w / 2.0,
+        radius: 0.5 * (l * l + w * w).sqrt(),
+        lim: limits(class, motion),
+        path: Path::default(),
+        init: pose,
+        s0: 0.0,
+        d0: 0.0,
+        v0: 0.0,
+        v_goal: 0.0,
+        v_hold: 0.0,
+        start: 0.0,
+        lateral: Lat::Hold,
+        stop: StopGoal::None,
+        info,
+    }
+}
+
+fn build_actor(
+    c: &Concrete,
+    map: &Map,
+    p: &crate::place::PlacedAgent,
+    track_of: &[Option<usize>],
+    errs: &mut Vec<Diagnostic>,
+) -> Actor {
+    let info = TrackAgent {
+        name: p.name.clone(),
+        kind: p.kind.clone(),
+        class: p.class,
+        motion: p.motion,
+        size: p.size,
+        background: false,
+    };
+    let ca = p.source.and_then(|i| c.agents.get(i));
+    let Some(ca) = ca.filter(|_| !p.is_object && p.motion != Motion::Static) else {
+        return base_actor(info, p.pose, p.motion, p.class, Drive::Static);
+    };
+    if let Some(keys) = ca.track.as_ref().filter(|k| !k.is_empty()) {
+        return base_actor(info, p.pose, p.motion, p.class, Drive::Replay(keys.clone()));
+    }
+    let mut a = base_actor(info, p.pose, p.motion, p.class, Drive::Mover);
+    let pos = DVec2::new(p.pose.x, p.pose.y);
+    let goal = ca.goal.as_ref();
+    let fail = |errs: &mut Vec<Diagnostic>, msg: String, help: &str| {
+        errs.push(Diagnostic::error("E0204", msg).label(ca.span, "this goal").help(help.to_string()));
+    };
+    a.v0 = p.speed.max(0.0);
+    a.v_hold = a.v0;
+    a.start = goal.map(|g| g.start_after.max(0.0)).unwrap_or(0.0);
+    let lateral = goal.map(|g| g.lateral).unwrap_or(Lateral::HoldLane);
+    let mut limit = f64::INFINITY;
+    let mut stop_line = None;
+    let mut lane_here = None;
+    if a.vehicle {
+        let found = find_lane(map, pos, p.pose.yaw);
+        let mut base = found.map(|(l, _, _)| l);
+        if let Lateral::ChangeLane(side) = lateral {
+            let target = base.and_then(|l| {
+                let id = map.lanes[l].id;
+                let index = match side {
+                    Side::Left => id.index.checked_sub(1)?,
+                    Side::Right => id.index + 1,
+                };
+                map.lanes.iter().position(|x| x.id == LaneId { index, ..id })
+            });
+            match target {
+                Some(t) => base = Some(t),
+                None => fail(
+                    errs,
+                    format!("`{}` cannot change lane {}: there is no lane on that side", ca.name, side_name(side)),
+                    "lane 1 is nearest the centre line: `left` moves to index-1, `right` to index+1",
+                ),
+            }
+        }
+        match base {
+            Some(l) => {
+                let lane = &map.lanes[l];
+                let turn = goal.and_then(|g| g.turn);
+                let (pts, ok) = chain(map, l, turn);
+                if !ok {
+                    fail(
+                        errs,
+                        format!(
+                            "`{}` cannot turn {}: no junction connector of that kind leaves its lane",
+                            ca.name,
+                            turn.map(turn_name).unwrap_or("")
+                        ),
+                        "place the agent on an in-lane of a junction that offers this turn",
+                    );
+                }
+                a.path = Path::new(&pts);
+                let (s, d) = lane.centre.project(pos);
+                (a.s0, a.d0) = (s, d);
+                limit = lane.speed_limit;
+                stop_line = lane.stop_line_s.filter(|&sl| sl > a.s0);
+                lane_here = Some(l);
+            }
+            None => {
+                a.path = Path::straight(pos, p.pose.yaw, RUN_OUT * 2.0);
+                if goal.is_some_and(|g| g.turn.is_some()) {
+                    fail(errs, format!("`{}` is not on a lane, so it cannot turn", ca.name), "start it on a lane");
+                }
+            }
+        }
+    } else if lateral == Lateral::Cross {
+        match cross_line(map, pos) {
+            Some((yaw, len)) => a.path = Path::straight(pos, yaw, len),
+            None => {
+                fail(errs, format!("`{}` has no road nearby to cross", ca.name), "place it beside a lane");
+                a.path = Path::straight(pos, p.pose.yaw, 1.0);
+            }
+        }
+    } else {
+        a.path = Path::straight(pos, p.pose.yaw, RUN_OUT);
+    }
+    a.path.set_caps(a.lim.lat_acc, a.lim.yaw_rate, a.lim.brake);
+    // An explicit goal speed may exceed the lane limit (an ambulance); a kept speed may not.
+    a.v_goal = match goal.and_then(|g| g.speed) {
+        Some(v) => v.max(0.0),
+        None if a.vehicle => a.v0.min(limit),
+        None => a.v0,
+    };
+    let lane = lane_here.map(|l| &map.lanes[l]);
+    let aside = |lane: Option<&crate::road::map::Lane>, hw: f64, d0: f64| -> f64 {
+        let (w, sh) = lane.map(|l| (l.width, l.shoulder_right)).unwrap_or((3.5, 0.0));
+        (-(w / 2.0 + sh - hw - 0.2)).min(d0)
+    };
+    a.lateral = match lateral {
+        Lateral::HoldLane | Lateral::Cross => Lat::Hold,
+        Lateral::ChangeLane(_) => Lat::Shift { target: 0.0, dur: LANE_CHANGE_S },
+        Lateral::PullToShoulder => Lat::Shift { target: aside(lane, a.hw, a.d0), dur: LANE_CHANGE_S },
+        Lateral::AwayFrom(k) => match track_of.get(k).copied().flatten() {
+            Some(who) => Lat::Away { who, target: aside(lane, a.hw, a.d0), dur: ASIDE_S },
+            None => Lat::Hold,
+        },
+    };
+    a.stop = match goal.and_then(|g| g.stop) {
+        None => StopGoal::None,
+        Some(Stop::AtStopLine) => match stop_line {
+            // Stop lines are painted across the lane; the front bumper halts just short of it.
+            Some(sl) => StopGoal::Front(sl - 0.3),
+            None => {
+                fail(
+                    errs,
+                    format!("`{}` has no stop line ahead on its lane", ca.name),
+                    "stop lines exist on the in-lanes of four_way, t_junction and roundabout roads",
+                );
+                StopGoal::None
+            }
+        },
+        Some(Stop::Behind(k)) => match track_of.get(k).copied().flatten() {
+            Some(t) => StopGoal::Behind(t),
+            None => StopGoal::None,
+        },
+        Some(Stop::After(dist)) => StopGoal::Centre(a.s0 + dist.max(0.0)),
+    };
+    a
+}
+
+fn background_actor(map: &Map, s: traffic::Spawn) -> Actor {
+    let lane = &map.lanes[s.lane];
+    let (p, yaw) = lane.centre.pose_at(s.s);
+    let info = TrackAgent {
+        name: s.name,
+        kind: s.kind.to_string(),
+        class: Class::Vehicle,
+        motion: Motion::Vehicle,
+        size: s.size,
+        background: true,
+    };
+    let mut a = base_actor(info, Pose { x: p.x, y: p.y, yaw }, Motion::Vehicle, Class::Vehicle, Drive::Mover);
+    let (pts, _) = chain(map, s.lane, None);
+    a.path = Path::new(&pts);
+    a.path.set_caps(a.lim.lat_acc, a.lim.yaw_rate, a.lim.brake);
+    a.s0 = s.s;
+    a.v0 = s.speed;
+    a.v_hold = s.speed;
+    a.v_goal = s.target;
+    a
+}
+
+fn side_name(s: Side) -> &'static str {
+    match s {
+        Side::Left => "left",
+        Side::Right => "right",
+    }
+}
+
+fn turn_name(t: Turn) -> &'static str {
+    match t {
+        Turn::Left => "left",
+        Turn::Right => "right",
+        Turn::Straight => "straight",
+        Turn::UTurn => "u_turn",
+    }
+}
+
+/// The lane a vehicle at `p` heading `yaw` is driving in: nearest centre line among lanes whose
+/// direction agrees, within the lane (and its shoulder).
+pub(super) fn find_lane(map: &Map, p: DVec2, yaw: f64) -> Option<(usize, f64, f64)> {
+    let mut best: Option<(usize, f64, f64)> = None;
+    for (i, l) in map.lanes.iter().enumerate() {
+        if l.centre.points.len() < 2 {
+            continue;
+        }
+        let (s, d) = l.centre.project(p);
+        if s < -0.5 || s > l.centre.length() + 0.5 {
+            continue;
+        }
+        let (_, h) = l.centre.pose_at(s);
+        if wrap_angle(yaw - h).abs() > 1.0 {
+            continue;
+        }
+        let reach = l.width / 2.0 + if d < 0.0 { l.shoulder_right } else { 0.0 } + 0.5;
+        if d.abs() > reach {
+            continue;
+        }
+        if best.is_none_or(|b| d.abs() < b.2.abs()) {
+            best = Some((i, s, d));
+        }
+    }
+    best
+}
+
+/// Points of the route starting with lane `l`: its centre, then at each lane end the connector
+/// of the requested turn (consumed at the first junction) or else straight on, then the next
+/// lane. `false` when a requested turn finds no connector before the route runs out.
+pub(super) fn chain(map: &Map, l: usize, turn: Option<Turn>) -> (Vec<DVec2>, bool) {
+    let mut pts: Vec<DVec2> = map.lanes[l].centre.points.clone();
+    let mut cur = l;
+    let mut pending = turn;
+    let mut ok = true;
+    let mut total = map.lanes[l].centre.length();
+    for _ in 0..6 {
+        if total > 800.0 {
+            break;
+        }
+        let mut from_here = map.connectors.iter().filter(|c| c.from == cur && c.to < map.lanes.len());
+        let pick = match pending {
+            Some(t) => match from_here.clone().find(|c| c.turn == t) {
+                Some(cn) => Some(cn),
+                None if map.lanes[cur].next.is_some() => None,
+                None => {
+                    ok = false;
+                    break;
+                }
+            },
+            None => from_here
+                .clone()
+                .find(|c| c.turn == Turn::Straight)
+                .or_else(|| if map.lanes[cur].next.is_some() { None } else { from_here.next() }),
+        };
+        let nxt = match pick {
+            Some(cn) => {
+                pts.extend_from_slice(&cn.path.points);
+                total += cn.path.length();
+                pending = None;
+                cn.to
+            }
+            None => match map.lanes[cur].next {
+                Some(n) if n < map.lanes.len() => n,
+                _ => break,
+            },
+        };
+        pts.extend_from_slice(&map.lanes[nxt].centre.points);
+        total += map.lanes[nxt].centre.length();
+        cur = nxt;
+    }
+    if pending.is_some() {
+        ok = false;
+    }
+    let n = pts.len();
+    if n >= 2 {
+        let dir = (pts[n - 1] - pts[n - 2]).normalize_or_zero();
+        pts.push(pts[n - 1] + dir * RUN_OUT);
+    }
+    (pts, ok)
+}
+
+/// Heading and length of a walk straight across the nearest road from `p`: perpendicular to
+/// the nearest lane, toward it, ending 2 m past the last lane or shoulder met.
+fn cross_line(map: &Map, p: DVec2) -> Option<(f64, f64)> {
+    let mut near: Option<(usize, f64, f64)> = None;
+    for (i, l) in map.lanes.iter().enumerate() {
+        if l.centre.points.len() < 2 {
+            continue;
+        }
+        let (s, d) = l.centre.project(p);
+        if near.is_none_or(|b| d.abs() < b.2.abs()) {
+            near = Some((i, s, d));
+        }
+    }
+    let (i, s, d) = near?;
+    let (_, h) = map.lanes[i].centre.pose_at(s);
+    let dir = DVec2::from_angle(h).perp() * if d > 0.0 { -1.0 } else { 1.0 };
+    let on_road = |q: DVec2| {
+        map.lanes.iter().any(|l| {
+            let (s, d) = l.centre.project(q);
+            s > 0.0 && s < l.centre.length() && d.abs() <= l.width / 2.0 + if d < 0.0 { l.shoulder_right } else { 0.0 }
+        })
+    };
+    let mut last = None;
+    for k in 0..=160 {
+        let dist = k as f64 * 0.5;
+        if on_road(p + dir * dist) {
+            last = Some(dist);
+        } else if last.is_some_and(|l| dist - l > 4.0) {
+            break;
+        }
+    }
+    Some((dir.y.atan2(dir.x), last? + 2.0))
+}
+
+// ---------------------------------------------------------------- the frame loop
+
+struct Sim<'a> {
+    actors: &'a [Actor],
+    confs: &'a [Conf],
+    /// Per conflict (pass 2 only).
+    plans: &'a [Option<Plan>],
+    pass1: Option<&'a Tracks>,
+    /// Per actor: the plan it strikes with, if any.
+    striker: Vec<Option<usize>>,
+    latched: Vec<bool>,
+    prev_depth: Vec<f64>,
+    dt: f64,
+    cur: Vec<State>,
+    next: Vec<State>,
+}
+
+impl<'a> Sim<'a> {
+    fn new(
+        actors: &'a [Actor],
+        confs: &'a [Conf],
+        plans: &'a [Option<Plan>],
+        pass1: Option<&'a Tracks>,
+        dt: f64,
+    ) -> Self {
+        let mut striker = vec![None; actors.len()];
+        for (k, p) in plans.iter().enumerate() {
+            if p.is_some() {
+                striker[confs[k].af] = Some(k);
+            }
+        }
+        let cur: Vec<State> = actors.iter().map(initial).collect();
+        Sim {
+            actors,
+            confs,
+            plans,
+            pass1,
+            striker,
+            latched: vec![false; confs.len()],
+            prev_depth: vec![0.0; confs.len()],
+            dt,
+            next: cur.clone(),
+            cur,
+        }
+    }
+
+    fn run(mut self, out: &mut Tracks) {
+        if out.frames == 0 {
+            return;
+        }
+        self.record(out);
+        for f in 1..out.frames {
+            let t = (f - 1) as f64 * self.dt;
+            for i in 0..self.actors.len() {
+                self.next[i] = self.step(i, t, f);
+            }
+            self.resolve_overlaps();
+            self.latch(f, out);
+            std::mem::swap(&mut self.cur, &mut self.next);
+            self.record(out);
+        }
+    }
+
+    fn record(&self, out: &mut Tracks) {
+        for (i, st) in self.cur.iter().enumerate() {
+            out.poses[i].push(Pose { x: st.pos.x, y: st.pos.y, yaw: st.yaw });
+            out.speeds[i].push(st.v);
+        }
+    }
+
+    /// Conflict pairs may come close and overlap; nobody else may.
+    #[inline]
+    fn exempt(&self, i: usize, j: usize) -> bool {
+        self.confs.iter().any(|k| (k.af == i && k.st == j) || (k.af == j && k.st == i))
+    }
+
+    /// The state of agent `i` at `t + dt`, from everyone's state at `t` (frame `f - 1`).
+    fn step(&self, i: usize, t: f64, f: usize) -> State {
+        let a = &self.actors[i];
+        let st = self.cur[i];
+        match &a.drive {
+            Drive::Static => st,
+            Drive::Replay(keys) => {
+                let (p, yaw) = replay(keys, t + self.dt);
+                State { pos: p, yaw, v: p.distance(st.pos) / self.dt, ..st }
+            }
+            Drive::Mover if st.frozen => State { v: 0.0, ..st },
+            Drive::Mover => match self.striker[i].and_then(|k| self.plans[k].as_ref().map(|p| (k, p))) {
+                Some((k, plan)) if t >= plan.t_depart - 1e-9 && !self.latched[k] => self.intercept(i, plan, t, f),
+                _ => self.drive(i, t),
+            },
+        }
+    }
+
+    fn drive(&self, i: usize, t: f64) -> State {
+        let (a, st, dt) = (&self.actors[i], self.cur[i], self.dt);
+        let lim = a.lim;
+        if st.stopped {
+            return State { v: 0.0, ..st };
+        }
+        let active = t >= a.start - 1e-9;
+        let v_des = if active { a.v_goal } else { a.v_hold }.min(a.path.cap(st.s));
+
+        // Lateral: where the profile would put us next, and the band we sweep meanwhile.
+        let mut triggered = st.triggered;
+        let (target, dur) = match a.lateral {
+            Lat::Hold => (None, 1.0),
+            Lat::Shift { target, dur } => (active.then_some(target), dur),
+            Lat::Away { who, target, dur } => {
+                if active && !triggered {
+                    let o = &self.cur[who];
+                    let (sk, lk, beyond, _) =
+                        a.path.frenet(o.pos, st.s + (o.pos - st.pos).dot(DVec2::from_angle(st.yaw)));
+                    let behind = st.s - sk;
+                    let closing = o.v - st.v;
+                    triggered = beyond < 1.0
+                        && behind > 0.0
+                        && behind < 40.0f64.max(closing * 5.0)
+                        && (lk - st.d).abs() < 4.0
+                        && (closing > 0.0 || behind < 15.0);
+                }
+                (triggered.then_some(target), dur)
+            }
+        };
+        let mut phase = st.phase;
+        let mut d_next = st.d;
+        if let Some(tg) = target {
+            phase = (st.phase + dt / dur).min(1.0);
+            d_next = a.d0 + (tg - a.d0) * quintic(phase);
+        }
+        let margin = if a.vehicle { 0.25 } else { 0.1 };
+        let goal_d = target.filter(|_| st.phase < 1.0).unwrap_or(st.d);
+        let (lo, hi) = (st.d.min(goal_d) - a.hw - margin, st.d.max(goal_d) + a.hw + margin);
+
+        let fwd = DVec2::from_angle(st.yaw);
+        let look = st.v * st.v / (2.0 * lim.brake) + 2.5 * st.v + 15.0;
+        let mut acc = idm_free(st.v, v_des, lim, dt);
+        let mut hard = f64::INFINITY;
+        let mut side_blocked = false;
+        let named = match a.stop {
+            StopGoal::Behind(k) if active => Some(k),
+            _ => None,
+        };
+        for (j, (o, b)) in self.cur.iter().zip(self.actors.iter()).enumerate() {
+            if j == i || self.exempt(i, j) {
+                continue;
+            }
+            let is_named = named == Some(j);
+            let dp = o.pos - st.pos;
+            let r = look + a.radius + b.radius;
+            if !is_named && dp.length_squared() > r * r {
+                continue;
+            }
+            let ahead = dp.dot(fwd);
+            // Well behind us and not beside a lateral move: cannot be in our way.
+            if ahead < -(a.hl + b.radius + 1.0) && !is_named && d_next == st.d {
+                continue;
+            }
+            let (sj, lj, beyond, h) = a.path.frenet(o.pos, st.s + ahead);
+            if beyond > 0.5 && !is_named {
+                continue;
+            }
+            let rel = o.yaw - h;
+            let (cr, sr) = (rel.cos(), rel.sin());
+            let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
+            let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
+            let ds = sj - st.s;
+            if d_next != st.d && ds.abs() < a.hl + ext_lon + 0.5 {
+                let (nlo, nhi) = (st.d.min(d_next) - a.hw - 0.1, st.d.max(d_next) + a.hw + 0.1);
+                let (jlo, jhi) = (lj - ext_lat, lj + ext_lat);
+                let now = jlo < st.d + a.hw && jhi > st.d - a.hw;
+                if jlo < nhi && jhi > nlo && !now {
+                    side_blocked = true;
+                }
+            }
+            // Gap acceptance: a lateral move not yet half done waits while the target band has
+            // someone too close ahead or closing from behind.
+            if d_next != st.d && st.phase < 0.5 {
+                let (jlo, jhi) = (lj - ext_lat, lj + ext_lat);
+                let in_target = jlo < goal_d + a.hw + 0.1 && jhi > goal_d - a.hw - 0.1;
+                let in_current = jlo < st.d + a.hw && jhi > st.d - a.hw;
+                if in_target && !in_current {
+                    let v_j = o.v * cr;
+                    let g = ds.abs() - a.hl - ext_lon;
+                    let (back, front) = if ds < 0.0 { (v_j, st.v) } else { (st.v, v_j) };
+                    if g < 2.0 + 0.8 * back + (back - front).max(0.0).powi(2) / 6.0 {
+                        side_blocked = true;
+                    }
+                }
+            }
+            if ds <= 0.0 {
+                continue;
+            }
+            let gap = ds - a.hl - ext_lon;
+            if gap > look && !is_named {
+                continue;
+            }
+            let (v_lon, v_lat) = (o.v * cr, o.v * sr);
+            // In the lane we are in now; or in the band we are moving into, and then only when
+            // ahead of our front (alongside is the gap acceptance's business).
+            let in_cur = lj - ext_lat < st.d + a.hw + margin && lj + ext_lat > st.d - a.hw - margin;
+            let in_now = in_cur || (gap > 0.0 && lj - ext_lat < hi && lj + ext_lat > lo);
+            let mut obstacle = in_now || is_named;
+            // Someone about to cut across our corridor (a crossing pedestrian, a car in the
+            // junction, a lane changer) counts as in it. Walkers do not wait for predicted
+            // vehicles: vehicles yield to them, which keeps the two from waiting on each other.
+            if !obstacle && a.vehicle && v_lat.abs() > 0.3 {
+                let horizon = (gap.max(0.0) / st.v.max(1.0)).min(4.0) + 1.0;
+                let l2 = lj + v_lat * horizon;
+                obstacle = lj.min(l2) - ext_lat < hi && lj.max(l2) + ext_lat > lo;
+            }
+            if !obstacle {
+                continue;
+            }
+            let s0 = if is_named { 2.0 } else { lim.min_gap };
+            acc = acc.min(idm_interaction(st.v, v_lon.max(0.0), gap, s0, lim));
+            if v_lon < 0.5 {
+                acc = acc.min(stop_law(st.v, gap - s0, lim, dt));
+            }
+            if in_cur || is_named {
+                let lead_move = (v_lon * dt - 0.5 * lim.brake_max * dt * dt).max(0.0);
+                hard = hard.min(gap - 0.2 + lead_move);
+            }
+        }
+        let mut stop_rem = None;
+        if active {
+            stop_rem = match a.stop {
+                StopGoal::Front(sf) => Some(sf - (st.s + a.hl)),
+                StopGoal::Centre(sc) => Some(sc - st.s),
+                _ => None,
+            };
+        }
+        if let Some(rem) = stop_rem {
+            acc = acc.min(stop_law(st.v, rem, lim, dt));
+            hard = hard.min(rem.max(0.0));
+        }
+        // Do not run off the end of the path.
+        hard = hard.min(a.path.length() - st.s);
+
+        let acc = acc.clamp(-lim.brake_max, lim.accel);
+        let mut v = (st.v + acc * dt).max(0.0);
+        let mut adv = 0.5 * (st.v + v) * dt;
+        if adv > hard.max(0.0) {
+            adv = hard.max(0.0);
+            v = v.min(adv / dt);
+        }
+        if side_blocked {
+            phase = st.phase;
+            d_next = st.d;
+        }
+        let s = st.s + adv;
+        let (pos, h) = a.path.point(s, d_next);
+        let d_rate = (d_next - st.d) / dt;
+        let yaw = if a.vehicle || adv > 1e-4 || d_rate.abs() > 1e-4 { h + d_rate.atan2(v.max(1.0)) } else { st.yaw };
+        let stopped = stop_rem.is_some_and(|r| r - adv < 0.3) && v < 0.05;
+        State {
+            pos,
+            yaw: turn_toward(st.yaw, yaw, a, 0.5 * (st.v + v), dt, 1.0),
+            v,
+            s,
+            d: d_next,
+            phase,
+            triggered,
+            stopped,
+            frozen: false,
+        }
+    }
+
+    /// One step of an at-fault agent's intercept: a Hermite curve from where it is to the pose
+    /// that makes contact, re-planned every frame against the struck agent's predicted pose,
+    /// traversed with the constant acceleration that arrives at the impact time.
+    fn intercept(&self, i: usize, plan: &Plan, t: f64, f: usize) -> State {
+        let (a, st, dt) = (&self.actors[i], self.cur[i], self.dt);
+        let lim = a.lim;
+        let so = self.cur[plan.struck];
+        let remaining = plan.t_impact - t;
+        let target = match self.pass1 {
+            // Where pass 1 put the struck agent at the impact frame, shifted by how far it now is
+            // from where pass 1 had it: bystanders may have delayed it.
+            Some(p1) if remaining > 1e-9 => {
+                let now = p1.poses[plan.struck][(f - 1).min(p1.frames - 1)];
+                let then = p1.poses[plan.struck][plan.frame.min(p1.frames - 1)];
+                Pose {
+                    x: then.x + so.pos.x - now.x,
+                    y: then.y + so.pos.y - now.y,
+                    yaw: then.yaw + wrap_angle(so.yaw - now.yaw),
+                }
+            }
+            _ => Pose { x: so.pos.x, y: so.pos.y, yaw: so.yaw },
+        };
+        let (g, gyaw) = stage::compose(target, plan.rel_pos, plan.rel_yaw);
+        let tau = remaining.max(dt);
+        let curve = Hermite::new(st.pos, st.yaw, g, gyaw);
+        let len = curve.length();
+        let acc = (2.0 * (len - st.v * tau) / (tau * tau)).clamp(-lim.brake_max, stage::STRIKE_ACCEL * lim.accel);
+        // Keep rolling: an intercept that stalls never makes contact.
+        let v = (st.v + acc * dt).max(1.0);
+        let adv = 0.5 * (st.v + v) * dt;
+        let (pos, h) = curve.at(adv, gyaw);
+        State { pos, yaw: turn_toward(st.yaw, h, a, 0.5 * (st.v + v), dt, stage::STRIKE_YAW), v, ..st }
+    }
+
+    /// Undo moves until no two boxes overlap (conflict pairs excepted). Undoing every move
+    /// restores the previous frame, which had no overlap, so this always ends.
+    fn resolve_overlaps(&mut self) {
+        let n = self.actors.len();
+        for _ in 0..=n {
+            let mut changed = false;
+            for i in 0..n {
+                for j in i + 1..n {
+                    let (ai, aj) = (&self.actors[i], &self.actors[j]);
+                    let (si, sj) = (&self.next[i], &self.next[j]);
+                    let r = ai.radius + aj.radius;
+                    if si.pos.distance_squared(sj.pos) >= r * r || self.exempt(i, j) {
+                        continue;
+                    }
+                    if !ai.obb(si).overlaps(&aj.obb(sj)) {
+                        continue;
+                    }
+                    for k in [i, j] {
+                        let moved = self.next[k].pos != self.cur[k].pos || self.next[k].yaw != self.cur[k].yaw;
+                        if matches!(self.actors[k].drive, Drive::Mover) && moved {
+                            self.next[k] = State { v: 0.0, ..self.cur[k] };
+                            changed = true;
+                        }
+                    }
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+    }
+
+    /// Latch each staged conflict at its deepest overlap: once the boxes meet, the frame where
+    /// the planned penetration is reached (or the impact time passes, or the overlap starts to
+    /// shrink) freezes both agents there.
+    fn latch(&mut self, f: usize, out: &mut Tracks) {
+        let t = f as f64 * self.dt;
+        for (k, conf) in self.confs.iter().enumerate() {
+            let Some(plan) = self.plans.get(k).and_then(|p| p.as_ref()) else { continue };
+            if self.latched[k] {
+                continue;
+            }
+            let (af, st) = (conf.af, conf.st);
+            let (a, b) = (self.actors[af].obb(&self.next[af]), self.actors[st].obb(&self.next[st]));
+            if !a.overlaps(&b) {
+                continue;
+            }
+            let depth = stage::depth(&a, &b);
+            if depth >= 0.8 * plan.delta || t >= plan.t_impact - 0.5 * self.dt || depth < self.prev_depth[k] {
+                self.latched[k] = true;
+                self.next[af].frozen = true;
+                self.next[st].frozen = true;
+                let p = stage::contact_centroid(&a, &b).unwrap_or((a.center + b.center) / 2.0);
+                let local = |o: &Obb| {
+                    let q = (p - o.center).rotate(DVec2::from_angle(-o.yaw));
+                    [q.x, q.y]
+                };
+                let sl = local(&b);
+                out.impacts.push(ImpactRecord {
+                    conflict: conf.index,
+                    frame: f,
+                    at_fault: af,
+                    struck: st,
+                    point_world: [p.x, p.y],
+                    at_fault_local: local(&a),
+                    struck_local: sl,
+                    struck_side: stage::side_of(DVec2::new(sl[0], sl[1]), b.length, b.width),
+                    depth,
+                });
+            } else {
+                self.prev_depth[k] = depth;
+            }
+        }
+    }
+}
+
+/// Smooth 0..1 profile with zero velocity and acceleration at both ends.
+fn quintic(x: f64) -> f64 {
+    let x = x.clamp(0.0, 1.0);
+    x * x * x * (10.0 - 15.0 * x + 6.0 * x * x)
+}
+
+/// Rotate `from` toward `to`, bounded by the class yaw rate and, for vehicles, by a 3 m turning
+/// radius at the distance travelled (a vehicle does not turn on the spot).
+fn turn_toward(from: f64, to: f64, a: &Actor, v: f64, dt: f64, scale: f64) -> f64 {
+    let mut rate = a.lim.yaw_rate * scale;
+    if a.vehicle {
+        rate = rate.min(v / 3.0);
+    }
+    let step = wrap_angle(to - from).clamp(-rate * dt, rate * dt);
+    wrap_angle(from + step)
+}
+
+fn idm_free(v: f64, v0: f64, lim: Limits, dt: f64) -> f64 {
+    if v0 < 0.05 {
+        return -(v / dt).min(lim.brake);
+    }
+    (lim.accel * (1.0 - (v / v0).powi(4))).max(-lim.brake)
+}
+
+fn idm_interaction(v: f64, v_lead: f64, gap: f64, s0: f64, lim: Limits) -> f64 {
+    let s_star = s0 + (v * lim.headway + v * (v - v_lead) / (2.0 * (lim.accel * lim.brake).sqrt())).max(0.0);
+    let g = gap.max(0.05);
+    lim.accel * (1.0 - (s_star / g) * (s_star / g))
+}
+
+/// Constant deceleration that halts exactly `rem` metres ahead, engaged once it reaches half the
+/// comfortable braking or the mark is near (so approach is at speed, and the stop lands on it).
+fn stop_law(v: f64, rem: f64, lim: Limits, dt: f64) -> f64 {
+    if rem <= 0.05 {
+        return -v / dt;
+    }
+    let b = v * v / (2.0 * rem);
+    // Close to the mark, always: car-following alone only creeps up on a standstill gap.
+    if b >= 0.5 * lim.brake || rem < 2.0 { -b } else { f64::INFINITY }
+}
+
+/// Keyframe interpolation: linear in position, shortest arc in yaw, held beyond either end.
+fn replay(keys: &[Keyframe], t: f64) -> (DVec2, f64) {
+    let k = keys.partition_point(|k| k.t <= t);
+    if k == 0 {
+        let f = &keys[0];
+        return (DVec2::new(f.x, f.y), f.yaw);
+    }
+    if k >= keys.len() {
+        let l = &keys[keys.len() - 1];
+        return (DVec2::new(l.x, l.y), l.yaw);
+    }
+    let (a, b) = (&keys[k - 1], &keys[k]);
+    let u = if b.t > a.t { (t - a.t) / (b.t - a.t) } else { 1.0 };
+    let p = DVec2::new(a.x, a.y).lerp(DVec2::new(b.x, b.y), u);
+    (p, wrap_angle(a.yaw + wrap_angle(b.yaw - a.yaw) * u))
+}

@@ -1,0 +1,376 @@
+//! Crash staging geometry: where the at-fault box must be, relative to the struck box, for its
+//! striking face to meet the requested side; the choice of impact and departure times from the
+//! first pass; and measurements of a contact (overlap centroid, depth, which side).
+
+use super::Tracks;
+use super::path::Hermite;
+use super::sim::{Actor, Conf, Drive};
+use crate::check::scenario::{Impact, Point};
+use crate::geom::{Obb, wrap_angle};
+use crate::place::Pose;
+use glam::DVec2;
+
+/// Intercepts may accelerate harder than comfortable driving (the driver is at fault), by this
+/// factor on the class limits.
+pub const STRIKE_ACCEL: f64 = 1.6;
+pub const STRIKE_YAW: f64 = 1.5;
+/// Heading of a sideswiping agent into the struck one, rad.
+const SWIPE_ANGLE: f64 = 0.15;
+/// Largest angle off a struck object's face normal that an at-fault agent approaches at, rad.
+const OBLIQUE: f64 = 0.6;
+
+pub(super) struct Plan {
+    pub struck: usize,
+    /// At-fault centre and yaw at the impact frame, in the struck agent's frame.
+    pub rel_pos: DVec2,
+    pub rel_yaw: f64,
+    pub t_depart: f64,
+    pub t_impact: f64,
+    pub frame: usize,
+    /// Planned penetration, m.
+    pub delta: f64,
+}
+
+/// World pose of a point given in the frame of `base`.
+pub(super) fn compose(base: Pose, rel: DVec2, rel_yaw: f64) -> (DVec2, f64) {
+    let p = DVec2::new(base.x, base.y) + rel.rotate(DVec2::from_angle(base.yaw));
+    (p, wrap_angle(base.yaw + rel_yaw))
+}
+
+fn point_signs(p: Point) -> (f64, f64) {
+    match p {
+        Point::Front => (1.0, 0.0),
+        Point::Rear => (-1.0, 0.0),
+        Point::Left => (0.0, 1.0),
+        Point::Right => (0.0, -1.0),
+        Point::FrontLeft => (1.0, 1.0),
+        Point::FrontRight => (1.0, -1.0),
+        Point::RearLeft => (-1.0, 1.0),
+        Point::RearRight => (-1.0, -1.0),
+    }
+}
+
+/// The at-fault pose at impact in the struck frame, and the planned penetration.
+/// `struck` and `af` are (length, width); `af_rel` is the at-fault's initial position and yaw in
+/// the struck frame, which decides what the request leaves open (which face of a corner an
+/// object is hit on, which side a sideswipe comes from, same or opposite direction).
+/// `drift` (sideswipes only) is how far the leading corner slides along the struck side, in its
+/// +x, between first touch and the planned penetration; first touch and the final overlap are
+/// centred on the target between them.
+pub(super) fn relative(
+    impact: Impact,
+    point: Point,
+    struck: (f64, f64),
+    af: (f64, f64),
+    af_rel: (DVec2, f64),
+    drift: f64,
+) -> (DVec2, f64, f64) {
+    let (sx, sy) = (struck.0 / 2.0, struck.1 / 2.0);
+    let (al, aw) = (af.0 / 2.0, af.1 / 2.0);
+    let (mut px, mut py) = point_signs(point);
+    let delta = if struck.0.min(struck.1) < 1.2 { 0.12 } else { 0.25 };
+    if impact == Impact::Sideswipe {
+        if py == 0.0 {
+            py = if af_rel.0.y >= 0.0 { 1.0 } else { -1.0 };
+        }
+        let same = af_rel.1.cos() >= 0.0;
+        let phi = if same { -py * SWIPE_ANGLE } else { std::f64::consts::PI + py * SWIPE_ANGLE };
+        // The at-fault side facing the struck box, and its leading corner.
+        let sa = if phi.cos() * -py > 0.0 { 1.0 } else { -1.0 };
+        let corner_local = DVec2::new(al, sa * aw);
+        // The overlap is a sliver running back from that corner; put its centroid on the target.
+        let sliver = delta / SWIPE_ANGLE.tan();
+        let x_t = px * 0.65 * sx;
+        let drift = drift.clamp(-1.5, 1.5);
+        let corner = DVec2::new(x_t + 0.5 * (phi.cos() * sliver / 3.0 + drift), py * (sy - delta));
+        return (corner - corner_local.rotate(DVec2::from_angle(phi)), phi, delta);
+    }
+    // Front-face strikes: pick the struck face (outward normal n, half length h along tangent
+    // t, depth from the centre) and where along it (sigma: -1, 0, +1 toward a corner).
+    match impact {
+        Impact::RearEnd => (px, py) = (-1.0, py),
+        Impact::HeadOn => (px, py) = (1.0, py),
+        _ => {}
+    }
+    let (n, h, depth, t, sigma) = if px != 0.0 && py != 0.0 {
+        let side_face = match impact {
+            Impact::RearEnd | Impact::HeadOn => false,
+            Impact::Angle => true,
+            // Objects and pedestrians: the face the at-fault agent approaches most squarely.
+            _ => {
+                let dir = DVec2::from_angle(af_rel.1);
+                dir.dot(DVec2::new(0.0, -py)) > dir.dot(DVec2::new(-px, 0.0))
+            }
+        };
+        if side_face {
+            (DVec2::new(0.0, py), sx, sy, DVec2::X, px)
+        } else {
+            (DVec2::new(px, 0.0), sy, sx, DVec2::Y, py)
+        }
+    } else if py != 0.0 {
+        (DVec2::new(0.0, py), sx, sy, DVec2::X, 0.0)
+    } else {
+        (DVec2::new(px, 0.0), sy, sx, DVec2::Y, 0.0)
+    };
+    let normal_yaw = (-n).y.atan2((-n).x);
+    let beta = wrap_angle(af_rel.1 - normal_yaw).clamp(-OBLIQUE, OBLIQUE);
+    if matches!(impact, Impact::Object | Impact::Pedestrian) && beta.abs() > 0.05 {
+        // A driver who runs into a thing keeps roughly its own course: approach up to 35 deg off
+        // the face normal, leading with the front corner nearest the face.
+        let phi = normal_yaw + beta;
+        let c_t = sigma * 0.7 * h;
+        let target = n * depth + t * c_t - n * delta;
+        let rot = DVec2::from_angle(phi);
+        let corner = [DVec2::new(al, aw), DVec2::new(al, -aw)]
+            .into_iter()
+            .min_by(|a, b| a.rotate(rot).dot(n).total_cmp(&b.rotate(rot).dot(n)))
+            .unwrap_or(DVec2::new(al, 0.0));
+        return (target - corner.rotate(rot), phi, delta);
+    }
+    let phi = normal_yaw;
+    // Toward a corner, overlap only the outer 60% of the half face (or the whole at-fault face
+    // when it is narrower), so the overlap's centroid stays in the corner's third.
+    let k = 0.6 * h;
+    let c = if sigma != 0.0 { sigma * (h - k.min(2.0 * aw) + aw) } else { 0.0 };
+    let face = n * depth + t * c;
+    (face + n * (al - delta), phi, delta)
+}
+
+/// Pick the impact frame and departure time for a conflict from pass 1.
+pub(super) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration: f64) -> Option<Plan> {
+    let (af, st) = (&actors[k.af], &actors[k.st]);
+    if !matches!(af.drive, Drive::Mover) || p1.frames < 4 {
+        return None;
+    }
+    let pa = &p1.poses[k.af];
+    let ps = &p1.poses[k.st];
+    let to_struck = |a: Pose, s: Pose| {
+        let rel = (DVec2::new(a.x, a.y) - DVec2::new(s.x, s.y)).rotate(DVec2::from_angle(-s.yaw));
+        (rel, wrap_angle(a.yaw - s.yaw))
+    };
+    let sizes = ((2.0 * st.hl, 2.0 * st.hw), (2.0 * af.hl, 2.0 * af.hw));
+    let start = to_struck(pa[0], ps[0]);
+    let (rel_pos0, rel_yaw, delta0) = relative(k.c.impact, k.c.point, sizes.0, sizes.1, start, 0.0);
+    // First frame pass 1 already has them touching: the intercept must leave before it.
+    let natural = (0..p1.frames).find(|&f| {
+        let a = Obb { center: DVec2::new(pa[f].x, pa[f].y), yaw: pa[f].yaw, length: 2.0 * af.hl, width: 2.0 * af.hw };
+        let b = Obb { center: DVec2::new(ps[f].x, ps[f].y), yaw: ps[f].yaw, length: 2.0 * st.hl, width: 2.0 * st.hw };
+        a.overlaps(&b)
+    });
+    let last = p1.frames - 1;
+    let t_req = k.c.at.unwrap_or(duration / 2.0).clamp(2.0 * dt, last as f64 * dt);
+    let lo = ((t_req - 1.5) / dt).round().max(2.0) as usize;
+    let hi = (((t_req + 1.5) / dt).round() as usize).min(last);
+    let lim = af.lim;
+    let mut best: Option<(f64, Plan)> = None;
+    for (fi, &struck_at) in ps.iter().enumerate().take(hi + 1).skip(lo) {
+        let t_imp = fi as f64 * dt;
+        for tau in [1.5, 2.0, 2.5, 3.0, 4.0] {
+            let fd = ((t_imp - tau) / dt).round().max(0.0) as usize;
+            if fd + 3 > fi {
+                continue;
+            }
+            let tau = (fi - fd) as f64 * dt;
+            let s = pa[fd];
+            let v = p1.speeds[k.af][fd];
+            let (g0, _) = compose(struck_at, rel_pos0, rel_yaw);
+            let v_end0 = 2.0 * DVec2::new(s.x, s.y).distance(g0) / tau - v;
+            // Sideswipes: where the corner first touches depends on the relative motion.
+            let (v_rel, v_lat) = (v_end0 * rel_yaw.cos() - p1.speeds[k.st][fi], (v_end0 * rel_yaw.sin()).abs());
+            let drift = if k.c.impact == Impact::Sideswipe { v_rel * delta0 / v_lat.max(0.3) } else { 0.0 };
+            let (rel_pos, _, delta) = relative(k.c.impact, k.c.point, sizes.0, sizes.1, start, drift);
+            let (g, gyaw) = compose(struck_at, rel_pos, rel_yaw);
+            let curve = Hermite::new(DVec2::new(s.x, s.y), s.yaw, g, gyaw);
+            let len = curve.length();
+            let acc = 2.0 * (len - v * tau) / (tau * tau);
+            let v_end = v + acc * tau;
+            let lat = v.max(v_end).powi(2) * curve.max_curvature();
+            // Closing speed along the approach: the at-fault's motion into the struck box.
+            let struck_v = DVec2::from_angle(struck_at.yaw) * p1.speeds[k.st][fi];
+            let inward = if k.c.impact == Impact::Sideswipe {
+                let side = if rel_pos.y >= 0.0 { -1.0 } else { 1.0 };
+                DVec2::new(0.0, side).rotate(DVec2::from_angle(struck_at.yaw))
+            } else {
+                DVec2::from_angle(gyaw)
+            };
+            let closing = (DVec2::from_angle(gyaw) * v_end - struck_v).dot(inward);
+            let mut cost = 3.0 * (t_imp - t_req).abs() + acc.abs() / lim.accel + 2.0 * (lat - lim.lat_acc).max(0.0);
+            if acc > STRIKE_ACCEL * lim.accel || acc < -lim.brake_max {
+                cost += 20.0 + acc.abs();
+            }
+            if v_end < 1.0 {
+                cost += 20.0;
+            }
+            if closing < 0.5 {
+                cost += 10.0;
+            }
+            // A long slide along the struck side spreads the contact over more than one sector.
+            cost += 3.0 * drift.abs();
+            if natural.is_some_and(|n| n <= fd) {
+                cost += 50.0;
+            }
+            if best.as_ref().is_none_or(|b| cost < b.0) {
+                let plan = Plan {
+                    struck: k.st,
+                    rel_pos,
+                    rel_yaw,
+                    t_depart: fd as f64 * dt,
+                    t_impact: t_imp,
+                    frame: fi,
+                    delta,
+                };
+                best = Some((cost, plan));
+            }
+        }
+    }
+    best.map(|b| b.1)
+}
+
+/// Penetration depth of two overlapping boxes: the smallest overlap over the separating axes.
+pub(super) fn depth(a: &Obb, b: &Obb) -> f64 {
+    let (ca, cb) = (a.corners(), b.corners());
+    let axes = [
+        DVec2::from_angle(a.yaw),
+        DVec2::from_angle(a.yaw).perp(),
+        DVec2::from_angle(b.yaw),
+        DVec2::from_angle(b.yaw).perp(),
+    ];
+    axes.iter()
+        .map(|&ax| {
+            let (a0, a1) = span(&ca, ax);
+            let (b0, b1) = span(&cb, ax);
+            (a1.min(b1) - a0.max(b0)).max(0.0)
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+fn span(c: &[DVec2; 4], ax: DVec2) -> (f64, f64) {
+    c.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p.dot(ax)), hi.max(p.dot(ax))))
+}
+
+/// Centroid of the overlap of two boxes (world frame), `None` when they do not overlap.
+pub fn contact_centroid(a: &Obb, b: &Obb) -> Option<DVec2> {
+    // Sutherland-Hodgman: clip a's corners by each edge of b (both counter-clockwise).
+    let mut poly: Vec<DVec2> = a.corners().to_vec();
+    let cb = b.corners();
+    for e in 0..4 {
+        let (p, q) = (cb[e], cb[(e + 1) % 4]);
+        let inside = |x: DVec2| (q - p).perp_dot(x - p) >= 0.0;
+        let mut outp = Vec::with_capacity(poly.len() + 2);
+        for i in 0..poly.len() {
+            let (cur, prev) = (poly[i], poly[(i + poly.len() - 1) % poly.len()]);
+            let (ic, ip) = (inside(cur), inside(prev));
+            if ic != ip {
+                let d = cur - prev;
+                let den = (q - p).perp_dot(d);
+                if den.abs() > 1e-12 {
+                    let u = (q - p).perp_dot(p - prev) / den;
+                    outp.push(prev + d * u);
+                }
+            }
+            if ic {
+                outp.push(cur);
+            }
+        }
+        poly = outp;
+        if poly.is_empty() {
+            return None;
+        }
+    }
+    let (mut area, mut c) = (0.0, DVec2::ZERO);
+    for i in 0..poly.len() {
+        let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
+        let cr = p.perp_dot(q);
+        area += cr;
+        c += (p + q) * cr;
+    }
+    if area.abs() < 1e-12 {
+        return Some(poly.iter().copied().sum::<DVec2>() / poly.len() as f64);
+    }
+    Some(c / (3.0 * area))
+}
+
+/// Which side of a box (length, width) a point in its frame lies on: each face is cut in thirds;
+/// the outer thirds of the faces are corners.
+pub fn side_of(local: DVec2, length: f64, width: f64) -> Point {
+    let u = local.x / (length / 2.0);
+    let v = local.y / (width / 2.0);
+    let lon = if u > 1.0 / 3.0 {
+        1
+    } else if u < -1.0 / 3.0 {
+        -1
+    } else {
+        0
+    };
+    let lat = if v > 1.0 / 3.0 {
+        1
+    } else if v < -1.0 / 3.0 {
+        -1
+    } else {
+        0
+    };
+    match (lon, lat) {
+        (1, 0) => Point::Front,
+        (-1, 0) => Point::Rear,
+        (0, 1) => Point::Left,
+        (0, -1) => Point::Right,
+        (1, 1) => Point::FrontLeft,
+        (1, -1) => Point::FrontRight,
+        (-1, 1) => Point::RearLeft,
+        (-1, -1) => Point::RearRight,
+        // Deep in the middle: the nearer face.
+        _ if u.abs() * length >= v.abs() * width => {
+            if u >= 0.0 {
+                Point::Front
+            } else {
+                Point::Rear
+            }
+        }
+        _ if v >= 0.0 => Point::Left,
+        _ => Point::Right,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::check::scenario::POINTS;
+
+    /// Every static staging lands the overlap centroid in the requested sector.
+    #[test]
+    fn staged_poses_touch_the_requested_side() {
+        let struck = (4.6, 1.85);
+        let af = (4.8, 1.9);
+        let cases: &[(Impact, &[Point])] = &[
+            (Impact::RearEnd, &[Point::Rear, Point::RearLeft, Point::RearRight]),
+            (Impact::HeadOn, &[Point::Front, Point::FrontLeft, Point::FrontRight]),
+            (Impact::Angle, &[Point::Left, Point::Right, Point::FrontLeft, Point::RearRight]),
+            (Impact::Sideswipe, &[Point::Left, Point::Right, Point::FrontRight, Point::RearLeft]),
+            (Impact::Object, &[Point::Front, Point::Rear, Point::Left, Point::FrontLeft, Point::RearRight]),
+        ];
+        for &(impact, points) in cases {
+            for &p in points {
+                for same in [0.0, std::f64::consts::PI] {
+                    let (c, yaw, delta) = relative(impact, p, struck, af, (DVec2::new(-10.0, -3.0), same), 0.0);
+                    let a = Obb { center: c, yaw, length: af.0, width: af.1 };
+                    let b = Obb { center: DVec2::ZERO, yaw: 0.0, length: struck.0, width: struck.1 };
+                    assert!(a.overlaps(&b), "{impact:?} {p:?}");
+                    let d = depth(&a, &b);
+                    assert!(d > 0.5 * delta && d < 2.0 * delta, "{impact:?} {p:?} depth {d}");
+                    let q = contact_centroid(&a, &b).expect("overlap");
+                    let name = POINTS.iter().find(|x| x.1 == p).map(|x| x.0);
+                    assert_eq!(side_of(q, struck.0, struck.1), p, "{impact:?} {name:?} {q}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn centroid_of_a_corner_overlap() {
+        let a = Obb { center: DVec2::ZERO, yaw: 0.0, length: 2.0, width: 2.0 };
+        let b = Obb { center: DVec2::new(1.5, 1.5), yaw: 0.0, length: 2.0, width: 2.0 };
+        let c = contact_centroid(&a, &b).expect("overlap");
+        assert!(c.distance(DVec2::new(0.75, 0.75)) < 1e-9, "{c}");
+        assert!((depth(&a, &b) - 0.5).abs() < 1e-9);
+    }
+}

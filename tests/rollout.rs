@@ -1,0 +1,755 @@
+//! The rollout pass on hand-made maps: queues and stop lines, staged conflicts landing on the
+//! requested side at the requested time, turns and lateral goals, background traffic, and
+//! property tests (no overlaps, class limits, determinism) over generated scenes.
+
+use glam::DVec2;
+use proptest::prelude::*;
+use rocc::check::scenario::*;
+use rocc::geom::{Obb, Polyline, wrap_angle};
+use rocc::place::{Placed, PlacedAgent, Pose};
+use rocc::road::Map;
+use rocc::road::map::{Connector, Lane};
+use rocc::rollout::{Tracks, contact_centroid, limits, rollout};
+use rocc::sample::{Concrete, ConcreteAgent};
+use std::f64::consts::{FRAC_PI_2, PI};
+
+// ------------------------------------------------------------------ hand-made maps
+
+const W: f64 = 3.5;
+
+fn lane(id: LaneId, pts: Vec<DVec2>, limit: f64, stop: Option<f64>, shoulder: f64) -> Lane {
+    let centre = Polyline::new(pts);
+    let len = centre.length();
+    Lane {
+        id,
+        centre,
+        width: W,
+        speed_limit: limit,
+        center_s: len / 2.0,
+        junction_s: stop.map(|s| s + 1.0),
+        stop_line_s: stop,
+        shoulder_right: shoulder,
+        next: None,
+    }
+}
+
+fn id(arm: Arm, dir: Dir, index: u32) -> LaneId {
+    LaneId { arm, dir, index }
+}
+
+/// A straight road along x from -150 to 150 m, `n` lanes each way, 2.5 m shoulders. `west.in`
+/// lanes drive east (y < 0, index 1 nearest the centre line); `east.in` lanes drive west.
+fn straight(n: u32) -> Map {
+    let mut m = Map::default();
+    for k in 1..=n {
+        let y = (k as f64 - 0.5) * W;
+        let sh = if k == n { 2.5 } else { 0.0 };
+        let line =
+            |y: f64, x0: f64, x1: f64| (0..=30).map(|i| DVec2::new(x0 + (x1 - x0) * i as f64 / 30.0, y)).collect();
+        m.lanes.push(lane(id(Arm::West, Dir::In, k), line(-y, -150.0, 150.0), 14.0, None, sh));
+        m.lanes.push(lane(id(Arm::East, Dir::In, k), line(y, 150.0, -150.0), 14.0, None, sh));
+    }
+    m
+}
+
+fn arm_dir(arm: Arm) -> DVec2 {
+    match arm {
+        Arm::North => DVec2::Y,
+        Arm::South => -DVec2::Y,
+        Arm::East => DVec2::X,
+        _ => -DVec2::X,
+    }
+}
+
+const J: f64 = 9.0;
+const ARM: f64 = 60.0;
+
+/// A four-way junction at the origin, one lane each way on every arm, arms 60 m long, stop
+/// lines 1 m before the junction, connectors for every turn (cubic Beziers).
+fn four_way() -> Map {
+    let mut m = Map::default();
+    let arms = [Arm::North, Arm::East, Arm::South, Arm::West];
+    for arm in arms {
+        let u = arm_dir(arm);
+        let right_in = DVec2::new(-u.y, u.x); // right of a car driving -u
+        // A 4 m median leaves room for a U-turn at a car's turning radius.
+        let off = 0.5 * W + 2.0;
+        let a = u * (J + ARM) + right_in * off;
+        let b = u * J + right_in * off;
+        let pts = (0..=20).map(|i| a.lerp(b, i as f64 / 20.0)).collect();
+        m.lanes.push(lane(id(arm, Dir::In, 1), pts, 11.0, Some(ARM - 1.0), 0.0));
+        let (c, d) = (u * J - right_in * off, u * (J + ARM) - right_in * off);
+        let pts = (0..=20).map(|i| c.lerp(d, i as f64 / 20.0)).collect();
+        m.lanes.push(lane(id(arm, Dir::Out, 1), pts, 11.0, None, 0.0));
+    }
+    for (fi, from) in m.lanes.iter().enumerate() {
+        if from.id.dir != Dir::In {
+            continue;
+        }
+        for (ti, to) in m.lanes.iter().enumerate() {
+            if to.id.dir != Dir::Out {
+                continue;
+            }
+            let din = -arm_dir(from.id.arm);
+            let dout = arm_dir(to.id.arm);
+            let turn = if from.id.arm == to.id.arm {
+                Turn::UTurn
+            } else if din.dot(dout) > 0.9 {
+                Turn::Straight
+            } else if din.perp_dot(dout) > 0.0 {
+                Turn::Left
+            } else {
+                Turn::Right
+            };
+            let p0 = *from.centre.points.last().expect("lane has points");
+            let p3 = to.centre.points[0];
+            let k = if turn == Turn::UTurn { 4.0 / 3.0 * 0.5 * p0.distance(p3) } else { 0.55 * p0.distance(p3) };
+            let (p1, p2) = (p0 + din * k, p3 - dout * k);
+            let pts = (0..=24)
+                .map(|i| {
+                    let t = i as f64 / 24.0;
+                    let s = 1.0 - t;
+                    p0 * s * s * s + p1 * 3.0 * s * s * t + p2 * 3.0 * s * t * t + p3 * t * t * t
+                })
+                .collect();
+            m.connectors.push(Connector { from: fi, to: ti, turn, path: Polyline::new(pts) });
+        }
+    }
+    m
+}
+
+// ------------------------------------------------------------------ scenes
+
+struct Spec {
+    name: &'static str,
+    class: Class,
+    motion: Motion,
+    size: [f64; 3],
+    pose: Pose,
+    speed: f64,
+    goal: Option<Goal<f64>>,
+    object: bool,
+    track: Option<Vec<Keyframe>>,
+}
+
+const CAR: [f64; 3] = [4.6, 1.85, 1.5];
+
+fn goal() -> Goal<f64> {
+    Goal { speed: None, lateral: Lateral::HoldLane, stop: None, turn: None, start_after: 0.0 }
+}
+
+fn car(name: &'static str, pose: Pose, speed: f64, g: Option<Goal<f64>>) -> Spec {
+    Spec {
+        name,
+        class: Class::Vehicle,
+        motion: Motion::Vehicle,
+        size: CAR,
+        pose,
+        speed,
+        goal: g,
+        object: false,
+        track: None,
+    }
+}
+
+/// Pose on a lane of `m`, `s` metres from its start, `off` to the left.
+fn on(m: &Map, l: LaneId, s: f64, off: f64) -> Pose {
+    let lane = m.lane(l).expect("lane exists");
+    let (p, yaw) = lane.centre.pose_at(s);
+    let p = p + DVec2::from_angle(yaw).perp() * off;
+    Pose { x: p.x, y: p.y, yaw }
+}
+
+fn scene(specs: Vec<Spec>, conflicts: Vec<Conflict>, traffic: Option<Traffic>, duration: f64) -> (Concrete, Placed) {
+    let road = Road {
+        template: Template::Straight,
+        lanes: 2,
+        lane_width: W,
+        speed_limit: 14.0,
+        shoulder: 2.5,
+        median: 0.0,
+        crosswalks: false,
+        sidewalks: false,
+        length: 300.0,
+        radius: 0.0,
+        angle: 0.0,
+    };
+    let agents: Vec<ConcreteAgent> = specs
+        .iter()
+        .map(|s| ConcreteAgent {
+            name: s.name.to_string(),
+            kind: s.name.to_string(),
+            class: s.class,
+            motion: s.motion,
+            is_object: s.object,
+            size: s.size,
+            place: Place::World { x: s.pose.x, y: s.pose.y, heading: Some(s.pose.yaw) },
+            speed: s.speed,
+            goal: s.goal.clone(),
+            track: s.track.clone(),
+            span: Default::default(),
+            place_span: Default::default(),
+        })
+        .collect();
+    let placed = Placed {
+        agents: specs
+            .iter()
+            .enumerate()
+            .map(|(i, s)| PlacedAgent {
+                name: s.name.to_string(),
+                kind: s.name.to_string(),
+                class: s.class,
+                motion: s.motion,
+                is_object: s.object,
+                size: s.size,
+                pose: s.pose,
+                speed: s.speed,
+                source: Some(i),
+                span: Default::default(),
+            })
+            .collect(),
+    };
+    let c = Concrete {
+        name: "t".into(),
+        seed: 7,
+        duration,
+        rate: 10.0,
+        egos: vec![0],
+        road,
+        agents,
+        rows: vec![],
+        conflicts,
+        traffic,
+        kinds: Default::default(),
+    };
+    (c, placed)
+}
+
+fn obb(t: &Tracks, i: usize, f: usize) -> Obb {
+    let p = t.poses[i][f];
+    Obb { center: DVec2::new(p.x, p.y), yaw: p.yaw, length: t.agents[i].size[0], width: t.agents[i].size[1] }
+}
+
+/// Pairs whose boxes overlap in some frame, other than the listed conflict pairs.
+fn overlaps(t: &Tracks, allowed: &[(usize, usize)]) -> Vec<(usize, usize, usize)> {
+    let mut bad = vec![];
+    for f in 0..t.frames {
+        for i in 0..t.agents.len() {
+            for j in i + 1..t.agents.len() {
+                if allowed.iter().any(|&(a, b)| (a, b) == (i, j) || (a, b) == (j, i)) {
+                    continue;
+                }
+                if obb(t, i, f).overlaps(&obb(t, j, f)) {
+                    bad.push((f, i, j));
+                }
+            }
+        }
+    }
+    bad
+}
+
+fn run(specs: Vec<Spec>, conflicts: Vec<Conflict>, map: &Map, duration: f64) -> Tracks {
+    let (c, p) = scene(specs, conflicts, None, duration);
+    rollout(&c, map, &p).expect("rollout succeeds")
+}
+
+fn front_gap(t: &Tracks, back: usize, front: usize, f: usize) -> f64 {
+    let (a, b) = (t.poses[back][f], t.poses[front][f]);
+    DVec2::new(b.x - a.x, b.y - a.y).length() - t.agents[back].size[0] / 2.0 - t.agents[front].size[0] / 2.0
+}
+
+// ------------------------------------------------------------------ longitudinal
+
+#[test]
+fn queue_stops_with_a_gap_and_never_touches() {
+    let m = straight(2);
+    let l = id(Arm::West, Dir::In, 1);
+    let lead = car("lead", on(&m, l, 120.0, 0.0), 0.0, Some(Goal { speed: Some(0.0), ..goal() }));
+    let b = car("b", on(&m, l, 70.0, 0.0), 10.0, Some(Goal { stop: Some(Stop::Behind(0)), ..goal() }));
+    let c = car("c", on(&m, l, 40.0, 0.0), 12.0, Some(Goal { stop: Some(Stop::Behind(1)), ..goal() }));
+    let t = run(vec![lead, b, c], vec![], &m, 15.0);
+    assert!(overlaps(&t, &[]).is_empty());
+    let last = t.frames - 1;
+    for (back, front) in [(1, 0), (2, 1)] {
+        let g = front_gap(&t, back, front, last);
+        assert!((1.5..=3.0).contains(&g), "gap {back}->{front} = {g}");
+        assert!(t.speeds[back][last] < 0.05);
+        for f in 0..t.frames {
+            assert!(front_gap(&t, back, front, f) > 1.0, "frame {f} gap too small");
+        }
+    }
+}
+
+#[test]
+fn stop_at_stop_line_stops_before_the_line() {
+    let m = four_way();
+    let l = id(Arm::South, Dir::In, 1);
+    let stop_s = ARM - 1.0;
+    let ego = car("ego", on(&m, l, 20.0, 0.0), 11.0, Some(Goal { stop: Some(Stop::AtStopLine), ..goal() }));
+    let t = run(vec![ego], vec![], &m, 10.0);
+    let lane = m.lane(l).expect("lane");
+    for f in 0..t.frames {
+        let p = t.poses[0][f];
+        let (s, _) = lane.centre.project(DVec2::new(p.x, p.y));
+        assert!(s + CAR[0] / 2.0 <= stop_s + 1e-6, "front past the stop line at frame {f}");
+    }
+    let p = t.poses[0][t.frames - 1];
+    let (s, _) = lane.centre.project(DVec2::new(p.x, p.y));
+    assert!(stop_s - (s + CAR[0] / 2.0) < 1.0, "stopped too early: {}", stop_s - s);
+    assert!(t.speeds[0][t.frames - 1] < 0.05);
+}
+
+#[test]
+fn stop_after_a_distance_and_follow_a_slower_leader() {
+    let m = straight(1);
+    let l = id(Arm::West, Dir::In, 1);
+    let a = car("a", on(&m, l, 10.0, 0.0), 10.0, Some(Goal { stop: Some(Stop::After(40.0)), ..goal() }));
+    let lead = car("lead", on(&m, l, 160.0, 0.0), 5.0, None);
+    let fast = car("fast", on(&m, l, 110.0, 0.0), 14.0, None);
+    let t = run(vec![a, lead, fast], vec![], &m, 12.0);
+    assert!(overlaps(&t, &[]).is_empty());
+    let end = t.poses[0][t.frames - 1].x - t.poses[0][0].x;
+    assert!((end - 40.0).abs() < 0.5, "stopped after {end} m");
+    // The fast car settles behind the slow one.
+    assert!(front_gap(&t, 2, 1, t.frames - 1) > 2.0);
+    assert!((t.speeds[2][t.frames - 1] - 5.0).abs() < 1.0, "{}", t.speeds[2][t.frames - 1]);
+}
+
+#[test]
+fn start_after_holds_the_initial_state() {
+    let m = straight(1);
+    let l = id(Arm::West, Dir::In, 1);
+    let a = car("a", on(&m, l, 10.0, 0.0), 0.0, Some(Goal { speed: Some(10.0), start_after: 2.0, ..goal() }));
+    let t = run(vec![a], vec![], &m, 5.0);
+    assert!(t.speeds[0][20] < 1e-9 && t.speeds[0][40] > 2.0);
+}
+
+// ------------------------------------------------------------------ conflicts
+
+/// The contact, measured on the boxes by sampling: the mean of at-fault box points inside the
+/// struck box, in the struck frame and in the at-fault frame.
+fn measured_contact(t: &Tracks, af: usize, st: usize, f: usize) -> (DVec2, DVec2) {
+    let (a, b) = (obb(t, af, f), obb(t, st, f));
+    let (mut sum, mut n) = (DVec2::ZERO, 0);
+    for i in 0..=80 {
+        for j in 0..=40 {
+            let q = DVec2::new((i as f64 / 80.0 - 0.5) * a.length, (j as f64 / 40.0 - 0.5) * a.width);
+            let w = a.center + q.rotate(DVec2::from_angle(a.yaw));
+            let l = (w - b.center).rotate(DVec2::from_angle(-b.yaw));
+            if l.x.abs() < b.length / 2.0 && l.y.abs() < b.width / 2.0 {
+                sum += w;
+                n += 1;
+            }
+        }
+    }
+    assert!(n > 0, "no contact at frame {f}");
+    let w = sum / n as f64;
+    ((w - b.center).rotate(DVec2::from_angle(-b.yaw)), (w - a.center).rotate(DVec2::from_angle(-a.yaw)))
+}
+
+/// Thirds of each face, as in the language reference: outer thirds are corners.
+fn sector(p: DVec2, l: f64, w: f64) -> Point {
+    let (u, v) = (p.x / (l / 2.0), p.y / (w / 2.0));
+    let lon = if u > 1.0 / 3.0 {
+        1
+    } else if u < -1.0 / 3.0 {
+        -1
+    } else {
+        0
+    };
+    let lat = if v > 1.0 / 3.0 {
+        1
+    } else if v < -1.0 / 3.0 {
+        -1
+    } else {
+        0
+    };
+    match (lon, lat) {
+        (1, 1) => Point::FrontLeft,
+        (1, -1) => Point::FrontRight,
+        (-1, 1) => Point::RearLeft,
+        (-1, -1) => Point::RearRight,
+        (1, _) => Point::Front,
+        (-1, _) => Point::Rear,
+        (_, 1) => Point::Left,
+        _ => Point::Right,
+    }
+}
+
+fn conflict(at_fault: usize, struck: usize, impact: Impact, point: Point, at: Option<f64>) -> Conflict {
+    Conflict { at_fault, struck, impact, point, at, span: Default::default() }
+}
+
+/// Run a staged conflict (agent 0 strikes agent 1) and check side, time, face and latching.
+fn check_conflict(specs: Vec<Spec>, map: &Map, impact: Impact, point: Point, at: f64) -> Tracks {
+    let t = run(specs, vec![conflict(0, 1, impact, point, Some(at))], map, 12.0);
+    let rec = t.impacts.first().unwrap_or_else(|| panic!("{impact:?} {point:?}: no impact"));
+    let f = rec.frame;
+    let when = f as f64 / t.rate;
+    assert!((when - at).abs() <= 1.0, "{impact:?} {point:?}: impact at {when} s, asked {at}");
+    let (in_struck, in_af) = measured_contact(&t, 0, 1, f);
+    let s = t.agents[1].size;
+    assert_eq!(sector(in_struck, s[0], s[1]), point, "{impact:?}: contact {in_struck} on the struck box");
+    assert_eq!(rec.struck_side, point);
+    let a = t.agents[0].size;
+    if impact == Impact::Sideswipe {
+        assert!(in_af.y.abs() > 0.6 * a[1] / 2.0, "{impact:?} {point:?}: not the side: {in_af}");
+    } else {
+        assert!(in_af.x > 0.6 * a[0] / 2.0, "{impact:?} {point:?}: not the front: {in_af}");
+    }
+    // Only the pair overlaps, and they hold still from the impact on.
+    assert!(overlaps(&t, &[(0, 1)]).is_empty(), "{:?}", overlaps(&t, &[(0, 1)]));
+    for k in [0, 1] {
+        assert_eq!(t.poses[k][f], t.poses[k][t.frames - 1]);
+    }
+    // First contact comes at most half a second before the latched (deepest) frame, and is
+    // already on the requested side.
+    let first = (0..=f).find(|&g| obb(&t, 0, g).overlaps(&obb(&t, 1, g))).expect("contact");
+    assert!(f - first <= 5, "{impact:?} {point:?}: first contact at {first}, latched at {f}");
+    let q = contact_centroid(&obb(&t, 0, first), &obb(&t, 1, first)).expect("overlap");
+    let b = obb(&t, 1, first);
+    let local = (q - b.center).rotate(DVec2::from_angle(-b.yaw));
+    assert_eq!(sector(local, s[0], s[1]), point, "{impact:?}: first contact {local}");
+    t
+}
+
+#[test]
+fn rear_end_hits_the_requested_rear_side_and_bystanders_stop() {
+    let m = straight(2);
+    let l = id(Arm::West, Dir::In, 1);
+    for point in [Point::Rear, Point::RearLeft, Point::RearRight] {
+        let striker = car("striker", on(&m, l, 30.0, 0.0), 14.0, None);
+        let victim = car("victim", on(&m, l, 80.0, 0.0), 6.0, None);
+        let follower = car("follower", on(&m, l, 5.0, 0.0), 12.0, None);
+        let t = check_conflict(vec![striker, victim, follower], &m, Impact::RearEnd, point, 3.0);
+        assert!(t.speeds[2][t.frames - 1] < 0.5, "bystander still moving");
+        assert!(front_gap(&t, 2, 0, t.frames - 1) > 1.0);
+    }
+}
+
+#[test]
+fn head_on_hits_the_front() {
+    let m = straight(1);
+    for point in [Point::Front, Point::FrontLeft, Point::FrontRight] {
+        let victim = car("victim", on(&m, id(Arm::West, Dir::In, 1), 100.0, 0.0), 9.0, None);
+        let striker = car("striker", on(&m, id(Arm::East, Dir::In, 1), 120.0, 0.0), 9.0, None);
+        check_conflict(vec![striker, victim], &m, Impact::HeadOn, point, 3.0);
+    }
+}
+
+#[test]
+fn sideswipe_hits_the_requested_side() {
+    let m = straight(2);
+    for point in [Point::Right, Point::FrontRight, Point::RearRight] {
+        // As in ciren_sideswipe.scn: the striker starts ahead and faster, in the right lane.
+        let striker = car(
+            "striker",
+            on(&m, id(Arm::West, Dir::In, 2), 60.0, 0.0),
+            22.0,
+            Some(Goal { speed: Some(22.0), ..goal() }),
+        );
+        let victim = car(
+            "victim",
+            on(&m, id(Arm::West, Dir::In, 1), 55.0, 0.0),
+            20.0,
+            Some(Goal { speed: Some(20.0), ..goal() }),
+        );
+        check_conflict(vec![striker, victim], &m, Impact::Sideswipe, point, 3.0);
+    }
+    let striker =
+        car("striker", on(&m, id(Arm::West, Dir::In, 1), 50.0, 0.0), 20.0, Some(Goal { speed: Some(20.0), ..goal() }));
+    let victim =
+        car("victim", on(&m, id(Arm::West, Dir::In, 2), 60.0, 0.0), 18.0, Some(Goal { speed: Some(18.0), ..goal() }));
+    check_conflict(vec![striker, victim], &m, Impact::Sideswipe, Point::Left, 3.0);
+}
+
+#[test]
+fn angle_crash_in_a_junction() {
+    let m = four_way();
+    let straight_on = Some(Goal { turn: Some(Turn::Straight), ..goal() });
+    for (arm, point) in [(Arm::West, Point::Left), (Arm::West, Point::FrontLeft), (Arm::East, Point::Right)] {
+        let victim = car("victim", on(&m, id(Arm::South, Dir::In, 1), 30.0, 0.0), 8.0, straight_on.clone());
+        let striker = car("striker", on(&m, id(arm, Dir::In, 1), 28.0, 0.0), 8.0, straight_on.clone());
+        check_conflict(vec![striker, victim], &m, Impact::Angle, point, 4.0);
+    }
+}
+
+#[test]
+fn single_vehicle_crash_into_an_object() {
+    let m = straight(2);
+    // Its left side is hit by a car swerving in from the lane to its left.
+    for (point, lane) in [(Point::Rear, 2), (Point::RearLeft, 2), (Point::Left, 1)] {
+        let striker = car("striker", on(&m, id(Arm::West, Dir::In, lane), 20.0, 0.0), 12.0, None);
+        let mut barrier = car("barrier", on(&m, id(Arm::West, Dir::In, 2), 75.0, 0.0), 0.0, None);
+        barrier.class = Class::Barrier;
+        barrier.motion = Motion::Static;
+        barrier.object = true;
+        barrier.size = [2.0, 0.6, 1.0];
+        check_conflict(vec![striker, barrier], &m, Impact::Object, point, 4.0);
+    }
+}
+
+#[test]
+fn default_impact_time_is_mid_clip() {
+    let m = straight(2);
+    let l = id(Arm::West, Dir::In, 1);
+    let striker = car("striker", on(&m, l, 30.0, 0.0), 14.0, None);
+    let victim = car("victim", on(&m, l, 80.0, 0.0), 6.0, None);
+    let t = run(vec![striker, victim], vec![conflict(0, 1, Impact::RearEnd, Point::Rear, None)], &m, 8.0);
+    let f = t.impacts.first().expect("impact").frame;
+    assert!((f as f64 / 10.0 - 4.0).abs() <= 1.0, "frame {f}");
+}
+
+// ------------------------------------------------------------------ paths and lateral goals
+
+#[test]
+fn turns_follow_connectors_onto_the_out_lane() {
+    let m = four_way();
+    let cases = [
+        (Turn::Left, Arm::West, PI),
+        (Turn::Right, Arm::East, 0.0),
+        (Turn::Straight, Arm::North, FRAC_PI_2),
+        (Turn::UTurn, Arm::South, -FRAC_PI_2),
+    ];
+    for (turn, out_arm, yaw) in cases {
+        let g = Some(Goal { speed: Some(8.0), turn: Some(turn), ..goal() });
+        let t = run(vec![car("ego", on(&m, id(Arm::South, Dir::In, 1), 40.0, 0.0), 8.0, g)], vec![], &m, 10.0);
+        let last = t.poses[0][t.frames - 1];
+        assert!(wrap_angle(last.yaw - yaw).abs() < 0.1, "{turn:?}: yaw {}", last.yaw);
+        let out = m.lane(id(out_arm, Dir::Out, 1)).expect("lane");
+        let (_, d) = out.centre.project(DVec2::new(last.x, last.y));
+        assert!(d.abs() < 0.3, "{turn:?}: {d} m off the out-lane");
+        check_limits(&t);
+    }
+}
+
+#[test]
+fn turn_without_a_connector_is_e0204() {
+    let m = straight(1);
+    let g = Some(Goal { turn: Some(Turn::Left), ..goal() });
+    let (c, p) = scene(vec![car("ego", on(&m, id(Arm::West, Dir::In, 1), 40.0, 0.0), 8.0, g)], vec![], None, 4.0);
+    let errs = rollout(&c, &m, &p).expect_err("no junction on a straight road");
+    assert_eq!(errs[0].code, "E0204");
+    let g = Some(Goal { lateral: Lateral::ChangeLane(Side::Left), ..goal() });
+    let (c, p) = scene(vec![car("ego", on(&m, id(Arm::West, Dir::In, 1), 40.0, 0.0), 8.0, g)], vec![], None, 4.0);
+    assert_eq!(rollout(&c, &m, &p).expect_err("no lane 0")[0].code, "E0204");
+}
+
+#[test]
+fn lane_change_ends_centred_in_the_target_lane() {
+    let m = straight(2);
+    let g = Some(Goal { lateral: Lateral::ChangeLane(Side::Left), ..goal() });
+    let t = run(vec![car("ego", on(&m, id(Arm::West, Dir::In, 2), 20.0, 0.0), 12.0, g)], vec![], &m, 8.0);
+    let last = t.poses[0][t.frames - 1];
+    assert!((last.y + 0.5 * W).abs() < 0.05, "y = {}", last.y);
+    check_limits(&t);
+}
+
+#[test]
+fn lane_change_waits_for_a_car_alongside() {
+    let m = straight(2);
+    let g = Some(Goal { lateral: Lateral::ChangeLane(Side::Left), ..goal() });
+    let ego = car("ego", on(&m, id(Arm::West, Dir::In, 2), 20.0, 0.0), 10.0, g);
+    let side = car("side", on(&m, id(Arm::West, Dir::In, 1), 21.0, 0.0), 10.0, None);
+    let t = run(vec![ego, side], vec![], &m, 8.0);
+    assert!(overlaps(&t, &[]).is_empty());
+}
+
+#[test]
+fn pull_to_shoulder_and_away_from() {
+    let m = straight(2);
+    let l = id(Arm::West, Dir::In, 2);
+    let g = Some(Goal { lateral: Lateral::PullToShoulder, stop: Some(Stop::After(30.0)), ..goal() });
+    let t = run(vec![car("ego", on(&m, l, 20.0, 0.0), 10.0, g)], vec![], &m, 8.0);
+    let last = t.poses[0][t.frames - 1];
+    assert!(last.y < -1.5 * W - 1.0, "not on the shoulder: {}", last.y);
+    assert!(t.speeds[0][t.frames - 1] < 0.05);
+
+    let lead = car("lead", on(&m, l, 60.0, 0.0), 5.0, Some(Goal { lateral: Lateral::AwayFrom(1), ..goal() }));
+    let mut amb = car("amb", on(&m, l, 20.0, 0.0), 14.0, Some(Goal { speed: Some(16.0), ..goal() }));
+    amb.size = [6.5, 2.3, 2.8];
+    let t = run(vec![lead, amb], vec![], &m, 8.0);
+    assert!(t.poses[0][t.frames - 1].y < -1.5 * W - 0.5, "lead did not ease aside");
+    assert!((t.poses[0][0].y + 1.5 * W).abs() < 1e-9);
+    assert!(overlaps(&t, &[]).is_empty());
+}
+
+#[test]
+fn pedestrian_crosses_and_traffic_yields() {
+    let m = straight(1);
+    let ped = Spec {
+        name: "walker",
+        class: Class::Pedestrian,
+        motion: Motion::Holonomic,
+        size: [0.6, 0.6, 1.7],
+        pose: Pose { x: 40.0, y: -W - 1.5, yaw: 0.0 },
+        speed: 0.0,
+        goal: Some(Goal { speed: Some(1.4), lateral: Lateral::Cross, start_after: 1.0, ..goal() }),
+        object: false,
+        track: None,
+    };
+    let c = car("car", on(&m, id(Arm::West, Dir::In, 1), 150.0, 0.0), 12.0, None);
+    let t = run(vec![ped, c], vec![], &m, 12.0);
+    assert!(overlaps(&t, &[]).is_empty());
+    let last = t.poses[0][t.frames - 1];
+    assert!(last.y > W, "walker did not cross: y = {}", last.y);
+    assert!((last.x - 40.0).abs() < 1e-6, "walked askew");
+    // The car (coming from x = 0) had to slow for the walker.
+    assert!(t.speeds[1].iter().any(|&v| v < 6.0));
+}
+
+#[test]
+fn replayed_agents_interpolate_and_hold() {
+    let m = straight(1);
+    let keys = vec![Keyframe { t: 0.0, x: 0.0, y: 10.0, yaw: 3.0 }, Keyframe { t: 2.0, x: 10.0, y: 10.0, yaw: -3.0 }];
+    let mut s = car("replay", Pose { x: 0.0, y: 10.0, yaw: 3.0 }, 0.0, None);
+    s.track = Some(keys);
+    let t = run(vec![s], vec![], &m, 4.0);
+    let mid = t.poses[0][10];
+    assert!((mid.x - 5.0).abs() < 1e-9 && wrap_angle(mid.yaw - PI).abs() < 1e-9, "{mid:?}");
+    assert_eq!(t.poses[0][30], t.poses[0][39]);
+}
+
+// ------------------------------------------------------------------ traffic
+
+#[test]
+fn background_traffic_is_seeded_and_never_overlaps() {
+    let m = straight(2);
+    let specs = || vec![car("ego", on(&m, id(Arm::West, Dir::In, 1), 100.0, 0.0), 10.0, None)];
+    let tr = Some(Traffic { density: 0.6, randomness: 0.5 });
+    let (c, p) = scene(specs(), vec![], tr, 6.0);
+    let t = rollout(&c, &m, &p).expect("rollout");
+    let bg = t.agents.iter().filter(|a| a.background).count();
+    assert!(bg >= 5, "only {bg} background vehicles");
+    assert!(!t.agents[0].background && t.agents[0].name == "ego");
+    assert!(overlaps(&t, &[]).is_empty());
+    assert_eq!(t, rollout(&c, &m, &p).expect("rollout"));
+    let (mut c2, p2) = scene(specs(), vec![], tr, 6.0);
+    c2.seed = 8;
+    assert_ne!(t.poses, rollout(&c2, &m, &p2).expect("rollout").poses);
+    check_limits(&t);
+}
+
+// ------------------------------------------------------------------ properties
+
+/// Speeds are non-negative; accelerations and yaw rates within class limits; moving vehicles
+/// move along their heading (no sideways sliding beyond a lane change's slip).
+fn check_limits(t: &Tracks) {
+    let dt = 1.0 / t.rate;
+    for (i, a) in t.agents.iter().enumerate() {
+        let lim = limits(a.class, a.motion);
+        for f in 1..t.frames {
+            let v = t.speeds[i][f];
+            assert!(v >= 0.0);
+            let acc = (v - t.speeds[i][f - 1]) / dt;
+            assert!(acc <= lim.accel + 1e-6 && acc >= -lim.brake_max - 1e-6, "{}: accel {acc} at {f}", a.name);
+            let (p, q) = (t.poses[i][f - 1], t.poses[i][f]);
+            let rate = wrap_angle(q.yaw - p.yaw).abs() / dt;
+            assert!(rate <= lim.yaw_rate + 1e-6, "{}: yaw rate {rate} at {f}", a.name);
+            let step = DVec2::new(q.x - p.x, q.y - p.y);
+            if a.motion == Motion::Vehicle && step.length() > 0.3 {
+                let slip = wrap_angle(step.y.atan2(step.x) - q.yaw).abs();
+                assert!(slip < 0.35, "{}: slip {slip} at {f}", a.name);
+            }
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+struct Gen {
+    lane: u32,
+    west: bool,
+    gap: f64,
+    speed: f64,
+    goal: u8,
+    goal_speed: f64,
+}
+
+fn gen_agent() -> impl Strategy<Value = Gen> {
+    (1u32..=2, any::<bool>(), 0.0f64..30.0, 0.0f64..14.0, 0u8..6, 2.0f64..16.0)
+        .prop_map(|(lane, west, gap, speed, goal, goal_speed)| Gen { lane, west, gap, speed, goal, goal_speed })
+}
+
+/// Agents along the lanes of a two-lane straight road, each far enough behind the one ahead to
+/// stop comfortably, with a mix of goals.
+fn generated(gens: &[Gen]) -> Vec<Spec> {
+    let m = straight(2);
+    let mut next_s = std::collections::HashMap::new();
+    let mut last_in = std::collections::HashMap::new();
+    let mut specs = vec![];
+    let names = ["a0", "a1", "a2", "a3", "a4", "a5", "a6", "a7", "a8", "a9"];
+    for (i, g) in gens.iter().enumerate() {
+        let key = (g.lane, g.west);
+        let ahead = *next_s.get(&key).unwrap_or(&260.0);
+        let s = ahead - 6.0 - g.speed * g.speed / 6.0 - g.gap;
+        if s < 5.0 {
+            continue;
+        }
+        next_s.insert(key, s);
+        let arm = if g.west { Arm::West } else { Arm::East };
+        let prev_same = last_in.get(&key).copied();
+        last_in.insert(key, specs.len());
+        let goal = match g.goal {
+            0 => None,
+            1 => Some(Goal { speed: Some(g.goal_speed), ..goal() }),
+            2 => Some(Goal { stop: Some(Stop::After(g.gap + 10.0)), ..goal() }),
+            3 => Some(Goal {
+                lateral: Lateral::ChangeLane(if g.lane == 1 { Side::Right } else { Side::Left }),
+                ..goal()
+            }),
+            4 => prev_same.map(|p| Goal { stop: Some(Stop::Behind(p)), ..goal() }),
+            _ => Some(Goal { speed: Some(g.goal_speed), start_after: 1.0, ..goal() }),
+        };
+        specs.push(car(names[i], on(&m, id(arm, Dir::In, g.lane), s, 0.0), g.speed, goal));
+    }
+    specs
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    #[test]
+    fn generated_scenes_never_overlap_and_respect_limits(gens in prop::collection::vec(gen_agent(), 2..9)) {
+        let m = straight(2);
+        let specs = generated(&gens);
+        let (c, p) = scene(specs, vec![], Some(Traffic { density: 0.3, randomness: 0.3 }), 8.0);
+        let t = rollout(&c, &m, &p).expect("rollout");
+        prop_assert!(overlaps(&t, &[]).is_empty(), "{:?}", overlaps(&t, &[]));
+        check_limits(&t);
+        prop_assert_eq!(&t, &rollout(&c, &m, &p).expect("rollout"));
+    }
+}
+
+/// Cost per agent-frame on a 50-agent scene. `cargo test --release --test rollout -- --ignored
+/// --nocapture bench` prints it.
+#[test]
+#[ignore]
+fn bench_rollout_50_agents() {
+    let m = straight(2);
+    let gens: Vec<Gen> = (0..10)
+        .map(|i| Gen {
+            lane: 1 + (i % 2) as u32,
+            west: i % 4 < 2,
+            gap: 2.0,
+            speed: 10.0,
+            goal: (i % 3) as u8,
+            goal_speed: 12.0,
+        })
+        .collect();
+    let specs = generated(&gens);
+    let (c, p) = scene(specs, vec![], Some(Traffic { density: 1.0, randomness: 0.3 }), 20.0);
+    let t = rollout(&c, &m, &p).expect("rollout");
+    let n = t.agents.len();
+    let reps = 20;
+    let start = std::time::Instant::now();
+    for _ in 0..reps {
+        std::hint::black_box(rollout(&c, &m, &p).expect("rollout"));
+    }
+    let el = start.elapsed().as_secs_f64() / reps as f64;
+    println!(
+        "{n} agents x {} frames: {:.3} ms per rollout, {:.0} ns per agent-frame",
+        t.frames,
+        el * 1e3,
+        el * 1e9 / (n * t.frames) as f64
+    );
+}
