@@ -1,0 +1,194 @@
+//! LiDAR pass. In: one frame's `Occupancy`, a `Rig` (RON; `rigs/nuplan.ron` by default), the
+//! seed and the frame index. Out: a `PointCloud` in the ego frame (x, y, z, intensity 0-255,
+//! ring, lidar id) and its KITTI-style `.bin` and PCD v0.7 `.pcd` files.
+//!
+//! Every (sensor, beam, azimuth) fires one ray, cast through the grid by 3D DDA (`dda`). A ray
+//! reports the first non-free voxel it enters. The ground needs no special case: the occupancy
+//! backend labels the layer below z = 0 background (see `backend`), so ground returns are hits
+//! on its top face. Then, per return, with the rig's parameters:
+//!
+//! - range limits: hits nearer than `min_range` or farther than `max_range` are dropped;
+//! - drop: with probability base + incidence (1 - cos i)^2 + range (r / max_range)^2, where i is
+//!   the angle between the ray and the normal of the voxel face it entered;
+//! - range noise: the surface is somewhere inside the hit voxel, so the return is placed at
+//!   entry + |N(0, sigma)| along the ray, sigma = sigma_m + sigma_per_m r, capped at the voxel's
+//!   exit. One-sided on purpose: the voxels in front are free by the occupancy's own account, so
+//!   every point stays in or on the boundary of a non-free voxel;
+//! - intensity: 255 reflectivity(label) ((1 - lambert) + lambert cos i) exp(-2 alpha r)
+//!   (1 + noise N(0, 1)), rounded and clamped to 0..=255.
+//!
+//! Randomness: each (sensor, beam) draws from its own `sample::Rng` keyed by (seed, frame,
+//! sensor id, beam), three uniforms per ray hit or not, so the cloud does not depend on rayon's
+//! scheduling or thread count. Points come out ordered by sensor, beam, then azimuth.
+//!
+//! Rays that leave the 100 m x 100 m x 8 m grid return nothing: the occupancy is the whole world
+//! the sensor can see.
+
+pub mod dda;
+pub mod rig;
+
+pub use rig::{Rig, RigError, Sensor};
+
+use crate::backend::Occupancy;
+use crate::backend::layout::{NX, NY, NZ};
+use crate::sample::Rng;
+use rayon::prelude::*;
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+
+/// One return in the ego frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Point {
+    pub x: f32,
+    pub y: f32,
+    pub z: f32,
+    /// 0..=255 (whole numbers).
+    pub intensity: f32,
+    /// Beam index within its sensor.
+    pub ring: u16,
+    /// Sensor id.
+    pub lidar: u8,
+}
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PointCloud {
+    pub points: Vec<Point>,
+}
+
+/// The stream of one (sensor, beam) of one frame.
+fn beam_rng(seed: u64, frame: usize, sensor: u8, beam: usize) -> Rng {
+    // Each stage's SplitMix64 output scrambles the next key, so nearby keys give unrelated streams.
+    let a = Rng::new(seed ^ 0x6c69_6461_725f_7631).next_u64();
+    let b = Rng::new(a ^ (frame as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)).next_u64();
+    Rng::new(b ^ (u64::from(sensor) << 40) ^ beam as u64)
+}
+
+/// Fire every ray of `rig` through `occ`.
+pub fn scan(occ: &Occupancy, rig: &Rig, seed: u64, frame: usize) -> PointCloud {
+    let std_layout;
+    let labels: &[u8] = match occ.labels.as_slice() {
+        Some(s) if occ.labels.dim() == (NX, NY, NZ) => s,
+        _ if occ.labels.dim() == (NX, NY, NZ) => {
+            std_layout = occ.labels.as_standard_layout();
+            std_layout.as_slice().unwrap_or(&[])
+        }
+        _ => return PointCloud::default(),
+    };
+    let units: Vec<(usize, usize)> = rig
+        .sensors
+        .iter()
+        .enumerate()
+        .flat_map(|(s, sen)| (0..sen.elevations_deg.len()).map(move |b| (s, b)))
+        .collect();
+    let skip = dda::Skip::new(labels);
+    let chunks: Vec<Vec<Point>> =
+        units.par_iter().map(|&(s, b)| fire_beam(labels, &skip, rig, &rig.sensors[s], b, seed, frame)).collect();
+    let mut points = Vec::with_capacity(chunks.iter().map(Vec::len).sum());
+    for c in chunks {
+        points.extend(c);
+    }
+    PointCloud { points }
+}
+
+fn fire_beam(
+    labels: &[u8],
+    skip: &dda::Skip,
+    rig: &Rig,
+    sensor: &Sensor,
+    beam: usize,
+    seed: u64,
+    frame: usize,
+) -> Vec<Point> {
+    let mut rng = beam_rng(seed, frame, sensor.id, beam);
+    let rot = sensor.rotation();
+    let o = [sensor.origin.0, sensor.origin.1, sensor.origin.2];
+    let el = sensor.elevations_deg[beam].to_radians();
+    let (ce, se) = (el.cos(), el.sin());
+    let mut out = Vec::new();
+    for az in sensor.azimuths(rig.horizontal_resolution_deg) {
+        let l = [ce * az.cos(), ce * az.sin(), se];
+        let d = [
+            rot[0][0] * l[0] + rot[0][1] * l[1] + rot[0][2] * l[2],
+            rot[1][0] * l[0] + rot[1][1] * l[1] + rot[1][2] * l[2],
+            rot[2][0] * l[0] + rot[2][1] * l[1] + rot[2][2] * l[2],
+        ];
+        // Three uniforms per ray, hit or not; the two normals (Box-Muller) only for returns.
+        let (u_drop, u1, u2) = (rng.unit(), rng.unit(), rng.unit());
+        let Some(h) = skip.cast(labels, o, d, rig.max_range) else { continue };
+        if h.t < rig.min_range || h.t > rig.max_range {
+            continue;
+        }
+        let cos_i = if h.axis < 3 { d[h.axis].abs() } else { 1.0 };
+        let p_drop =
+            rig.drop.base + rig.drop.incidence * (1.0 - cos_i).powi(2) + rig.drop.range * (h.t / rig.max_range).powi(2);
+        if u_drop < p_drop {
+            continue;
+        }
+        let rad = (-2.0 * u1.max(1e-300).ln()).sqrt();
+        let (sn, cs) = (std::f64::consts::TAU * u2).sin_cos();
+        let (n1, n2) = (rad * cs, rad * sn);
+        let sigma = rig.noise.sigma_m + rig.noise.sigma_per_m * h.t;
+        let r = (h.t + (n1 * sigma).abs()).min(h.t_exit).min(rig.max_range);
+        let refl = rig.reflectivity.get(h.label as usize).copied().unwrap_or(0.0);
+        let i = 255.0
+            * refl
+            * ((1.0 - rig.intensity.lambert) + rig.intensity.lambert * cos_i)
+            * (-2.0 * rig.intensity.attenuation_per_m * r).exp()
+            * (1.0 + rig.intensity.noise * n2);
+        out.push(Point {
+            x: (o[0] + r * d[0]) as f32,
+            y: (o[1] + r * d[1]) as f32,
+            z: (o[2] + r * d[2]) as f32,
+            intensity: i.round().clamp(0.0, 255.0) as f32,
+            ring: beam as u16,
+            lidar: sensor.id,
+        });
+    }
+    out
+}
+
+/// `dir/lidar/NNNNNN.bin` for frame `frame` (SPEC output layout).
+pub fn bin_frame_path(dir: &Path, frame: usize) -> PathBuf {
+    dir.join("lidar").join(format!("{frame:06}.bin"))
+}
+
+/// `dir/lidar/NNNNNN.pcd` for frame `frame`.
+pub fn pcd_frame_path(dir: &Path, frame: usize) -> PathBuf {
+    dir.join("lidar").join(format!("{frame:06}.pcd"))
+}
+
+/// KITTI-style `.bin`: float32 little-endian x, y, z, intensity per point, atomically.
+pub fn write_bin(path: &Path, pc: &PointCloud) -> io::Result<u64> {
+    crate::output::write_atomic(path, |w| {
+        let mut buf = Vec::with_capacity(pc.points.len() * 16);
+        for p in &pc.points {
+            for v in [p.x, p.y, p.z, p.intensity] {
+                buf.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        w.write_all(&buf)
+    })
+}
+
+/// Binary PCD v0.7 with fields x y z intensity (float32), ring (uint16) and lidar (uint8),
+/// little endian, atomically. Open3D's tensor reader and numpy (see tests/python) load it.
+pub fn write_pcd(path: &Path, pc: &PointCloud) -> io::Result<u64> {
+    crate::output::write_atomic(path, |w| {
+        let n = pc.points.len();
+        write!(
+            w,
+            "# .PCD v0.7 - Point Cloud Data file format (rocc, ego frame)\nVERSION 0.7\n\
+             FIELDS x y z intensity ring lidar\nSIZE 4 4 4 4 2 1\nTYPE F F F F U U\nCOUNT 1 1 1 1 1 1\n\
+             WIDTH {n}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA binary\n"
+        )?;
+        let mut buf = Vec::with_capacity(n * 19);
+        for p in &pc.points {
+            for v in [p.x, p.y, p.z, p.intensity] {
+                buf.extend_from_slice(&v.to_le_bytes());
+            }
+            buf.extend_from_slice(&p.ring.to_le_bytes());
+            buf.push(p.lidar);
+        }
+        w.write_all(&buf)
+    })
+}

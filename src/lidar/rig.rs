@@ -1,0 +1,209 @@
+//! LiDAR rig description. In: RON text (`rigs/nuplan.ron` is compiled in as the default). Out: a
+//! validated `Rig`: sensors (mounting pose, beam elevations, azimuth sector, horizontal
+//! resolution) and the return model (range limits, reflectivity per label, intensity, drop and
+//! noise parameters). Angles are degrees in the file and converted where used.
+
+use crate::backend::layout::N_LABELS;
+use serde::{Deserialize, Serialize};
+
+/// The nuPlan rig shipped with rocc (SPEC.md "LiDAR").
+pub const NUPLAN_RON: &str = include_str!("../../rigs/nuplan.ron");
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Rig {
+    pub name: String,
+    /// Azimuth step between firings (deg), for every sensor that does not set its own.
+    pub horizontal_resolution_deg: f64,
+    /// Returns nearer than this (the sensor's blind zone, the ego's own body) or farther than
+    /// `max_range` are not reported (m).
+    pub min_range: f64,
+    pub max_range: f64,
+    /// Reflectivity in [0, 1] per occupancy label 0..=8.
+    pub reflectivity: Vec<f64>,
+    pub intensity: Intensity,
+    pub drop: Drop,
+    pub noise: Noise,
+    pub sensors: Vec<Sensor>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Intensity {
+    /// Share of the return following Lambert's cosine law (the rest does not depend on angle).
+    pub lambert: f64,
+    /// Two-way attenuation exp(-2 alpha r), alpha in 1/m.
+    pub attenuation_per_m: f64,
+    /// Relative standard deviation of multiplicative Gaussian noise.
+    pub noise: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Drop {
+    /// P(drop) = base + incidence (1 - cos i)^2 + range (r / max_range)^2, clamped to [0, 1].
+    pub base: f64,
+    pub incidence: f64,
+    pub range: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Noise {
+    /// Range noise sigma = sigma_m + sigma_per_m r (m).
+    pub sigma_m: f64,
+    pub sigma_per_m: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Sensor {
+    /// Written into every point's `lidar` field.
+    pub id: u8,
+    pub name: String,
+    /// Mounting position in the ego frame (m).
+    pub origin: (f64, f64, f64),
+    /// Mounting rotation (roll, pitch, yaw) in degrees, applied as Rz(yaw) Ry(pitch) Rx(roll) to
+    /// the sensor's own axes; zero means aligned with the ego frame.
+    #[serde(default)]
+    pub rotation_deg: (f64, f64, f64),
+    /// Beam elevations (deg); index = `ring`.
+    pub elevations_deg: Vec<f64>,
+    /// Swept from .0 counter-clockwise to .1 (deg, sensor frame); equal values: a full turn.
+    pub azimuth_deg: (f64, f64),
+    /// Overrides the rig's horizontal resolution for this sensor.
+    #[serde(default)]
+    pub horizontal_resolution_deg: Option<f64>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RigError {
+    #[error("rig file: {0}")]
+    Parse(#[from] ron::error::SpannedError),
+    #[error("rig: {0}")]
+    Invalid(String),
+}
+
+impl Rig {
+    /// The compiled-in nuPlan rig.
+    pub fn nuplan() -> Rig {
+        // The file is part of the binary and parsed by a test, so this cannot fail at run time.
+        Rig::from_ron(NUPLAN_RON).expect("rigs/nuplan.ron is valid")
+    }
+
+    pub fn from_ron(text: &str) -> Result<Rig, RigError> {
+        let rig: Rig = ron::from_str(text)?;
+        rig.validate()?;
+        Ok(rig)
+    }
+
+    pub fn to_ron(&self) -> String {
+        // Plain data with no maps keyed by non-strings: serialisation cannot fail.
+        ron::ser::to_string_pretty(self, ron::ser::PrettyConfig::default()).expect("a rig serialises")
+    }
+
+    /// Reject rigs the ray caster cannot run (a user's file is input like any other).
+    pub fn validate(&self) -> Result<(), RigError> {
+        let bad = |m: String| Err(RigError::Invalid(m));
+        let res_ok = |r: f64| (0.01..=360.0).contains(&r);
+        if !res_ok(self.horizontal_resolution_deg) {
+            return bad(format!("horizontal_resolution_deg {} is not in [0.01, 360]", self.horizontal_resolution_deg));
+        }
+        if !(self.min_range >= 0.0 && self.max_range > self.min_range && self.max_range.is_finite()) {
+            return bad(format!("need 0 <= min_range < max_range, got {} and {}", self.min_range, self.max_range));
+        }
+        if self.reflectivity.len() != N_LABELS || self.reflectivity.iter().any(|r| !(0.0..=1.0).contains(r)) {
+            return bad(format!("reflectivity needs {N_LABELS} values in [0, 1] (one per label)"));
+        }
+        let finite = [
+            self.intensity.lambert,
+            self.intensity.attenuation_per_m,
+            self.intensity.noise,
+            self.drop.base,
+            self.drop.incidence,
+            self.drop.range,
+            self.noise.sigma_m,
+            self.noise.sigma_per_m,
+        ];
+        if finite.iter().any(|v| !v.is_finite() || *v < 0.0) {
+            return bad("intensity, drop and noise parameters must be finite and >= 0".into());
+        }
+        if self.sensors.is_empty() {
+            return bad("no sensors".into());
+        }
+        for s in &self.sensors {
+            if s.elevations_deg.is_empty() || s.elevations_deg.len() > u16::MAX as usize {
+                return bad(format!("sensor {}: needs 1..=65535 beams", s.name));
+            }
+            if s.elevations_deg.iter().any(|e| !(-90.0..=90.0).contains(e)) {
+                return bad(format!("sensor {}: elevations must be in [-90, 90] deg", s.name));
+            }
+            let o = [s.origin.0, s.origin.1, s.origin.2, s.rotation_deg.0, s.rotation_deg.1, s.rotation_deg.2];
+            if o.iter().any(|v| !v.is_finite()) || !s.azimuth_deg.0.is_finite() || !s.azimuth_deg.1.is_finite() {
+                return bad(format!("sensor {}: non-finite pose or azimuth", s.name));
+            }
+            if let Some(r) = s.horizontal_resolution_deg
+                && !res_ok(r)
+            {
+                return bad(format!("sensor {}: horizontal_resolution_deg {r} is not in [0.01, 360]", s.name));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Sensor {
+    /// Firing azimuths (rad, sensor frame) for a horizontal step of `res_deg`.
+    pub fn azimuths(&self, res_deg: f64) -> impl Iterator<Item = f64> + use<> {
+        let res = self.horizontal_resolution_deg.unwrap_or(res_deg);
+        let (a, b) = self.azimuth_deg;
+        let span = (b - a).rem_euclid(360.0);
+        // A full turn fires n times without repeating its start; a sector includes both ends.
+        let n = if span < 1e-9 {
+            (360.0 / res).round().max(1.0) as usize
+        } else {
+            (span / res + 1e-9).floor() as usize + 1
+        };
+        (0..n).map(move |m| (a + res * m as f64).to_radians())
+    }
+
+    /// The sensor-to-ego rotation as a row-major 3x3 matrix.
+    pub fn rotation(&self) -> [[f64; 3]; 3] {
+        let (r, p, y) =
+            (self.rotation_deg.0.to_radians(), self.rotation_deg.1.to_radians(), self.rotation_deg.2.to_radians());
+        let (cr, sr, cp, sp, cy, sy) = (r.cos(), r.sin(), p.cos(), p.sin(), y.cos(), y.sin());
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nuplan_rig_matches_the_spec_table_and_round_trips() {
+        let rig = Rig::nuplan();
+        let beams: Vec<usize> = rig.sensors.iter().map(|s| s.elevations_deg.len()).collect();
+        assert_eq!(beams, [40, 40, 40, 20, 20]);
+        let top = &rig.sensors[0];
+        assert_eq!(top.origin, (1.5283, -0.0081, 1.6157));
+        let (lo, hi) = top.elevations_deg.iter().fold((f64::MAX, f64::MIN), |(a, b), e| (a.min(*e), b.max(*e)));
+        assert_eq!((lo, hi), (-25.0, 15.0));
+        assert_eq!(top.azimuths(0.4).count(), 900);
+        // 280 deg sectors with both ends.
+        assert_eq!(rig.sensors[1].azimuths(0.4).count(), 701);
+        assert_eq!(rig.sensors[2].azimuths(0.4).count(), 701);
+        let back = Rig::from_ron(&rig.to_ron()).expect("round trip");
+        assert_eq!(back, rig);
+    }
+
+    #[test]
+    fn bad_rigs_are_errors_not_panics() {
+        let mut rig = Rig::nuplan();
+        rig.horizontal_resolution_deg = 0.0;
+        assert!(rig.validate().is_err());
+        assert!(Rig::from_ron("Rig(name: \"x\")").is_err());
+        let mut rig = Rig::nuplan();
+        rig.reflectivity.pop();
+        assert!(Rig::from_ron(&rig.to_ron()).is_err());
+    }
+}
