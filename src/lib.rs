@@ -3,6 +3,7 @@
 
 pub mod backend;
 pub mod check;
+pub mod compile;
 pub mod diag;
 pub mod geom;
 pub mod lidar;

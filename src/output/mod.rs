@@ -5,7 +5,10 @@
 //! never leaves a truncated file under a final name and a re-run can resume. (No fsync: that
 //! protects against a crash of the process, not of the machine.)
 
+mod anim;
 mod preview;
+
+pub use anim::{SIDE as PREVIEW_SIDE, paint_bev, paint_lidar, paint_occ, palette, write_gif, write_sheet};
 
 pub use preview::{CHANNEL_COLOURS, STRUCTURE_COLOUR, render_preview, write_preview_png};
 
@@ -188,7 +191,14 @@ pub struct Manifest {
     pub frame_count: usize,
     pub rate_hz: f64,
     pub ego: String,
-    /// In pipeline order.
+    /// The last stage written: `bev`, `occ` or `lidar`.
+    #[serde(default)]
+    pub stage: String,
+    /// The frame indices written (all of the clip unless `--frames` chose).
+    #[serde(default)]
+    pub frames: Vec<usize>,
+    /// In pipeline order. Wall seconds summed over worker threads, so they add up to CPU time;
+    /// the only part of an output directory that differs between two runs of the same input.
     pub timings: Vec<StageTiming>,
     pub files: Vec<OutputFile>,
 }
@@ -207,6 +217,8 @@ impl Manifest {
             frame_count,
             rate_hz,
             ego: ego.to_string(),
+            stage: "bev".to_string(),
+            frames: Vec::new(),
             timings: Vec::new(),
             files: Vec::new(),
         }

@@ -6,6 +6,7 @@
 //! painted surfaces first, markings next, agents last (`PAINT_ORDER`), so a later channel hides an
 //! earlier one where both are set. Text uses a built-in 3x5 bitmap font drawn at 2x.
 
+use super::anim::{paint_bev, palette};
 use crate::raster::Bev;
 use crate::raster::layout::{GRID, MASK_NAMES, N_MASKS};
 use std::io;
@@ -34,10 +35,10 @@ pub const CHANNEL_COLOURS: [[u8; 3]; N_MASKS] = [
 ];
 /// The extra `structure` mask.
 pub const STRUCTURE_COLOUR: [u8; 3] = [40, 120, 40];
-const BACKGROUND: [u8; 3] = [18, 18, 22];
-const EGO_MARK: [u8; 3] = [255, 60, 60];
+pub(super) const BACKGROUND: [u8; 3] = [18, 18, 22];
+pub(super) const EGO_MARK: [u8; 3] = [255, 60, 60];
 /// `None` = the structure mask.
-const PAINT_ORDER: [Option<usize>; N_MASKS + 1] = [
+pub(super) const PAINT_ORDER: [Option<usize>; N_MASKS + 1] = [
     Some(1),
     Some(7),
     Some(6),
@@ -76,22 +77,13 @@ pub fn render_preview(bev: &Bev) -> (u32, u32, Vec<u8>) {
         let k = (r * w + c) * 3;
         img[k..k + 3].copy_from_slice(&col);
     };
-    for layer in PAINT_ORDER {
-        let (plane, col) = match layer {
-            Some(ch) => (bev.masks.index_axis(ndarray::Axis(0), ch), CHANNEL_COLOURS[ch]),
-            None => (bev.structure.view(), STRUCTURE_COLOUR),
-        };
-        for ((i, j), &m) in plane.indexed_iter() {
-            if m != 0 {
-                // Forward (+x, i) up; left (+y, j) on the image's left.
-                put(&mut img, GRID - 1 - i, GRID - 1 - j, col);
-            }
+    let mut idx = vec![0u8; GRID * GRID];
+    paint_bev(bev, &mut idx);
+    let pal = palette();
+    for r in 0..GRID {
+        for c in 0..GRID {
+            put(&mut img, r, c, pal[idx[r * GRID + c] as usize]);
         }
-    }
-    // The ego origin (x = y = 0 is pixel 200, 200).
-    for (di, dj) in [(0i64, 0i64), (1, 0), (-1, 0), (0, 1), (0, -1), (2, 0)] {
-        let (i, j) = ((GRID / 2) as i64 + di, (GRID / 2) as i64 + dj);
-        put(&mut img, GRID - 1 - i as usize, GRID - 1 - j as usize, EGO_MARK);
     }
     // Legend.
     let x0 = GRID + 10;
@@ -126,7 +118,7 @@ pub fn write_preview_png(dir: &Path, bev: &Bev) -> io::Result<super::OutputFile>
     Ok(super::OutputFile { path: "preview/bev.png".to_string(), bytes })
 }
 
-fn text(img: &mut [u8], w: usize, h: usize, x: usize, y: usize, s: &str, col: [u8; 3]) {
+pub(super) fn text(img: &mut [u8], w: usize, h: usize, x: usize, y: usize, s: &str, col: [u8; 3]) {
     for (n, ch) in s.chars().enumerate() {
         let g = glyph(ch);
         let gx = x + n * (GLYPH_W + 1) * SCALE;

@@ -1,0 +1,258 @@
+//! Batch plumbing: which files a command line names, which of them this shard owns, and
+//! progress reporting that suits a terminal or a log file.
+
+use super::{ClipInput, ClipReport, Front, Options, Stage, clip, compile_clip, front};
+use crate::backend::Background;
+use crate::diag::Diagnostic;
+use crate::source::SourceMap;
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+/// A file that failed, with the sources its diagnostics point into.
+pub struct Failure {
+    pub input: PathBuf,
+    pub diags: Vec<Diagnostic>,
+    pub sources: SourceMap,
+}
+
+#[derive(Default)]
+pub struct BatchReport {
+    /// In input order, then ego order.
+    pub clips: Vec<ClipReport>,
+    /// In input order.
+    pub failures: Vec<Failure>,
+}
+
+/// A scenario decided and ready to render.
+struct Prepared {
+    input: PathBuf,
+    bytes: Vec<u8>,
+    front: Front,
+    background: Background,
+    egos: Vec<usize>,
+    frames: Vec<usize>,
+}
+
+/// Compile `inputs` into `out`: every file checked and decided first (in parallel), then every
+/// clip rendered (clips and their frames in parallel). Failures never stop the others.
+pub fn run(inputs: &[PathBuf], out: &Path, opts: &Options, quiet: bool) -> BatchReport {
+    let mut report = BatchReport::default();
+    let prepared: Vec<Result<Prepared, Failure>> = inputs.par_iter().map(|p| prepare(p, opts)).collect();
+    let mut ok = Vec::new();
+    let mut owner: BTreeMap<String, PathBuf> = BTreeMap::new();
+    for r in prepared {
+        match r {
+            Ok(p) => match owner.get(&p.front.concrete.name) {
+                Some(first) => report.failures.push(Failure {
+                    diags: vec![
+                        Diagnostic::error(
+                            "E0303",
+                            format!(
+                                "`{}` and `{}` both declare scenario `{}`",
+                                first.display(),
+                                p.input.display(),
+                                p.front.concrete.name
+                            ),
+                        )
+                        .help("rename one of them: outputs go to OUT/<scenario>/<ego>/"),
+                    ],
+                    input: p.input,
+                    sources: SourceMap::default(),
+                }),
+                None => {
+                    owner.insert(p.front.concrete.name.clone(), p.input.clone());
+                    ok.push(p);
+                }
+            },
+            Err(f) => report.failures.push(f),
+        }
+    }
+
+    let jobs: Vec<(usize, usize)> =
+        ok.iter().enumerate().flat_map(|(i, p)| p.egos.iter().map(move |&e| (i, e))).collect();
+    let total: usize = jobs.iter().map(|&(i, _)| ok[i].frames.len()).sum();
+    let progress = Progress::new(total as u64, quiet);
+    let results: Vec<Result<ClipReport, Failure>> = jobs
+        .par_iter()
+        .map(|&(i, ego)| {
+            let p = &ok[i];
+            let input = p.input.display().to_string();
+            let ci = ClipInput {
+                input: &input,
+                input_bytes: &p.bytes,
+                front: &p.front,
+                background: &p.background,
+                ego,
+                frames: &p.frames,
+            };
+            let dir = clip::clip_dir(out, &p.front, ego);
+            let r = compile_clip(&ci, opts, &dir, &|| progress.inc(1));
+            match &r {
+                Ok(c) if c.resumed => progress.line(&format!("complete  {} (kept)", dir.display())),
+                Ok(c) => progress.line(&format!("compiled  {} ({} frames)", dir.display(), c.frames)),
+                Err(_) => {}
+            }
+            r.map_err(|e| Failure {
+                input: p.input.clone(),
+                diags: vec![
+                    Diagnostic::error("E0401", format!("cannot write `{}`: {e}", dir.display()))
+                        .help("check the output directory's permissions and free space; a re-run resumes"),
+                ],
+                sources: SourceMap::default(),
+            })
+        })
+        .collect();
+    progress.finish();
+    for r in results {
+        match r {
+            Ok(c) => report.clips.push(c),
+            Err(f) => report.failures.push(f),
+        }
+    }
+    report
+}
+
+fn prepare(path: &Path, opts: &Options) -> Result<Prepared, Failure> {
+    let mut sources = SourceMap::default();
+    let fail = |diags: Vec<Diagnostic>, sources: SourceMap| Failure { input: path.to_path_buf(), diags, sources };
+    let scenario = match crate::check::check_path(path, &mut sources) {
+        Ok(s) => s,
+        Err(d) => return Err(fail(d, sources)),
+    };
+    let bytes = std::fs::read(path).unwrap_or_default();
+    let front = match front(scenario, opts.seed) {
+        Ok(f) => f,
+        Err(d) => return Err(fail(d, sources)),
+    };
+    let egos = front.egos(&opts.egos).map_err(|d| fail(vec![d], SourceMap::default()))?;
+    let frames = front.frames(opts.frames.as_deref()).map_err(|d| fail(vec![d], SourceMap::default()))?;
+    let background = if opts.stage >= Stage::Occ {
+        Background::generate(&front.map, front.concrete.seed)
+    } else {
+        Background::none()
+    };
+    Ok(Prepared { input: path.to_path_buf(), bytes, front, background, egos, frames })
+}
+
+/// Expand files and directories (recursively, `*.scn`) into a sorted, de-duplicated list.
+/// Directory walks skip files that hold no `scenario` (kind files imported with `use`).
+pub fn collect_inputs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
+    let mut out = Vec::new();
+    for p in paths {
+        if p.is_dir() {
+            walk(p, &mut out).map_err(|e| format!("cannot read directory `{}`: {e}", p.display()))?;
+        } else if p.exists() {
+            out.push(p.clone());
+        } else {
+            return Err(format!("`{}` does not exist", p.display()));
+        }
+    }
+    out.sort();
+    out.dedup();
+    Ok(out)
+}
+
+fn walk(dir: &Path, out: &mut Vec<PathBuf>) -> std::io::Result<()> {
+    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)?.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    entries.sort();
+    for p in entries {
+        if p.is_dir() {
+            walk(&p, out)?;
+        } else if p.extension().is_some_and(|e| e == "scn") && holds_scenario(&p) {
+            out.push(p);
+        }
+    }
+    Ok(())
+}
+
+/// A cheap syntactic test: does the file define a scenario (rather than only kinds)?
+fn holds_scenario(p: &Path) -> bool {
+    let Ok(text) = std::fs::read_to_string(p) else { return true };
+    match crate::syntax::parse(0, &text) {
+        Ok(f) => f.items.iter().any(|i| matches!(i, crate::syntax::ast::Item::Scenario(_))),
+        // A file that does not parse is compiled so that its error is reported.
+        Err(_) => true,
+    }
+}
+
+/// `--shard K/N` (1-based K): parse and validate.
+pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let (k, n) = s.split_once('/').ok_or_else(|| format!("`{s}`: expected K/N, e.g. 3/16"))?;
+    let k: usize = k.trim().parse().map_err(|_| format!("`{s}`: K is not a number"))?;
+    let n: usize = n.trim().parse().map_err(|_| format!("`{s}`: N is not a number"))?;
+    if n == 0 || k == 0 || k > n {
+        return Err(format!("`{s}`: need 1 <= K <= N"));
+    }
+    Ok((k, n))
+}
+
+/// The inputs shard K of N owns: every N-th file of the sorted list, starting at K-1. The list
+/// is sorted, so every job of an array computes the same partition without talking to the others.
+pub fn shard(inputs: Vec<PathBuf>, shard: Option<(usize, usize)>) -> Vec<PathBuf> {
+    match shard {
+        None => inputs,
+        Some((k, n)) => inputs.into_iter().enumerate().filter(|(i, _)| i % n == k - 1).map(|(_, p)| p).collect(),
+    }
+}
+
+/// A progress bar on a terminal; plain lines otherwise (CI logs, job arrays).
+pub struct Progress {
+    bar: Option<ProgressBar>,
+}
+
+impl Progress {
+    pub fn new(total: u64, quiet: bool) -> Self {
+        let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
+            let b = ProgressBar::new(total);
+            if let Ok(style) =
+                ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} frames  {msg}")
+            {
+                b.set_style(style);
+            }
+            b
+        });
+        Progress { bar }
+    }
+
+    pub fn inc(&self, n: u64) {
+        if let Some(b) = &self.bar {
+            b.inc(n);
+        }
+    }
+
+    /// A line for the log (above the bar on a terminal).
+    pub fn line(&self, msg: &str) {
+        match &self.bar {
+            Some(b) => b.println(msg),
+            None => eprintln!("{msg}"),
+        }
+    }
+
+    pub fn finish(&self) {
+        if let Some(b) = &self.bar {
+            b.finish_and_clear();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shards_partition_the_inputs() {
+        let inputs: Vec<PathBuf> = (0..10).map(|i| PathBuf::from(format!("{i:02}.scn"))).collect();
+        let mut all = vec![];
+        for k in 1..=3 {
+            all.extend(shard(inputs.clone(), Some((k, 3))));
+        }
+        all.sort();
+        assert_eq!(all, inputs);
+        assert_eq!(shard(inputs.clone(), Some((2, 3))).len(), 3);
+        assert!(parse_shard("0/3").is_err() && parse_shard("4/3").is_err() && parse_shard("x").is_err());
+        assert_eq!(parse_shard("2/3"), Ok((2, 3)));
+    }
+}

@@ -1,0 +1,338 @@
+//! One clip: one ego's frames of one scene, written to `OUT/<scenario>/<ego>/`.
+//!
+//! Frames are independent (the tracks are already decided, every random draw is keyed by the
+//! frame), so they run in parallel with per-thread scratch buffers, and each frame's files are
+//! written by the thread that made them. What needs all frames — `boxes.json`, the previews —
+//! is written after, and `manifest.json` last: its presence with matching inputs and files is
+//! what "this clip is complete" means to a resumed run.
+
+use super::{Front, Options, Stage};
+use crate::backend::{Background, OccInput, Occupancy, OccupancyBackend, Procedural, occ_frame_path, write_npy};
+use crate::lidar::{bin_frame_path, pcd_frame_path, scan, write_bin, write_pcd};
+use crate::output::{
+    FrameBoxes, Manifest, OutputFile, PREVIEW_SIDE, StageTiming, paint_bev, paint_lidar, paint_occ, write_bev_frame,
+    write_boxes_json, write_gif, write_manifest, write_preview_png, write_sheet,
+};
+use crate::raster::{Bev, Rasterizer};
+use crate::sample::Rng;
+use crate::view::{AgentState, EgoBox, to_ego};
+use rayon::prelude::*;
+use std::io;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+/// GIFs keep at most this many frames (a stride through the clip), bounding preview memory.
+const GIF_FRAMES: usize = 60;
+/// Columns of the contact sheet.
+const SHEET_FRAMES: usize = 4;
+/// Half the BEV's side (m): boxes whose footprint cannot reach the grid are left out.
+const HALF_EXTENT: f64 = 50.0;
+
+/// What one clip is made of.
+pub struct ClipInput<'a> {
+    /// The input file as named on the command line, and its bytes (hashed into the manifest).
+    pub input: &'a str,
+    pub input_bytes: &'a [u8],
+    pub front: &'a Front,
+    pub background: &'a Background,
+    /// Track index of the ego.
+    pub ego: usize,
+    pub frames: &'a [usize],
+}
+
+#[derive(Clone, Debug)]
+pub struct ClipReport {
+    pub dir: PathBuf,
+    pub frames: usize,
+    /// True when a complete earlier run was found and nothing was written.
+    pub resumed: bool,
+    pub manifest: Manifest,
+}
+
+#[derive(Default)]
+struct Clock {
+    view: AtomicU64,
+    bev: AtomicU64,
+    occ: AtomicU64,
+    lidar: AtomicU64,
+    write: AtomicU64,
+    preview: AtomicU64,
+}
+
+impl Clock {
+    fn add(slot: &AtomicU64, since: Instant) -> Instant {
+        let now = Instant::now();
+        slot.fetch_add((now - since).as_nanos() as u64, Ordering::Relaxed);
+        now
+    }
+}
+
+struct Scratch {
+    raster: Rasterizer,
+    bev: Bev,
+    occ: Occupancy,
+}
+
+/// Per-frame results kept for the clip-level files.
+struct FrameOut {
+    boxes: FrameBoxes,
+    files: Vec<OutputFile>,
+    /// Preview images (bev, occ, lidar) when this frame is sampled for a preview.
+    thumbs: Option<[Option<Vec<u8>>; 3]>,
+    /// The full BEV preview (with legend) is drawn from the first selected frame.
+    first_bev: Option<Bev>,
+}
+
+/// The clip's output directory.
+pub fn clip_dir(out: &Path, front: &Front, ego: usize) -> PathBuf {
+    out.join(&front.concrete.name).join(&front.tracks.agents[ego].name)
+}
+
+/// The seed of one clip's sensor noise: the scene seed, decorrelated per ego so two egos at one
+/// spot do not see the same noise.
+fn clip_seed(front: &Front, ego: usize) -> u64 {
+    Rng::stream(front.concrete.seed, &format!("clip:{}", front.tracks.agents[ego].name)).next_u64()
+}
+
+/// The manifest this run would write, without files and timings: compared with an existing one
+/// to decide whether the clip is already complete.
+fn expected_manifest(ci: &ClipInput, opts: &Options, backend: &str) -> Manifest {
+    let f = ci.front;
+    let mut m = Manifest::new(
+        ci.input,
+        ci.input_bytes,
+        f.concrete.seed,
+        &f.tracks.agents[ci.ego].name,
+        f.tracks.frames,
+        f.tracks.rate,
+    );
+    m.backend = if opts.stage >= Stage::Occ { backend.to_string() } else { "none".to_string() };
+    m.rig = (opts.stage >= Stage::Lidar).then(|| opts.rig.name.clone());
+    m.stage = opts.stage.name().to_string();
+    m.frames = ci.frames.to_vec();
+    m
+}
+
+/// A complete earlier run of the same clip: same compiler, input, seed, stage, frames, backend,
+/// rig, and every file it lists present with its recorded size.
+fn complete(dir: &Path, want: &Manifest) -> Option<Manifest> {
+    let text = std::fs::read_to_string(dir.join("manifest.json")).ok()?;
+    let m: Manifest = serde_json::from_str(&text).ok()?;
+    let same = m.compiler_version == want.compiler_version
+        && m.input_hash == want.input_hash
+        && m.seed == want.seed
+        && m.stage == want.stage
+        && m.frames == want.frames
+        && m.backend == want.backend
+        && m.rig == want.rig
+        && m.ego == want.ego;
+    let files_ok = m
+        .files
+        .iter()
+        .all(|f| std::fs::metadata(dir.join(&f.path)).is_ok_and(|md| md.is_file() && md.len() == f.bytes));
+    (same && files_ok).then_some(m)
+}
+
+/// Every box of frame `f` in the ego's frame, the ego itself excluded (nuPlan's annotations never
+/// contain the ego), and only boxes whose footprint can reach the 100 m grid.
+pub fn frame_boxes(front: &Front, ego: usize, f: usize) -> Vec<EgoBox> {
+    let t = &front.tracks;
+    let ego_pose = t.poses[ego][f];
+    let near = |i: usize| {
+        let p = t.poses[i][f];
+        let a = &t.agents[i];
+        let r = 0.5 * a.size[0].hypot(a.size[1]) + HALF_EXTENT;
+        // Chebyshev distance bounds the ego-frame coordinates whatever the ego's heading.
+        (p.x - ego_pose.x).abs().max((p.y - ego_pose.y).abs()) <= r * std::f64::consts::SQRT_2
+    };
+    let states = t.agents.iter().enumerate().filter(|&(i, _)| i != ego && near(i)).map(|(i, a)| AgentState {
+        track: i as u32,
+        name: &a.name,
+        kind: &a.kind,
+        class: a.class,
+        size: a.size,
+        pose: t.poses[i][f],
+    });
+    let mut boxes = to_ego(ego_pose, states);
+    boxes.retain(|b| {
+        let r = 0.5 * b.l.hypot(b.w);
+        b.x.abs() <= HALF_EXTENT + r && b.y.abs() <= HALF_EXTENT + r
+    });
+    boxes
+}
+
+/// Indices into `frames` sampled for the GIFs and for the contact sheet.
+fn preview_picks(n: usize) -> (Vec<usize>, Vec<usize>) {
+    if n == 0 {
+        return (vec![], vec![]);
+    }
+    let stride = n.div_ceil(GIF_FRAMES);
+    let gif: Vec<usize> = (0..n).step_by(stride).collect();
+    let mut sheet: Vec<usize> = (0..SHEET_FRAMES).map(|c| c * (n - 1) / (SHEET_FRAMES - 1).max(1)).collect();
+    sheet.dedup();
+    (gif, sheet)
+}
+
+/// Compile one clip into `dir`. `on_frame` is called once per finished frame (progress).
+pub fn compile_clip(
+    ci: &ClipInput,
+    opts: &Options,
+    dir: &Path,
+    on_frame: &(dyn Fn() + Sync),
+) -> io::Result<ClipReport> {
+    let backend = Procedural::new(opts.mode);
+    let want = expected_manifest(ci, opts, backend.name());
+    if !opts.force
+        && let Some(m) = complete(dir, &want)
+    {
+        for _ in ci.frames {
+            on_frame();
+        }
+        return Ok(ClipReport { dir: dir.to_path_buf(), frames: ci.frames.len(), resumed: true, manifest: m });
+    }
+    std::fs::create_dir_all(dir)?;
+    // A stale manifest must not vouch for a half-rewritten directory if this run is interrupted.
+    match std::fs::remove_file(dir.join("manifest.json")) {
+        Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(e),
+        _ => {}
+    }
+
+    let front = ci.front;
+    let seed = clip_seed(front, ci.ego);
+    let (gif_picks, sheet_picks) = if opts.previews { preview_picks(ci.frames.len()) } else { (vec![], vec![]) };
+    let clock = Clock::default();
+    let rate = front.tracks.rate;
+
+    let outs: Vec<FrameOut> = ci
+        .frames
+        .par_iter()
+        .enumerate()
+        .map_init(
+            || Scratch { raster: Rasterizer::new(), bev: Bev::zeros(), occ: Occupancy::empty() },
+            |s, (n, &f)| -> io::Result<FrameOut> {
+                let t0 = Instant::now();
+                let ego_pose = front.tracks.poses[ci.ego][f];
+                let boxes = frame_boxes(front, ci.ego, f);
+                let t1 = Clock::add(&clock.view, t0);
+                s.raster.rasterize_into(&front.map, ego_pose, &boxes, &mut s.bev);
+                let t2 = Clock::add(&clock.bev, t1);
+                let mut files = vec![write_bev_frame(dir, f, &s.bev)?];
+                let mut t3 = Clock::add(&clock.write, t2);
+                let preview = gif_picks.contains(&n) || sheet_picks.contains(&n);
+                let mut thumbs = [None, None, None];
+                if preview {
+                    let mut img = vec![0u8; PREVIEW_SIDE * PREVIEW_SIDE];
+                    paint_bev(&s.bev, &mut img);
+                    thumbs[0] = Some(img);
+                    t3 = Clock::add(&clock.preview, t3);
+                }
+                if opts.stage >= Stage::Occ {
+                    let input = OccInput {
+                        boxes: &boxes,
+                        bev: &s.bev,
+                        background: ci.background,
+                        ego: ego_pose,
+                        seed,
+                        frame: f,
+                    };
+                    backend.occupancy_into(&input, &mut s.occ);
+                    let t4 = Clock::add(&clock.occ, t3);
+                    let path = occ_frame_path(dir, f);
+                    files.push(OutputFile { path: rel(dir, &path), bytes: write_npy(&path, &s.occ)? });
+                    t3 = Clock::add(&clock.write, t4);
+                    if preview {
+                        let mut img = vec![0u8; PREVIEW_SIDE * PREVIEW_SIDE];
+                        paint_occ(&s.occ, &mut img);
+                        thumbs[1] = Some(img);
+                        t3 = Clock::add(&clock.preview, t3);
+                    }
+                }
+                if opts.stage >= Stage::Lidar {
+                    let pc = scan(&s.occ, &opts.rig, seed, f);
+                    let t5 = Clock::add(&clock.lidar, t3);
+                    let (bin, pcd) = (bin_frame_path(dir, f), pcd_frame_path(dir, f));
+                    files.push(OutputFile { path: rel(dir, &bin), bytes: write_bin(&bin, &pc)? });
+                    files.push(OutputFile { path: rel(dir, &pcd), bytes: write_pcd(&pcd, &pc)? });
+                    t3 = Clock::add(&clock.write, t5);
+                    if preview {
+                        let mut img = vec![0u8; PREVIEW_SIDE * PREVIEW_SIDE];
+                        paint_lidar(&pc, &mut img);
+                        thumbs[2] = Some(img);
+                        Clock::add(&clock.preview, t3);
+                    }
+                }
+                on_frame();
+                Ok(FrameOut {
+                    boxes: FrameBoxes { frame: f, t: f as f64 / rate, boxes },
+                    files,
+                    thumbs: preview.then_some(thumbs),
+                    first_bev: (n == 0 && opts.previews).then(|| s.bev.clone()),
+                })
+            },
+        )
+        .collect::<io::Result<_>>()?;
+
+    let t0 = Instant::now();
+    let mut files: Vec<OutputFile> = outs.iter().flat_map(|o| o.files.iter().cloned()).collect();
+    let frame_boxes: Vec<FrameBoxes> = outs.iter().map(|o| o.boxes.clone()).collect();
+    files.push(write_boxes_json(dir, &frame_boxes)?);
+    let t1 = Clock::add(&clock.write, t0);
+
+    if opts.previews {
+        if let Some(bev) = outs.first().and_then(|o| o.first_bev.as_ref()) {
+            files.push(write_preview_png(dir, bev)?);
+        }
+        // Frames play at the clip's real speed.
+        let stride = gif_picks.get(1).copied().unwrap_or(1);
+        let delay_cs = ((100.0 * stride as f64 / rate).round() as u16).max(2);
+        let names = ["bev", "occ", "lidar"];
+        let stages = 1 + (opts.stage >= Stage::Occ) as usize + (opts.stage >= Stage::Lidar) as usize;
+        let mut rows = Vec::new();
+        for (s, name) in names.iter().enumerate().take(stages) {
+            let pick = |picks: &[usize]| -> Vec<Vec<u8>> {
+                picks.iter().filter_map(|&n| outs[n].thumbs.as_ref().and_then(|t| t[s].clone())).collect()
+            };
+            files.push(write_gif(dir, &format!("{name}.gif"), &pick(&gif_picks), delay_cs)?);
+            rows.push((*name, pick(&sheet_picks)));
+        }
+        let sheet_frames: Vec<usize> = sheet_picks.iter().map(|&n| ci.frames[n]).collect();
+        files.push(write_sheet(dir, &sheet_frames, &rows)?);
+        Clock::add(&clock.preview, t1);
+    }
+    files.sort_by(|a, b| a.path.cmp(&b.path));
+
+    let mut manifest = want;
+    let secs = |a: &AtomicU64| a.load(Ordering::Relaxed) as f64 * 1e-9;
+    let mut timings = vec![("view", &clock.view), ("bev", &clock.bev)];
+    if opts.stage >= Stage::Occ {
+        timings.push(("occ", &clock.occ));
+    }
+    if opts.stage >= Stage::Lidar {
+        timings.push(("lidar", &clock.lidar));
+    }
+    timings.extend([("write", &clock.write), ("preview", &clock.preview)]);
+    manifest.timings =
+        timings.into_iter().map(|(n, a)| StageTiming { stage: n.to_string(), seconds: secs(a) }).collect();
+    manifest.files = files;
+    write_manifest(dir, &manifest)?;
+    Ok(ClipReport { dir: dir.to_path_buf(), frames: ci.frames.len(), resumed: false, manifest })
+}
+
+fn rel(dir: &Path, p: &Path) -> String {
+    p.strip_prefix(dir).unwrap_or(p).to_string_lossy().replace('\\', "/")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::preview_picks;
+
+    #[test]
+    fn previews_sample_the_whole_clip() {
+        let (gif, sheet) = preview_picks(200);
+        assert!(gif.len() <= super::GIF_FRAMES && gif[0] == 0 && *gif.last().unwrap() >= 190);
+        assert_eq!(sheet, vec![0, 66, 132, 199]);
+        assert_eq!(preview_picks(1), (vec![0], vec![0]));
+        assert_eq!(preview_picks(2).1, vec![0, 1]);
+    }
+}

@@ -1,0 +1,177 @@
+//! Compile driver. In: scenario files and `Options`. Out: the SPEC.md output layout, one
+//! directory per (scenario, ego): `OUT/<scenario>/<ego>/{manifest.json, boxes.json, bev/, occ/,
+//! lidar/, preview/}`.
+//!
+//! `front` runs the passes that decide the scene (check's output -> sample -> road -> place ->
+//! rollout); `rocc check` runs it too, so every error a compile could hit before writing a byte
+//! is a check error. `clip::compile_clip` then renders one ego's frames in parallel (view ->
+//! raster -> backend -> lidar, each frame independent, every random draw keyed by frame), and
+//! `batch::run` spreads files and clips over the rayon pool.
+
+pub mod batch;
+mod clip;
+
+pub use clip::{ClipInput, ClipReport, compile_clip};
+
+use crate::backend::Mode;
+use crate::check::scenario::Scenario;
+use crate::diag::{Diagnostic, did_you_mean};
+use crate::lidar::Rig;
+use crate::place::{Placed, place};
+use crate::road::{self, Map};
+use crate::rollout::{Tracks, rollout};
+use crate::sample::{Concrete, sample};
+use serde::{Deserialize, Serialize};
+
+/// How far `rocc compile` goes. Each stage includes the ones before it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Stage {
+    Bev,
+    Occ,
+    Lidar,
+}
+
+impl Stage {
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Bev => "bev",
+            Stage::Occ => "occ",
+            Stage::Lidar => "lidar",
+        }
+    }
+}
+
+/// Everything `rocc compile` can be told, besides its inputs and output directory.
+#[derive(Clone, Debug)]
+pub struct Options {
+    pub stage: Stage,
+    /// `--frames` as written; `None` = every frame.
+    pub frames: Option<String>,
+    /// `--ego` names; empty = the scenario's own `egos`.
+    pub egos: Vec<String>,
+    /// `--seed`; `None` = the scenario's `seed`.
+    pub seed: Option<u64>,
+    pub mode: Mode,
+    pub rig: Rig,
+    pub previews: bool,
+    /// Recompile clips whose manifest says they are complete.
+    pub force: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            stage: Stage::Lidar,
+            frames: None,
+            egos: Vec::new(),
+            seed: None,
+            mode: Mode::Surface,
+            rig: Rig::nuplan(),
+            previews: true,
+            force: false,
+        }
+    }
+}
+
+/// A scene decided down to every agent's track: what all of a scenario's clips share.
+#[derive(Clone, Debug)]
+pub struct Front {
+    pub scenario: Scenario,
+    pub concrete: Concrete,
+    pub map: Map,
+    pub placed: Placed,
+    pub tracks: Tracks,
+}
+
+/// Sample, build the road, place and roll out a checked scenario.
+pub fn front(scenario: Scenario, seed: Option<u64>) -> Result<Front, Vec<Diagnostic>> {
+    let concrete = sample(&scenario, seed.unwrap_or(scenario.seed));
+    let map = road::build(&concrete.road);
+    let placed = place(&concrete, &map)?;
+    let tracks = rollout(&concrete, &map, &placed)?;
+    Ok(Front { scenario, concrete, map, placed, tracks })
+}
+
+impl Front {
+    /// Track indices of the clips to compile: `names`, or the scenario's egos when empty.
+    pub fn egos(&self, names: &[String]) -> Result<Vec<usize>, Diagnostic> {
+        if names.is_empty() {
+            return Ok(self.concrete.egos.clone());
+        }
+        // Declared, non-object agents may carry sensors; their track index is their declaration index.
+        let eligible: Vec<&str> =
+            self.concrete.agents.iter().filter(|a| !a.is_object).map(|a| a.name.as_str()).collect();
+        let mut out = Vec::new();
+        for n in names {
+            match self.concrete.agents.iter().position(|a| &a.name == n && !a.is_object) {
+                Some(i) if !out.contains(&i) => out.push(i),
+                Some(_) => {}
+                None => {
+                    return Err(Diagnostic::error(
+                        "E0301",
+                        format!("`{n}` is not an agent of scenario `{}` that can be an ego", self.concrete.name),
+                    )
+                    .help(did_you_mean(n, &eligible, "agent")));
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// The frame indices `spec` selects (all when `None`), sorted and de-duplicated.
+    pub fn frames(&self, spec: Option<&str>) -> Result<Vec<usize>, Diagnostic> {
+        parse_frames(spec, self.tracks.frames)
+    }
+}
+
+/// Parse `--frames`: comma-separated `N`, `A..B`, `A..=B`, `A..`.
+pub fn parse_frames(spec: Option<&str>, count: usize) -> Result<Vec<usize>, Diagnostic> {
+    let Some(spec) = spec else { return Ok((0..count).collect()) };
+    let bad = |why: String| {
+        Diagnostic::error("E0302", format!("`--frames {spec}`: {why}"))
+            .help(format!("the clip has {count} frames (0..{count}); write e.g. `0`, `0..10`, `0..=9`, `50..`"))
+    };
+    let num = |s: &str| s.trim().parse::<usize>().map_err(|_| bad(format!("`{}` is not a frame index", s.trim())));
+    let mut out = Vec::new();
+    for part in spec.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        let (a, b) = if let Some((a, b)) = part.split_once("..=") {
+            (num(a)?, num(b)? + 1)
+        } else if let Some((a, b)) = part.split_once("..") {
+            (num(a)?, if b.trim().is_empty() { count } else { num(b)? })
+        } else {
+            let n = num(part)?;
+            (n, n + 1)
+        };
+        if a >= b {
+            return Err(bad(format!("`{part}` selects no frame")));
+        }
+        if b > count {
+            return Err(bad(format!("`{part}` goes past the last frame ({})", count.saturating_sub(1))));
+        }
+        out.extend(a..b);
+    }
+    if out.is_empty() {
+        return Err(bad("selects no frame".to_string()));
+    }
+    out.sort_unstable();
+    out.dedup();
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_selections() {
+        assert_eq!(parse_frames(None, 3).unwrap(), vec![0, 1, 2]);
+        assert_eq!(parse_frames(Some("0,2..4, 8..=9"), 10).unwrap(), vec![0, 2, 3, 8, 9]);
+        assert_eq!(parse_frames(Some("7.."), 10).unwrap(), vec![7, 8, 9]);
+        assert_eq!(parse_frames(Some("1,1,0"), 10).unwrap(), vec![0, 1]);
+        for bad in ["10", "3..3", "x", "0..11", "", "5..2"] {
+            let e = parse_frames(Some(bad), 10).unwrap_err();
+            assert_eq!(e.code, "E0302", "{bad}");
+        }
+    }
+}
