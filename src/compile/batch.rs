@@ -1,7 +1,7 @@
 //! Batch plumbing: which files a command line names, which of them this shard owns, and
 //! progress reporting that suits a terminal or a log file.
 
-use super::{ClipInput, ClipReport, Front, Options, Stage, clip, compile_clip, front};
+use super::{ClipInput, ClipReport, Front, Options, Stage, clip_dir, compile_clip, front};
 use crate::backend::Background;
 use crate::diag::Diagnostic;
 use crate::source::SourceMap;
@@ -88,7 +88,7 @@ pub fn run(inputs: &[PathBuf], out: &Path, opts: &Options, quiet: bool) -> Batch
                 ego,
                 frames: &p.frames,
             };
-            let dir = clip::clip_dir(out, &p.front, ego);
+            let dir = clip_dir(out, &p.front, ego);
             let r = compile_clip(&ci, opts, &dir, &|| progress.inc(1));
             match &r {
                 Ok(c) if c.resumed => progress.line(&format!("complete  {} (kept)", dir.display())),

@@ -11,7 +11,7 @@
 pub mod batch;
 mod clip;
 
-pub use clip::{ClipInput, ClipReport, compile_clip};
+pub use clip::{ClipInput, ClipReport, clip_dir, compile_clip, frame_boxes};
 
 use crate::backend::Mode;
 use crate::check::scenario::Scenario;

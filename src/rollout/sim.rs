@@ -100,6 +100,13 @@ pub(super) struct Conf {
     pub c: crate::check::scenario::Conflict,
 }
 
+/// Lateral speed of a vehicle squeezing past an agent that eases aside for it (m/s).
+const PASS_LAT_RATE: f64 = 1.0;
+/// Side clearance kept while passing it (m).
+const PASS_CLEARANCE: f64 = 0.4;
+/// The most a pass may move off the lane's centre line (m): half into the next lane.
+const PASS_MAX_SHIFT: f64 = 2.5;
+
 pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Vec<Diagnostic>> {
     // Concrete agent index -> track index.
     let mut track_of = vec![None; c.agents.len()];
@@ -131,6 +138,9 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         }
         confs.push(Conf { index, af: *af, st: *st, c: k.clone() });
     }
+    for k in &confs {
+        face_the_striker(&mut actors, k);
+    }
     let frames = c.frame_count();
     let dt = if c.rate > 0.0 { 1.0 / c.rate } else { 0.1 };
     let mut out = empty_tracks(&actors, c.rate, frames);
@@ -144,6 +154,24 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         Sim::new(&actors, &confs, &plans, Some(&pass1), dt).run(&mut out);
     }
     Ok(out)
+}
+
+/// A tree or a pole has no front: its yaw is whatever the placement gave it (the lane's heading),
+/// so a requested `point front` in that frame could send the striker around the trunk to hit
+/// its far face. Turn such a struck object (a static, roughly square structure) to face the
+/// striker's start, so the requested side reads from the striker's approach: `front` is the face
+/// it drives into, `left` the one on the striker's right as it comes. Walls and buildings keep
+/// their yaw: their faces are real.
+fn face_the_striker(actors: &mut [Actor], k: &Conf) {
+    let (af, st) = (actors[k.af].init, &actors[k.st]);
+    let square = st.hl.max(st.hw) <= 1.5 * st.hl.min(st.hw);
+    if !matches!(st.drive, Drive::Static) || st.info.class != Class::Structure || !square {
+        return;
+    }
+    let to_striker = DVec2::new(af.x - st.init.x, af.y - st.init.y);
+    if to_striker.length() > 1e-6 {
+        actors[k.st].init.yaw = to_striker.y.atan2(to_striker.x);
+    }
 }
 
 fn empty_tracks(actors: &[Actor], rate: f64, frames: usize) -> Tracks {
@@ -621,12 +649,19 @@ impl<'a> Sim<'a> {
         };
         let mut phase = st.phase;
         let mut d_next = st.d;
+        let mut pass_target = None;
         if let Some(tg) = target {
             phase = (st.phase + dt / dur).min(1.0);
             d_next = a.d0 + (tg - a.d0) * quintic(phase);
+        } else if a.vehicle && matches!(a.lateral, Lat::Hold) {
+            // Squeeze past whoever is easing aside for us (`away_from`), then settle back.
+            let look = st.v * st.v / (2.0 * lim.brake) + 2.5 * st.v + 15.0;
+            let tg = self.pass_offset(i, look).unwrap_or(a.d0);
+            pass_target = Some(tg);
+            d_next = st.d + (tg - st.d).clamp(-PASS_LAT_RATE * dt, PASS_LAT_RATE * dt);
         }
         let margin = if a.vehicle { 0.25 } else { 0.1 };
-        let goal_d = target.filter(|_| st.phase < 1.0).unwrap_or(st.d);
+        let goal_d = target.filter(|_| st.phase < 1.0).or(pass_target).unwrap_or(st.d);
         let (lo, hi) = (st.d.min(goal_d) - a.hw - margin, st.d.max(goal_d) + a.hw + margin);
 
         let fwd = DVec2::from_angle(st.yaw);
@@ -702,7 +737,11 @@ impl<'a> Sim<'a> {
             // junction, a lane changer) counts as in it. Walkers do not wait for predicted
             // vehicles: vehicles yield to them, which keeps the two from waiting on each other.
             if !obstacle && a.vehicle && v_lat.abs() > 0.3 {
-                let horizon = (gap.max(0.0) / st.v.max(1.0)).min(4.0) + 1.0;
+                // A walker or an animal heading for the road gets two more seconds of slack:
+                // drivers brake for someone stepping off the kerb, not only for someone already
+                // in their lane, and a walker's path is the least predictable.
+                let slack = if b.vehicle { 1.0 } else { 3.0 };
+                let horizon = (gap.max(0.0) / st.v.max(1.0)).min(4.0) + slack;
                 let l2 = lj + v_lat * horizon;
                 obstacle = lj.min(l2) - ext_lat < hi && lj.max(l2) + ext_lat > lo;
             }
@@ -761,6 +800,39 @@ impl<'a> Sim<'a> {
             stopped,
             frozen: false,
         }
+    }
+
+    /// The lateral offset at which agent `i` clears an agent ahead that is easing aside for it
+    /// (`away_from i`, already triggered), on the side that agent leaves free; `None` when there
+    /// is none, or when passing would take more than `PASS_MAX_SHIFT` out of the lane.
+    fn pass_offset(&self, i: usize, look: f64) -> Option<f64> {
+        let (a, st) = (&self.actors[i], &self.cur[i]);
+        let fwd = DVec2::from_angle(st.yaw);
+        let mut best: Option<f64> = None;
+        for (j, (o, b)) in self.cur.iter().zip(self.actors.iter()).enumerate() {
+            if j == i || !o.triggered || !matches!(b.lateral, Lat::Away { who, .. } if who == i) {
+                continue;
+            }
+            let ahead = (o.pos - st.pos).dot(fwd);
+            // Until our rear has cleared its front.
+            if ahead < -(a.hl + b.hl + 1.0) || ahead > look {
+                continue;
+            }
+            let (_, lj, beyond, h) = a.path.frenet(o.pos, st.s + ahead);
+            if beyond > 0.5 {
+                continue;
+            }
+            let rel = o.yaw - h;
+            let ext_lat = b.hl * rel.sin().abs() + b.hw * rel.cos().abs();
+            // It eases toward its right (negative offsets); pass on the side it leaves.
+            let side = if lj > a.d0 + 0.05 { -1.0 } else { 1.0 };
+            let d = lj + side * (ext_lat + a.hw + PASS_CLEARANCE);
+            if (d - a.d0).abs() > PASS_MAX_SHIFT {
+                continue;
+            }
+            best = Some(best.map_or(d, |b: f64| if side > 0.0 { b.max(d) } else { b.min(d) }));
+        }
+        best
     }
 
     /// One step of an at-fault agent's intercept: a Hermite curve from where it is to the pose
