@@ -1,147 +1,272 @@
-//! BEV benchmark. In: nothing (a synthetic four-way junction, 20 agents, an ego driving through).
-//! Out: BEV frames per second on one core and on all cores, and the cost of writing one frame as
-//! a compressed `.npz`, printed to stdout. Run with `cargo run --release --bin bench`
-//! (`-- --preview DIR` also writes `DIR/preview/bev.png` of one frame).
+//! rocc's benchmarks: figures printed to stdout, never asserted (speed targets live here, not in
+//! unit tests). `cargo run --release --bin bench [-- SECTION...]`, sections `front`, `rollout`,
+//! `stages`, `e2e` (default: all).
+//!
+//! - front: parse + check per library file, and generated files of 10/100/1000 agents;
+//! - rollout: cost per agent-frame over the library, and on a generated 50-agent scene;
+//! - stages: frames/s of BEV, occupancy, LiDAR (+ rays/s) and of each writer, on the
+//!   ambulance example (background traffic included), one core and every core;
+//! - e2e: `rocc compile` of the whole library at full stage into a temporary directory
+//!   (BEV + occupancy + LiDAR + compressed writes + previews), frames/s, and peak memory.
 
-use glam::DVec2;
 use rayon::prelude::*;
-use rocc::check::scenario::Class;
-use rocc::place::Pose;
+use rocc::backend::{Background, OccInput, Occupancy, OccupancyBackend, Procedural, write_npy};
+use rocc::compile::{Front, Options, batch, frame_boxes, front};
+use rocc::lidar::{Rig, scan, write_bin, write_pcd};
+use rocc::output::write_npz;
 use rocc::raster::{Bev, Rasterizer};
-use rocc::road::map::Map;
-use rocc::view::{AgentState, to_ego};
+use rocc::source::SourceMap;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<DVec2> {
-    vec![DVec2::new(x0, y0), DVec2::new(x1, y0), DVec2::new(x1, y1), DVec2::new(x0, y1)]
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// Four arms of 2 + 2 lanes (3.5 m), junction with rounded corners, sidewalks, crosswalks,
-/// dashed dividers.
-fn four_way() -> Map {
-    let (hw, far) = (7.0, 150.0);
-    let mut m = Map::default();
-    // Junction: a square with corner arcs (many vertices, like a real template).
-    let mut junction = Vec::new();
-    for q in 0..4 {
-        let (cx, cy) = [(hw + 5.0, hw + 5.0), (-hw - 5.0, hw + 5.0), (-hw - 5.0, -hw - 5.0), (hw + 5.0, -hw - 5.0)][q];
-        let a0 = std::f64::consts::FRAC_PI_2 * (q as f64 + 2.0);
-        for k in 0..=8 {
-            let a = a0 + std::f64::consts::FRAC_PI_2 * k as f64 / 8.0;
-            junction.push(DVec2::new(cx + 5.0 * a.cos(), cy + 5.0 * a.sin()));
-        }
+fn library() -> Vec<PathBuf> {
+    batch::collect_inputs(&[root().join("scenarios")]).unwrap_or_default()
+}
+
+/// Median seconds of `f` over `reps` runs.
+fn median(reps: usize, mut f: impl FnMut()) -> f64 {
+    let mut t: Vec<f64> = (0..reps.max(1))
+        .map(|_| {
+            let t0 = Instant::now();
+            f();
+            t0.elapsed().as_secs_f64()
+        })
+        .collect();
+    t.sort_by(f64::total_cmp);
+    t[t.len() / 2]
+}
+
+/// A valid scenario with `n` agents spread over a long six-lane straight road.
+fn generated(n: usize) -> String {
+    let mut s = String::from(
+        "scenario generated {\n    seed 1\n    duration 10 s\n    rate 10 Hz\n    egos [a0]\n\n    road straight { lanes 6; lane_width 3.5 m; speed_limit 100 km/h; length 1000 m }\n\n",
+    );
+    let slots = [("west", "in"), ("east", "in"), ("west", "out"), ("east", "out")];
+    for i in 0..n {
+        let (arm, dir) = slots[i % 4];
+        let lane = 1 + (i / 4) % 6;
+        let dist = 5.0 + 10.0 * (i / 24) as f64;
+        let rel = if dir == "in" { "before" } else { "after" };
+        s += &format!(
+            "    agent a{i}: one_of [sedan, suv, hatchback] {{\n        at {arm}.{dir}[{lane}], {dist} m {rel} center\n        speed 20..30 m/s\n        goal {{ speed 25 m/s; lateral hold_lane }}\n    }}\n"
+        );
     }
-    m.intersections = vec![junction.clone()];
-    m.lane_group_connectors = vec![junction];
-    let j = hw + 5.0;
-    for rot in 0..4 {
-        let r = |p: DVec2| DVec2::from_angle(std::f64::consts::FRAC_PI_2 * rot as f64).rotate(p);
-        let rr = |v: Vec<DVec2>| v.into_iter().map(r).collect::<Vec<_>>();
-        m.road_segments.push(rr(rect(j, -hw, far, hw)));
-        m.lane_groups.push(rr(rect(j, -hw, far, 0.0)));
-        m.lane_groups.push(rr(rect(j, 0.0, far, hw)));
-        m.drivable.push(rr(rect(j, -hw, far, hw)));
-        m.walkways.push(rr(rect(j, hw + 0.5, far, hw + 3.0)));
-        m.walkways.push(rr(rect(j, -hw - 3.0, far, -hw - 0.5)));
-        m.crosswalk_polygons.push(rr(rect(j + 0.5, -hw, j + 4.5, hw)));
-        for lane_y in [-3.5, 3.5] {
-            let mut x = j + 6.0;
-            while x < far {
-                m.dividers.push(vec![r(DVec2::new(x, lane_y)), r(DVec2::new(x + 3.0, lane_y))]);
-                x += 9.0;
-            }
-        }
-        m.dividers.push(vec![r(DVec2::new(j + 6.0, 0.0)), r(DVec2::new(far, 0.0))]);
+    s + "}\n"
+}
+
+fn load(path: &Path) -> Option<Front> {
+    let mut sources = SourceMap::default();
+    let s = rocc::check::check_path(path, &mut sources).ok()?;
+    front(s, None).ok()
+}
+
+fn bench_front() {
+    println!("== front: parse + check (median of 50 runs, one core)");
+    for p in library() {
+        let text = std::fs::read_to_string(&p).unwrap_or_default();
+        let dir = p.parent().unwrap_or(Path::new(".")).to_path_buf();
+        let t = median(50, || {
+            let mut sources = SourceMap::default();
+            let _ = std::hint::black_box(rocc::check::check_text("x.scn", &text, &dir, &mut sources));
+        });
+        let name = p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        println!("  {name:<40} {:>5} B  {:>8.1} us", text.len(), t * 1e6);
     }
-    m.drivable.push(m.intersections[0].clone());
-    m
-}
-
-struct World {
-    names: Vec<String>,
-    poses: Vec<Pose>,
-}
-
-fn world(frame: usize) -> (Pose, World) {
-    let t = frame as f64 * 0.1;
-    let ego = Pose { x: -60.0 + 8.0 * t, y: -1.75, yaw: 0.02 * (t * 0.7).sin() };
-    let mut names = Vec::new();
-    let mut poses = Vec::new();
-    for k in 0..20 {
-        let arm = k % 4;
-        let s = 20.0 + 7.0 * (k / 4) as f64 + 3.0 * t;
-        let a = std::f64::consts::FRAC_PI_2 * arm as f64;
-        let p = DVec2::from_angle(a).rotate(DVec2::new(s, 1.75 + 3.5 * (k % 2) as f64));
-        names.push(format!("agent{k}"));
-        poses.push(Pose { x: p.x, y: p.y, yaw: a + std::f64::consts::PI + 0.05 * k as f64 });
+    for n in [10, 100, 1000] {
+        let text = generated(n);
+        let t = median(if n >= 1000 { 10 } else { 50 }, || {
+            let mut sources = SourceMap::default();
+            let r = rocc::check::check_text("gen.scn", &text, Path::new("."), &mut sources);
+            std::hint::black_box(r.is_ok());
+        });
+        println!(
+            "  generated, {n:>4} agents {:>9} B  {:>8.1} us  ({:.2} us/agent)",
+            text.len(),
+            t * 1e6,
+            t * 1e6 / n as f64
+        );
     }
-    (ego, World { names, poses })
 }
 
-fn frame(r: &mut Rasterizer, bev: &mut Bev, map: &Map, i: usize) -> usize {
-    let (ego, w) = world(i);
-    let classes = [Class::Vehicle, Class::Vehicle, Class::Pedestrian, Class::Bicycle, Class::TrafficCone];
-    let states = w.names.iter().zip(&w.poses).enumerate().map(|(k, (n, p))| AgentState {
-        track: k as u32,
-        name: n,
-        kind: "sedan",
-        class: classes[k % classes.len()],
-        size: [4.6, 1.9, 1.6],
-        pose: *p,
-    });
-    let boxes = to_ego(ego, states);
-    r.rasterize_into(map, ego, &boxes, bev);
-    bev.masks[[8, 200, 200]] as usize
+fn bench_rollout() {
+    println!("== rollout: cost per agent-frame (median of 20 runs, one core)");
+    let mut total = (0.0, 0usize);
+    for p in library() {
+        let Some(f) = load(&p) else { continue };
+        let t = median(20, || {
+            std::hint::black_box(rocc::rollout::rollout(&f.concrete, &f.map, &f.placed).is_ok());
+        });
+        let af = f.tracks.agents.len() * f.tracks.frames;
+        total.0 += t;
+        total.1 += af;
+        let name = p.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        println!(
+            "  {name:<32} {:>3} agents x {:>3} frames  {:>7.2} ms  {:>6.3} us/agent-frame",
+            f.tracks.agents.len(),
+            f.tracks.frames,
+            t * 1e3,
+            t * 1e6 / af as f64
+        );
+    }
+    println!("  library total: {:.3} us/agent-frame", total.0 * 1e6 / total.1.max(1) as f64);
+    let mut sources = SourceMap::default();
+    if let Some(f) = rocc::check::check_text("gen.scn", &generated(50), Path::new("."), &mut sources)
+        .ok()
+        .and_then(|s| front(s, None).ok())
+    {
+        let t = median(10, || {
+            std::hint::black_box(rocc::rollout::rollout(&f.concrete, &f.map, &f.placed).is_ok());
+        });
+        let af = f.tracks.agents.len() * f.tracks.frames;
+        println!("  generated 50 agents x {} frames: {:.3} us/agent-frame", f.tracks.frames, t * 1e6 / af as f64);
+    }
 }
 
-fn fps(pool: &rayon::ThreadPool, map: &Map, frames: usize) -> f64 {
-    pool.install(|| {
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool")
+}
+
+fn bench_stages() {
+    let path = root().join("scenarios/ambulance_crowded_intersection.scn");
+    let Some(f) = load(&path) else {
+        println!("== stages: {} does not compile", path.display());
+        return;
+    };
+    let ego = f.concrete.egos[0];
+    let frames: Vec<usize> = (0..f.tracks.frames).collect();
+    let boxes: Vec<_> = frames.iter().map(|&i| frame_boxes(&f, ego, i)).collect();
+    let mean_boxes = boxes.iter().map(Vec::len).sum::<usize>() as f64 / frames.len() as f64;
+    let cores = rayon::current_num_threads();
+    println!(
+        "== stages: ambulance_crowded_intersection, ego `{}`, {} frames, {mean_boxes:.1} boxes/frame; 1 core / {cores} cores",
+        f.tracks.agents[ego].name,
+        frames.len()
+    );
+    let bg = Background::generate(&f.map, f.concrete.seed);
+    let backend = Procedural::default();
+    let rig = Rig::nuplan();
+    let bevs: Vec<Bev> = frames
+        .iter()
+        .map(|&i| {
+            let mut r = Rasterizer::new();
+            let mut b = Bev::zeros();
+            r.rasterize_into(&f.map, f.tracks.poses[ego][i], &boxes[i], &mut b);
+            b
+        })
+        .collect();
+    let occ_input = |i: usize| OccInput {
+        boxes: &boxes[i],
+        bev: &bevs[i],
+        background: &bg,
+        ego: f.tracks.poses[ego][i],
+        seed: 1,
+        frame: i,
+    };
+    let occs: Vec<Occupancy> = frames.iter().map(|&i| backend.occupancy(&occ_input(i))).collect();
+    let rays: usize =
+        rig.sensors.iter().map(|s| s.elevations_deg.len() * s.azimuths(rig.horizontal_resolution_deg).count()).sum();
+
+    let fps = |threads: usize, work: &(dyn Fn(usize) + Sync)| {
+        let p = pool(threads);
         let t0 = Instant::now();
-        let sink: usize = (0..frames)
-            .into_par_iter()
-            .map_init(|| (Rasterizer::new(), Bev::zeros()), |(r, b), i| frame(r, b, map, i))
-            .sum();
-        std::hint::black_box(sink);
-        frames as f64 / t0.elapsed().as_secs_f64()
-    })
+        p.install(|| frames.par_iter().for_each(|&i| work(i)));
+        frames.len() as f64 / t0.elapsed().as_secs_f64()
+    };
+    let report = |name: &str, work: &(dyn Fn(usize) + Sync), extra: &dyn Fn(f64) -> String| {
+        let (one, all) = (fps(1, work), fps(cores, work));
+        println!("  {name:<26} {one:>8.1} fr/s  {all:>8.1} fr/s  {}", extra(all));
+    };
+    let bev_work = |i: usize| {
+        thread_local!(static S: std::cell::RefCell<(Rasterizer, Bev)> = std::cell::RefCell::new((Rasterizer::new(), Bev::zeros())));
+        S.with(|s| {
+            let (r, b) = &mut *s.borrow_mut();
+            r.rasterize_into(&f.map, f.tracks.poses[ego][i], &boxes[i], b);
+        });
+    };
+    report("bev (raster)", &bev_work, &|_| String::new());
+    let occ_work = |i: usize| {
+        thread_local!(static O: std::cell::RefCell<Occupancy> = std::cell::RefCell::new(Occupancy::empty()));
+        O.with(|o| backend.occupancy_into(&occ_input(i), &mut o.borrow_mut()));
+    };
+    report("occupancy (procedural)", &occ_work, &|_| String::new());
+    let lidar_work = |i: usize| {
+        std::hint::black_box(scan(&occs[i], &rig, 1, i).points.len());
+    };
+    report("lidar (nuPlan rig, 0.4 deg)", &lidar_work, &|fps| {
+        format!("{rays} rays/frame, {:.2} M rays/s", fps * rays as f64 / 1e6)
+    });
+    let dir = std::env::temp_dir().join(format!("rocc-bench-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let npz = |i: usize| {
+        let _ = write_npz(&dir.join(format!("b{i}.npz")), &bevs[i]);
+    };
+    report("write bev .npz (deflate)", &npz, &|_| String::new());
+    let npy = |i: usize| {
+        let _ = write_npy(&dir.join(format!("o{i}.npy")), &occs[i]);
+    };
+    report("write occ .npy", &npy, &|_| String::new());
+    let clouds: Vec<_> = frames.iter().take(8).map(|&i| scan(&occs[i], &rig, 1, i)).collect();
+    let pts = clouds.iter().map(|c| c.points.len()).sum::<usize>() / clouds.len().max(1);
+    let bin = |i: usize| {
+        let c = &clouds[i % clouds.len()];
+        let _ = write_bin(&dir.join(format!("l{i}.bin")), c);
+        let _ = write_pcd(&dir.join(format!("l{i}.pcd")), c);
+    };
+    report("write lidar .bin + .pcd", &bin, &|_| format!("{pts} points/frame"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn peak_rss_mb() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kb: f64 = s.lines().find(|l| l.starts_with("VmHWM:"))?.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}
+
+fn bench_e2e() {
+    let inputs = library();
+    let out = std::env::temp_dir().join(format!("rocc-bench-e2e-{}", std::process::id()));
+    for (label, previews) in [("with previews", true), ("no previews", false)] {
+        let _ = std::fs::remove_dir_all(&out);
+        let opts = Options { previews, force: true, ..Options::default() };
+        let t0 = Instant::now();
+        let r = batch::run(&inputs, &out, &opts, true);
+        let secs = t0.elapsed().as_secs_f64();
+        let frames: usize = r.clips.iter().map(|c| c.frames).sum();
+        println!(
+            "== e2e ({label}): {} clips, {frames} frames of BEV + occupancy + LiDAR + writes in {secs:.1} s on {} cores: {:.1} frames/s ({} failed)",
+            r.clips.len(),
+            rayon::current_num_threads(),
+            frames as f64 / secs,
+            r.failures.len()
+        );
+        if !previews {
+            let per = secs / frames.max(1) as f64;
+            println!("  a 65,518-frame corpus at this rate: {:.0} min on this machine", 65_518.0 * per / 60.0);
+        }
+    }
+    let _ = std::fs::remove_dir_all(&out);
+    if let Some(mb) = peak_rss_mb() {
+        println!("  peak resident memory of the whole bench: {mb:.0} MB");
+    }
 }
 
 fn main() {
-    let map = four_way();
-    // `bench --preview DIR`: also write DIR/preview/bev.png of frame 30, to eyeball the raster.
-    let args: Vec<String> = std::env::args().collect();
-    if let Some(dir) = args.iter().position(|a| a == "--preview").and_then(|i| args.get(i + 1)) {
-        let (mut r, mut bev) = (Rasterizer::new(), Bev::zeros());
-        frame(&mut r, &mut bev, &map, 30);
-        match rocc::output::write_preview_png(std::path::Path::new(dir), &bev) {
-            Ok(f) => println!("wrote {dir}/{}", f.path),
-            Err(e) => eprintln!("preview: {e}"),
-        }
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let want = |s: &str| args.is_empty() || args.iter().any(|a| a == s);
+    if want("front") {
+        bench_front();
     }
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a one-thread pool");
-    let all = rayon::ThreadPoolBuilder::new().num_threads(cores).build().expect("a pool per core");
-    fps(&one, &map, 100); // warm-up
-    let f1 = fps(&one, &map, 2000);
-    let fa = fps(&all, &map, 2000 * cores);
-    println!("BEV raster, 400x400, four-way map, 20 agents (excluding compression)");
-    println!("  1 core   : {f1:8.0} frames/s ({:.3} ms/frame)", 1e3 / f1);
-    println!("  {cores} cores  : {fa:8.0} frames/s");
-
-    let dir = std::env::temp_dir().join(format!("rocc-bench-{}", std::process::id()));
-    let (mut r, mut bev) = (Rasterizer::new(), Bev::zeros());
-    let n = 50;
-    let mut bytes = 0;
-    let t0 = Instant::now();
-    for i in 0..n {
-        frame(&mut r, &mut bev, &map, i);
-        bytes += rocc::output::write_bev_frame(&dir, i, &bev).map(|f| f.bytes).unwrap_or(0);
+    if want("rollout") {
+        bench_rollout();
     }
-    let per = t0.elapsed().as_secs_f64() / n as f64 - 1.0 / f1;
-    println!(
-        "npz write (compressed, incl. rename): {:.2} ms/frame, {:.1} KiB/frame",
-        per * 1e3,
-        bytes as f64 / n as f64 / 1024.0
-    );
-    let _ = std::fs::remove_dir_all(&dir);
+    if want("stages") {
+        bench_stages();
+    }
+    if want("e2e") {
+        bench_e2e();
+    }
 }
