@@ -201,6 +201,7 @@ pub fn shard(inputs: Vec<PathBuf>, shard: Option<(usize, usize)>) -> Vec<PathBuf
 /// A progress bar on a terminal; plain lines otherwise (CI logs, job arrays).
 pub struct Progress {
     bar: Option<ProgressBar>,
+    quiet: bool,
 }
 
 impl Progress {
@@ -214,7 +215,7 @@ impl Progress {
             }
             b
         });
-        Progress { bar }
+        Progress { bar, quiet }
     }
 
     pub fn inc(&self, n: u64) {
@@ -227,7 +228,8 @@ impl Progress {
     pub fn line(&self, msg: &str) {
         match &self.bar {
             Some(b) => b.println(msg),
-            None => eprintln!("{msg}"),
+            None if !self.quiet => eprintln!("{msg}"),
+            None => {}
         }
     }
 
