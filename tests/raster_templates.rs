@@ -113,12 +113,12 @@ fn four_way_and_roundabout_look_the_same_from_every_arm() {
         let first = rasterize(&map, Pose { x: 0.0, y: 0.0, yaw: 0.0 }, &[]);
         for q in 1..4 {
             let b = rasterize(&map, Pose { x: 0.0, y: 0.0, yaw: q as f64 * std::f64::consts::FRAC_PI_2 }, &[]);
-            for ch in 0..N_MASKS {
+            for (ch, name) in MASK_NAMES.iter().enumerate() {
                 let (a, c) = (plane(&first, ch), plane(&b, ch));
                 let n = a.iter().filter(|&&v| v != 0).count();
                 // Rounding at exact half pixels differs under rotation: compare within a pixel.
                 let diff = unmatched(a, c) + unmatched(c, a);
-                assert!(diff * 100 <= n.max(100), "{t:?} q{q} {}: {diff} of {n} px unmatched", MASK_NAMES[ch]);
+                assert!(diff * 100 <= n.max(100), "{t:?} q{q} {name}: {diff} of {n} px unmatched");
             }
         }
     }
