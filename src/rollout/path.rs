@@ -142,6 +142,15 @@ impl Path {
     /// heading there.
     #[inline]
     pub fn frenet(&self, p: DVec2, guess: f64) -> (f64, f64, f64, f64) {
+        let (s, off, beyond, _) = self.frenet_dir(p, guess);
+        let (i, u) = self.locate(s);
+        let h = self.heading[i] + wrap_angle(self.heading[i + 1] - self.heading[i]) * u;
+        (s, off, beyond, h)
+    }
+
+    /// `frenet` with the path's unit tangent instead of its heading angle (no trigonometry).
+    #[inline]
+    pub fn frenet_dir(&self, p: DVec2, guess: f64) -> (f64, f64, f64, DVec2) {
         let len = self.length();
         let mut s = guess.clamp(0.0, len);
         let mut along = 0.0;
@@ -158,9 +167,7 @@ impl Path {
         let (q, t) = self.at_vec(s);
         let off = p - q;
         let beyond = if s <= 0.0 || s >= len { along.abs().min(off.dot(t).abs()) } else { 0.0 };
-        let (i, u) = self.locate(s);
-        let h = self.heading[i] + wrap_angle(self.heading[i + 1] - self.heading[i]) * u;
-        (s, off.dot(t.perp()), beyond, h)
+        (s, off.dot(t.perp()), beyond, t.normalize_or(DVec2::X))
     }
 
     #[inline]

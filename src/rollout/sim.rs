@@ -538,6 +538,8 @@ struct Sim<'a> {
     dt: f64,
     cur: Vec<State>,
     next: Vec<State>,
+    /// Unit heading of every agent in `cur`: pair checks use dot and cross products, not trig.
+    dirs: Vec<DVec2>,
 }
 
 impl<'a> Sim<'a> {
@@ -565,6 +567,7 @@ impl<'a> Sim<'a> {
             prev_depth: vec![0.0; confs.len()],
             dt,
             next: cur.clone(),
+            dirs: cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect(),
             cur,
         }
     }
@@ -576,6 +579,8 @@ impl<'a> Sim<'a> {
         self.record(out);
         for f in 1..out.frames {
             let t = (f - 1) as f64 * self.dt;
+            self.dirs.clear();
+            self.dirs.extend(self.cur.iter().map(|s| DVec2::from_angle(s.yaw)));
             for i in 0..self.actors.len() {
                 self.next[i] = self.step(i, t, f);
             }
@@ -688,12 +693,12 @@ impl<'a> Sim<'a> {
             if ahead < -(a.hl + b.radius + 1.0) && !is_named && d_next == st.d {
                 continue;
             }
-            let (sj, lj, beyond, h) = a.path.frenet(o.pos, st.s + ahead);
+            let (sj, lj, beyond, th) = a.path.frenet_dir(o.pos, st.s + ahead);
             if beyond > 0.5 && !is_named {
                 continue;
             }
-            let rel = o.yaw - h;
-            let (cr, sr) = (rel.cos(), rel.sin());
+            // cos and sin of the other's heading relative to the path's.
+            let (cr, sr) = (self.dirs[j].dot(th), th.perp_dot(self.dirs[j]));
             let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
             let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
             let ds = sj - st.s;
