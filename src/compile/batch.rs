@@ -36,83 +36,110 @@ struct Prepared {
     frames: Vec<usize>,
 }
 
-/// Compile `inputs` into `out`: every file checked and decided first (in parallel), then every
-/// clip rendered (clips and their frames in parallel). Failures never stop the others.
+/// Files decided and rendered together: enough to keep every core busy, few enough that memory
+/// does not grow with the corpus.
+const CHUNK_PER_THREAD: usize = 4;
+
+/// Compile `inputs` into `out`. A cheap survey checks every file first (errors, duplicate
+/// scenario names, the frame total for the progress bar); then the files are decided (sample ->
+/// rollout) and rendered chunk by chunk, clips and frames in parallel, so peak memory depends on
+/// the chunk, not on the corpus. Failures never stop the others.
 pub fn run(inputs: &[PathBuf], out: &Path, opts: &Options, quiet: bool) -> BatchReport {
     let mut report = BatchReport::default();
-    let prepared: Vec<Result<Prepared, Failure>> = inputs.par_iter().map(|p| prepare(p, opts)).collect();
-    let mut ok = Vec::new();
-    let mut owner: BTreeMap<String, PathBuf> = BTreeMap::new();
-    for r in prepared {
+    let surveyed: Vec<Result<(String, usize), Failure>> = inputs.par_iter().map(|p| survey(p, opts)).collect();
+    let mut owner: BTreeMap<String, &PathBuf> = BTreeMap::new();
+    let mut todo = Vec::new();
+    let mut total = 0;
+    for (input, r) in inputs.iter().zip(surveyed) {
         match r {
-            Ok(p) => match owner.get(&p.front.concrete.name) {
+            Ok((name, frames)) => match owner.get(&name) {
                 Some(first) => report.failures.push(Failure {
                     diags: vec![
                         Diagnostic::error(
                             "E0303",
-                            format!(
-                                "`{}` and `{}` both declare scenario `{}`",
-                                first.display(),
-                                p.input.display(),
-                                p.front.concrete.name
-                            ),
+                            format!("`{}` and `{}` both declare scenario `{name}`", first.display(), input.display()),
                         )
                         .help("rename one of them: outputs go to OUT/<scenario>/<ego>/"),
                     ],
-                    input: p.input,
+                    input: input.clone(),
                     sources: SourceMap::default(),
                 }),
                 None => {
-                    owner.insert(p.front.concrete.name.clone(), p.input.clone());
-                    ok.push(p);
+                    owner.insert(name, input);
+                    todo.push(input.clone());
+                    total += frames;
                 }
             },
             Err(f) => report.failures.push(f),
         }
     }
 
-    let jobs: Vec<(usize, usize)> =
-        ok.iter().enumerate().flat_map(|(i, p)| p.egos.iter().map(move |&e| (i, e))).collect();
-    let total: usize = jobs.iter().map(|&(i, _)| ok[i].frames.len()).sum();
     let progress = Progress::new(total as u64, quiet);
-    let results: Vec<Result<ClipReport, Failure>> = jobs
-        .par_iter()
-        .map(|&(i, ego)| {
-            let p = &ok[i];
-            let input = p.input.display().to_string();
-            let ci = ClipInput {
-                input: &input,
-                input_bytes: &p.bytes,
-                front: &p.front,
-                background: &p.background,
-                ego,
-                frames: &p.frames,
-            };
-            let dir = clip_dir(out, &p.front, ego);
-            let r = compile_clip(&ci, opts, &dir, &|| progress.inc(1));
-            match &r {
-                Ok(c) if c.resumed => progress.line(&format!("complete  {} (kept)", dir.display())),
-                Ok(c) => progress.line(&format!("compiled  {} ({} frames)", dir.display(), c.frames)),
-                Err(_) => {}
+    let chunk = (rayon::current_num_threads() * CHUNK_PER_THREAD).max(1);
+    for files in todo.chunks(chunk) {
+        let prepared: Vec<Result<Prepared, Failure>> = files.par_iter().map(|p| prepare(p, opts)).collect();
+        let mut ok = Vec::new();
+        for r in prepared {
+            match r {
+                Ok(p) => ok.push(p),
+                Err(f) => report.failures.push(f),
             }
-            r.map_err(|e| Failure {
-                input: p.input.clone(),
-                diags: vec![
-                    Diagnostic::error("E0401", format!("cannot write `{}`: {e}", dir.display()))
-                        .help("check the output directory's permissions and free space; a re-run resumes"),
-                ],
-                sources: SourceMap::default(),
-            })
-        })
-        .collect();
-    progress.finish();
-    for r in results {
-        match r {
-            Ok(c) => report.clips.push(c),
-            Err(f) => report.failures.push(f),
+        }
+        let jobs: Vec<(usize, usize)> =
+            ok.iter().enumerate().flat_map(|(i, p)| p.egos.iter().map(move |&e| (i, e))).collect();
+        let results: Vec<Result<ClipReport, Failure>> =
+            jobs.par_iter().map(|&(i, ego)| render(&ok[i], ego, out, opts, &progress)).collect();
+        for r in results {
+            match r {
+                Ok(c) => report.clips.push(c),
+                Err(f) => report.failures.push(f),
+            }
         }
     }
+    progress.finish();
+    // Failures in input order, whichever phase found them.
+    report.failures.sort_by_key(|f| inputs.iter().position(|p| *p == f.input));
     report
+}
+
+fn render(p: &Prepared, ego: usize, out: &Path, opts: &Options, progress: &Progress) -> Result<ClipReport, Failure> {
+    let input = p.input.display().to_string();
+    let ci = ClipInput {
+        input: &input,
+        input_bytes: &p.bytes,
+        front: &p.front,
+        background: &p.background,
+        ego,
+        frames: &p.frames,
+    };
+    let dir = clip_dir(out, &p.front, ego);
+    let r = compile_clip(&ci, opts, &dir, &|| progress.inc(1));
+    match &r {
+        Ok(c) if c.resumed => progress.line(&format!("complete  {} (kept)", dir.display())),
+        Ok(c) => progress.line(&format!("compiled  {} ({} frames)", dir.display(), c.frames)),
+        Err(_) => {}
+    }
+    r.map_err(|e| Failure {
+        input: p.input.clone(),
+        diags: vec![
+            Diagnostic::error("E0401", format!("cannot write `{}`: {e}", dir.display()))
+                .help("check the output directory's permissions and free space; a re-run resumes"),
+        ],
+        sources: SourceMap::default(),
+    })
+}
+
+/// Check a file and count the frames it will produce; keep nothing else.
+fn survey(path: &Path, opts: &Options) -> Result<(String, usize), Failure> {
+    let mut sources = SourceMap::default();
+    let s = crate::check::check_path(path, &mut sources).map_err(|diags| Failure {
+        input: path.to_path_buf(),
+        diags,
+        sources,
+    })?;
+    let egos = if opts.egos.is_empty() { s.egos.len() } else { opts.egos.len() };
+    let frames = super::parse_frames(opts.frames.as_deref(), s.frame_count()).map(|f| f.len()).unwrap_or(0);
+    Ok((s.name, egos * frames))
 }
 
 fn prepare(path: &Path, opts: &Options) -> Result<Prepared, Failure> {
