@@ -49,7 +49,11 @@ pub fn load_text(name: &str, text: &str, base: &Path, sources: &mut SourceMap) -
     let root = syntax::parse(root_id, text).map_err(|d| vec![d])?;
     let root_dir = absolute(base);
 
-    let mut loader = Loader { sources, root_dir: root_dir.clone(), kinds: vec![], diags: vec![], seen: vec![] };
+    // Imported files are named relative to the root file's name as given, so diagnostics (and
+    // snapshots of them) never show a machine's absolute paths.
+    let display_dir = Path::new(name).parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut loader =
+        Loader { sources, root_dir: root_dir.clone(), display_dir, kinds: vec![], diags: vec![], seen: vec![] };
     loader.take_kinds(&stdlib);
     let root_path = root_dir.join(Path::new(name).file_name().unwrap_or_default());
     loader.imports(&root, &root_dir, &mut vec![root_path]);
@@ -94,6 +98,8 @@ fn stdlib_ast(id: FileId) -> Result<ast::File, Diagnostic> {
 struct Loader<'a> {
     sources: &'a mut SourceMap,
     root_dir: PathBuf,
+    /// `root_dir` as the user named it.
+    display_dir: PathBuf,
     kinds: Vec<ast::KindDecl>,
     diags: Vec<Diagnostic>,
     /// Files already imported (a diamond imports a file once).
@@ -101,6 +107,15 @@ struct Loader<'a> {
 }
 
 impl Loader<'_> {
+    /// A path under `root_dir` as the user would write it.
+    fn shown(&self, p: &Path) -> PathBuf {
+        match p.strip_prefix(&self.root_dir) {
+            Ok(rel) if rel.as_os_str().is_empty() => self.display_dir.clone(),
+            Ok(rel) => self.display_dir.join(rel),
+            Err(_) => p.to_path_buf(),
+        }
+    }
+
     fn take_kinds(&mut self, f: &ast::File) {
         for it in &f.items {
             if let ast::Item::Kind(k) = it {
@@ -127,7 +142,7 @@ impl Loader<'_> {
                 self.diags.push(
                     Diagnostic::error("E0004", format!("import path `{}` leaves the scenario's directory", u.path))
                         .label(u.span, "escapes via `..`")
-                        .help(format!("keep imported files under `{}`", self.root_dir.display())),
+                        .help(format!("keep imported files under `{}`", self.shown(&self.root_dir).display())),
                 );
                 continue;
             }
@@ -147,6 +162,7 @@ impl Loader<'_> {
             let text = match read_source(&target) {
                 Ok(t) => t,
                 Err(m) => {
+                    let m = m.replace(&target.display().to_string(), &self.shown(&target).display().to_string());
                     self.diags.push(
                         Diagnostic::error("E0002", m)
                             .label(u.span, "imported here")
@@ -155,7 +171,7 @@ impl Loader<'_> {
                     continue;
                 }
             };
-            let id: FileId = self.sources.add(target.display().to_string(), text);
+            let id: FileId = self.sources.add(self.shown(&target).display().to_string(), text);
             let text = self.sources.text(id).to_string();
             match syntax::parse(id, &text) {
                 Err(d) => self.diags.push(d),
