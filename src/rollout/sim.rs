@@ -216,12 +216,14 @@ fn build_actor(
         background: false,
     };
     let ca = p.source.and_then(|i| c.agents.get(i));
+    // A recorded track is what happened: it is replayed even for a kind that never moves by
+    // itself (a cone carried on a pickup), so an imported clip reproduces its boxes exactly.
+    if let Some(keys) = ca.filter(|_| !p.is_object).and_then(|ca| ca.track.as_ref()).filter(|k| !k.is_empty()) {
+        return base_actor(info, p.pose, p.motion, p.class, Drive::Replay(keys.clone()));
+    }
     let Some(ca) = ca.filter(|_| !p.is_object && p.motion != Motion::Static) else {
         return base_actor(info, p.pose, p.motion, p.class, Drive::Static);
     };
-    if let Some(keys) = ca.track.as_ref().filter(|k| !k.is_empty()) {
-        return base_actor(info, p.pose, p.motion, p.class, Drive::Replay(keys.clone()));
-    }
     let mut a = base_actor(info, p.pose, p.motion, p.class, Drive::Mover);
     let pos = DVec2::new(p.pose.x, p.pose.y);
     let goal = ca.goal.as_ref();
@@ -897,6 +899,9 @@ fn idm_free(v: f64, v0: f64, lim: Limits, dt: f64) -> f64 {
     (lim.accel * (1.0 - (v / v0).powi(4))).max(-lim.brake)
 }
 
+/// Keyframe time tolerance (s) of `replay`; see there.
+pub const KEY_SNAP_S: f64 = 1e-6;
+
 fn idm_interaction(v: f64, v_lead: f64, gap: f64, s0: f64, lim: Limits) -> f64 {
     let s_star = s0 + (v * lim.headway + v * (v - v_lead) / (2.0 * (lim.accel * lim.brake).sqrt())).max(0.0);
     let g = gap.max(0.05);
@@ -915,7 +920,12 @@ fn stop_law(v: f64, rem: f64, lim: Limits, dt: f64) -> f64 {
 }
 
 /// Keyframe interpolation: linear in position, shortest arc in yaw, held beyond either end.
+/// At a keyframe's own time (within `KEY_SNAP_S`, the float noise of `f * dt`) the keyframe is
+/// returned exactly, so recorded frames replay bit for bit (the importer's lossless guarantee).
 fn replay(keys: &[Keyframe], t: f64) -> (DVec2, f64) {
+    if let Some(k) = keys.iter().find(|k| (k.t - t).abs() <= KEY_SNAP_S) {
+        return (DVec2::new(k.x, k.y), k.yaw);
+    }
     let k = keys.partition_point(|k| k.t <= t);
     if k == 0 {
         let f = &keys[0];
