@@ -34,6 +34,66 @@ enum OccMode {
     Solid,
 }
 
+#[derive(Clone, Copy, ValueEnum)]
+enum ConventionArg {
+    Nuscenes,
+    Mmdet3d,
+    Nuplan,
+}
+
+#[derive(Subcommand)]
+enum ImportCmd {
+    /// Per-frame 3D boxes (JSON) -> a `.scn` whose agents replay their tracks.
+    Boxes {
+        file: PathBuf,
+        #[arg(long, value_enum)]
+        convention: ConventionArg,
+        #[arg(short, long)]
+        out: PathBuf,
+        /// A recorded BEV whose map layers the scene borrows (checked here; pass it to `rocc compile` too).
+        #[arg(long)]
+        static_bev: Option<PathBuf>,
+    },
+}
+
+#[derive(Subcommand)]
+enum EvalCmd {
+    /// Per-class occupancy IoU over a set, mIoU_US, fg-mIoU, occ-IoU.
+    Occ {
+        #[arg(long)]
+        pred: PathBuf,
+        #[arg(long)]
+        gt: PathBuf,
+        /// Print JSON instead of the table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// LiDAR MMD and JSD between two sets of clouds.
+    Lidar {
+        #[arg(long)]
+        pred: PathBuf,
+        #[arg(long)]
+        gt: PathBuf,
+        /// Keep only points with 3 < range < 50 m.
+        #[arg(long)]
+        range_filter: bool,
+        #[arg(long)]
+        json: bool,
+    },
+    /// The paper's edit protocol (insert / delete / move) on the procedural backend.
+    Edits {
+        #[arg(long, default_value_t = 100)]
+        scenes: usize,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Scenarios to draw scenes from.
+        #[arg(long, default_value = "scenarios")]
+        scenarios: PathBuf,
+        #[arg(long)]
+        json: bool,
+    },
+}
+
 #[derive(Subcommand)]
 enum Cmd {
     /// Parse and check scenario files; print diagnostics.
@@ -93,6 +153,46 @@ enum Cmd {
         /// No progress bar or per-clip lines.
         #[arg(short, long)]
         quiet: bool,
+        /// A recorded BEV (`.npz`, or a directory of per-frame `NNNNNN.npz`) whose static and
+        /// divider layers replace the map's, e.g. for a scene from `rocc import boxes`.
+        #[arg(long)]
+        static_bev: Option<PathBuf>,
+    },
+    /// Turn recorded boxes into a scenario: `rocc import boxes FILE --convention nuscenes -o scene.scn`.
+    Import {
+        #[command(subcommand)]
+        what: ImportCmd,
+    },
+    /// Edit the boxes of a compiled clip (OUT/<scenario>/<ego>) or of a `.scn`, and rerun what follows.
+    Edit {
+        /// A compiled clip directory, or a `.scn` file.
+        target: PathBuf,
+        /// `KIND at X,Y yaw A` (metres; degrees unless `rad`).
+        #[arg(long, num_args = 1.., value_name = "KIND at X,Y yaw A")]
+        insert: Vec<String>,
+        /// `AGENT`
+        #[arg(long, value_name = "AGENT")]
+        delete: Vec<String>,
+        /// `AGENT by DX,DY` (metres).
+        #[arg(long = "move", num_args = 1.., value_name = "AGENT by DX,DY")]
+        move_: Vec<String>,
+        /// Clips: edit only these frames (`0`, `0..10`, ...); default every frame.
+        #[arg(long)]
+        frames: Option<String>,
+        /// Clips: the scenario the clip was compiled from, if not where its manifest says.
+        #[arg(long)]
+        scenario: Option<PathBuf>,
+        /// Clips: the rig it was compiled with, if not the bundled nuPlan rig.
+        #[arg(long)]
+        rig: Option<PathBuf>,
+        /// `.scn`: write the edited scenario here (default: rewrite the file).
+        #[arg(short, long)]
+        out: Option<PathBuf>,
+    },
+    /// Score predictions against ground truth with the shared scorer, or run the edit protocol.
+    Eval {
+        #[command(subcommand)]
+        what: EvalCmd,
     },
     /// Explain a diagnostic code (`rocc explain E0107`); without a code, list them all.
     Explain { code: Option<String> },
@@ -117,6 +217,7 @@ fn main() -> ExitCode {
             no_previews,
             force,
             quiet,
+            static_bev,
         } => {
             let stage = match stage {
                 StageArg::Bev => Stage::Bev,
@@ -134,9 +235,23 @@ fn main() -> ExitCode {
                     return ExitCode::FAILURE;
                 }
             };
-            let opts = Options { stage, frames, egos: ego, seed, mode, rig, previews: !no_previews, force };
+            let static_bev = match static_bev.as_deref().map(rocc::import::StaticBev::load).transpose() {
+                Ok(s) => s,
+                Err(d) => {
+                    print_diags(&[d], &SourceMap::default(), MessageFormat::Human);
+                    return ExitCode::FAILURE;
+                }
+            };
+            let opts = Options { stage, frames, egos: ego, seed, mode, rig, previews: !no_previews, force, static_bev };
             compile(&inputs, &out, shard.as_deref(), &opts, quiet)
         }
+        Cmd::Import { what: ImportCmd::Boxes { file, convention, out, static_bev } } => {
+            import_boxes(&file, convention, &out, static_bev.as_deref())
+        }
+        Cmd::Edit { target, insert, delete, move_, frames, scenario, rig, out } => {
+            edit(&target, &insert, &delete, &move_, frames, scenario, rig.as_deref(), out.as_deref())
+        }
+        Cmd::Eval { what } => eval(what),
         Cmd::Explain { code } => explain(code.as_deref()),
     }
 }
@@ -330,5 +445,166 @@ fn explain(code: Option<&str>) -> ExitCode {
                 ExitCode::FAILURE
             }
         },
+    }
+}
+
+fn import_boxes(file: &Path, conv: ConventionArg, out: &Path, static_bev: Option<&Path>) -> ExitCode {
+    use rocc::import::{Convention, StaticBev, import_boxes, scenario_name};
+    let conv = match conv {
+        ConventionArg::Nuscenes => Convention::NuScenes,
+        ConventionArg::Mmdet3d => Convention::Mmdet3d,
+        ConventionArg::Nuplan => Convention::NuPlan,
+    };
+    let mut sources = SourceMap::default();
+    if let Some(p) = static_bev
+        && let Err(d) = StaticBev::load(p)
+    {
+        print_diags(&[d], &sources, MessageFormat::Human);
+        return ExitCode::FAILURE;
+    }
+    match import_boxes(file, conv, &scenario_name(out), &mut sources) {
+        Ok(imp) => {
+            print_diags(&imp.warnings, &sources, MessageFormat::Human);
+            let mut text = imp.text;
+            if let Some(p) = static_bev {
+                text = format!("// Map layers: compile with `--static-bev {}`.\n{text}", p.display());
+            }
+            if let Err(e) = rocc::output::write_atomic(out, |w| std::io::Write::write_all(w, text.as_bytes())) {
+                let d = Diagnostic::error("E0401", format!("cannot write `{}`: {e}", out.display()))
+                    .help("check the directory exists and is writable");
+                print_diags(&[d], &sources, MessageFormat::Human);
+                return ExitCode::FAILURE;
+            }
+            eprintln!(
+                "imported {} frame(s), {} replayed agent(s) -> {}",
+                imp.recorded.frames.len(),
+                imp.agents.len(),
+                out.display()
+            );
+            ExitCode::SUCCESS
+        }
+        Err(d) => {
+            print_diags(&d, &sources, MessageFormat::Human);
+            ExitCode::FAILURE
+        }
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn edit(
+    target: &Path,
+    insert: &[String],
+    delete: &[String],
+    move_: &[String],
+    frames: Option<String>,
+    scenario: Option<PathBuf>,
+    rig: Option<&Path>,
+    out: Option<&Path>,
+) -> ExitCode {
+    use rocc::edit::{ClipEdit, Edit, parse_edit};
+    let fail = |d: Vec<Diagnostic>, sources: &SourceMap| {
+        print_diags(&d, sources, MessageFormat::Human);
+        ExitCode::FAILURE
+    };
+    let mut edits: Vec<Edit> = Vec::new();
+    let parsed = (!insert.is_empty())
+        .then(|| parse_edit("insert", insert))
+        .into_iter()
+        .chain(delete.iter().map(|a| parse_edit("delete", std::slice::from_ref(a))))
+        .chain((!move_.is_empty()).then(|| parse_edit("move", move_)));
+    for p in parsed {
+        match p {
+            Ok(e) => edits.push(e),
+            Err(d) => return fail(vec![d], &SourceMap::default()),
+        }
+    }
+    if edits.is_empty() {
+        let d = Diagnostic::error("E0717", "no edit given")
+            .help("add `--insert KIND at X,Y yaw A`, `--delete AGENT` or `--move AGENT by DX,DY`");
+        return fail(vec![d], &SourceMap::default());
+    }
+    if target.is_dir() {
+        let rig = match rig.map(|r| load_rig(Some(r), None)).transpose() {
+            Ok(r) => r,
+            Err(d) => return fail(vec![d], &SourceMap::default()),
+        };
+        match rocc::edit::edit_clip(target, &edits, &ClipEdit { scenario, frames, rig }) {
+            Ok(m) => {
+                eprintln!("edited {} ({} frames): {}", target.display(), m.frames.len(), m.edits.join("; "));
+                ExitCode::SUCCESS
+            }
+            Err(d) => fail(d, &SourceMap::default()),
+        }
+    } else {
+        let mut sources = SourceMap::default();
+        match rocc::edit::edit_scn(target, &edits, &mut sources) {
+            Ok(text) => {
+                let dest = out.unwrap_or(target);
+                match rocc::output::write_atomic(dest, |w| std::io::Write::write_all(w, text.as_bytes())) {
+                    Ok(_) => {
+                        eprintln!("edited {} -> {}", target.display(), dest.display());
+                        ExitCode::SUCCESS
+                    }
+                    Err(e) => fail(
+                        vec![Diagnostic::error("E0401", format!("cannot write `{}`: {e}", dest.display()))],
+                        &sources,
+                    ),
+                }
+            }
+            Err(d) => fail(d, &sources),
+        }
+    }
+}
+
+fn eval(what: EvalCmd) -> ExitCode {
+    let fail = |d: Vec<Diagnostic>| {
+        print_diags(&d, &SourceMap::default(), MessageFormat::Human);
+        ExitCode::FAILURE
+    };
+    match what {
+        EvalCmd::Occ { pred, gt, json } => match rocc::eval::score_occ_dirs(&pred, &gt) {
+            Ok(s) if json => {
+                println!("{}", serde_json::to_string_pretty(&s).expect("scores are plain numbers"));
+                ExitCode::SUCCESS
+            }
+            Ok(s) => {
+                print!("{}", s.table());
+                ExitCode::SUCCESS
+            }
+            Err(d) => fail(d),
+        },
+        EvalCmd::Lidar { pred, gt, range_filter, json } => match rocc::eval::score_lidar_dirs(&pred, &gt, range_filter)
+        {
+            Ok(s) if json => {
+                println!("{}", serde_json::to_string_pretty(&s).expect("scores are plain numbers"));
+                ExitCode::SUCCESS
+            }
+            Ok(s) => {
+                println!(
+                    "MMD {:.4e} ({:.3} x 1e-5)   JSD {:.4}   ({} predicted vs {} ground-truth clouds{})",
+                    s.mmd,
+                    s.mmd * 1e5,
+                    s.jsd,
+                    s.pred_clouds,
+                    s.gt_clouds,
+                    if s.range_filter { ", 3 < r < 50 m" } else { "" }
+                );
+                ExitCode::SUCCESS
+            }
+            Err(d) => fail(d),
+        },
+        EvalCmd::Edits { scenes, seed, scenarios, json } => {
+            match rocc::eval::run_edit_protocol(&scenarios, scenes, seed) {
+                Ok(s) if json => {
+                    println!("{}", serde_json::to_string_pretty(&s).expect("scores are plain numbers"));
+                    ExitCode::SUCCESS
+                }
+                Ok(s) => {
+                    print!("{}", s.table());
+                    ExitCode::SUCCESS
+                }
+                Err(d) => fail(d),
+            }
+        }
     }
 }

@@ -706,7 +706,7 @@ fn generated(gens: &[Gen]) -> Vec<Spec> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 128, ..ProptestConfig::default() })]
 
     #[test]
     fn generated_scenes_never_overlap_and_respect_limits(gens in prop::collection::vec(gen_agent(), 2..9)) {

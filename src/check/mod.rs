@@ -500,6 +500,10 @@ impl Checker {
         };
         let mut allowed =
             vec!["lanes", "lane_width", "speed_limit", "shoulder", "median", "crosswalks", "sidewalks", "length"];
+        if template == Template::None {
+            // A road-less scene has no geometry to parameterise.
+            allowed.clear();
+        }
         match template {
             Template::Curve => allowed.extend(["radius", "angle"]),
             Template::Roundabout => allowed.push("radius"),
@@ -527,7 +531,9 @@ impl Checker {
                 } else {
                     format!("unknown road parameter `{n}`")
                 };
-                let help = if all.contains(&n) {
+                let help = if allowed.is_empty() {
+                    format!("a {} road takes no parameters: write `road {}`", template.name(), template.name())
+                } else if all.contains(&n) {
                     format!("{} roads take: {}", template.name(), allowed.join(", "))
                 } else {
                     did_you_mean(n, &allowed, "road parameter")

@@ -73,16 +73,20 @@ pub enum Template {
     TJunction,
     Merge,
     Roundabout,
+    /// No map: the scene of replayed tracks imported from a recorded clip (`rocc import boxes`),
+    /// whose map layers, if any, come from a recorded BEV (`--static-bev`).
+    None,
 }
 
 impl Template {
-    pub const ALL: [(&'static str, Template); 6] = [
+    pub const ALL: [(&'static str, Template); 7] = [
         ("straight", Template::Straight),
         ("curve", Template::Curve),
         ("four_way", Template::FourWay),
         ("t_junction", Template::TJunction),
         ("merge", Template::Merge),
         ("roundabout", Template::Roundabout),
+        ("none", Template::None),
     ];
     pub fn name(self) -> &'static str {
         Template::ALL.iter().find(|(_, t)| *t == self).map(|(n, _)| *n).expect("every template is listed")
@@ -93,11 +97,12 @@ impl Template {
             Template::FourWay | Template::Roundabout => &[Arm::North, Arm::East, Arm::South, Arm::West],
             Template::TJunction => &[Arm::West, Arm::East, Arm::South],
             Template::Merge => &[Arm::Main, Arm::Ramp],
+            Template::None => &[],
         }
     }
     /// Templates with a junction area (and `junction` landmarks).
     pub fn has_junction(self) -> bool {
-        !matches!(self, Template::Straight | Template::Curve)
+        !matches!(self, Template::Straight | Template::Curve | Template::None)
     }
     /// Templates with stop (or yield) lines on their in-lanes, where turns are chosen.
     pub fn has_stop_lines(self) -> bool {

@@ -13,6 +13,7 @@ use crate::output::{
     FrameBoxes, Manifest, OutputFile, PREVIEW_SIDE, StageTiming, paint_bev, paint_lidar, paint_occ, write_bev_frame,
     write_boxes_json, write_gif, write_manifest, write_preview_png, write_sheet,
 };
+use crate::place::Pose;
 use crate::raster::{Bev, Rasterizer};
 use crate::sample::Rng;
 use crate::view::{AgentState, EgoBox, to_ego};
@@ -52,7 +53,6 @@ pub struct ClipReport {
 
 #[derive(Default)]
 struct Clock {
-    view: AtomicU64,
     bev: AtomicU64,
     occ: AtomicU64,
     lidar: AtomicU64,
@@ -91,7 +91,7 @@ pub fn clip_dir(out: &Path, front: &Front, ego: usize) -> PathBuf {
 
 /// The seed of one clip's sensor noise: the scene seed, decorrelated per ego so two egos at one
 /// spot do not see the same noise.
-fn clip_seed(front: &Front, ego: usize) -> u64 {
+pub fn clip_seed(front: &Front, ego: usize) -> u64 {
     Rng::stream(front.concrete.seed, &format!("clip:{}", front.tracks.agents[ego].name)).next_u64()
 }
 
@@ -111,6 +111,7 @@ fn expected_manifest(ci: &ClipInput, opts: &Options, backend: &str) -> Manifest 
     m.rig = (opts.stage >= Stage::Lidar).then(|| opts.rig.name.clone());
     m.stage = opts.stage.name().to_string();
     m.frames = ci.frames.to_vec();
+    m.static_bev = opts.static_bev.as_ref().map(|b| b.source.clone());
     m
 }
 
@@ -126,7 +127,10 @@ fn complete(dir: &Path, want: &Manifest) -> Option<Manifest> {
         && m.frames == want.frames
         && m.backend == want.backend
         && m.rig == want.rig
-        && m.ego == want.ego;
+        && m.ego == want.ego
+        && m.static_bev == want.static_bev
+        // An edited clip is not what this input compiles to.
+        && m.edits.is_empty();
     let files_ok = m
         .files
         .iter()
@@ -146,14 +150,17 @@ pub fn frame_boxes(front: &Front, ego: usize, f: usize) -> Vec<EgoBox> {
         // Chebyshev distance bounds the ego-frame coordinates whatever the ego's heading.
         (p.x - ego_pose.x).abs().max((p.y - ego_pose.y).abs()) <= r * std::f64::consts::SQRT_2
     };
-    let states = t.agents.iter().enumerate().filter(|&(i, _)| i != ego && near(i)).map(|(i, a)| AgentState {
-        track: i as u32,
-        name: &a.name,
-        kind: &a.kind,
-        class: a.class,
-        size: a.size,
-        pose: t.poses[i][f],
-    });
+    let states =
+        t.agents.iter().enumerate().filter(|&(i, _)| i != ego && near(i) && front.present(i, f)).map(|(i, a)| {
+            AgentState {
+                track: i as u32,
+                name: &a.name,
+                kind: &a.kind,
+                class: a.class,
+                size: a.size,
+                pose: t.poses[i][f],
+            }
+        });
     let mut boxes = to_ego(ego_pose, states);
     boxes.retain(|b| {
         let r = 0.5 * b.l.hypot(b.w);
@@ -174,6 +181,23 @@ fn preview_picks(n: usize) -> (Vec<usize>, Vec<usize>) {
     (gif, sheet)
 }
 
+/// Where a clip's frames come from: for frame `f`, the ego's world pose and the frame's boxes,
+/// with its BEV rendered into the given buffer. `compile_clip` rasterises the scene; `rocc edit`
+/// re-rasterises edited boxes over a compiled BEV's static layers.
+pub type FrameSource<'a> = dyn Fn(usize, &mut Rasterizer, &mut Bev) -> io::Result<(Pose, Vec<EgoBox>)> + Sync + 'a;
+
+/// Everything the stages after the BEV need to render a clip into a directory.
+pub struct Render<'a> {
+    pub frames: &'a [usize],
+    pub rate: f64,
+    pub background: &'a Background,
+    /// Sensor-noise seed of the clip.
+    pub seed: u64,
+    /// The manifest to write, without files and timings.
+    pub manifest: Manifest,
+    pub source: &'a FrameSource<'a>,
+}
+
 /// Compile one clip into `dir`. `on_frame` is called once per finished frame (progress).
 pub fn compile_clip(
     ci: &ClipInput,
@@ -191,6 +215,31 @@ pub fn compile_clip(
         }
         return Ok(ClipReport { dir: dir.to_path_buf(), frames: ci.frames.len(), resumed: true, manifest: m });
     }
+    let front = ci.front;
+    let source = |f: usize, raster: &mut Rasterizer, bev: &mut Bev| -> io::Result<(Pose, Vec<EgoBox>)> {
+        let ego_pose = front.tracks.poses[ci.ego][f];
+        let boxes = frame_boxes(front, ci.ego, f);
+        raster.rasterize_into(&front.map, ego_pose, &boxes, bev);
+        if let Some(s) = &opts.static_bev {
+            s.apply(f, bev)?;
+        }
+        Ok((ego_pose, boxes))
+    };
+    let render = Render {
+        frames: ci.frames,
+        rate: front.tracks.rate,
+        background: ci.background,
+        seed: clip_seed(front, ci.ego),
+        manifest: want,
+        source: &source,
+    };
+    render_clip(&render, opts, dir, on_frame)
+}
+
+/// Render every frame of `r` (BEV, then occupancy and LiDAR as `opts.stage` asks), the clip-level
+/// files and the manifest, into `dir`.
+pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() + Sync)) -> io::Result<ClipReport> {
+    let backend = Procedural::new(opts.mode);
     std::fs::create_dir_all(dir)?;
     // A stale manifest must not vouch for a half-rewritten directory if this run is interrupted.
     match std::fs::remove_file(dir.join("manifest.json")) {
@@ -198,13 +247,12 @@ pub fn compile_clip(
         _ => {}
     }
 
-    let front = ci.front;
-    let seed = clip_seed(front, ci.ego);
-    let (gif_picks, sheet_picks) = if opts.previews { preview_picks(ci.frames.len()) } else { (vec![], vec![]) };
+    let seed = r.seed;
+    let (gif_picks, sheet_picks) = if opts.previews { preview_picks(r.frames.len()) } else { (vec![], vec![]) };
     let clock = Clock::default();
-    let rate = front.tracks.rate;
+    let rate = r.rate;
 
-    let outs: Vec<FrameOut> = ci
+    let outs: Vec<FrameOut> = r
         .frames
         .par_iter()
         .enumerate()
@@ -212,11 +260,8 @@ pub fn compile_clip(
             || Scratch { raster: Rasterizer::new(), bev: Bev::zeros(), occ: Occupancy::empty() },
             |s, (n, &f)| -> io::Result<FrameOut> {
                 let t0 = Instant::now();
-                let ego_pose = front.tracks.poses[ci.ego][f];
-                let boxes = frame_boxes(front, ci.ego, f);
-                let t1 = Clock::add(&clock.view, t0);
-                s.raster.rasterize_into(&front.map, ego_pose, &boxes, &mut s.bev);
-                let t2 = Clock::add(&clock.bev, t1);
+                let (ego_pose, boxes) = (r.source)(f, &mut s.raster, &mut s.bev)?;
+                let t2 = Clock::add(&clock.bev, t0);
                 let mut files = vec![write_bev_frame(dir, f, &s.bev)?];
                 let mut t3 = Clock::add(&clock.write, t2);
                 let preview = gif_picks.contains(&n) || sheet_picks.contains(&n);
@@ -231,7 +276,7 @@ pub fn compile_clip(
                     let input = OccInput {
                         boxes: &boxes,
                         bev: &s.bev,
-                        background: ci.background,
+                        background: r.background,
                         ego: ego_pose,
                         seed,
                         frame: f,
@@ -296,15 +341,16 @@ pub fn compile_clip(
             files.push(write_gif(dir, &format!("{name}.gif"), &pick(&gif_picks), delay_cs)?);
             rows.push((*name, pick(&sheet_picks)));
         }
-        let sheet_frames: Vec<usize> = sheet_picks.iter().map(|&n| ci.frames[n]).collect();
+        let sheet_frames: Vec<usize> = sheet_picks.iter().map(|&n| r.frames[n]).collect();
         files.push(write_sheet(dir, &sheet_frames, &rows)?);
         Clock::add(&clock.preview, t1);
     }
     files.sort_by(|a, b| a.path.cmp(&b.path));
 
-    let mut manifest = want;
+    let mut manifest = r.manifest.clone();
     let secs = |a: &AtomicU64| a.load(Ordering::Relaxed) as f64 * 1e-9;
-    let mut timings = vec![("view", &clock.view), ("bev", &clock.bev)];
+    // View and BEV are one step of the frame source now; "bev" holds both.
+    let mut timings = vec![("bev", &clock.bev)];
     if opts.stage >= Stage::Occ {
         timings.push(("occ", &clock.occ));
     }
@@ -316,7 +362,7 @@ pub fn compile_clip(
         timings.into_iter().map(|(n, a)| StageTiming { stage: n.to_string(), seconds: secs(a) }).collect();
     manifest.files = files;
     write_manifest(dir, &manifest)?;
-    Ok(ClipReport { dir: dir.to_path_buf(), frames: ci.frames.len(), resumed: false, manifest })
+    Ok(ClipReport { dir: dir.to_path_buf(), frames: r.frames.len(), resumed: false, manifest })
 }
 
 fn rel(dir: &Path, p: &Path) -> String {

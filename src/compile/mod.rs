@@ -11,7 +11,9 @@
 pub mod batch;
 mod clip;
 
-pub use clip::{ClipInput, ClipReport, clip_dir, compile_clip, frame_boxes};
+pub use clip::{
+    ClipInput, ClipReport, FrameSource, Render, clip_dir, clip_seed, compile_clip, frame_boxes, render_clip,
+};
 
 use crate::backend::Mode;
 use crate::check::scenario::Scenario;
@@ -57,6 +59,8 @@ pub struct Options {
     pub previews: bool,
     /// Recompile clips whose manifest says they are complete.
     pub force: bool,
+    /// A recorded BEV whose static and divider layers replace the map's (`--static-bev`).
+    pub static_bev: Option<crate::import::StaticBev>,
 }
 
 impl Default for Options {
@@ -70,6 +74,7 @@ impl Default for Options {
             rig: Rig::nuplan(),
             previews: true,
             force: false,
+            static_bev: None,
         }
     }
 }
@@ -117,6 +122,23 @@ impl Front {
             }
         }
         Ok(out)
+    }
+
+    /// Whether track `i` is in the scene at frame `f`. A replayed track exists from its first to
+    /// its last keyframe (a recorded object enters and leaves the clip); everything else, always.
+    pub fn present(&self, i: usize, f: usize) -> bool {
+        let keys = self
+            .placed
+            .agents
+            .get(i)
+            .and_then(|p| p.source)
+            .and_then(|s| self.concrete.agents.get(s))
+            .and_then(|a| a.track.as_ref());
+        let (Some(first), Some(last)) = (keys.and_then(|k| k.first()), keys.and_then(|k| k.last())) else {
+            return true;
+        };
+        let t = f as f64 / self.tracks.rate;
+        t >= first.t - crate::rollout::KEY_SNAP_S && t <= last.t + crate::rollout::KEY_SNAP_S
     }
 
     /// The frame indices `spec` selects (all when `None`), sorted and de-duplicated.

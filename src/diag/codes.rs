@@ -1,5 +1,6 @@
 //! Every diagnostic code rocc can emit, with the long explanation `rocc explain CODE` prints.
 //! E00xx: files and syntax. E01xx: the checker. E02xx: road and placement. E04xx: I/O.
+//! E07xx: import, edit and eval.
 
 pub struct Code {
     pub code: &'static str,
@@ -246,6 +247,128 @@ models, and at least one sensor with beam elevations and an azimuth sector.",
         title: "cannot write output",
         explanation: "An output file or directory could not be created or written. rocc writes to a\n\
 temporary name and renames, so no truncated file is left behind.",
+    },
+    Code {
+        code: "E0701",
+        title: "unreadable occupancy frame",
+        explanation: "`rocc eval occ` reads occupancy frames as a dense `.npy` of shape (400, 400, 32) (rocc's\n\
+uint8 output, or nuPlan-Occ's dense grid in any integer dtype) or as a sparse `.npz` whose array\n\
+is (N, 4) rows of [i, j, k, label] (unlisted voxels are free). Labels are 0..=8 (SPEC.md).",
+    },
+    Code {
+        code: "E0703",
+        title: "prediction and ground-truth sets do not match",
+        explanation: "`--pred` and `--gt` must be directories. Occupancy frames are paired by relative path\n\
+(`.npy` and `.npz` may stand in for each other); every ground-truth frame needs a prediction.\n\
+LiDAR sets are compared as sets and need at least one cloud each.",
+    },
+    Code {
+        code: "E0704",
+        title: "unreadable point cloud",
+        explanation: "`rocc eval lidar` reads KITTI-style `.bin` (float32 x, y, z, intensity per point) or a\n\
+`.npy` of shape (N, >= 3), float32 or float64.",
+    },
+    Code {
+        code: "E0705",
+        title: "box stream is not valid JSON of the expected layout",
+        explanation: "`rocc import boxes FILE` reads\n\n\
+    { \"rate_hz\": 2.0, \"ego_size\": [l, w, h], \"sensor_to_ego\": {\"x\": 0, \"y\": 0, \"yaw\": 0},\n\
+      \"frames\": [ { \"frame\": 0, \"time\": 0.0,\n\
+          \"ego_pose\": {\"x\": 1.0, \"y\": 2.0, \"yaw\": 0.1},\n\
+          \"boxes\": [ {\"track\": \"a1\", \"class\": \"vehicle.car\",\n\
+                      \"center\": [x, y, z], \"size\": [a, b, c], \"yaw\": 0.3} ] } ] }\n\n\
+Only `frames` is required. `ego_pose` may also be {\"translation\": [x, y, z], \"rotation\":\n\
+[w, x, y, z]}. With `--convention mmdet3d` a box may be `\"box\": [cx, cy, cz, w, l, h, yaw]`.",
+    },
+    Code {
+        code: "E0706",
+        title: "box stream values are inconsistent",
+        explanation: "The frames of a box stream must have distinct indices and increasing times, a rate in\n\
+0.5..100 Hz (from `rate_hz` or the median frame interval), at most 120 s in all, and finite\n\
+numbers. A `convention` written in the file must agree with `--convention`.",
+    },
+    Code {
+        code: "E0707",
+        title: "recorded coordinates too far apart",
+        explanation: "Replayed coordinates in a `.scn` stay within 1 km of the scenario's origin. The importer\n\
+moves the origin (by whole kilometres) to the clip's first ego pose when the recording uses\n\
+large coordinates (nuPlan's UTM metres); a clip that still spans more must be split.",
+    },
+    Code {
+        code: "E0708",
+        title: "bad static BEV",
+        explanation: "`--static-bev` takes a nuPlan-Occ BEV `.npz` (key `gt_bev_masks`, int8 (18, 400, 400)),\n\
+whose channels 0-7 and 15-17 replace the map's in every frame, or a directory of per-frame\n\
+`NNNNNN.npz` files (a compiled clip's `bev/`), matched by frame index.",
+    },
+    Code {
+        code: "E0709",
+        title: "edit names an unknown agent",
+        explanation: "`--delete AGENT` and `--move AGENT by DX,DY` name an agent by the name in `boxes.json`\n\
+(clips) or the declaration (`.scn`). Row elements and background traffic have generated names;\n\
+`boxes.json` lists them.",
+    },
+    Code {
+        code: "E0710",
+        title: "edited box off a valid surface",
+        explanation: "An inserted or moved box must stand where the BEV's map layers allow its class:\n\
+vehicles on drivable area (channels 0, 1, 3, 5, 6), bicycles there or on walkways and\n\
+crosswalks, pedestrians on walkways, crosswalks or the shoulder; static objects anywhere in the\n\
+100 m grid. The check is at the box centre, in every edited frame.",
+    },
+    Code {
+        code: "E0711",
+        title: "edited box overlaps another",
+        explanation: "An inserted or moved box may touch another box or the ego but not interpenetrate it\n\
+(more than 1 cm per side). Choose a free spot; `boxes.json` lists every box of every frame.",
+    },
+    Code {
+        code: "E0712",
+        title: "not an editable clip",
+        explanation: "`rocc edit DIR` needs a directory written by `rocc compile` (manifest.json, boxes.json,\n\
+bev/). The later stages need the scene the clip came from (ego poses, background), so the\n\
+scenario named in the manifest must be readable and unchanged (same hash); pass `--scenario\n\
+FILE` when it moved. A clip compiled with a custom rig needs the same `--rig`.",
+    },
+    Code {
+        code: "E0713",
+        title: "unknown kind",
+        explanation: "`--insert KIND at X,Y` takes a kind of the stdlib prelude (stdlib/kinds.scn), e.g.\n\
+sedan, van, bicycle, pedestrian, traffic_cone, barrier, construction_sign, debris.",
+    },
+    Code {
+        code: "E0714",
+        title: "edit does not apply to this scenario",
+        explanation: "On a `.scn`, `--move` shifts agents placed at world coordinates `(X m, Y m)` or replaying\n\
+a `track`; an agent placed relative to the road moves by changing its distance or `offset`.\n\
+The file must declare a scenario.",
+    },
+    Code {
+        code: "E0715",
+        title: "unknown class imported as generic_object",
+        explanation: "A warning: a box's class name is neither a nuPlan class nor a nuScenes or mmdet3d name\n\
+rocc knows. The box is kept, as `generic_object` (kind `debris`), never dropped. Known:\n\
+vehicle, bicycle, pedestrian, traffic_cone, barrier, czone_sign, generic_object; vehicle.*,\n\
+human.pedestrian.*, movable_object.{trafficcone, barrier, debris, pushable_pullable},\n\
+static_object.bicycle_rack, animal; car, truck, bus, trailer, construction_vehicle,\n\
+motorcycle (nuPlan counts two-wheelers as bicycle).",
+    },
+    Code {
+        code: "E0716",
+        title: "box imported with a change",
+        explanation: "A warning: a box could not be replayed exactly — its size was outside 0.05..40 m\n\
+(clamped), its track changed size (a replayed agent keeps its first size), or the track had two\n\
+boxes in one frame (the second dropped). That frame's BEV footprint differs from the recording's.",
+    },
+    Code {
+        code: "E0717",
+        title: "malformed edit",
+        explanation: "Edits are written\n\n\
+    --insert KIND at X,Y [yaw A]    A in degrees, or with `rad`\n\
+    --delete AGENT\n\
+    --move AGENT by DX,DY\n\n\
+Coordinates are metres: in each edited frame's ego frame (x forward, y left) for a compiled\n\
+clip, in the world frame for a `.scn`.",
     },
 ];
 

@@ -201,6 +201,12 @@ pub struct Manifest {
     /// the only part of an output directory that differs between two runs of the same input.
     pub timings: Vec<StageTiming>,
     pub files: Vec<OutputFile>,
+    /// The recorded BEV whose static layers replaced the map's (`--static-bev`), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub static_bev: Option<String>,
+    /// Box edits applied by `rocc edit` after compilation, in order (`insert sedan at 10,-3.5 yaw 0`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub edits: Vec<String>,
 }
 
 impl Manifest {
@@ -221,6 +227,8 @@ impl Manifest {
             frames: Vec::new(),
             timings: Vec::new(),
             files: Vec::new(),
+            static_bev: None,
+            edits: Vec::new(),
         }
     }
 }

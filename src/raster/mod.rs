@@ -106,6 +106,19 @@ pub fn rasterize(map: &Map, ego: Pose, boxes: &[EgoBox]) -> Bev {
     bev
 }
 
+/// The `gt_bev_masks` channels that come from the map, not from boxes: static layers 0-7 and the
+/// divider layers 15-17. Box edits and `--static-bev` swap exactly these (paper, App. E).
+pub const STATIC_CHANNELS: [usize; 11] = [0, 1, 2, 3, 4, 5, 6, 7, CH_DIVIDER, CH_PED_CROSSING, CH_BOUNDARY];
+
+/// Copy the static and divider layers of `from` into `into`, leaving agents, aux and structure.
+pub fn keep_static(from: &Bev, into: &mut Bev) {
+    for ch in STATIC_CHANNELS {
+        if ch < from.masks.dim().0 && ch < into.masks.dim().0 && from.masks.dim() == into.masks.dim() {
+            into.masks.index_axis_mut(ndarray::Axis(0), ch).assign(&from.masks.index_axis(ndarray::Axis(0), ch));
+        }
+    }
+}
+
 const G: i64 = GRID as i64;
 const N: usize = GRID * GRID;
 

@@ -26,6 +26,8 @@ pub fn build(road: &Road) -> Map {
         Template::FourWay | Template::TJunction => junction::build(road),
         Template::Merge => merge::build(road),
         Template::Roundabout => roundabout::build(road),
+        // Replayed recorded tracks carry no map of their own.
+        Template::None => Map::default(),
     };
     map.bounds = bounds(&map);
     map

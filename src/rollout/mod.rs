@@ -23,6 +23,7 @@ mod sim;
 mod stage;
 mod traffic;
 
+pub use sim::KEY_SNAP_S;
 pub use stage::{contact_centroid, side_of};
 
 use crate::check::scenario::{Class, Motion, Point};

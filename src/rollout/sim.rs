@@ -100,6 +100,8 @@ pub(super) struct Conf {
     pub c: crate::check::scenario::Conflict,
 }
 
+/// Largest angle between a vehicle's heading and its lane while it moves sideways (rad).
+const MAX_SLIP: f64 = 0.25;
 /// Lateral speed of a vehicle squeezing past an agent that eases aside for it (m/s).
 const PASS_LAT_RATE: f64 = 1.0;
 /// Side clearance kept while passing it (m).
@@ -124,7 +126,7 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         return Err(errs);
     }
     if let Some(t) = c.traffic {
-        let boxes: Vec<Obb> = actors.iter().map(|a| a.obb(&initial(a))).collect();
+        let boxes: Vec<(Obb, f64)> = actors.iter().map(|a| (a.obb(&initial(a)), initial(a).v)).collect();
         for s in traffic::spawn(map, &boxes, t, c.seed) {
             actors.push(background_actor(map, s));
         }
@@ -244,12 +246,14 @@ fn build_actor(
         background: false,
     };
     let ca = p.source.and_then(|i| c.agents.get(i));
+    // A recorded track is what happened: it is replayed even for a kind that never moves by
+    // itself (a cone carried on a pickup), so an imported clip reproduces its boxes exactly.
+    if let Some(keys) = ca.filter(|_| !p.is_object).and_then(|ca| ca.track.as_ref()).filter(|k| !k.is_empty()) {
+        return base_actor(info, p.pose, p.motion, p.class, Drive::Replay(keys.clone()));
+    }
     let Some(ca) = ca.filter(|_| !p.is_object && p.motion != Motion::Static) else {
         return base_actor(info, p.pose, p.motion, p.class, Drive::Static);
     };
-    if let Some(keys) = ca.track.as_ref().filter(|k| !k.is_empty()) {
-        return base_actor(info, p.pose, p.motion, p.class, Drive::Replay(keys.clone()));
-    }
     let mut a = base_actor(info, p.pose, p.motion, p.class, Drive::Mover);
     let pos = DVec2::new(p.pose.x, p.pose.y);
     let goal = ca.goal.as_ref();
@@ -665,6 +669,13 @@ impl<'a> Sim<'a> {
             pass_target = Some(tg);
             d_next = st.d + (tg - st.d).clamp(-PASS_LAT_RATE * dt, PASS_LAT_RATE * dt);
         }
+        if a.vehicle {
+            // A vehicle drifts sideways only as fast as its heading can follow (below 3 m/s the
+            // bound stays at its 3 m/s value, so a car creeping in a queue still changes lane):
+            // a slow lane change takes longer than its nominal duration instead of crabbing.
+            let max_step = st.v.max(3.0) * MAX_SLIP.tan() * dt;
+            d_next = st.d + (d_next - st.d).clamp(-max_step, max_step);
+        }
         let margin = if a.vehicle { 0.25 } else { 0.1 };
         let goal_d = target.filter(|_| st.phase < 1.0).or(pass_target).unwrap_or(st.d);
         let (lo, hi) = (st.d.min(goal_d) - a.hw - margin, st.d.max(goal_d) + a.hw + margin);
@@ -773,7 +784,10 @@ impl<'a> Sim<'a> {
         }
         if let Some(rem) = stop_rem {
             acc = acc.min(stop_law(st.v, rem, lim, dt));
-            hard = hard.min(rem.max(0.0));
+            // A stop target is a goal, not an obstacle: one closer than the braking distance is
+            // overrun by what the brakes cannot absorb, never met by braking past the limit.
+            let shortest = (st.v * dt - 0.5 * lim.brake_max * dt * dt).max(0.0);
+            hard = hard.min(rem.max(shortest));
         }
         // Do not run off the end of the path.
         hard = hard.min(a.path.length() - st.s);
@@ -974,6 +988,9 @@ fn idm_free(v: f64, v0: f64, lim: Limits, dt: f64) -> f64 {
     (lim.accel * (1.0 - (v / v0).powi(4))).max(-lim.brake)
 }
 
+/// Keyframe time tolerance (s) of `replay`; see there.
+pub const KEY_SNAP_S: f64 = 1e-6;
+
 fn idm_interaction(v: f64, v_lead: f64, gap: f64, s0: f64, lim: Limits) -> f64 {
     let s_star = s0 + (v * lim.headway + v * (v - v_lead) / (2.0 * (lim.accel * lim.brake).sqrt())).max(0.0);
     let g = gap.max(0.05);
@@ -992,7 +1009,12 @@ fn stop_law(v: f64, rem: f64, lim: Limits, dt: f64) -> f64 {
 }
 
 /// Keyframe interpolation: linear in position, shortest arc in yaw, held beyond either end.
+/// At a keyframe's own time (within `KEY_SNAP_S`, the float noise of `f * dt`) the keyframe is
+/// returned exactly, so recorded frames replay bit for bit (the importer's lossless guarantee).
 fn replay(keys: &[Keyframe], t: f64) -> (DVec2, f64) {
+    if let Some(k) = keys.iter().find(|k| (k.t - t).abs() <= KEY_SNAP_S) {
+        return (DVec2::new(k.x, k.y), k.yaw);
+    }
     let k = keys.partition_point(|k| k.t <= t);
     if k == 0 {
         let f = &keys[0];

@@ -30,12 +30,15 @@ pub(super) struct Spawn {
     pub target: f64,
 }
 
-pub(super) fn spawn(map: &Map, placed: &[Obb], t: Traffic, seed: u64) -> Vec<Spawn> {
+/// Deceleration a starting gap is sized for (m/s^2): comfortable, well inside every limit.
+const BRAKE: f64 = 3.0;
+
+pub(super) fn spawn(map: &Map, placed: &[(Obb, f64)], t: Traffic, seed: u64) -> Vec<Spawn> {
     let mut rng = Rng::stream(seed, "traffic");
     let density = t.density.clamp(0.0, 1.0);
     let rnd = t.randomness.clamp(0.0, 1.0);
     let mut out: Vec<Spawn> = vec![];
-    let mut boxes: Vec<Obb> = placed.to_vec();
+    let mut boxes: Vec<Obb> = placed.iter().map(|(b, _)| *b).collect();
     for (li, lane) in map.lanes.iter().enumerate() {
         let len = lane.centre.length();
         // Spawn on the approach, short of the stop line: cars start in lanes, not junctions.
@@ -64,6 +67,15 @@ pub(super) fn spawn(map: &Map, placed: &[Obb], t: Traffic, seed: u64) -> Vec<Spa
             if boxes.iter().any(|b| b.overlaps(&probe)) {
                 continue;
             }
+            // Nor right in front of a placed agent: it must be able to stop behind the new car.
+            let cut_in = placed.iter().any(|(b, v)| {
+                let (sb, db) = lane.centre.project(b.center);
+                let gap = s - size[0] / 2.0 - (sb + b.length / 2.0);
+                sb < s && db.abs() < (lane.width + b.width) / 2.0 && gap < v * v / (2.0 * BRAKE) + 4.0
+            });
+            if cut_in {
+                continue;
+            }
             boxes.push(Obb { center: p, yaw, length: size[0], width: size[1] });
             let target = lane.speed_limit * (1.0 - 0.3 * rnd * speed_draw);
             out.push(Spawn { name: String::new(), kind, size, lane: li, s, speed: target, target });
@@ -78,8 +90,7 @@ pub(super) fn spawn(map: &Map, placed: &[Obb], t: Traffic, seed: u64) -> Vec<Spa
                     gap = gap.min(s - b.length / 2.0 - front);
                 }
             }
-            let brake = 3.0;
-            let v_safe = (2.0 * brake * (gap - 4.0).max(0.0)).sqrt();
+            let v_safe = (2.0 * BRAKE * (gap - 4.0).max(0.0)).sqrt();
             sp.speed = sp.speed.min(v_safe);
         }
     }
