@@ -72,7 +72,11 @@ fn decoding_grammar_accepts_the_corpus_without_comments() {
         let text = std::fs::read_to_string(&f).unwrap();
         let Ok(canon) = rocc::syntax::format_source(&text) else { continue };
         // Canonical layout, comments dropped: what a model writes under the decoding grammar.
-        let bare: String = canon.lines().filter(|l| !l.trim_start().starts_with("//")).map(|l| l.split(" //").next().unwrap().to_string() + "\n").collect();
+        let bare: String = canon
+            .lines()
+            .filter(|l| !l.trim_start().starts_with("//"))
+            .map(|l| l.split(" //").next().unwrap().to_string() + "\n")
+            .collect();
         assert!(g.accepts(&bare), "the decoding grammar rejects {}:\n{bare}", f.display());
     }
 }
@@ -575,7 +579,7 @@ fn real_llamacpp_server() {
     let st = std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
         .args(["text", "a car follows a truck on a straight road", "-o", out.to_str().unwrap()])
         .args(["--server", "llamacpp", "--endpoint", &format!("http://127.0.0.1:{port}/v1")])
-        .args(["--max-repairs", "1", "--transcript", "--timeout", "240", "--max-tokens", "600"])
+        .args(["--max-repairs", "1", "--transcript", "--timeout", "240", "--max-tokens", "1000"])
         .output()
         .unwrap();
     let _ = child.kill();
@@ -591,5 +595,8 @@ fn real_llamacpp_server() {
     // The grammar was enforced: every goal reply is `NAME: goal { ... }` lines, nothing else.
     let reply: Value = serde_json::from_str(ex[1]["reply"].as_str().unwrap()).unwrap();
     let content = reply["choices"][0]["message"]["content"].as_str().unwrap();
-    assert!(content.lines().filter(|l| !l.trim().is_empty()).all(|l| l.contains(": goal {") || !l.contains(':')), "{content}");
+    assert!(
+        content.lines().filter(|l| !l.trim().is_empty()).all(|l| l.contains(": goal {") || !l.contains(':')),
+        "{content}"
+    );
 }

@@ -57,7 +57,10 @@ pub const DECODING_MAX_WS: usize = 12;
 /// accepts (minus comments), in which a small model cannot fill `--max-tokens` with blank lines
 /// or `//` lines (it did, against a real llama.cpp server).
 pub fn for_decoding(mut cfg: Cfg) -> Cfg {
-    let space = || Node::Class { negated: false, items: vec![ClassItem::Char(' '), ClassItem::Char('\t'), ClassItem::Char('\n')] };
+    let space = || Node::Class {
+        negated: false,
+        items: vec![ClassItem::Char(' '), ClassItem::Char('\t'), ClassItem::Char('\n')],
+    };
     // Right-nested optionals: one way to match each run, so no ambiguity for the decoder.
     let mut ws = Node::Empty;
     for _ in 0..DECODING_MAX_WS {

@@ -101,7 +101,12 @@ fn goal_block() -> Cfg {
     let cfg = grammar::rule("goal").expect("scn.pest has a `goal` rule");
     let ws = || Node::Ref("ws".into());
     let part = |rule: &str| {
-        Node::Opt(Box::new(Node::Seq(vec![Node::Ref(rule.into()), ws(), Node::Opt(Box::new(Node::Lit(";".into()))), ws()])))
+        Node::Opt(Box::new(Node::Seq(vec![
+            Node::Ref(rule.into()),
+            ws(),
+            Node::Opt(Box::new(Node::Lit(";".into()))),
+            ws(),
+        ])))
     };
     let mut seq = vec![Node::Lit("goal".into()), ws(), Node::Lit("{".into()), ws()];
     seq.extend(["speed_stmt", "lateral", "stop", "turn", "start"].map(part));

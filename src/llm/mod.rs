@@ -294,7 +294,10 @@ impl Pipeline<'_> {
             ]);
             let messages = vec![json!({"role": "system", "content": system}), json!({"role": "user", "content": user})];
             let constraint = self.grammar(|| {
-                crate::grammar::print(&crate::grammar::for_decoding(crate::grammar::language()), crate::grammar::Format::Gbnf)
+                crate::grammar::print(
+                    &crate::grammar::for_decoding(crate::grammar::language()),
+                    crate::grammar::Format::Gbnf,
+                )
             });
             let reply =
                 self.client.chat(&format!("repair {round}"), &messages, &constraint, &mut self.run.exchanges)?;
