@@ -3,6 +3,7 @@
 use clap::{Parser, Subcommand, ValueEnum};
 use rocc::compile::{Options, Stage, batch};
 use rocc::diag::{Diagnostic, codes};
+use rocc::llm;
 use rocc::source::SourceMap;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -26,6 +27,26 @@ enum StageArg {
     Bev,
     Occ,
     Lidar,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ServerArg {
+    Vllm,
+    Llamacpp,
+    Ollama,
+    Openai,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum PlanArg {
+    Joint,
+    Hierarchical,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum GrammarFormat {
+    Gbnf,
+    Lark,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -194,6 +215,67 @@ enum Cmd {
         #[command(subcommand)]
         what: EvalCmd,
     },
+    /// Write a checked scenario from a sentence with a language model (OpenAI-compatible server).
+    Text {
+        /// The scene in words, e.g. "an ambulance through a crowded intersection".
+        sentence: String,
+        /// The `.scn` file to write (atomically, only once it checks).
+        #[arg(short, long)]
+        out: PathBuf,
+        /// The server's OpenAI-compatible base URL [env: ROCC_LLM_ENDPOINT; default: the server's usual port on 127.0.0.1].
+        #[arg(long)]
+        endpoint: Option<String>,
+        /// Model name as the server knows it [env: ROCC_LLM_MODEL]; llama.cpp ignores it.
+        #[arg(long)]
+        model: Option<String>,
+        /// Bearer token [env: ROCC_LLM_API_KEY, then OPENAI_API_KEY].
+        #[arg(long)]
+        api_key: Option<String>,
+        /// Server dialect: how grammar constraints are sent (ollama and openai take none).
+        #[arg(long, value_enum, default_value = "vllm")]
+        server: ServerArg,
+        /// Goal stage: one call for all agents, or one per agent with earlier goals in context.
+        #[arg(long, value_enum, default_value = "joint")]
+        plan: PlanArg,
+        /// Rounds of sending diagnostics back for a corrected file (and corrections per stage).
+        #[arg(long, default_value_t = 3)]
+        max_repairs: u32,
+        /// Background traffic density 0..1 (overrides the model's choice).
+        #[arg(long)]
+        density: Option<f64>,
+        /// Background traffic randomness 0..1 (overrides the model's choice).
+        #[arg(long)]
+        randomness: Option<f64>,
+        /// Scenario seed (default: a hash of the sentence); also sent as the sampling seed.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Seconds to wait for one reply.
+        #[arg(long, default_value_t = 120.0)]
+        timeout: f64,
+        /// Retries after HTTP 429 or 5xx, with exponential backoff from 1 s.
+        #[arg(long, default_value_t = 2)]
+        retries: u32,
+        #[arg(long, default_value_t = 2048)]
+        max_tokens: u32,
+        /// Sampling temperature; 0 (greedy) makes runs repeatable.
+        #[arg(long, default_value_t = 0.0)]
+        temperature: f64,
+        /// A sketch (PNG/JPEG/WebP/GIF) sent with the sentence to a vision model (CIREN route).
+        #[arg(long)]
+        image: Option<PathBuf>,
+        /// Do not send grammar or JSON-schema constraints.
+        #[arg(long)]
+        no_grammar: bool,
+        /// Save every request and reply as OUT.transcript.json (the API key is never written).
+        #[arg(long)]
+        transcript: bool,
+    },
+    /// Print the language grammar for grammar-constrained LLM decoding (derived from scn.pest).
+    Grammar {
+        /// `gbnf`: llama.cpp and vLLM (xgrammar); `lark`: llguidance and vLLM's guidance backend.
+        #[arg(long, value_enum, default_value = "gbnf")]
+        format: GrammarFormat,
+    },
     /// Explain a diagnostic code (`rocc explain E0107`); without a code, list them all.
     Explain { code: Option<String> },
 }
@@ -252,6 +334,66 @@ fn main() -> ExitCode {
             edit(&target, &insert, &delete, &move_, frames, scenario, rig.as_deref(), out.as_deref())
         }
         Cmd::Eval { what } => eval(what),
+        Cmd::Text {
+            sentence,
+            out,
+            endpoint,
+            model,
+            api_key,
+            server,
+            plan,
+            max_repairs,
+            density,
+            randomness,
+            seed,
+            timeout,
+            retries,
+            max_tokens,
+            temperature,
+            image,
+            no_grammar,
+            transcript,
+        } => {
+            let server = match server {
+                ServerArg::Vllm => llm::client::Server::Vllm,
+                ServerArg::Llamacpp => llm::client::Server::Llamacpp,
+                ServerArg::Ollama => llm::client::Server::Ollama,
+                ServerArg::Openai => llm::client::Server::Openai,
+            };
+            let env = |k: &str| std::env::var(k).ok().filter(|v| !v.is_empty());
+            let args = TextArgs {
+                endpoint: endpoint
+                    .or_else(|| env("ROCC_LLM_ENDPOINT"))
+                    .unwrap_or_else(|| server.default_endpoint().into()),
+                model: model.or_else(|| env("ROCC_LLM_MODEL")),
+                api_key: api_key.or_else(|| env("ROCC_LLM_API_KEY")).or_else(|| env("OPENAI_API_KEY")),
+                server,
+                plan: match plan {
+                    PlanArg::Joint => llm::Plan::Joint,
+                    PlanArg::Hierarchical => llm::Plan::Hierarchical,
+                },
+                max_repairs,
+                overrides: llm::schema::Overrides { density, randomness, seed },
+                timeout,
+                retries,
+                max_tokens,
+                temperature,
+                image,
+                constrain: !no_grammar,
+                transcript,
+            };
+            text(&sentence, &out, args)
+        }
+        Cmd::Grammar { format } => {
+            print!(
+                "{}",
+                rocc::grammar::export(match format {
+                    GrammarFormat::Gbnf => rocc::grammar::Format::Gbnf,
+                    GrammarFormat::Lark => rocc::grammar::Format::Lark,
+                })
+            );
+            ExitCode::SUCCESS
+        }
         Cmd::Explain { code } => explain(code.as_deref()),
     }
 }
@@ -425,6 +567,150 @@ fn compile(inputs: &[PathBuf], out: &Path, shard: Option<&str>, opts: &Options, 
         );
     }
     if report.failures.is_empty() { ExitCode::SUCCESS } else { ExitCode::FAILURE }
+}
+
+struct TextArgs {
+    endpoint: String,
+    model: Option<String>,
+    api_key: Option<String>,
+    server: llm::client::Server,
+    plan: llm::Plan,
+    max_repairs: u32,
+    overrides: llm::schema::Overrides,
+    timeout: f64,
+    retries: u32,
+    max_tokens: u32,
+    temperature: f64,
+    image: Option<PathBuf>,
+    constrain: bool,
+    transcript: bool,
+}
+
+fn text_options(a: TextArgs) -> Result<llm::Options, Diagnostic> {
+    let bad = |m: String, h: &str| Diagnostic::error("E0614", m).help(h.to_string());
+    for (flag, v) in [("--density", a.overrides.density), ("--randomness", a.overrides.randomness)] {
+        if let Some(v) = v.filter(|v| !(0.0..=1.0).contains(v)) {
+            return Err(bad(format!("{flag} {v} is outside 0..1"), "a fraction: 0 none, 1 as much as fits"));
+        }
+    }
+    if !(a.timeout.is_finite() && a.timeout > 0.0) {
+        return Err(bad(format!("--timeout {} is not a positive number of seconds", a.timeout), "e.g. --timeout 120"));
+    }
+    let model = match (a.model, a.server) {
+        (Some(m), _) => m,
+        // llama.cpp serves the one model it loaded and ignores the field.
+        (None, llm::client::Server::Llamacpp) => "default".to_string(),
+        (None, s) => {
+            return Err(bad(
+                format!("--model is required with --server {}", s.name()),
+                "pass the model name the server lists at /v1/models, or set ROCC_LLM_MODEL",
+            ));
+        }
+    };
+    let image = a.image.as_deref().map(llm::Image::from_file).transpose()?;
+    Ok(llm::Options {
+        client: llm::client::ClientConfig {
+            endpoint: a.endpoint,
+            model,
+            api_key: a.api_key,
+            server: a.server,
+            timeout: std::time::Duration::from_secs_f64(a.timeout),
+            retries: a.retries,
+            backoff: std::time::Duration::from_secs(1),
+            max_tokens: a.max_tokens,
+            temperature: a.temperature,
+            seed: a.overrides.seed.unwrap_or(0),
+        },
+        plan: a.plan,
+        max_repairs: a.max_repairs,
+        overrides: a.overrides,
+        constrain: a.constrain,
+        image,
+    })
+}
+
+/// `rocc text`: the output is written only once it checks; a failure keeps OUT.rejected.scn.
+fn text(sentence: &str, out: &Path, args: TextArgs) -> ExitCode {
+    let human = MessageFormat::Human;
+    let write_transcript = args.transcript;
+    let opts = match text_options(args) {
+        Ok(o) => o,
+        Err(d) => {
+            print_diags(&[d], &SourceMap::default(), human);
+            return ExitCode::FAILURE;
+        }
+    };
+    let name = out.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "scene.scn".into());
+    let base = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let (outcome, run) = llm::text_to_scenario(sentence, &opts, &name, base);
+    print_diags(&run.warnings, &SourceMap::default(), human);
+    let rejected = out.with_extension("rejected.scn");
+    if write_transcript {
+        let t = out.with_extension("transcript.json");
+        let v = run.transcript(sentence, &opts);
+        let bytes = serde_json::to_vec_pretty(&v).expect("a JSON value serialises");
+        match rocc::output::write_atomic(&t, |w| std::io::Write::write_all(w, &bytes)) {
+            Ok(_) => eprintln!("transcript: {}", t.display()),
+            Err(e) => eprintln!("error[E0401]: cannot write {}: {e}", t.display()),
+        }
+    }
+    let requests = run.exchanges.len();
+    let repairs = run.attempts.len().saturating_sub(1);
+    match outcome {
+        llm::Outcome::Accepted { text } => {
+            if let Err(e) = rocc::output::write_atomic(out, |w| std::io::Write::write_all(w, text.as_bytes())) {
+                print_diags(
+                    &[Diagnostic::error("E0401", format!("cannot write {}: {e}", out.display()))],
+                    &SourceMap::default(),
+                    human,
+                );
+                return ExitCode::FAILURE;
+            }
+            // A rejected attempt from an earlier run would now be misleading.
+            let _ = std::fs::remove_file(&rejected);
+            eprintln!("wrote {} ({requests} request(s), {repairs} repair round(s))", out.display());
+            ExitCode::SUCCESS
+        }
+        llm::Outcome::Rejected { text, diags, sources } => {
+            let kept = rocc::output::write_atomic(&rejected, |w| std::io::Write::write_all(w, text.as_bytes()));
+            // Re-check under the kept file's name so the spans point into it.
+            let mut named = SourceMap::default();
+            let shown = match &kept {
+                Ok(_) => {
+                    let rname = rejected.display().to_string();
+                    match rocc::check::check_text(&rname, &text, base, &mut named)
+                        .and_then(|s| rocc::compile::front(s, None))
+                    {
+                        Err(d) => (d, named),
+                        Ok(_) => (diags, sources),
+                    }
+                }
+                Err(_) => (diags, sources),
+            };
+            print_diags(&shown.0, &shown.1, human);
+            let where_ = match kept {
+                Ok(_) => format!("the last attempt is kept in {}", rejected.display()),
+                Err(e) => format!("the last attempt could not be kept ({e})"),
+            };
+            let d = Diagnostic::error(
+                "E0613",
+                format!("the generated scenario still fails to check after {repairs} repair round(s); nothing written to {}", out.display()),
+            )
+            .help(format!("{where_}; raise --max-repairs or use a stronger model"));
+            print_diags(&[d], &SourceMap::default(), human);
+            ExitCode::FAILURE
+        }
+        llm::Outcome::Failed(d) => {
+            print_diags(&[d], &SourceMap::default(), human);
+            // A failure mid-repair still leaves the last checked attempt to look at.
+            if let Some(last) = run.attempts.last()
+                && rocc::output::write_atomic(&rejected, |w| std::io::Write::write_all(w, last.as_bytes())).is_ok()
+            {
+                eprintln!("the last attempt is kept in {}", rejected.display());
+            }
+            ExitCode::FAILURE
+        }
+    }
 }
 
 fn explain(code: Option<&str>) -> ExitCode {

@@ -1,0 +1,339 @@
+//! The scene schema (stage 1 of the pipeline): what the model returns as JSON, how it is read
+//! and validated, and how rocc — not the model — writes the scenario skeleton from it.
+
+use serde::{Deserialize, Serialize};
+use serde_json::{Value, json};
+
+pub const TEMPLATES: [&str; 6] = ["straight", "curve", "four_way", "t_junction", "merge", "roundabout"];
+pub const ARMS: [&str; 6] = ["north", "east", "south", "west", "main", "ramp"];
+pub const LANDMARKS: [&str; 3] = ["center", "stop_line", "junction"];
+/// Upper bound on the roster: a sentence names a handful of agents; background traffic is
+/// `traffic { density }`, not a roster.
+pub const MAX_AGENTS: usize = 8;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Schema {
+    pub name: String,
+    #[serde(default)]
+    pub brief: String,
+    pub road: RoadSpec,
+    #[serde(default = "default_duration")]
+    pub duration_s: f64,
+    pub agents: Vec<AgentSpec>,
+    #[serde(default)]
+    pub density: Option<f64>,
+    #[serde(default)]
+    pub randomness: Option<f64>,
+    #[serde(default)]
+    pub seed: Option<u64>,
+}
+
+fn default_duration() -> f64 {
+    8.0
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RoadSpec {
+    pub template: String,
+    #[serde(default = "one")]
+    pub lanes: u32,
+    #[serde(default)]
+    pub speed_limit_kmh: Option<f64>,
+    #[serde(default)]
+    pub crosswalks: bool,
+    #[serde(default)]
+    pub sidewalks: bool,
+}
+
+fn one() -> u32 {
+    1
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AgentSpec {
+    pub name: String,
+    pub kind: String,
+    /// `lane` (default), `sidewalk` or `crosswalk`.
+    #[serde(default = "lane_word")]
+    pub on: String,
+    pub arm: String,
+    /// `in` (toward the centre, default) or `out`.
+    #[serde(default = "in_word")]
+    pub direction: String,
+    #[serde(default = "one")]
+    pub lane: u32,
+    #[serde(default = "twenty")]
+    pub distance_m: f64,
+    /// `before` (default) or `after` the landmark.
+    #[serde(default = "before_word")]
+    pub relation: String,
+    #[serde(default = "center_word")]
+    pub landmark: String,
+    #[serde(default)]
+    pub speed_kmh: f64,
+    #[serde(default)]
+    pub ego: bool,
+}
+
+fn lane_word() -> String {
+    "lane".into()
+}
+fn in_word() -> String {
+    "in".into()
+}
+fn before_word() -> String {
+    "before".into()
+}
+fn center_word() -> String {
+    "center".into()
+}
+fn twenty() -> f64 {
+    20.0
+}
+
+/// The user's sliders: they win over whatever the model said, deterministically.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Overrides {
+    pub density: Option<f64>,
+    pub randomness: Option<f64>,
+    pub seed: Option<u64>,
+}
+
+/// The JSON schema sent with the schema stage (as a decoding constraint where the server takes one).
+pub fn json_schema(kinds: &[String]) -> Value {
+    json!({
+        "type": "object",
+        "required": ["name", "brief", "road", "duration_s", "agents"],
+        "properties": {
+            "name": {"type": "string", "pattern": "^[a-z][a-z0-9_]{0,40}$"},
+            "brief": {"type": "string", "maxLength": 300},
+            "duration_s": {"type": "number", "minimum": 1, "maximum": 30},
+            "road": {
+                "type": "object",
+                "required": ["template", "lanes"],
+                "properties": {
+                    "template": {"enum": TEMPLATES},
+                    "lanes": {"type": "integer", "minimum": 1, "maximum": 4},
+                    "speed_limit_kmh": {"type": "number", "minimum": 10, "maximum": 130},
+                    "crosswalks": {"type": "boolean"},
+                    "sidewalks": {"type": "boolean"}
+                }
+            },
+            "agents": {
+                "type": "array", "minItems": 1, "maxItems": MAX_AGENTS,
+                "items": {
+                    "type": "object",
+                    "required": ["name", "kind", "on", "arm", "direction", "lane", "distance_m", "relation", "landmark", "speed_kmh", "ego"],
+                    "properties": {
+                        "name": {"type": "string", "pattern": "^[a-z][a-z0-9_]{0,20}$"},
+                        "kind": {"enum": kinds},
+                        "on": {"enum": ["lane", "sidewalk", "crosswalk"]},
+                        "arm": {"enum": ARMS},
+                        "direction": {"enum": ["in", "out"]},
+                        "lane": {"type": "integer", "minimum": 1, "maximum": 4},
+                        "distance_m": {"type": "number", "minimum": 0, "maximum": 100},
+                        "relation": {"enum": ["before", "after"]},
+                        "landmark": {"enum": LANDMARKS},
+                        "speed_kmh": {"type": "number", "minimum": 0, "maximum": 130},
+                        "ego": {"type": "boolean"}
+                    }
+                }
+            },
+            "density": {"type": "number", "minimum": 0, "maximum": 1},
+            "randomness": {"type": "number", "minimum": 0, "maximum": 1}
+        }
+    })
+}
+
+/// Read the model's reply: the first JSON object in it (code fences and chatter around it are
+/// tolerated), then the checks serde cannot express. The error is what the model is told.
+pub fn parse(reply: &str) -> Result<Schema, String> {
+    let start = reply.find('{').ok_or("the reply holds no JSON object")?;
+    let end = reply.rfind('}').filter(|e| *e > start).ok_or("the JSON object is not closed")?;
+    let mut s: Schema = serde_json::from_str(&reply[start..=end]).map_err(|e| format!("invalid schema JSON: {e}"))?;
+    s.name = ident(&s.name, "generated");
+    if !TEMPLATES.contains(&s.road.template.as_str()) {
+        return Err(format!("road.template `{}` is not one of {}", s.road.template, TEMPLATES.join(", ")));
+    }
+    if s.agents.is_empty() {
+        return Err("`agents` is empty: list every road user the sentence mentions".into());
+    }
+    if s.agents.len() > MAX_AGENTS {
+        return Err(format!(
+            "{} agents is more than {MAX_AGENTS}; use `density` for background traffic",
+            s.agents.len()
+        ));
+    }
+    if !(s.duration_s.is_finite() && s.duration_s > 0.0) {
+        return Err("duration_s must be a positive number of seconds".into());
+    }
+    // Agent names become identifiers and must be unique; the model's spelling is kept when legal.
+    let mut seen: Vec<String> = vec![];
+    for a in &mut s.agents {
+        let base = ident(&a.name, "agent");
+        let mut name = base.clone();
+        let mut k = 2;
+        while seen.contains(&name) {
+            name = format!("{base}_{k}");
+            k += 1;
+        }
+        seen.push(name.clone());
+        a.name = name;
+        a.kind = ident(&a.kind, "sedan");
+        for (field, v) in [("distance_m", a.distance_m), ("speed_kmh", a.speed_kmh)] {
+            if !v.is_finite() || v < 0.0 {
+                return Err(format!("agent `{}`: {field} must be a non-negative number", a.name));
+            }
+        }
+    }
+    Ok(s)
+}
+
+/// A legal identifier from a model's word: lowercase, `[a-z0-9_]`, starting with a letter.
+pub fn ident(word: &str, fallback: &str) -> String {
+    let mut s: String = word
+        .trim()
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c.to_ascii_lowercase() } else { '_' })
+        .collect::<String>()
+        .trim_matches('_')
+        .to_string();
+    s.truncate(40);
+    match s.chars().next() {
+        None => fallback.to_string(),
+        Some(c) if !c.is_ascii_alphabetic() => format!("a_{s}"),
+        Some(_) => s,
+    }
+}
+
+/// A number as the DSL writes it: at most two decimals, no trailing zeros.
+pub fn num(x: f64) -> String {
+    let r = (x * 100.0).round() / 100.0;
+    if r == 0.0 { "0".into() } else { format!("{r}") }
+}
+
+/// Apply the sliders. The seed, if neither the user nor the model gave one, is a hash of the
+/// sentence, so the same sentence always gives the same file.
+pub fn apply(s: &mut Schema, o: &Overrides, sentence: &str) {
+    if let Some(d) = o.density {
+        s.density = Some(d);
+    }
+    if let Some(r) = o.randomness {
+        s.randomness = Some(r);
+    }
+    s.seed = o.seed.or(s.seed).or(Some(fnv1a(sentence.as_bytes()) % 1_000_000));
+}
+
+pub fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3))
+}
+
+/// The `at ...` placement of one agent.
+pub fn placement(a: &AgentSpec) -> String {
+    let d = num(a.distance_m);
+    match a.on.as_str() {
+        "sidewalk" => format!("at sidewalk({}.{}), {d} m {} {}", a.arm, a.direction, a.relation, a.landmark),
+        "crosswalk" => format!("at crosswalk({}), 50 %", a.arm),
+        _ => format!("at {}.{}[{}], {d} m {} {}", a.arm, a.direction, a.lane, a.relation, a.landmark),
+    }
+}
+
+/// Which agents are egos: those the model marked, else the first mover.
+pub fn egos(s: &Schema, is_static: &dyn Fn(&str) -> bool) -> Vec<String> {
+    let marked: Vec<String> =
+        s.agents.iter().filter(|a| a.ego && !is_static(&a.kind)).map(|a| a.name.clone()).collect();
+    if !marked.is_empty() {
+        return marked;
+    }
+    s.agents.iter().find(|a| !is_static(&a.kind)).map(|a| vec![a.name.clone()]).unwrap_or_default()
+}
+
+/// The scenario text: rocc writes it from the schema and the goal blocks the model chose.
+/// `goals[i]` is the `goal { ... }` block of `s.agents[i]`, if any.
+pub fn emit(s: &Schema, goals: &[Option<String>], is_static: &dyn Fn(&str) -> bool) -> String {
+    let mut out = String::new();
+    if !s.brief.trim().is_empty() {
+        for line in s.brief.lines() {
+            out.push_str(&format!("// {}\n", line.trim()));
+        }
+    }
+    out.push_str(&format!("scenario {} {{\n", s.name));
+    out.push_str(&format!("    seed {}\n", s.seed.unwrap_or(0)));
+    out.push_str(&format!("    duration {} s\n    rate 10 Hz\n", num(s.duration_s.clamp(1.0, 120.0))));
+    let egos = egos(s, is_static);
+    if !egos.is_empty() {
+        out.push_str(&format!("    egos [{}]\n", egos.join(", ")));
+    }
+    let r = &s.road;
+    let sidewalks = r.sidewalks || s.agents.iter().any(|a| a.on == "sidewalk");
+    let crosswalks = r.crosswalks || s.agents.iter().any(|a| a.on == "crosswalk");
+    let mut params = vec![format!("lanes {}", r.lanes)];
+    if let Some(v) = r.speed_limit_kmh {
+        params.push(format!("speed_limit {} km/h", num(v)));
+    }
+    if crosswalks {
+        params.push("crosswalks on".into());
+    }
+    if sidewalks {
+        params.push("sidewalks on".into());
+    }
+    out.push_str(&format!("\n    road {} {{ {} }}\n", r.template, params.join("; ")));
+    for (i, a) in s.agents.iter().enumerate() {
+        let stat = is_static(&a.kind);
+        out.push_str(&format!("\n    {} {}: {} {{\n", if stat { "object" } else { "agent" }, a.name, a.kind));
+        out.push_str(&format!("        {}\n", placement(a)));
+        if !stat {
+            out.push_str(&format!("        speed {} km/h\n", num(a.speed_kmh)));
+            if let Some(g) = goals.get(i).and_then(|g| g.as_ref()) {
+                out.push_str(&format!("        {}\n", g.trim()));
+            }
+        }
+        out.push_str("    }\n");
+    }
+    if s.density.is_some() || s.randomness.is_some() {
+        let mut t = vec![];
+        if let Some(d) = s.density {
+            t.push(format!("density {}", num(d)));
+        }
+        if let Some(r) = s.randomness {
+            t.push(format!("randomness {}", num(r)));
+        }
+        out.push_str(&format!("\n    traffic {{ {} }}\n", t.join("; ")));
+    }
+    out.push_str("}\n");
+    out
+}
+
+/// The agent in words, as the goal stage's "traffic director" sees it.
+pub fn describe(s: &Schema, a: &AgentSpec) -> String {
+    let toward = match (a.arm.as_str(), a.direction.as_str()) {
+        ("west", "in") | ("east", "out") => "heading east",
+        ("east", "in") | ("west", "out") => "heading west",
+        ("north", "in") | ("south", "out") => "heading south",
+        ("south", "in") | ("north", "out") => "heading north",
+        (_, "in") => "heading toward the centre",
+        _ => "heading away from the centre",
+    };
+    let junction = match s.road.template.as_str() {
+        "straight" | "curve" => "the road centre",
+        "merge" => "the merge",
+        _ => "the junction",
+    };
+    let place = match a.on.as_str() {
+        "sidewalk" => format!("on the {} sidewalk of the {} arm", a.direction, a.arm),
+        "crosswalk" => format!("on the crosswalk of the {} arm", a.arm),
+        _ => {
+            let motion = if a.direction == "in" { "toward" } else { "away from" };
+            format!("in lane {} of the {} arm, {toward}, {motion} {junction}", a.lane, a.arm)
+        }
+    };
+    format!(
+        "{}: a {} {place}, {} m {} the {}, at {} km/h",
+        a.name,
+        a.kind.replace('_', " "),
+        num(a.distance_m),
+        a.relation,
+        a.landmark.replace('_', " "),
+        num(a.speed_kmh)
+    )
+}
