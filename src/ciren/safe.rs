@@ -517,11 +517,11 @@ fn map(cx: &mut Ctx, root: &Value, path: &Path) -> Result<Crash, Vec<Diagnostic>
     let (striker, struck, impact, point, face) = match (poi.striker.filter(known), poi.struck.filter(known)) {
         (Some(a), Some(b)) if a.vehicle != b.vehicle => {
             match (a.part, b.part, poi.mutual) {
-                (Some(Part::Point(Point::Front)), Some(Part::Point(Point::Front)), _) => {
-                    (a.vehicle, b.vehicle, Impact::HeadOn, Point::Front, Face::Front)
-                }
-                (Some(Part::Point(pa)), Some(Part::Point(pb)), true) if pb == Point::Front && is_front(pa) => {
-                    (a.vehicle, b.vehicle, Impact::HeadOn, Point::Front, Face::Front)
+                // Front to front is symmetric in the text: the at-fault field decides who strikes.
+                (Some(Part::Point(pa)), Some(Part::Point(pb)), _) if is_front(pa) && is_front(pb) => {
+                    let (af, st) =
+                        if b.vehicle == at_fault_no { (b.vehicle, a.vehicle) } else { (a.vehicle, b.vehicle) };
+                    (af, st, Impact::HeadOn, Point::Front, Face::Front)
                 }
                 (Some(Part::Point(pa)), Some(Part::Point(pb)), _) if is_front(pa) && !is_front(pb) => {
                     let imp = if is_rear(pb) { Impact::RearEnd } else { Impact::Angle };
