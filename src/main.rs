@@ -847,14 +847,20 @@ fn ciren(what: CirenCmd) -> ExitCode {
                     Ok(p) => {
                         ok += 1;
                         written.push(name);
+                        let k = &imp.crash.conflict;
                         eprintln!(
-                            "ok  {} -> {}: {} of {} into {} {} side, latched at {:.1} s",
+                            "ok  {} -> {}: {}'s {} into {} ({}{}), latched at {:.1} s",
                             path.display(),
                             p.display(),
-                            imp.crash.conflict.at_fault,
-                            rocc::ciren::crash::impact_name(imp.crash.conflict.impact),
-                            imp.crash.conflict.struck,
-                            rocc::ciren::crash::point_name(imp.staged.struck_side),
+                            k.at_fault,
+                            k.face.name(),
+                            k.struck,
+                            rocc::ciren::crash::impact_name(k.impact),
+                            if k.impact == rocc::check::scenario::Impact::Object {
+                                String::new()
+                            } else {
+                                format!(", {} side", rocc::ciren::crash::point_name(imp.staged.struck_side))
+                            },
                             imp.staged.time
                         );
                     }

@@ -297,7 +297,7 @@ fn a_huge_file_is_refused_before_it_is_read() {
     let f = std::fs::File::create(&p).expect("create");
     f.set_len(ciren::case::MAX_CASE_BYTES + 1).expect("set_len");
     let mut sources = SourceMap::default();
-    let e = ciren::import_case(&d, &mut sources).err().expect("refused");
+    let e = ciren::import_case(&d, &mut sources).expect_err("refused");
     assert_eq!(e[0].code, "E0800");
     assert!(e[0].message.contains("case files up to"), "{}", e[0].message);
     let _ = std::fs::remove_dir_all(&d);

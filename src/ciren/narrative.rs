@@ -212,8 +212,8 @@ fn lanes(ws: &[String]) -> Option<(usize, Lanes)> {
         Some((i, number(n)?))
     })?;
     let after: Vec<&str> = ws.iter().skip(i + 1).take(4).map(String::as_str).collect();
-    let divided = after.iter().any(|w| *w == "divided");
-    let one_way = after.iter().any(|w| *w == "one-way");
+    let divided = after.contains(&"divided");
+    let one_way = after.contains(&"one-way");
     // "(two lanes westbound, center westbound left turn lane, two lanes eastbound)".
     let mut per_direction = None;
     for (j, w) in ws.iter().enumerate().skip(i) {

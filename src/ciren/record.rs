@@ -402,12 +402,15 @@ pub fn map_case(case: &CirenCase, file: u32) -> Result<Mapped, Vec<Diagnostic>> 
     .map(|crash| Mapped { crash, warnings: cx.warnings })
 }
 
+/// Striker and struck vehicle numbers, impact, struck point, striking face, and why.
+type PairConflict = (u32, u32, Impact, Point, Face, String);
+
 /// Pick the rocc conflict from two coded damage areas.
 fn pair_conflict(
     cx: &Ctx,
     a: (&CaseVehicle, Area, &Coded),
     b: (&CaseVehicle, Area, &Coded),
-) -> Result<(u32, u32, Impact, Point, Face, String), Vec<Diagnostic>> {
+) -> Result<PairConflict, Vec<Diagnostic>> {
     let (va, aa, ca) = a;
     let (vb, ab, cb) = b;
     let cite = format!("V{}'s {} met V{}'s {}", va.number, aa.name(), vb.number, ab.name());
