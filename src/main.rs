@@ -77,6 +77,28 @@ enum ImportCmd {
     },
 }
 
+/// `rocc ciren ...`: crash recreation from NHTSA CIREN cases (one variant per route).
+#[derive(Subcommand)]
+enum CirenCmd {
+    /// Coded CIREN case records -> one checked `.scn` per case (`DIR/<case id>.scn`).
+    Import {
+        /// Case directories (holding `crash_report.xml`), their parent directories, or XML files.
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        /// Output directory.
+        #[arg(short, long)]
+        out: PathBuf,
+    },
+    /// SAFE-format VLM extractions (`*.json`) -> one checked `.scn` per file.
+    ImportSafe {
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// Output directory.
+        #[arg(short, long)]
+        out: PathBuf,
+    },
+}
+
 #[derive(Subcommand)]
 enum EvalCmd {
     /// Per-class occupancy IoU over a set, mIoU_US, fg-mIoU, occ-IoU.
@@ -183,6 +205,11 @@ enum Cmd {
     Import {
         #[command(subcommand)]
         what: ImportCmd,
+    },
+    /// Recreate NHTSA CIREN crashes as scenarios: `rocc ciren import ../shared/ciren -o scn/`.
+    Ciren {
+        #[command(subcommand)]
+        what: CirenCmd,
     },
     /// Edit the boxes of a compiled clip (OUT/<scenario>/<ego>) or of a `.scn`, and rerun what follows.
     Edit {
@@ -334,6 +361,7 @@ fn main() -> ExitCode {
             edit(&target, &insert, &delete, &move_, frames, scenario, rig.as_deref(), out.as_deref())
         }
         Cmd::Eval { what } => eval(what),
+        Cmd::Ciren { what } => ciren(what),
         Cmd::Text {
             sentence,
             out,
@@ -774,6 +802,83 @@ fn import_boxes(file: &Path, conv: ConventionArg, out: &Path, static_bev: Option
             ExitCode::FAILURE
         }
     }
+}
+
+/// `rocc ciren import | import-safe`: every input is imported on its own; a failure is reported
+/// and the batch goes on; the exit status is 1 if any input failed.
+fn ciren(what: CirenCmd) -> ExitCode {
+    use rocc::ciren;
+    let (inputs, out, safe) = match what {
+        CirenCmd::Import { inputs, out } => {
+            let (cases, errs) = ciren::case_inputs(&inputs);
+            print_diags(&errs, &SourceMap::default(), MessageFormat::Human);
+            (cases.into_iter().map(Ok).chain(errs.into_iter().map(Err)).collect::<Vec<_>>(), out, false)
+        }
+        CirenCmd::ImportSafe { files, out } => (files.into_iter().map(Ok).collect(), out, true),
+    };
+    let (mut ok, mut failed) = (0, 0);
+    let mut written: Vec<String> = Vec::new();
+    for input in inputs {
+        let path = match input {
+            Ok(p) => p,
+            Err(_) => {
+                failed += 1;
+                continue;
+            }
+        };
+        let mut sources = SourceMap::default();
+        let result =
+            if safe { ciren::import_safe(&path, &mut sources) } else { ciren::import_case(&path, &mut sources) };
+        match result {
+            Ok(imp) => {
+                print_diags(&imp.warnings, &sources, MessageFormat::Human);
+                let name = imp.file_name();
+                if written.contains(&name) {
+                    let d = Diagnostic::error(
+                        "E0809",
+                        format!("`{}`: case {} was already imported in this batch", path.display(), imp.crash.id),
+                    )
+                    .help("two inputs with one case id would write the same file; pass each case once");
+                    print_diags(&[d], &sources, MessageFormat::Human);
+                    failed += 1;
+                    continue;
+                }
+                match ciren::write_scenario(&out, &imp) {
+                    Ok(p) => {
+                        ok += 1;
+                        written.push(name);
+                        let k = &imp.crash.conflict;
+                        eprintln!(
+                            "ok  {} -> {}: {}'s {} into {} ({}{}), latched at {:.1} s",
+                            path.display(),
+                            p.display(),
+                            k.at_fault,
+                            k.face.name(),
+                            k.struck,
+                            rocc::ciren::crash::impact_name(k.impact),
+                            if k.impact == rocc::check::scenario::Impact::Object {
+                                String::new()
+                            } else {
+                                format!(", {} side", rocc::ciren::crash::point_name(imp.staged.struck_side))
+                            },
+                            imp.staged.time
+                        );
+                    }
+                    Err(d) => {
+                        failed += 1;
+                        print_diags(&[d], &sources, MessageFormat::Human);
+                    }
+                }
+            }
+            Err(diags) => {
+                failed += 1;
+                print_diags(&diags, &sources, MessageFormat::Human);
+                eprintln!("skip {}: nothing written", path.display());
+            }
+        }
+    }
+    eprintln!("{ok} imported, {failed} failed -> {}", out.display());
+    if failed > 0 { ExitCode::FAILURE } else { ExitCode::SUCCESS }
 }
 
 #[allow(clippy::too_many_arguments)]

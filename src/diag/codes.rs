@@ -2,6 +2,7 @@
 //! E00xx: files and syntax. E01xx: the checker. E02xx: road and placement. E04xx: I/O.
 //! E07xx: import, edit and eval.
 //! E06xx: the LLM front end (`rocc text`): the HTTP client, the model's replies, the repair loop.
+//! E08xx: CIREN crash recreation (`rocc ciren`): E0800-E0849 records and SAFE extractions.
 
 pub struct Code {
     pub code: &'static str,
@@ -477,6 +478,99 @@ fixed by hand (`rocc check NAME.rejected.scn`) or the run repeated with a strong
 `https` build feature), `--model` is missing for a server that needs one, `--density` or\n\
 `--randomness` is outside 0..1, the `--image` file cannot be read or is not PNG/JPEG/WebP/GIF, or\n\
 the sentence is empty.",
+    },
+    Code {
+        code: "E0800",
+        title: "cannot read CIREN case",
+        explanation: "A `rocc ciren` input could not be read: the path does not exist, a directory holds no
+`crash_report.xml` (in it or one level down), the file is larger than the cap (16 MiB for a
+case record, 1 MiB for a SAFE extraction; the size is checked before reading), or it is not
+UTF-8 text. Nothing is written for that input; the other inputs of the batch go on and the
+exit status is 1.
+
+    rocc ciren import ../shared/ciren/100237 -o scn/       # a case directory
+    rocc ciren import ../shared/ciren -o scn/              # every case below a directory",
+    },
+    Code {
+        code: "E0801",
+        title: "malformed CIREN or SAFE file",
+        explanation: "The case record is not well-formed XML, or the SAFE extraction is not valid JSON. The
+label points at the first place the parser could not accept. Re-export the record from the
+CIREN database (or repair the extraction); nothing is written for this case.",
+    },
+    Code {
+        code: "E0802",
+        title: "missing field in a CIREN record or SAFE extraction",
+        explanation: "A field the importer needs is absent: for a CIREN record, `CaseSummary/Configuration`,
+an `Events/EventSum` row with `AreaOfDamage`, `Contacted` and `ContactedAreaOfDamage`, or the
+`GeneralVehicleForm` of a vehicle the event names; for a SAFE extraction, `meta`, `dsl`,
+`Actors` (with Model, Initial_position, Actions, Speed) or a `Conflict` field. Fields that only
+refine the scene (speeds, lane counts, directions) are not required: their defaults are
+warnings (E0807).",
+    },
+    Code {
+        code: "E0803",
+        title: "unknown code in a CIREN record or SAFE extraction",
+        explanation: "A coded value the importer does not map: a damage area other than the CDC areas F, B, L,
+R, T, U; a configuration other than angle/sideswipe, head-on, rear end, object; a body type with
+no rocc kind; or, in a SAFE extraction, a road_type, Initial_position (W2E, E2W, S2N, N2S,
+On-ramp, Main road), Actions, Speed (mph 0..150 or \"N/A\"), Model, vehicle name or impact_type
+it does not know. rocc never guesses a value it cannot read: fix the field, or write the
+scenario by hand.",
+    },
+    Code {
+        code: "E0804",
+        title: "crash rocc cannot represent",
+        explanation: "The case is read correctly but describes something rocc's staging cannot recreate, and
+the message says which: a rollover (rocc stages planar contacts between boxes on the ground), a
+non-collision, a pedestrian record, a contact by a vehicle's back, top or undercarriage (rocc
+strikes with a front or a side), a fixed object rocc has no kind for (ditch, embankment, curb),
+a side impact with a tree, a T-junction approached from its missing leg, or a SAFE extraction
+with one vehicle or more than two.",
+    },
+    Code {
+        code: "E0805",
+        title: "crash could not be staged on the coded sides",
+        explanation: "The importer writes a scenario only after `rocc check` accepts it and the rollout's latched
+contact lies on the coded sides: the struck box's side (thirds of each face, as `point` is
+defined) and the striker's coded face (front, or the coded side for a sideswipe). Several
+impact times are tried; this error means none of them landed there, and it names what the last
+attempt did. Nothing is written. Typical cause: an impact the rollout meets square-on (`angle`)
+between vehicles whose paths do not let the striker reach the struck side, e.g. a vehicle hit
+on its side by oncoming traffic after it spun.",
+    },
+    Code {
+        code: "E0806",
+        title: "later crash events not staged",
+        explanation: "A CIREN record codes several events (a second contact, a sideslap); rocc stages one
+conflict per scenario, the first-ranked event. This warning names each event left out.",
+    },
+    Code {
+        code: "E0807",
+        title: "importer default or contradiction",
+        explanation: "A warning: a field was missing, ambiguous or contradicted by another, and the importer
+made a documented choice, also written as a comment in the generated file. Examples: no
+narrated direction of travel, no leg count for an intersection, a SAFE `struck_vehicle` that
+the `point_of_impact` text contradicts (the point_of_impact, which names the damaged parts, is
+followed), a speed of \"N/A\" for a moving vehicle, a `point_of_impact` naming a trailer
+rather than a side (staged as a sideswipe).",
+    },
+    Code {
+        code: "E0808",
+        title: "point_of_impact cannot be decided",
+        explanation: "The SAFE `point_of_impact` text names no vehicle part the importer can map. The rules read
+`PART of V<n>` phrases joined by `struck`/`striking` (first strikes), `struck by` (first is
+struck) or `and` (head-on), where PART is front, rear/back, left side, right side or a corner
+(left-front, ...); a trailer or an unhanded side paired with a handed side is a sideswipe.
+
+    \"point_of_impact\": \"front of V2 striking right side of V1\"",
+    },
+    Code {
+        code: "E0809",
+        title: "cannot write imported scenario",
+        explanation: "The `.scn` of an imported case could not be written (the directory is not writable, the
+disk is full), or two inputs of one batch have the same case id and would write the same
+file. Files are written under a temporary name and renamed, so nothing partial is left.",
     },
 ];
 

@@ -1,0 +1,218 @@
+//! The crash description every CIREN route fills in (coded records, SAFE extractions, and any
+//! later front end): plain data in rocc's own terms (templates, arms, kinds, goals, impact and
+//! point), with the source fields each choice came from kept as comment lines. `emit` turns it
+//! into `.scn` text.
+
+use crate::check::scenario::{Impact, Point};
+
+/// A compass direction of travel in the source's frame (x east, y north).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Compass {
+    North,
+    East,
+    South,
+    West,
+}
+
+impl Compass {
+    pub fn name(self) -> &'static str {
+        match self {
+            Compass::North => "north",
+            Compass::East => "east",
+            Compass::South => "south",
+            Compass::West => "west",
+        }
+    }
+    /// Quarter turns counter-clockwise from east.
+    fn quarter(self) -> i32 {
+        match self {
+            Compass::East => 0,
+            Compass::North => 1,
+            Compass::West => 2,
+            Compass::South => 3,
+        }
+    }
+    fn from_quarter(q: i32) -> Compass {
+        match q.rem_euclid(4) {
+            0 => Compass::East,
+            1 => Compass::North,
+            2 => Compass::West,
+            _ => Compass::South,
+        }
+    }
+    /// This direction turned counter-clockwise by `quarters` quarter turns.
+    pub fn rotate(self, quarters: i32) -> Compass {
+        Compass::from_quarter(self.quarter() + quarters)
+    }
+    pub fn opposite(self) -> Compass {
+        self.rotate(2)
+    }
+    /// Quarter turns counter-clockwise that take `self` to `to`.
+    pub fn turns_to(self, to: Compass) -> i32 {
+        (to.quarter() - self.quarter()).rem_euclid(4)
+    }
+    pub fn parse(word: &str) -> Option<Compass> {
+        match word.to_ascii_lowercase().as_str() {
+            "north" | "northbound" | "n" => Some(Compass::North),
+            "east" | "eastbound" | "e" => Some(Compass::East),
+            "south" | "southbound" | "s" => Some(Compass::South),
+            "west" | "westbound" | "w" => Some(Compass::West),
+            _ => None,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Template {
+    Straight,
+    /// A curve bending left or right for a vehicle on `west.in`.
+    Curve {
+        right: bool,
+    },
+    FourWay,
+    TJunction,
+    Merge,
+}
+
+impl Template {
+    pub fn name(self) -> &'static str {
+        match self {
+            Template::Straight => "straight",
+            Template::Curve { .. } => "curve",
+            Template::FourWay => "four_way",
+            Template::TJunction => "t_junction",
+            Template::Merge => "merge",
+        }
+    }
+    pub fn has_junction(self) -> bool {
+        matches!(self, Template::FourWay | Template::TJunction)
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoadDesc {
+    pub template: Template,
+    /// Per direction (the merge: the main carriageway's lanes).
+    pub lanes: u32,
+    pub lane_width: f64,
+    pub speed_limit_kmh: f64,
+    /// A centre turn lane or a median strip, m.
+    pub median: f64,
+    pub shoulder: f64,
+    /// Why: one line per choice, citing the source.
+    pub notes: Vec<String>,
+}
+
+/// What a vehicle does before the crash.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Manoeuvre {
+    Straight,
+    TurnLeft,
+    TurnRight,
+    ChangeLaneLeft,
+    ChangeLaneRight,
+    /// On-ramp vehicle joining the main road.
+    Merge,
+    /// Stays where it is, speed 0.
+    Stopped,
+}
+
+/// Where a vehicle starts, in rocc's arms: `arm.in[lane]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VehicleDesc {
+    /// `v1`, `v2`, ... after the record's vehicle numbers.
+    pub name: String,
+    pub kind: String,
+    pub arm: &'static str,
+    pub lane: u32,
+    pub speed_kmh: f64,
+    pub manoeuvre: Manoeuvre,
+    pub notes: Vec<String>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Side {
+    Left,
+    Right,
+}
+
+/// A fixed object struck in a single-vehicle crash: a structure beside the striker's lane.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ObjectDesc {
+    /// `obj1`, ...
+    pub name: String,
+    /// `tree`, `pole`, `wall`, `building`, or a barrier kind.
+    pub kind: String,
+    /// Which side of the striker's road it stands on.
+    pub side: Side,
+    pub notes: Vec<String>,
+}
+
+/// The face of the striking vehicle that meets the struck one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Face {
+    Front,
+    Left,
+    Right,
+}
+
+impl Face {
+    pub fn name(self) -> &'static str {
+        match self {
+            Face::Front => "front",
+            Face::Left => "left side",
+            Face::Right => "right side",
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConflictDesc {
+    /// rocc's `at_fault`: the agent that leaves its goal and strikes (its `face` meets `point`).
+    pub at_fault: String,
+    pub struck: String,
+    pub impact: Impact,
+    /// The struck side, as coded.
+    pub point: Point,
+    /// The striker's face, as coded.
+    pub face: Face,
+    pub notes: Vec<String>,
+}
+
+/// A crash ready to emit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Crash {
+    /// Case id: the file stem (`100237.scn`) and the scenario name (`ciren_100237`).
+    pub id: String,
+    /// Header comment lines (what the case is, where it came from).
+    pub header: Vec<String>,
+    pub road: RoadDesc,
+    pub vehicles: Vec<VehicleDesc>,
+    pub objects: Vec<ObjectDesc>,
+    pub conflict: ConflictDesc,
+}
+
+impl Crash {
+    pub fn scenario_name(&self) -> String {
+        format!("ciren_{}", self.id.replace('-', "_"))
+    }
+    pub fn vehicle(&self, name: &str) -> Option<&VehicleDesc> {
+        self.vehicles.iter().find(|v| v.name == name)
+    }
+}
+
+/// The rocc point name of a side.
+pub fn point_name(p: Point) -> &'static str {
+    crate::check::scenario::POINTS.iter().find(|x| x.1 == p).map(|x| x.0).unwrap_or("front")
+}
+
+/// The rocc impact name.
+pub fn impact_name(i: Impact) -> &'static str {
+    crate::check::scenario::IMPACTS.iter().find(|x| x.1 == i).map(|x| x.0).unwrap_or("angle")
+}
+
+/// The rocc in-arm a vehicle travelling `dir` (in rocc's frame) comes from on a four-way,
+/// T-junction or straight road: travelling north it approaches from the south.
+pub fn approach_arm(dir: Compass) -> &'static str {
+    dir.opposite().name()
+}

@@ -1,0 +1,324 @@
+//! The emitter. In: a `Crash`. Out: `.scn` text whose staged collision lands on the coded
+//! sides, verified by running the checker and the front (sample, road, place, rollout) on it.
+//!
+//! Placements are chosen so both vehicles reach the conflict area at the impact time on their
+//! own goals; the rollout then re-plans the striker's last seconds onto the coded side. A few
+//! timings are tried in a fixed order and the first whose latched contact is on the coded sides
+//! is kept, so the result is deterministic and never unverified.
+
+use super::crash::{Crash, Face, Manoeuvre, Side, Template, VehicleDesc, impact_name, point_name};
+use crate::check::scenario::{Impact, Point};
+use crate::diag::Diagnostic;
+use crate::source::SourceMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Impact time and how much later (s) the striker would reach the conflict area on its own.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Staging {
+    pub t_impact: f64,
+    pub lag: f64,
+}
+
+/// The striker's lags tried (s), in order; each with every impact time of `TIMES`.
+const LAGS: [f64; 6] = [0.0, 0.5, 1.0, -0.5, 1.5, 2.0];
+const TIMES: [f64; 5] = [4.0, 3.5, 4.5, 3.0, 5.0];
+/// A latched contact shallower than this is a graze, not the coded impact (m).
+const MIN_DEPTH: f64 = 0.05;
+
+/// What the verified staging did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Staged {
+    pub text: String,
+    pub staging: Staging,
+    /// Latched impact frame and time (s).
+    pub frame: usize,
+    pub time: f64,
+    pub struck_side: Point,
+}
+
+/// A number as the language writes it: integers bare, otherwise one decimal.
+pub fn num(x: f64) -> String {
+    let r = (x * 10.0).round() / 10.0;
+    if (r - r.round()).abs() < 1e-9 { format!("{}", r.round() as i64) } else { format!("{r:.1}") }
+}
+
+fn comment_lines(out: &mut String, indent: &str, lines: &[String]) {
+    for l in lines {
+        for part in l.lines() {
+            let _ = writeln!(out, "{indent}// {part}");
+        }
+    }
+}
+
+/// Distance from a junction's stop line to the middle of the junction, m (see road/junction.rs:
+/// the junction box spans the crossing road's lanes and median, the stop line is 1 m out).
+fn stop_to_centre(c: &Crash) -> f64 {
+    f64::from(c.road.lanes) * c.road.lane_width + c.road.median / 2.0 + c.road.shoulder + 1.0
+}
+
+/// Where the merge area's middle lies past the `junction` landmark, m (road/merge.rs: x = -40..40).
+const MERGE_MID: f64 = 40.0;
+
+/// The distance before the landmark that brings `v` to the conflict area at `t`.
+fn lead_distance(c: &Crash, v: &VehicleDesc, t: f64) -> f64 {
+    let speed = v.speed_kmh / 3.6;
+    let to_conflict = match c.road.template {
+        Template::FourWay | Template::TJunction => stop_to_centre(c),
+        Template::Merge => MERGE_MID,
+        Template::Straight | Template::Curve { .. } => 0.0,
+    };
+    (speed * t - to_conflict).max(3.0)
+}
+
+/// Per-vehicle distance before the landmark.
+fn distances(c: &Crash, st: Staging) -> Vec<f64> {
+    let af = &c.conflict.at_fault;
+    let struck = c.vehicle(&c.conflict.struck);
+    c.vehicles
+        .iter()
+        .map(|v| {
+            if v.manoeuvre == Manoeuvre::Stopped {
+                return 3.0;
+            }
+            let is_af = &v.name == af;
+            let t = if is_af { st.t_impact + st.lag } else { st.t_impact };
+            let d = lead_distance(c, v, t);
+            match (is_af, c.conflict.impact, struck) {
+                // Same lane, behind the struck vehicle: at least a car length and a gap back.
+                (true, Impact::RearEnd, Some(s)) => {
+                    let ds = if s.manoeuvre == Manoeuvre::Stopped { 3.0 } else { lead_distance(c, s, st.t_impact) };
+                    d.max(ds + 12.0 + 5.0 * st.lag)
+                }
+                _ => d,
+            }
+        })
+        .collect()
+}
+
+fn landmark(t: Template) -> &'static str {
+    match t {
+        Template::FourWay | Template::TJunction => "stop_line",
+        Template::Merge => "junction",
+        Template::Straight | Template::Curve { .. } => "center",
+    }
+}
+
+fn goal(c: &Crash, v: &VehicleDesc) -> String {
+    let s = num(v.speed_kmh);
+    let junction = c.road.template.has_junction();
+    match v.manoeuvre {
+        Manoeuvre::Stopped => "goal { speed 0 km/h }".into(),
+        Manoeuvre::TurnLeft => format!("goal {{ speed {s} km/h; turn left }}"),
+        Manoeuvre::TurnRight => format!("goal {{ speed {s} km/h; turn right }}"),
+        Manoeuvre::ChangeLaneLeft => format!("goal {{ speed {s} km/h; lateral change_lane left }}"),
+        Manoeuvre::ChangeLaneRight => format!("goal {{ speed {s} km/h; lateral change_lane right }}"),
+        Manoeuvre::Straight if junction => format!("goal {{ speed {s} km/h; turn straight }}"),
+        Manoeuvre::Straight | Manoeuvre::Merge => format!("goal {{ speed {s} km/h }}"),
+    }
+}
+
+/// The seed: the numeric case id, or a stable hash of it.
+fn seed(id: &str) -> u64 {
+    id.parse().unwrap_or_else(|_| {
+        id.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
+    })
+}
+
+/// The `.scn` text of a crash under one staging.
+pub fn emit(c: &Crash, st: Staging) -> String {
+    let ds = distances(c, st);
+    let far = ds.iter().copied().fold(0.0, f64::max);
+    let mut out = String::new();
+    comment_lines(&mut out, "", &c.header);
+    let duration = (st.t_impact + 4.0).ceil().max(8.0);
+    let _ = writeln!(out, "scenario {} {{", c.scenario_name());
+    let _ = writeln!(out, "    seed {}", seed(&c.id));
+    let _ = writeln!(out, "    duration {} s", num(duration));
+    let _ = writeln!(out, "    rate 10 Hz");
+    let _ = writeln!(out, "    egos vehicles");
+    out.push('\n');
+
+    let r = &c.road;
+    comment_lines(&mut out, "    ", &r.notes);
+    let mut params = vec![format!("lanes {}", r.lanes), format!("lane_width {} m", num(r.lane_width))];
+    params.push(format!("speed_limit {} km/h", num(r.speed_limit_kmh)));
+    if r.median > 0.0 {
+        params.push(format!("median {} m", num(r.median)));
+    }
+    if r.shoulder > 0.0 {
+        params.push(format!("shoulder {} m", num(r.shoulder)));
+    }
+    if let Template::Curve { .. } = r.template {
+        params.push("radius 250 m".into());
+        params.push("angle 30 deg".into());
+    }
+    // Long enough that every start lies on its lane, with room past the crash.
+    let length = match r.template {
+        Template::FourWay | Template::TJunction => (far + 20.0).max(60.0),
+        Template::Merge => (far + 20.0).max(60.0),
+        Template::Straight | Template::Curve { .. } => (2.0 * far + 80.0).max(120.0),
+    };
+    let default_len = if r.template.has_junction() || r.template == Template::Merge { 60.0 } else { 120.0 };
+    if length > default_len {
+        params.push(format!("length {} m", num(length.ceil())));
+    }
+    let _ = writeln!(out, "    road {} {{ {} }}", r.template.name(), params.join("; "));
+
+    for o in &c.objects {
+        out.push('\n');
+        comment_lines(&mut out, "    ", &o.notes);
+        // Beside the striker's lane, past the conflict point, clear of the carriageway.
+        // Offsets are from `east.out[1]`, the striker's direction's lane nearest the centre line.
+        let n = f64::from(r.lanes);
+        let (side, off) = match o.side {
+            Side::Right => ("right", r.lane_width * (n - 0.5) + r.shoulder + 3.0),
+            Side::Left => ("left", r.lane_width * (n + 0.5) + r.median + r.shoulder + 3.0),
+        };
+        let _ = writeln!(
+            out,
+            "    object {}: {} {{ at east.out[1], 10 m after center offset {} m {side} }}",
+            o.name,
+            o.kind,
+            num(off)
+        );
+    }
+
+    for (v, d) in c.vehicles.iter().zip(&ds) {
+        out.push('\n');
+        comment_lines(&mut out, "    ", &v.notes);
+        // A single-vehicle crash into an object: the object stands 10 m past the centre.
+        let d = if c.objects.is_empty() { *d } else { (d - 10.0).max(3.0) };
+        let _ = writeln!(out, "    agent {}: {} {{", v.name, v.kind);
+        let _ = writeln!(out, "        at {}.in[{}], {} m before {}", v.arm, v.lane, num(d), landmark(r.template));
+        let _ = writeln!(
+            out,
+            "        speed {} km/h",
+            num(if v.manoeuvre == Manoeuvre::Stopped { 0.0 } else { v.speed_kmh })
+        );
+        let _ = writeln!(out, "        {}", goal(c, v));
+        let _ = writeln!(out, "    }}");
+    }
+
+    out.push('\n');
+    let k = &c.conflict;
+    comment_lines(&mut out, "    ", &k.notes);
+    let _ = writeln!(out, "    conflict {{");
+    let _ = writeln!(out, "        at_fault {}", k.at_fault);
+    let _ = writeln!(out, "        struck {}", k.struck);
+    let _ = writeln!(out, "        impact {}", impact_name(k.impact));
+    let _ = writeln!(out, "        point {}", point_name(k.point));
+    let _ = writeln!(out, "        at {} s", num(st.t_impact));
+    let _ = writeln!(out, "    }}");
+    out.push_str("}\n");
+    out
+}
+
+/// Whether a latched contact is on the coded sides: the struck sector equals the coded point
+/// (a struck fixed object has no coded side: only the striker's face counts), and the
+/// striker's contact lies on its coded face (outer 40% of the box along that axis, as the
+/// rollout's own tests measure a face).
+pub fn on_coded_sides(
+    impact: Impact,
+    face: Face,
+    point: Point,
+    struck_side: Point,
+    af_local: [f64; 2],
+    af_size: [f64; 3],
+) -> Result<(), String> {
+    if impact != Impact::Object && struck_side != point {
+        return Err(format!(
+            "the contact is on the struck box's {} side, not {}",
+            point_name(struck_side),
+            point_name(point)
+        ));
+    }
+    let (x, y) = (af_local[0], af_local[1]);
+    let ok = match face {
+        Face::Front => x > 0.6 * af_size[0] / 2.0,
+        Face::Left => y > 0.6 * af_size[1] / 2.0,
+        Face::Right => y < -0.6 * af_size[1] / 2.0,
+    };
+    if ok {
+        Ok(())
+    } else {
+        Err(format!("the striker touches with a point at ({x:.2}, {y:.2}) m of its box, not its {}", face.name()))
+    }
+}
+
+/// Emit, check and roll out; keep the first staging whose latched contact is on the coded
+/// sides. An error says what the last attempt did.
+pub fn stage(c: &Crash) -> Result<Staged, Vec<Diagnostic>> {
+    let mut last = String::new();
+    let tries = LAGS.iter().flat_map(|&lag| TIMES.iter().map(move |&t| (t, lag)));
+    for (t, lag) in tries {
+        let st = Staging { t_impact: t, lag };
+        let text = emit(c, st);
+        let mut sources = SourceMap::default();
+        let name = format!("{}.scn", c.id);
+        let scen = match crate::check::check_text(&name, &text, Path::new("."), &mut sources) {
+            Ok(s) => s,
+            Err(d) => {
+                // The emitter writes only what the checker accepts: a failure here is a bug,
+                // reported with the checker's own words rather than hidden.
+                let what: Vec<String> = d.iter().map(|x| format!("{}: {}", x.code, x.message)).collect();
+                return Err(vec![
+                    Diagnostic::error(
+                        "E0805",
+                        format!("case {}: the generated scenario does not check: {}", c.id, what.join("; ")),
+                    )
+                    .help("this is a bug in the importer; please report it with the case file"),
+                ]);
+            }
+        };
+        let front = match crate::compile::front(scen, None) {
+            Ok(f) => f,
+            Err(d) => {
+                last = d.iter().map(|x| format!("{}: {}", x.code, x.message)).collect::<Vec<_>>().join("; ");
+                continue;
+            }
+        };
+        let Some(rec) = front.tracks.impacts.first() else {
+            last = format!("no contact at {} s", num(t));
+            continue;
+        };
+        let size = front.tracks.agents[rec.at_fault].size;
+        if rec.depth < MIN_DEPTH {
+            last = format!("only a {:.2} m graze at {} s", rec.depth, num(t));
+            continue;
+        }
+        match on_coded_sides(
+            c.conflict.impact,
+            c.conflict.face,
+            c.conflict.point,
+            rec.struck_side,
+            rec.at_fault_local,
+            size,
+        ) {
+            Ok(()) => {
+                return Ok(Staged {
+                    text,
+                    staging: st,
+                    frame: rec.frame,
+                    time: rec.frame as f64 / front.tracks.rate,
+                    struck_side: rec.struck_side,
+                });
+            }
+            Err(m) => last = m,
+        }
+    }
+    Err(vec![
+        Diagnostic::error(
+            "E0805",
+            format!(
+                "case {}: rocc could not stage {}'s {} into {}'s {} side: {last}",
+                c.id,
+                c.conflict.at_fault,
+                c.conflict.face.name(),
+                c.conflict.struck,
+                point_name(c.conflict.point)
+            ),
+        )
+        .help("nothing is written for this case; `rocc explain E0805` lists what the staging can and cannot do"),
+    ])
+}

@@ -1,0 +1,928 @@
+//! SAFE-format VLM extraction -> `Crash`. In: the JSON the SAFE pipeline's vision model wrote
+//! for a CIREN case (`meta`: road type, car count; `dsl`: actors with model, W2E/E2W/S2N/N2S,
+//! action and speed in mph or "N/A", lane count, a `Conflict` block). Out: the crash description.
+//!
+//! The input is a model's output: every field is checked, garbage is a diagnostic, and where the
+//! fields disagree (a `struck_vehicle` that the `point_of_impact` text contradicts) the more
+//! specific field wins with a warning (E0807). Every `Conflict` field is used: the free-text
+//! `point_of_impact` decides the struck side and the striking face by the rules of
+//! `point_of_impact`; `impact_type` is checked against them; `at_fault_vehicle` keeps its
+//! manoeuvre and is rocc's `at_fault` whenever rocc's staging allows (a striking front, or either
+//! party of a sideswipe).
+
+use super::case::read_capped;
+use super::crash::{
+    Compass, ConflictDesc, Crash, Face, Manoeuvre, RoadDesc, Template, VehicleDesc, approach_arm, point_name,
+};
+use super::record::{TURN_KMH, kind_for};
+use crate::check::scenario::{Impact, Point};
+use crate::diag::Diagnostic;
+use crate::source::{SourceMap, Span};
+use serde_json::Value;
+use std::path::Path;
+
+/// Largest extraction read; real ones are about 1 kB.
+pub const MAX_SAFE_BYTES: u64 = 1024 * 1024;
+
+const MPH: f64 = 1.609_344;
+
+/// A part of a vehicle named in `point_of_impact`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Part {
+    Point(Point),
+    /// "side" without a hand, "trailer", "trailer component": a side contact of unknown hand.
+    Side,
+}
+
+/// One "PART of V<n>" phrase.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Named {
+    pub vehicle: u32,
+    pub part: Option<Part>,
+}
+
+/// What `point_of_impact` says: who strikes with what, who is struck where.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PointOfImpact {
+    pub striker: Option<Named>,
+    pub struck: Option<Named>,
+    /// "front of V1 and front of V2": no direction.
+    pub mutual: bool,
+}
+
+fn part_of(words: &[&str]) -> Option<Part> {
+    let w: Vec<String> = words.iter().map(|x| x.replace('-', " ")).collect();
+    let joined = w.join(" ");
+    let has = |x: &str| joined.split_whitespace().any(|t| t == x);
+    let front = has("front");
+    let rear = has("rear") || has("back");
+    let left = has("left");
+    let right = has("right");
+    Some(Part::Point(match (front, rear, left, right) {
+        (true, false, true, false) => Point::FrontLeft,
+        (true, false, false, true) => Point::FrontRight,
+        (false, true, true, false) => Point::RearLeft,
+        (false, true, false, true) => Point::RearRight,
+        (true, false, false, false) => Point::Front,
+        (false, true, false, false) => Point::Rear,
+        (false, false, true, false) => Point::Left,
+        (false, false, false, true) => Point::Right,
+        (false, false, false, false) if has("side") || has("trailer") || has("door") || has("doors") => {
+            return Some(Part::Side);
+        }
+        _ => return None,
+    }))
+}
+
+fn vehicle_no(w: &str, next: Option<&str>) -> Option<u32> {
+    let w = w.trim_end_matches(['\'', 's']);
+    let digits = w.strip_prefix("vehicle_").or_else(|| w.strip_prefix('v')).filter(|d| !d.is_empty());
+    if let Some(n) = digits.and_then(|d| d.parse().ok()) {
+        return Some(n);
+    }
+    if w == "vehicle" {
+        return next.and_then(|n| n.parse().ok());
+    }
+    None
+}
+
+/// Read `point_of_impact` by rules: `PART of V<n>` phrases joined by an active verb (`struck`,
+/// `striking`, `hit`, `impacted`), a passive one (`struck by`, `hit by`) or `and`.
+pub fn parse_point_of_impact(text: &str) -> PointOfImpact {
+    let lower = text.to_ascii_lowercase();
+    let words: Vec<&str> = lower
+        .split(|c: char| c.is_whitespace() || matches!(c, ',' | ';' | '.' | '(' | ')' | ':'))
+        .filter(|w| !w.is_empty())
+        .collect();
+    // Each vehicle mention with the part words before its "of".
+    let mut named: Vec<(usize, Named)> = Vec::new();
+    let mut i = 0;
+    while i < words.len() {
+        if let Some(n) = vehicle_no(words[i], words.get(i + 1).copied()) {
+            let part = if i >= 1 && words[i - 1] == "of" {
+                let start = named.last().map(|x| x.0 + 1).unwrap_or(0);
+                // Part words: up to three before "of", back to the previous mention or verb.
+                let lo = (i - 1).saturating_sub(3).max(start);
+                let ws: Vec<&str> = words[lo..i - 1]
+                    .iter()
+                    .copied()
+                    .filter(|w| {
+                        !matches!(*w, "the" | "a" | "an" | "struck" | "striking" | "by" | "and" | "hit" | "impacted")
+                    })
+                    .collect();
+                part_of(&ws)
+            } else {
+                None
+            };
+            named.push((i, Named { vehicle: n, part }));
+        }
+        i += 1;
+    }
+    let mut out = PointOfImpact { striker: None, struck: None, mutual: false };
+    let (Some(&(ia, a)), Some(&(ib, b))) = (named.first(), named.get(1)) else {
+        if let Some(&(_, a)) = named.first() {
+            out.struck = Some(a);
+        }
+        return out;
+    };
+    let between = &words[ia + 1..ib];
+    let passive =
+        between.windows(2).any(|w| matches!(w[0], "struck" | "hit" | "impacted" | "contacted") && w[1] == "by");
+    let active = between
+        .iter()
+        .any(|w| matches!(*w, "struck" | "striking" | "strikes" | "hit" | "hits" | "impacted" | "contacted"));
+    if passive {
+        out.struck = Some(a);
+        out.striker = Some(b);
+    } else if active {
+        out.striker = Some(a);
+        out.struck = Some(b);
+    } else if between.contains(&"and") {
+        out.striker = Some(a);
+        out.struck = Some(b);
+        out.mutual = true;
+    }
+    out
+}
+
+struct Ctx {
+    id: String,
+    file: u32,
+    text: String,
+    warnings: Vec<Diagnostic>,
+}
+
+impl Ctx {
+    /// The span of the first occurrence of `"key"` in the JSON text (for labels).
+    fn key_span(&self, key: &str) -> Span {
+        let pat = format!("\"{key}\"");
+        let start = self.text.find(&pat).unwrap_or(0);
+        Span::new(self.file, start, (start + pat.len()).min(self.text.len()))
+    }
+    fn err(&self, code: &'static str, key: &str, msg: String, help: &str) -> Vec<Diagnostic> {
+        vec![
+            Diagnostic::error(code, format!("SAFE {}: {msg}", self.id))
+                .label(self.key_span(key), "here")
+                .help(help.to_string()),
+        ]
+    }
+    fn warn(&mut self, key: &str, msg: String) {
+        let d = Diagnostic::warning("E0807", format!("SAFE {}: {msg}", self.id))
+            .label(self.key_span(key), "here")
+            .help("the choice is written as a comment in the generated file; check it against the case");
+        self.warnings.push(d);
+    }
+}
+
+fn str_of<'a>(v: &'a Value, key: &str) -> Option<&'a str> {
+    v.get(key).and_then(Value::as_str).map(str::trim)
+}
+
+/// One actor as extracted.
+struct Actor {
+    n: u32,
+    key: String,
+    model: String,
+    position: String,
+    action: String,
+    speed: String,
+}
+
+/// Read and map a SAFE extraction.
+pub fn read_safe(path: &Path, sources: &mut SourceMap) -> Result<(Crash, Vec<Diagnostic>), Vec<Diagnostic>> {
+    let text = read_capped(path, MAX_SAFE_BYTES).map_err(|m| {
+        vec![Diagnostic::error("E0800", m).help("pass a SAFE extraction file (`../shared/safe/<id>.json`)")]
+    })?;
+    let file = sources.add(path.display().to_string(), text.clone());
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("safe").to_string();
+    let root: Value = serde_json::from_str(&text).map_err(|e| {
+        let off = line_offset(&text, e.line(), e.column());
+        vec![
+            Diagnostic::error("E0801", format!("`{}` is not valid JSON: {e}", path.display()))
+                .label(Span::new(file, off, (off + 1).min(text.len()).max(off)), "here")
+                .help("a SAFE extraction is one JSON object with `case_id`, `meta` and `dsl`"),
+        ]
+    })?;
+    let id_raw =
+        root.get("case_id").and_then(|v| v.as_str().map(str::to_string).or_else(|| v.as_u64().map(|n| n.to_string())));
+    let id: String = id_raw
+        .unwrap_or(stem)
+        .chars()
+        .take(64)
+        .map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' })
+        .collect();
+    let id = if id.is_empty() { "safe".to_string() } else { id };
+    let mut cx = Ctx { id, file, text, warnings: Vec::new() };
+    let crash = map(&mut cx, &root, path)?;
+    Ok((crash, cx.warnings))
+}
+
+fn line_offset(text: &str, line: usize, col: usize) -> usize {
+    let mut off = 0;
+    for (i, l) in text.split_inclusive('\n').enumerate() {
+        if i + 1 == line {
+            return off + col.saturating_sub(1).min(l.len());
+        }
+        off += l.len();
+    }
+    text.len()
+}
+
+fn direction(p: &str) -> Option<Compass> {
+    match p.to_ascii_uppercase().replace([' ', '-', '_'], "").as_str() {
+        "W2E" => Some(Compass::East),
+        "E2W" => Some(Compass::West),
+        "S2N" => Some(Compass::North),
+        "N2S" => Some(Compass::South),
+        _ => None,
+    }
+}
+
+fn action(a: &str) -> Option<(Manoeuvre, Option<&'static str>)> {
+    let t = a.to_ascii_lowercase();
+    let has = |w: &str| t.contains(w);
+    Some(if has("stop") || has("park") || has("wait") || has("stationary") {
+        (Manoeuvre::Stopped, None)
+    } else if has("turn left") || has("left turn") {
+        (Manoeuvre::TurnLeft, None)
+    } else if has("turn right") || has("right turn") {
+        (Manoeuvre::TurnRight, None)
+    } else if has("change lane") || has("lane change") {
+        if has("right") { (Manoeuvre::ChangeLaneRight, None) } else { (Manoeuvre::ChangeLaneLeft, None) }
+    } else if has("merge") {
+        (Manoeuvre::Merge, None)
+    } else if has("wrong way") {
+        (
+            Manoeuvre::Straight,
+            Some("wrong-way driving starts in its own direction's lane; the staging carries it across the centre line"),
+        )
+    } else if has("forward") || has("straight") || has("drive") || has("continue") || has("cruise") {
+        (Manoeuvre::Straight, None)
+    } else {
+        return None;
+    })
+}
+
+fn map(cx: &mut Ctx, root: &Value, path: &Path) -> Result<Crash, Vec<Diagnostic>> {
+    let meta = root.get("meta").filter(|m| m.is_object()).ok_or_else(|| {
+        cx.err("E0802", "case_id", "no `meta` object".into(), "`meta` holds road_type, car_num and drive_dir")
+    })?;
+    let dsl = root.get("dsl").filter(|m| m.is_object()).ok_or_else(|| {
+        cx.err("E0802", "meta", "no `dsl` object".into(), "`dsl` holds Actors, Road network and Conflict")
+    })?;
+    let road_type = str_of(meta, "road_type")
+        .ok_or_else(|| cx.err("E0802", "meta", "`meta.road_type` is missing".into(), "give the road type"))?;
+    let template = match road_type.to_ascii_lowercase().replace(['-', '_', ' '], "").as_str() {
+        "intersection" | "4wayintersection" | "crossroads" => Template::FourWay,
+        "tintersection" | "tjunction" => Template::TJunction,
+        "straight" | "straightroad" => Template::Straight,
+        "curve" | "curved" | "curvedroad" => Template::Curve { right: false },
+        "merging" | "merge" | "onramp" => Template::Merge,
+        _ => {
+            return Err(cx.err(
+                "E0803",
+                "road_type",
+                format!("unknown road_type \"{road_type}\""),
+                "known: Intersection, T-intersection, Straight, Curve, Merging",
+            ));
+        }
+    };
+
+    // Actors: one object (or several) of "Vehicle_N": {...}.
+    let mut actors: Vec<Actor> = Vec::new();
+    let list = dsl.get("Actors").and_then(Value::as_array).ok_or_else(|| {
+        cx.err(
+            "E0802",
+            "dsl",
+            "`dsl.Actors` is missing or not a list".into(),
+            "`Actors` is a list of {\"Vehicle_1\": {...}} objects",
+        )
+    })?;
+    for obj in list {
+        let Some(map) = obj.as_object() else {
+            return Err(cx.err(
+                "E0802",
+                "Actors",
+                "an entry of `Actors` is not an object".into(),
+                "write {\"Vehicle_1\": {...}}",
+            ));
+        };
+        for (k, v) in map {
+            let n = vehicle_no(&k.to_ascii_lowercase(), None).filter(|n| (1..=9).contains(n)).ok_or_else(|| {
+                cx.err(
+                    "E0803",
+                    k,
+                    format!("actor `{k}` is not named Vehicle_<n>"),
+                    "name actors Vehicle_1, Vehicle_2, ...",
+                )
+            })?;
+            let field = |f: &str| -> Result<String, Vec<Diagnostic>> {
+                match v.get(f) {
+                    Some(Value::String(s)) => Ok(s.trim().to_string()),
+                    Some(Value::Number(x)) => Ok(x.to_string()),
+                    _ => Err(cx.err(
+                        "E0802",
+                        k,
+                        format!("actor `{k}` has no `{f}` text"),
+                        "each actor has Model, Initial_position, Actions and Speed",
+                    )),
+                }
+            };
+            if actors.iter().any(|a| a.n == n) {
+                return Err(cx.err("E0803", k, format!("two actors are called Vehicle_{n}"), "name each actor once"));
+            }
+            actors.push(Actor {
+                n,
+                key: k.clone(),
+                model: field("Model")?,
+                position: field("Initial_position")?,
+                action: field("Actions")?,
+                speed: field("Speed")?,
+            });
+        }
+    }
+    actors.sort_by_key(|a| a.n);
+    if actors.is_empty() {
+        return Err(cx.err("E0802", "Actors", "no actors".into(), "a crash needs at least one vehicle"));
+    }
+    if let Some(c) = meta.get("car_num").and_then(Value::as_u64)
+        && c as usize != actors.len()
+    {
+        let msg = format!("meta.car_num says {c} but {} actors are listed; the actors are used", actors.len());
+        cx.warn("car_num", msg);
+    }
+
+    // Lanes: the count is of the whole road (both directions) on two-way roads.
+    let net = dsl.get("Road network");
+    let lanes_raw =
+        net.and_then(|n| n.get("Number of lanes")).map(|v| v.as_str().map(str::to_string).unwrap_or(v.to_string()));
+    let (lanes, centre, lanes_note) = match lanes_raw.as_deref().map(str::trim) {
+        Some(s) => {
+            let n: u32 = s.parse().ok().filter(|n| (1..=12).contains(n)).ok_or_else(|| {
+                cx.err(
+                    "E0803",
+                    "Number of lanes",
+                    format!("`Number of lanes` is \"{s}\", not a count 1..12"),
+                    "give the lane count as a number",
+                )
+            })?;
+            let per = (n / 2).max(1);
+            let centre = n % 2 == 1 && n > 1 && template != Template::Merge;
+            let note = if n == 1 {
+                "Number of lanes 1: one lane per direction".to_string()
+            } else if centre {
+                format!(
+                    "Number of lanes {n} (both directions): {per} per direction and a centre lane, kept as a 3.5 m median (not a lane split by the centre line)"
+                )
+            } else {
+                format!("Number of lanes {n} (both directions): {per} per direction")
+            };
+            (per.min(6), centre, note)
+        }
+        None => {
+            cx.warn("dsl", "no `Number of lanes`; one lane per direction is assumed".into());
+            (1, false, "no lane count: one per direction assumed".into())
+        }
+    };
+
+    // Speeds (mph; "N/A" = not known).
+    struct Sp {
+        kmh: Option<f64>,
+        cite: String,
+    }
+    let mut speeds = Vec::new();
+    for a in &actors {
+        let s = a.speed.trim();
+        let sp = if s.eq_ignore_ascii_case("n/a")
+            || s.eq_ignore_ascii_case("na")
+            || s.eq_ignore_ascii_case("unknown")
+            || s.is_empty()
+        {
+            Sp { kmh: None, cite: format!("Speed \"{s}\"") }
+        } else {
+            let num = s.trim_end_matches("mph").trim();
+            let v: f64 =
+                num.parse().ok().filter(|v: &f64| v.is_finite() && (0.0..=150.0).contains(v)).ok_or_else(|| {
+                    cx.err(
+                        "E0803",
+                        &a.key,
+                        format!("{}: Speed \"{s}\" is not a speed in mph (0..150) or \"N/A\"", a.key),
+                        "write the speed in mph, e.g. \"45\", or \"N/A\"",
+                    )
+                })?;
+            Sp { kmh: Some(v * MPH), cite: format!("Speed \"{s}\" mph") }
+        };
+        speeds.push(sp);
+    }
+    let limit = speeds.iter().filter_map(|s| s.kmh).fold(0.0, f64::max);
+    let (limit, limit_note) = if limit > 0.0 {
+        let l = (limit / 5.0).ceil() * 5.0;
+        (l, format!("speed_limit {} km/h: the fastest actor's speed, rounded up", super::emit::num(l)))
+    } else {
+        (50.0, "no actor speed given: 50 km/h".to_string())
+    };
+
+    // The conflict.
+    let conflict = dsl.get("Conflict").filter(|c| c.is_object()).ok_or_else(|| {
+        cx.err(
+            "E0802",
+            "dsl",
+            "no `Conflict` block".into(),
+            "the Conflict block names at_fault_vehicle, struck_vehicle, impact_type and point_of_impact",
+        )
+    })?;
+    let get = |k: &str| str_of(conflict, k).map(str::to_string);
+    let name_no = |cx: &Ctx, key: &str| -> Result<u32, Vec<Diagnostic>> {
+        let s = get(key).ok_or_else(|| {
+            cx.err(
+                "E0802",
+                "Conflict",
+                format!("`Conflict.{key}` is missing"),
+                "name a listed actor, e.g. \"Vehicle_1\"",
+            )
+        })?;
+        let lower = s.to_ascii_lowercase().replace(' ', "_");
+        let n = vehicle_no(&lower, None).filter(|n| actors.iter().any(|a| a.n == *n));
+        n.ok_or_else(|| {
+            cx.err(
+                "E0803",
+                key,
+                format!("`{key}` \"{s}\" names no listed actor"),
+                "name a listed actor, e.g. \"Vehicle_1\"",
+            )
+        })
+    };
+    let at_fault_no = name_no(cx, "at_fault_vehicle")?;
+    let single = actors.len() == 1;
+    let struck_no = if single { None } else { Some(name_no(cx, "struck_vehicle")?) };
+    if single {
+        return Err(cx.err(
+            "E0804",
+            "Actors",
+            "a single-vehicle extraction: SAFE's format names no struck object rocc could place".into(),
+            "import the coded record with `rocc ciren import`, which maps the struck tree or pole",
+        ));
+    }
+    if actors.len() > 2 {
+        return Err(cx.err(
+            "E0804",
+            "Actors",
+            format!(
+                "{} actors: SAFE's Conflict block describes one pair, and the others' roles are not extracted",
+                actors.len()
+            ),
+            "rocc stages the pair of a two-vehicle extraction",
+        ));
+    }
+    let impact_raw = get("impact_type").ok_or_else(|| {
+        cx.err("E0802", "Conflict", "`Conflict.impact_type` is missing".into(), "e.g. \"T-bone\", \"head-on\"")
+    })?;
+    let it = impact_raw.to_ascii_lowercase().replace(['-', '_'], " ");
+    let impact_said =
+        if it.contains("t bone") || it.contains("angle") || it.contains("broadside") || it.contains("side impact") {
+            Impact::Angle
+        } else if it.contains("head on") || it.contains("frontal") {
+            Impact::HeadOn
+        } else if it.contains("rear") {
+            Impact::RearEnd
+        } else if it.contains("sideswipe") || it.contains("side swipe") {
+            Impact::Sideswipe
+        } else {
+            return Err(cx.err(
+                "E0803",
+                "impact_type",
+                format!("unknown impact_type \"{impact_raw}\""),
+                "known: T-bone, angle, head-on, rear-end, sideswipe",
+            ));
+        };
+    let poi_raw = get("point_of_impact").ok_or_else(|| {
+        cx.err(
+            "E0802",
+            "Conflict",
+            "`Conflict.point_of_impact` is missing".into(),
+            "e.g. \"front of V2 struck right side of V1\"",
+        )
+    })?;
+    let poi = parse_point_of_impact(&poi_raw);
+    let other_of = |n: u32| actors.iter().map(|a| a.n).find(|&m| m != n).unwrap_or(n);
+    let struck_field = struck_no.unwrap_or(other_of(at_fault_no));
+
+    let mut conflict_notes = vec![format!(
+        "Conflict: at_fault_vehicle \"{}\", struck_vehicle \"{}\", impact_type \"{impact_raw}\", point_of_impact \"{poi_raw}\".",
+        get("at_fault_vehicle").unwrap_or_default(),
+        get("struck_vehicle").unwrap_or_default()
+    )];
+    let known = |n: &Named| actors.iter().any(|a| a.n == n.vehicle);
+    // Decide striker, struck, impact, point and face.
+    let (striker, struck, impact, point, face) = match (poi.striker.filter(known), poi.struck.filter(known)) {
+        (Some(a), Some(b)) if a.vehicle != b.vehicle => {
+            match (a.part, b.part, poi.mutual) {
+                // Front to front is symmetric in the text: the at-fault field decides who strikes.
+                (Some(Part::Point(pa)), Some(Part::Point(pb)), _) if is_front(pa) && is_front(pb) => {
+                    let (af, st) =
+                        if b.vehicle == at_fault_no { (b.vehicle, a.vehicle) } else { (a.vehicle, b.vehicle) };
+                    (af, st, Impact::HeadOn, Point::Front, Face::Front)
+                }
+                (Some(Part::Point(pa)), Some(Part::Point(pb)), _) if is_front(pa) && !is_front(pb) => {
+                    let imp = if is_rear(pb) { Impact::RearEnd } else { Impact::Angle };
+                    (a.vehicle, b.vehicle, imp, pb, Face::Front)
+                }
+                (Some(Part::Point(pa)), Some(Part::Point(pb)), true) if is_front(pb) && !is_front(pa) => {
+                    let imp = if is_rear(pa) { Impact::RearEnd } else { Impact::Angle };
+                    (b.vehicle, a.vehicle, imp, pa, Face::Front)
+                }
+                (Some(Part::Point(pa)), Some(Part::Point(pb)), _) if hand(pa).is_some() && hand(pb).is_some() => {
+                    let (af, st, fa, pt) = if a.vehicle == at_fault_no || b.vehicle != at_fault_no {
+                        (a.vehicle, b.vehicle, pa, pb)
+                    } else {
+                        (b.vehicle, a.vehicle, pb, pa)
+                    };
+                    let f = if hand(fa) == Some(true) { Face::Left } else { Face::Right };
+                    (af, st, Impact::Sideswipe, pt, f)
+                }
+                // One side named, the other party's part a side of unknown hand (a trailer): a
+                // side-to-side contact. The at-fault vehicle strikes with its named side; the
+                // other's side is the one facing it.
+                (pa, pb, _) if side_pair(pa, pb).is_some() => {
+                    let (named, other, hand_left) = match side_pair(pa, pb) {
+                        Some(true) => (a.vehicle, b.vehicle, hand(part_point(pa)).unwrap_or(true)),
+                        _ => (b.vehicle, a.vehicle, hand(part_point(pb)).unwrap_or(true)),
+                    };
+                    let (af, st) = if other == at_fault_no { (other, named) } else { (named, other) };
+                    // Same direction: the at-fault's left meets the other's right.
+                    let (face, point) = if af == named {
+                        (
+                            if hand_left { Face::Left } else { Face::Right },
+                            if hand_left { Point::Right } else { Point::Left },
+                        )
+                    } else {
+                        (
+                            if hand_left { Face::Right } else { Face::Left },
+                            if hand_left { Point::Left } else { Point::Right },
+                        )
+                    };
+                    let msg = format!(
+                        "point_of_impact \"{poi_raw}\" names V{}'s {} side and only a side of unknown hand of V{}: staged as a sideswipe, v{af}'s {} against v{st}'s {} side",
+                        named,
+                        if hand_left { "left" } else { "right" },
+                        other,
+                        face.name(),
+                        point_name(point)
+                    );
+                    cx.warn("point_of_impact", msg.clone());
+                    conflict_notes.push(format!("Ambiguous: {msg}."));
+                    (af, st, Impact::Sideswipe, point, face)
+                }
+                _ => {
+                    return Err(cx.err(
+                        "E0808",
+                        "point_of_impact",
+                        format!("point_of_impact \"{poi_raw}\" names no striking face and struck side rocc can map"),
+                        "write it as `PART of V<n> struck PART of V<m>` with PART front, rear, left side, right side or a corner",
+                    ));
+                }
+            }
+        }
+        (_, Some(b)) if b.part.is_some() => {
+            // Only the struck vehicle's part: the other party strikes with its front.
+            let Some(Part::Point(pb)) = b.part else {
+                return Err(cx.err(
+                    "E0808",
+                    "point_of_impact",
+                    format!("point_of_impact \"{poi_raw}\" names a side of unknown hand"),
+                    "name left or right",
+                ));
+            };
+            let af = other_of(b.vehicle);
+            let msg = format!("point_of_impact \"{poi_raw}\" names no striking part; v{af}'s front is assumed");
+            cx.warn("point_of_impact", msg.clone());
+            conflict_notes.push(format!("Ambiguous: {msg}."));
+            let imp = if pb == Point::Front && impact_said == Impact::HeadOn {
+                Impact::HeadOn
+            } else if is_rear(pb) {
+                Impact::RearEnd
+            } else {
+                Impact::Angle
+            };
+            (af, b.vehicle, imp, pb, Face::Front)
+        }
+        _ => {
+            return Err(cx.err(
+                "E0808",
+                "point_of_impact",
+                format!("point_of_impact \"{poi_raw}\" cannot be read: it names no vehicle part rocc can map"),
+                "write it as `PART of V<n> struck PART of V<m>` with PART front, rear, left side, right side or a corner",
+            ));
+        }
+    };
+    if struck != struck_field {
+        let msg = format!(
+            "struck_vehicle says Vehicle_{struck_field}, but point_of_impact \"{poi_raw}\" has V{struck} struck; the point_of_impact (the damage geometry) is followed"
+        );
+        cx.warn("struck_vehicle", msg.clone());
+        conflict_notes.push(format!("Contradiction: {msg}."));
+    }
+    if impact != impact_said {
+        let msg = format!(
+            "impact_type \"{impact_raw}\" does not fit point_of_impact \"{poi_raw}\"; staged as {}",
+            super::crash::impact_name(impact)
+        );
+        cx.warn("impact_type", msg.clone());
+        conflict_notes.push(format!("Contradiction: {msg}."));
+    }
+    if striker != at_fault_no {
+        conflict_notes.push(format!(
+            "at_fault_vehicle is Vehicle_{at_fault_no}: its manoeuvre is kept as its goal; rocc's `at_fault` is the striking v{striker}, whose {} meets v{struck}'s {} side.",
+            face.name(),
+            point_name(point)
+        ));
+    } else {
+        conflict_notes.push(format!("at_fault_vehicle Vehicle_{at_fault_no} strikes with its {}.", face.name()));
+    }
+
+    // Rotation into the template frame.
+    let dirs: Vec<Option<Compass>> = actors.iter().map(|a| direction(&a.position)).collect();
+    let mans: Vec<(Manoeuvre, Option<&'static str>)> = actors
+        .iter()
+        .map(|a| {
+            action(&a.action).ok_or_else(|| {
+                cx.err(
+                    "E0803",
+                    &a.key,
+                    format!("{}: unknown Actions \"{}\"", a.key, a.action),
+                    "known: Move forward, Turn left, Turn right, Change lane, Merge, Stop, Enter the Wrong Way",
+                )
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    let mut header = vec![
+        format!("SAFE extraction {}, imported by `rocc ciren import-safe` from {}.", cx.id, path.display()),
+        format!("meta: road_type \"{road_type}\"; the extraction is a model's output, checked field by field."),
+    ];
+    let q = match template {
+        Template::FourWay | Template::Merge => 0,
+        Template::Straight | Template::Curve { .. } => match dirs.iter().flatten().next() {
+            Some(Compass::North) => -1,
+            Some(Compass::South) => 1,
+            _ => 0,
+        },
+        Template::TJunction => {
+            let stem = net.and_then(|n| str_of(n, "Stem road direction")).and_then(Compass::parse);
+            match stem {
+                Some(s) => s.turns_to(Compass::South),
+                None => {
+                    let turner = actors
+                        .iter()
+                        .zip(&mans)
+                        .zip(&dirs)
+                        .find(|((_, m), _)| matches!(m.0, Manoeuvre::TurnLeft | Manoeuvre::TurnRight));
+                    let d = turner.and_then(|(_, d)| *d).or(dirs[dirs.len() - 1]).unwrap_or(Compass::North);
+                    cx.warn(
+                        "Road network",
+                        "no `Stem road direction`; the turning vehicle's leg is taken as the stem".into(),
+                    );
+                    d.opposite().turns_to(Compass::South)
+                }
+            }
+        }
+    };
+    if q.rem_euclid(4) != 0 {
+        header.push(format!(
+            "Rotated into the template: the extraction's north is rocc's {}.",
+            Compass::North.rotate(q).name()
+        ));
+    }
+
+    let mut vehicles: Vec<VehicleDesc> = Vec::new();
+    for ((a, sp), (dir, (man, man_note))) in actors.iter().zip(&speeds).zip(dirs.iter().zip(&mans)) {
+        let kind = kind_for(&a.model).ok_or_else(|| {
+            cx.err(
+                "E0803",
+                &a.key,
+                format!("{}: Model \"{}\" has no rocc kind", a.key, a.model),
+                "known: Sedan, SUV, Van, Pickup, Truck, Semi Truck, Bus, Motorcycle",
+            )
+        })?;
+        let mut man = *man;
+        let mut notes = vec![format!("v{}: {}: Model \"{}\" -> {kind}", a.n, a.key, a.model)];
+        let (arm, lane, where_note): (&'static str, u32, String) = match (template, dir) {
+            (Template::Merge, _) => {
+                let p = a.position.to_ascii_lowercase();
+                if p.contains("ramp") || man == Manoeuvre::Merge {
+                    man = Manoeuvre::Merge;
+                    ("ramp", 1, format!("Initial_position \"{}\" -> ramp.in[1]", a.position))
+                } else {
+                    // The main-road party of a merge crash drives the lane the ramp joins.
+                    (
+                        "main",
+                        lanes,
+                        format!("Initial_position \"{}\" -> main.in[{lanes}], the lane the ramp joins", a.position),
+                    )
+                }
+            }
+            (_, Some(d)) => {
+                let rd = d.rotate(q);
+                (
+                    approach_arm(rd),
+                    1,
+                    format!("Initial_position \"{}\" travels {} -> {}.in[1]", a.position, d.name(), approach_arm(rd)),
+                )
+            }
+            (_, None) => {
+                return Err(cx.err(
+                    "E0803",
+                    &a.key,
+                    format!("{}: Initial_position \"{}\" is not W2E, E2W, S2N or N2S", a.key, a.position),
+                    "a SAFE actor starts W2E, E2W, S2N or N2S (On-ramp / Main road on a merge)",
+                ));
+            }
+        };
+        if template == Template::TJunction && arm == "north" {
+            return Err(cx.err(
+                "E0804",
+                &a.key,
+                format!("{} approaches the T-junction from its missing leg", a.key),
+                "the directions do not fit the stem direction",
+            ));
+        }
+        notes.push(where_note);
+        if let Some(n) = man_note {
+            notes.push((*n).to_string());
+        }
+        let junction = template.has_junction();
+        if matches!(man, Manoeuvre::TurnLeft | Manoeuvre::TurnRight) && !junction {
+            notes.push(format!("Actions \"{}\": no junction to turn at on this road: straight on", a.action));
+            man = Manoeuvre::Straight;
+        }
+        if template == Template::TJunction && arm == "south" && man == Manoeuvre::Straight {
+            notes.push("no straight on from a T's stem: turns right".into());
+            man = Manoeuvre::TurnRight;
+        }
+        // A stopped car stays stopped: 0 mph, or an action that says so.
+        let stopped = man == Manoeuvre::Stopped || sp.kmh == Some(0.0);
+        if stopped {
+            man = Manoeuvre::Stopped;
+        }
+        let (speed, speed_note) = if stopped {
+            (0.0, format!("{}, Actions \"{}\": stopped, speed 0 for the whole clip", sp.cite, a.action))
+        } else {
+            match sp.kmh {
+                Some(k) if matches!(man, Manoeuvre::TurnLeft | Manoeuvre::TurnRight) && k > TURN_KMH => (
+                    TURN_KMH,
+                    format!(
+                        "{} ({} km/h); turning: {TURN_KMH} km/h through the junction",
+                        sp.cite,
+                        super::emit::num(k)
+                    ),
+                ),
+                Some(k) => (k, format!("{} = {} km/h", sp.cite, super::emit::num(k))),
+                None => {
+                    let d = if matches!(man, Manoeuvre::TurnLeft | Manoeuvre::TurnRight) {
+                        TURN_KMH.min(limit)
+                    } else {
+                        limit
+                    };
+                    cx.warn(
+                        &a.key,
+                        format!(
+                            "{}: Speed \"{}\" with a moving action: {} km/h assumed",
+                            a.key,
+                            a.speed,
+                            super::emit::num(d)
+                        ),
+                    );
+                    (d, format!("{}: not known, {} km/h assumed", sp.cite, super::emit::num(d)))
+                }
+            }
+        };
+        notes.push(format!("Actions \"{}\" -> {}; speed: {speed_note}", a.action, man_word(man)));
+        vehicles.push(VehicleDesc {
+            name: format!("v{}", a.n),
+            kind: kind.into(),
+            arm,
+            lane,
+            speed_kmh: speed,
+            manoeuvre: man,
+            notes,
+        });
+    }
+    separate_lanes(&mut vehicles, lanes);
+
+    let mut road_notes =
+        vec![format!("road {}: meta.road_type \"{road_type}\"", template.name()), format!("lanes: {lanes_note}")];
+    road_notes.push(limit_note);
+    Ok(Crash {
+        id: cx.id.clone(),
+        header,
+        road: RoadDesc {
+            template,
+            lanes,
+            lane_width: 3.5,
+            speed_limit_kmh: limit,
+            median: if centre { 3.5 } else { 0.0 },
+            shoulder: 0.0,
+            notes: road_notes,
+        },
+        vehicles,
+        objects: Vec::new(),
+        conflict: ConflictDesc {
+            at_fault: format!("v{striker}"),
+            struck: format!("v{struck}"),
+            impact,
+            point,
+            face,
+            notes: conflict_notes,
+        },
+    })
+}
+
+/// Two vehicles starting on the same in-lane: the left-turner keeps the lane next to the centre
+/// line, the other moves one lane out (a right-turner to the outermost), when the road has one.
+fn separate_lanes(vs: &mut [VehicleDesc], lanes: u32) {
+    for i in 0..vs.len() {
+        for j in 0..vs.len() {
+            if i == j || vs[i].arm != vs[j].arm || vs[i].lane != vs[j].lane || lanes < 2 {
+                continue;
+            }
+            let k = if vs[i].manoeuvre == Manoeuvre::TurnLeft { j } else { i };
+            let target = if vs[k].manoeuvre == Manoeuvre::TurnRight { lanes } else { (vs[k].lane + 1).min(lanes) };
+            if target != vs[k].lane {
+                vs[k].lane = target;
+                let note = format!("shares its start lane with another vehicle: moved to {}.in[{target}]", vs[k].arm);
+                vs[k].notes.push(note);
+            }
+        }
+    }
+}
+
+fn man_word(m: Manoeuvre) -> &'static str {
+    match m {
+        Manoeuvre::Straight => "straight on",
+        Manoeuvre::TurnLeft => "turn left",
+        Manoeuvre::TurnRight => "turn right",
+        Manoeuvre::ChangeLaneLeft => "change lane left",
+        Manoeuvre::ChangeLaneRight => "change lane right",
+        Manoeuvre::Merge => "merge from the ramp",
+        Manoeuvre::Stopped => "stopped",
+    }
+}
+
+fn is_front(p: Point) -> bool {
+    matches!(p, Point::Front | Point::FrontLeft | Point::FrontRight)
+}
+
+fn is_rear(p: Point) -> bool {
+    matches!(p, Point::Rear | Point::RearLeft | Point::RearRight)
+}
+
+/// `Some(true)` for a left side, `Some(false)` for a right side; `None` otherwise.
+fn hand(p: Point) -> Option<bool> {
+    match p {
+        Point::Left => Some(true),
+        Point::Right => Some(false),
+        _ => None,
+    }
+}
+
+fn part_point(p: Option<Part>) -> Point {
+    match p {
+        Some(Part::Point(x)) => x,
+        _ => Point::Front,
+    }
+}
+
+/// A left/right side paired with a side of unknown hand: `Some(true)` when the first is the
+/// handed one, `Some(false)` when the second is.
+fn side_pair(a: Option<Part>, b: Option<Part>) -> Option<bool> {
+    match (a, b) {
+        (Some(Part::Point(p)), Some(Part::Side)) if hand(p).is_some() => Some(true),
+        (Some(Part::Side), Some(Part::Point(p))) if hand(p).is_some() => Some(false),
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn named(vehicle: u32, p: Point) -> Option<Named> {
+        Some(Named { vehicle, part: Some(Part::Point(p)) })
+    }
+
+    #[test]
+    fn point_of_impact_rules() {
+        let p = parse_point_of_impact("front of V2 striking right side of V1");
+        assert_eq!((p.striker, p.struck, p.mutual), (named(2, Point::Front), named(1, Point::Right), false));
+        let p = parse_point_of_impact("right side of V1 struck by front of V2");
+        assert_eq!((p.striker, p.struck), (named(2, Point::Front), named(1, Point::Right)));
+        let p = parse_point_of_impact("front of V1 and front of V2");
+        assert_eq!((p.striker, p.struck, p.mutual), (named(1, Point::Front), named(2, Point::Front), true));
+        let p = parse_point_of_impact("left side of V1 struck by trailer component of V2");
+        assert_eq!(p.struck, named(1, Point::Left));
+        assert_eq!(p.striker, Some(Named { vehicle: 2, part: Some(Part::Side) }));
+        let p = parse_point_of_impact("left-front of Vehicle 1 struck the rear of Vehicle 2");
+        assert_eq!((p.striker, p.struck), (named(1, Point::FrontLeft), named(2, Point::Rear)));
+        let p = parse_point_of_impact("somewhere in the middle");
+        assert_eq!((p.striker, p.struck), (None, None));
+    }
+}

@@ -1,0 +1,352 @@
+//! `rocc ciren`: snapshots of the generated scenario of every shared CIREN case and SAFE
+//! extraction; the staged contact measured on the rolled-out boxes against the source's own
+//! statement of the damaged parts (CIREN: `external.csv`, SAFE: `point_of_impact`); bad inputs
+//! (malformed, missing, unknown, non-UTF-8, huge) give diagnostics and write nothing while the
+//! rest of the batch goes on.
+
+use glam::DVec2;
+use rocc::check::scenario::Point;
+use rocc::ciren::{self, Imported};
+use rocc::geom::Obb;
+use rocc::rollout::Tracks;
+use rocc::source::SourceMap;
+use std::path::{Path, PathBuf};
+
+fn dirs(root: &str, want_dir: bool) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(root)
+        .expect("shared data")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            if want_dir { p.join("crash_report.xml").is_file() } else { p.extension().is_some_and(|e| e == "json") }
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+fn rendered(diags: &[rocc::diag::Diagnostic], sources: &SourceMap) -> String {
+    diags.iter().map(|d| d.render_plain(sources)).collect::<Vec<_>>().join("")
+}
+
+/// The imported text, then the warnings; or the diagnostics of a case that does not import.
+fn snapshot_text(r: &Result<Imported, Vec<rocc::diag::Diagnostic>>, sources: &SourceMap) -> String {
+    match r {
+        Ok(imp) => {
+            let w: Vec<String> = imp.warnings.iter().map(|d| format!("{} {}", d.code, d.message)).collect();
+            format!("{}\n---- warnings ----\n{}\n", imp.staged.text, w.join("\n"))
+        }
+        Err(d) => format!("---- not imported ----\n{}", rendered(d, sources)),
+    }
+}
+
+#[test]
+fn every_shared_ciren_case_imports_as_snapshotted() {
+    let cases = dirs("../shared/ciren", true);
+    assert_eq!(cases.len(), 6);
+    for p in cases {
+        let mut sources = SourceMap::default();
+        let r = ciren::import_case(&p, &mut sources);
+        let id = p.file_name().and_then(|n| n.to_str()).unwrap_or("case").to_string();
+        insta::assert_snapshot!(format!("ciren_{id}"), snapshot_text(&r, &sources));
+    }
+}
+
+#[test]
+fn every_shared_safe_extraction_imports_as_snapshotted() {
+    let files = dirs("../shared/safe", false);
+    assert_eq!(files.len(), 8);
+    for p in files {
+        let mut sources = SourceMap::default();
+        let r = ciren::import_safe(&p, &mut sources);
+        let id = p.file_stem().and_then(|n| n.to_str()).unwrap_or("safe").to_string();
+        insta::assert_snapshot!(format!("safe_{id}"), snapshot_text(&r, &sources));
+    }
+}
+
+// ------------------------------------------------------------------ contact sides
+
+fn obb(t: &Tracks, a: usize, f: usize) -> Obb {
+    let p = t.poses[a][f];
+    let s = t.agents[a].size;
+    Obb { center: DVec2::new(p.x, p.y), yaw: p.yaw, length: s[0], width: s[1] }
+}
+
+/// The contact measured by sampling, as tests/rollout.rs does: the mean of at-fault box points
+/// inside the struck box, in the struck frame and in the at-fault frame.
+fn measured_contact(t: &Tracks, af: usize, st: usize, f: usize) -> (DVec2, DVec2) {
+    let (a, b) = (obb(t, af, f), obb(t, st, f));
+    let (mut sum, mut n) = (DVec2::ZERO, 0);
+    for i in 0..=80 {
+        for j in 0..=40 {
+            let q = DVec2::new((i as f64 / 80.0 - 0.5) * a.length, (j as f64 / 40.0 - 0.5) * a.width);
+            let w = a.center + q.rotate(DVec2::from_angle(a.yaw));
+            let l = (w - b.center).rotate(DVec2::from_angle(-b.yaw));
+            if l.x.abs() < b.length / 2.0 && l.y.abs() < b.width / 2.0 {
+                sum += w;
+                n += 1;
+            }
+        }
+    }
+    assert!(n > 0, "no contact at frame {f}");
+    let w = sum / n as f64;
+    ((w - b.center).rotate(DVec2::from_angle(-b.yaw)), (w - a.center).rotate(DVec2::from_angle(-a.yaw)))
+}
+
+/// Thirds of each face, as in the language reference: outer thirds are corners.
+fn sector(p: DVec2, l: f64, w: f64) -> Point {
+    let (u, v) = (p.x / (l / 2.0), p.y / (w / 2.0));
+    let lon = if u > 1.0 / 3.0 {
+        1
+    } else if u < -1.0 / 3.0 {
+        -1
+    } else {
+        0
+    };
+    let lat = if v > 1.0 / 3.0 {
+        1
+    } else if v < -1.0 / 3.0 {
+        -1
+    } else {
+        0
+    };
+    match (lon, lat) {
+        (1, 1) => Point::FrontLeft,
+        (1, -1) => Point::FrontRight,
+        (-1, 1) => Point::RearLeft,
+        (-1, -1) => Point::RearRight,
+        (1, _) => Point::Front,
+        (-1, _) => Point::Rear,
+        (_, 1) => Point::Left,
+        _ => Point::Right,
+    }
+}
+
+/// The damaged part of a vehicle as the source states it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Part {
+    Front,
+    Left,
+    Right,
+    Rear,
+}
+
+fn part(word: &str) -> Option<Part> {
+    match word.trim().to_ascii_lowercase().as_str() {
+        "front" => Some(Part::Front),
+        "left" | "left side" => Some(Part::Left),
+        "right" | "right side" => Some(Part::Right),
+        "rear" | "back" => Some(Part::Rear),
+        _ => None,
+    }
+}
+
+/// Run the front on an imported scenario and check each stated part against the latched contact:
+/// the struck vehicle's sector is exactly the stated side; the striker touches with the stated
+/// face (outer 40% of its box along that axis, as tests/rollout.rs checks a face).
+fn check_contact(imp: &Imported, stated: &[(String, Part)]) -> Tracks {
+    let mut sources = SourceMap::default();
+    let scen = rocc::check::check_text(&imp.file_name(), &imp.staged.text, Path::new("."), &mut sources)
+        .unwrap_or_else(|d| panic!("{}: {}", imp.crash.id, rendered(&d, &sources)));
+    let front =
+        rocc::compile::front(scen, None).unwrap_or_else(|d| panic!("{}: {}", imp.crash.id, rendered(&d, &sources)));
+    let t = front.tracks;
+    let rec = t.impacts.first().unwrap_or_else(|| panic!("{}: no impact", imp.crash.id));
+    let (af, st, f) = (rec.at_fault, rec.struck, rec.frame);
+    let (in_struck, in_af) = measured_contact(&t, af, st, f);
+    let mut checked = 0;
+    for (name, p) in stated {
+        let Some(i) = t.agents.iter().position(|a| &a.name == name) else { continue };
+        let s = t.agents[i].size;
+        if i == st {
+            let want = match p {
+                Part::Front => Point::Front,
+                Part::Left => Point::Left,
+                Part::Right => Point::Right,
+                Part::Rear => Point::Rear,
+            };
+            assert_eq!(sector(in_struck, s[0], s[1]), want, "{}: struck {name} contact {in_struck}", imp.crash.id);
+            assert_eq!(rec.struck_side, want, "{}", imp.crash.id);
+        } else if i == af {
+            let ok = match p {
+                Part::Front => in_af.x > 0.6 * s[0] / 2.0,
+                Part::Left => in_af.y > 0.6 * s[1] / 2.0,
+                Part::Right => in_af.y < -0.6 * s[1] / 2.0,
+                Part::Rear => in_af.x < -0.6 * s[0] / 2.0,
+            };
+            assert!(ok, "{}: striker {name} touches at {in_af}, not its {p:?}", imp.crash.id);
+        } else {
+            panic!("{}: {name} is damaged in the source but not in the staged impact", imp.crash.id);
+        }
+        checked += 1;
+    }
+    assert!(checked >= 1, "{}: nothing checked", imp.crash.id);
+    t
+}
+
+#[test]
+fn ciren_contacts_land_on_the_sides_in_external_csv() {
+    for p in dirs("../shared/ciren", true) {
+        let mut sources = SourceMap::default();
+        let imp = ciren::import_case(&p, &mut sources).unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+        // external.csv: one row per vehicle in sketch colour order (red = V1, blue = V2).
+        let csv = std::fs::read_to_string(p.join("external.csv")).expect("external.csv");
+        let stated: Vec<(String, Part)> = csv
+            .lines()
+            .skip(1)
+            .enumerate()
+            .filter_map(|(i, l)| Some((format!("v{}", i + 1), part(l.split(',').nth(1)?)?)))
+            .collect();
+        assert!(!stated.is_empty());
+        let t = check_contact(&imp, &stated);
+        // Both vehicles of a two-vehicle case are checked, not only one of them.
+        let movers = t.agents.iter().filter(|a| a.name.starts_with('v') && !a.background).count();
+        if movers == 2 {
+            let rec = &t.impacts[0];
+            let names = [&t.agents[rec.at_fault].name, &t.agents[rec.struck].name];
+            assert!(stated.iter().filter(|(n, _)| names.contains(&n)).count() == 2, "{}", imp.crash.id);
+        }
+    }
+}
+
+#[test]
+fn safe_contacts_land_on_the_parts_in_point_of_impact() {
+    for p in dirs("../shared/safe", false) {
+        let mut sources = SourceMap::default();
+        let imp = ciren::import_safe(&p, &mut sources).unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+        let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&p).expect("read")).expect("json");
+        let poi = json["dsl"]["Conflict"]["point_of_impact"].as_str().expect("point_of_impact").to_ascii_lowercase();
+        // "PART of Vn" phrases, read independently of the importer's parser.
+        let mut stated = Vec::new();
+        for (i, _) in poi.match_indices(" of v") {
+            let n = poi[i + 5..].chars().take_while(char::is_ascii_digit).collect::<String>();
+            let before: Vec<&str> = poi[..i].split_whitespace().collect();
+            let two = before.iter().rev().take(2).rev().copied().collect::<Vec<_>>().join(" ");
+            let one = before.last().copied().unwrap_or("");
+            if let Some(pt) = part(&two).or_else(|| part(one)) {
+                stated.push((format!("v{n}"), pt));
+            }
+        }
+        check_contact(&imp, &stated);
+    }
+}
+
+#[test]
+fn a_stopped_car_stays_stopped_until_struck() {
+    let mut sources = SourceMap::default();
+    let imp = ciren::import_safe(Path::new("tests/fixtures/ciren/safe_stopped.json"), &mut sources)
+        .unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+    let t = check_contact(&imp, &[("v1".into(), Part::Right), ("v2".into(), Part::Front)]);
+    let v1 = t.agents.iter().position(|a| a.name == "v1").expect("v1");
+    assert!(t.speeds[v1].iter().all(|&s| s.abs() < 1e-9), "v1 moved: {:?}", t.speeds[v1]);
+    assert_eq!(t.poses[v1][0], t.poses[v1][t.frames - 1]);
+}
+
+// ------------------------------------------------------------------ bad inputs
+
+#[test]
+fn bad_case_records_give_specific_diagnostics() {
+    let cases = [
+        ("malformed.xml", "E0801"),
+        ("missing_events.xml", "E0802"),
+        ("not_a_case.xml", "E0802"),
+        ("unknown_area.xml", "E0803"),
+        ("unknown_body.xml", "E0803"),
+        ("rollover.xml", "E0804"),
+        ("back_strike.xml", "E0804"),
+        ("not_utf8.xml", "E0800"),
+    ];
+    for (f, code) in cases {
+        let mut sources = SourceMap::default();
+        let p = Path::new("tests/fixtures/ciren").join(f);
+        let d = ciren::import_case(&p, &mut sources).err().unwrap_or_else(|| panic!("{f} imported"));
+        assert_eq!(d[0].code, code, "{f}");
+        insta::assert_snapshot!(format!("bad_{f}"), rendered(&d, &sources));
+    }
+}
+
+#[test]
+fn bad_safe_extractions_give_specific_diagnostics() {
+    let cases = [
+        ("safe_not_json.json", "E0801"),
+        ("safe_bad_speed.json", "E0803"),
+        ("safe_bad_direction.json", "E0803"),
+        ("safe_unknown_vehicle.json", "E0803"),
+        ("safe_undecidable.json", "E0808"),
+    ];
+    for (f, code) in cases {
+        let mut sources = SourceMap::default();
+        let p = Path::new("tests/fixtures/ciren").join(f);
+        let d = ciren::import_safe(&p, &mut sources).err().unwrap_or_else(|| panic!("{f} imported"));
+        assert_eq!(d[0].code, code, "{f}");
+        insta::assert_snapshot!(format!("bad_{f}"), rendered(&d, &sources));
+    }
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("rocc-ciren-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("tmp");
+    d
+}
+
+#[test]
+fn a_huge_file_is_refused_before_it_is_read() {
+    let d = tmp("huge");
+    let p = d.join("crash_report.xml");
+    // Sparse: the size is what matters, and it must be refused without reading it.
+    let f = std::fs::File::create(&p).expect("create");
+    f.set_len(ciren::case::MAX_CASE_BYTES + 1).expect("set_len");
+    let mut sources = SourceMap::default();
+    let e = ciren::import_case(&d, &mut sources).expect_err("refused");
+    assert_eq!(e[0].code, "E0800");
+    assert!(e[0].message.contains("case files up to"), "{}", e[0].message);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn the_batch_goes_on_past_bad_cases_and_writes_nothing_for_them() {
+    let out = tmp("batch");
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
+        .args(["ciren", "import", "../shared/ciren/100237", "tests/fixtures/ciren/malformed.xml"])
+        .args(["tests/fixtures/ciren/rollover.xml", "tests/fixtures/ciren/not_utf8.xml", "no/such/case"])
+        .args(["../shared/ciren/117021", "-o"])
+        .arg(&out)
+        .output()
+        .expect("run rocc");
+    assert!(!status.status.success(), "failures must give a non-zero exit");
+    let stderr = String::from_utf8_lossy(&status.stderr);
+    assert!(stderr.contains("2 imported, 4 failed"), "{stderr}");
+    let mut names: Vec<String> =
+        std::fs::read_dir(&out).expect("out").filter_map(|e| e.ok()?.file_name().into_string().ok()).collect();
+    names.sort();
+    // The two good cases, and nothing else: no partial or temporary files.
+    assert_eq!(names, ["100237.scn", "117021.scn"]);
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn generated_files_check_format_and_are_deterministic() {
+    let out = tmp("det");
+    let run = || {
+        std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
+            .args(["ciren", "import-safe", "../shared/safe/117330.json", "../shared/safe/121520.json", "-o"])
+            .arg(&out)
+            .status()
+            .expect("run rocc")
+    };
+    assert!(run().success());
+    let first = std::fs::read_to_string(out.join("117330.scn")).expect("written");
+    assert!(run().success());
+    assert_eq!(first, std::fs::read_to_string(out.join("117330.scn")).expect("written"));
+    let files = [out.join("117330.scn"), out.join("121520.scn")];
+    let check =
+        std::process::Command::new(env!("CARGO_BIN_EXE_rocc")).arg("check").args(&files).status().expect("check");
+    assert!(check.success());
+    let fmt = std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
+        .args(["fmt", "--check"])
+        .args(&files)
+        .status()
+        .expect("fmt");
+    assert!(fmt.success(), "the emitter writes canonical layout");
+    let _ = std::fs::remove_dir_all(&out);
+}
