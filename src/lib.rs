@@ -3,6 +3,7 @@
 
 pub mod backend;
 pub mod check;
+pub mod ciren;
 pub mod compile;
 pub mod diag;
 pub mod edit;
