@@ -864,6 +864,9 @@ fn ciren_extract(case_dir: &Path, out: &Path, examples: Option<&Path>, args: Tex
         // checks (a scene without a usable conflict) shows the original diagnostics.
         let mut named = SourceMap::default();
         let shown = match &kept {
+            // Diagnostics without a file (no scenario in the reply, no usable conflict) are
+            // the better explanation.
+            Ok(_) if sources.files.is_empty() => (diags, sources),
             Ok(_) => match rocc::check::check_text(&rejected.display().to_string(), text, base, &mut named)
                 .and_then(|s| rocc::compile::front(s, None))
             {

@@ -215,7 +215,7 @@ impl ValueSpan for crate::syntax::ast::ConflictField {
 fn word(s: &str) -> String {
     let w = s.trim().to_ascii_lowercase();
     let w = w.strip_suffix(" side").or_else(|| w.strip_suffix("_side")).unwrap_or(&w);
-    w.split(|c: char| c == ' ' || c == '-' || c == '_').filter(|p| !p.is_empty()).collect::<Vec<_>>().join("_")
+    w.split([' ', '-', '_']).filter(|p| !p.is_empty()).collect::<Vec<_>>().join("_")
 }
 
 /// A roster name from what the model wrote: exact, case-folded, or `V1` / `Vehicle 1` /
