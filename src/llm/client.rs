@@ -393,7 +393,12 @@ fn http_error(status: u16, body: &str, url: &str) -> Diagnostic {
             Some(e.get("message").and_then(Value::as_str).map(str::to_string).unwrap_or_else(|| e.to_string()))
         })
         .unwrap_or_else(|| body.to_string());
+    let lower = said.to_ascii_lowercase();
     let help = match status {
+        // llama.cpp without a projector: "image input is not supported - hint: ... mmproj".
+        _ if lower.contains("image") && (lower.contains("not supported") || lower.contains("mmproj")) => {
+            "the model behind this endpoint takes no images: serve a vision model (vLLM with a -VL model, llama-server with --mmproj)".to_string()
+        }
         401 | 403 => "pass --api-key or set ROCC_LLM_API_KEY".to_string(),
         404 => "the endpoint should end in /v1 and --model must name a model the server has".to_string(),
         400 => {

