@@ -221,7 +221,7 @@ pub struct Example {
 }
 
 impl Example {
-    /// `None` unless the text checks and has a conflict block.
+    /// The example, or why it is unusable: it must check and have a conflict block.
     pub fn new(name: &str, text: &str) -> Result<Example, String> {
         let mut sources = SourceMap::default();
         let base = std::env::temp_dir();
