@@ -97,6 +97,52 @@ enum CirenCmd {
         #[arg(short, long)]
         out: PathBuf,
     },
+    /// Sketch and summary of a case to a checked `.scn` through a vision model (OpenAI-compatible server).
+    Extract {
+        /// The case folder: sketch.jpeg (or Sketch.jpg) and crash_report.xml (or Summary.txt).
+        case: PathBuf,
+        /// The `.scn` file to write (atomically, only once it checks with its conflict).
+        #[arg(short, long)]
+        out: PathBuf,
+        /// The server's OpenAI-compatible base URL [env: ROCC_LLM_ENDPOINT; default: the server's usual port on 127.0.0.1].
+        #[arg(long)]
+        endpoint: Option<String>,
+        /// Model name as the server knows it [env: ROCC_LLM_MODEL]; llama.cpp ignores it.
+        #[arg(long)]
+        model: Option<String>,
+        /// Bearer token [env: ROCC_LLM_API_KEY, then OPENAI_API_KEY].
+        #[arg(long)]
+        api_key: Option<String>,
+        /// Server dialect: how grammar and JSON-schema constraints are sent.
+        #[arg(long, value_enum, default_value = "vllm")]
+        server: ServerArg,
+        /// Repair rounds for the scene, and extra conflict calls for the conflict.
+        #[arg(long, default_value_t = 3)]
+        max_repairs: u32,
+        /// Scenario seed (default: the case number); also sent as the sampling seed.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Worked examples: every `.scn` of this directory instead of the bundled prompts/ciren/.
+        #[arg(long)]
+        examples: Option<PathBuf>,
+        /// Seconds to wait for one reply.
+        #[arg(long, default_value_t = 180.0)]
+        timeout: f64,
+        /// Retries after HTTP 429 or 5xx, with exponential backoff from 1 s.
+        #[arg(long, default_value_t = 2)]
+        retries: u32,
+        #[arg(long, default_value_t = 2048)]
+        max_tokens: u32,
+        /// Sampling temperature of the scene call; the conflict call is always 0.
+        #[arg(long, default_value_t = 0.0)]
+        temperature: f64,
+        /// Do not send grammar or JSON-schema constraints.
+        #[arg(long)]
+        no_grammar: bool,
+        /// Save every request (images shortened) and reply as OUT.transcript.json.
+        #[arg(long)]
+        transcript: bool,
+    },
 }
 
 #[derive(Subcommand)]
@@ -741,6 +787,185 @@ fn text(sentence: &str, out: &Path, args: TextArgs) -> ExitCode {
     }
 }
 
+/// `rocc ciren import | import-safe | extract`.
+fn ciren(what: CirenCmd) -> ExitCode {
+    match what {
+        CirenCmd::Import { inputs, out } => {
+            let (cases, errs) = rocc::ciren::case_inputs(&inputs);
+            print_diags(&errs, &SourceMap::default(), MessageFormat::Human);
+            ciren_import(cases.into_iter().map(Ok).chain(errs.into_iter().map(Err)).collect(), &out, false)
+        }
+        CirenCmd::ImportSafe { files, out } => ciren_import(files.into_iter().map(Ok).collect(), &out, true),
+        CirenCmd::Extract {
+            case,
+            out,
+            endpoint,
+            model,
+            api_key,
+            server,
+            max_repairs,
+            seed,
+            examples,
+            timeout,
+            retries,
+            max_tokens,
+            temperature,
+            no_grammar,
+            transcript,
+        } => {
+            let server = match server {
+                ServerArg::Vllm => llm::client::Server::Vllm,
+                ServerArg::Llamacpp => llm::client::Server::Llamacpp,
+                ServerArg::Ollama => llm::client::Server::Ollama,
+                ServerArg::Openai => llm::client::Server::Openai,
+            };
+            let env = |k: &str| std::env::var(k).ok().filter(|v| !v.is_empty());
+            // The client options are `rocc text`'s, validated the same way.
+            let args = TextArgs {
+                endpoint: endpoint
+                    .or_else(|| env("ROCC_LLM_ENDPOINT"))
+                    .unwrap_or_else(|| server.default_endpoint().into()),
+                model: model.or_else(|| env("ROCC_LLM_MODEL")),
+                api_key: api_key.or_else(|| env("ROCC_LLM_API_KEY")).or_else(|| env("OPENAI_API_KEY")),
+                server,
+                plan: llm::Plan::Joint,
+                max_repairs,
+                overrides: llm::schema::Overrides { density: None, randomness: None, seed },
+                timeout,
+                retries,
+                max_tokens,
+                temperature,
+                image: None,
+                constrain: !no_grammar,
+                transcript,
+            };
+            ciren_extract(&case, &out, examples.as_deref(), args)
+        }
+    }
+}
+
+/// `rocc ciren extract`: like `rocc text`, the output is written only once it checks (with its
+/// conflict); a failure keeps OUT.rejected.scn.
+fn ciren_extract(case_dir: &Path, out: &Path, examples: Option<&Path>, args: TextArgs) -> ExitCode {
+    use rocc::ciren::extract::{self, Outcome};
+    let human = MessageFormat::Human;
+    let fail = |d: Diagnostic, sources: &SourceMap| {
+        print_diags(&[d], sources, human);
+        ExitCode::FAILURE
+    };
+    let write_transcript = args.transcript;
+    let (seed, max_repairs, constrain) = (args.overrides.seed, args.max_repairs, args.constrain);
+    let client = match text_options(args) {
+        Ok(o) => o.client,
+        Err(d) => return fail(d, &SourceMap::default()),
+    };
+    let examples = match examples.map(extract::load_examples).transpose() {
+        Ok(e) => e.unwrap_or_else(extract::builtin_examples),
+        Err(d) => return fail(d, &SourceMap::default()),
+    };
+    let case = match extract::read_case(case_dir) {
+        Ok(c) => c,
+        Err(e) => return fail(e.diag, &e.sources),
+    };
+    let opts = extract::Options { client, max_repairs, constrain, seed, examples };
+    let name = out.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "scene.scn".into());
+    let base = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let (outcome, run) = extract::extract(&case, &opts, &name, base);
+    let rejected = out.with_extension("rejected.scn");
+    if write_transcript {
+        let t = out.with_extension("transcript.json");
+        let v = run.transcript(&case, &opts, seed.unwrap_or_else(|| extract::default_seed(&case.id)));
+        let bytes = serde_json::to_vec_pretty(&v).expect("a JSON value serialises");
+        match rocc::output::write_atomic(&t, |w| std::io::Write::write_all(w, &bytes)) {
+            Ok(_) => eprintln!("transcript: {}", t.display()),
+            Err(e) => eprintln!("error[E0401]: cannot write {}: {e}", t.display()),
+        }
+    }
+    let requests = run.exchanges.len();
+    let keep = |text: &str, diags: Vec<Diagnostic>, sources: SourceMap| -> Result<(), String> {
+        let kept = rocc::output::write_atomic(&rejected, |w| std::io::Write::write_all(w, text.as_bytes()));
+        // Re-check under the kept file's name so the spans point into it; a kept file that
+        // checks (a scene without a usable conflict) shows the original diagnostics.
+        let mut named = SourceMap::default();
+        let shown = match &kept {
+            // Diagnostics without a file (no scenario in the reply, no usable conflict) are
+            // the better explanation.
+            Ok(_) if sources.files.is_empty() => (diags, sources),
+            Ok(_) => match rocc::check::check_text(&rejected.display().to_string(), text, base, &mut named)
+                .and_then(|s| rocc::compile::front(s, None))
+            {
+                Err(d) => (d, named),
+                Ok(_) => (diags, sources),
+            },
+            Err(_) => (diags, sources),
+        };
+        print_diags(&shown.0, &shown.1, human);
+        kept.map(|_| ()).map_err(|e| e.to_string())
+    };
+    let where_ = |r: Result<(), String>| match r {
+        Ok(()) => format!("the last attempt is kept in {}", rejected.display()),
+        Err(e) => format!("the last attempt could not be kept ({e})"),
+    };
+    match outcome {
+        Outcome::Accepted { text } => {
+            if let Err(e) = rocc::output::write_atomic(out, |w| std::io::Write::write_all(w, text.as_bytes())) {
+                return fail(
+                    Diagnostic::error("E0401", format!("cannot write {}: {e}", out.display())),
+                    &SourceMap::default(),
+                );
+            }
+            let _ = std::fs::remove_file(&rejected);
+            let block = run.descriptor.as_ref().map(|d| d.block()).unwrap_or_default();
+            eprintln!(
+                "wrote {} ({requests} request(s), {} scene repair round(s), {} conflict call(s)): {block}",
+                out.display(),
+                run.attempts.len().saturating_sub(1),
+                run.conflict_replies.len()
+            );
+            ExitCode::SUCCESS
+        }
+        Outcome::SceneRejected { text, diags, sources } => {
+            let r = keep(&text, diags, sources);
+            let d = Diagnostic::error(
+                "E0856",
+                format!(
+                    "the scene extracted from case {} still fails to check after {} repair round(s); nothing written to {}",
+                    case.id,
+                    run.attempts.len().saturating_sub(1),
+                    out.display()
+                ),
+            )
+            .help(format!("{}; raise --max-repairs or use a stronger model", where_(r)));
+            fail(d, &SourceMap::default())
+        }
+        Outcome::ConflictRejected { text, diags, sources } => {
+            let r = keep(&text, diags, sources);
+            let d = Diagnostic::error(
+                "E0857",
+                format!(
+                    "no usable conflict for case {} after {} conflict call(s); nothing written to {}",
+                    case.id,
+                    run.conflict_replies.len(),
+                    out.display()
+                ),
+            )
+            .help(format!("{}; the scene checked, only its conflict is missing", where_(r)));
+            fail(d, &SourceMap::default())
+        }
+        Outcome::Failed(d) => {
+            print_diags(&[d], &SourceMap::default(), human);
+            // A failure mid-way still leaves the last attempt to look at.
+            let last = run.merged.last().or(run.scene.as_ref()).or(run.attempts.last());
+            if let Some(last) = last
+                && rocc::output::write_atomic(&rejected, |w| std::io::Write::write_all(w, last.as_bytes())).is_ok()
+            {
+                eprintln!("the last attempt is kept in {}", rejected.display());
+            }
+            ExitCode::FAILURE
+        }
+    }
+}
+
 fn explain(code: Option<&str>) -> ExitCode {
     match code {
         None => {
@@ -806,16 +1031,8 @@ fn import_boxes(file: &Path, conv: ConventionArg, out: &Path, static_bev: Option
 
 /// `rocc ciren import | import-safe`: every input is imported on its own; a failure is reported
 /// and the batch goes on; the exit status is 1 if any input failed.
-fn ciren(what: CirenCmd) -> ExitCode {
+fn ciren_import(inputs: Vec<Result<PathBuf, Diagnostic>>, out: &Path, safe: bool) -> ExitCode {
     use rocc::ciren;
-    let (inputs, out, safe) = match what {
-        CirenCmd::Import { inputs, out } => {
-            let (cases, errs) = ciren::case_inputs(&inputs);
-            print_diags(&errs, &SourceMap::default(), MessageFormat::Human);
-            (cases.into_iter().map(Ok).chain(errs.into_iter().map(Err)).collect::<Vec<_>>(), out, false)
-        }
-        CirenCmd::ImportSafe { files, out } => (files.into_iter().map(Ok).collect(), out, true),
-    };
     let (mut ok, mut failed) = (0, 0);
     let mut written: Vec<String> = Vec::new();
     for input in inputs {
@@ -843,7 +1060,7 @@ fn ciren(what: CirenCmd) -> ExitCode {
                     failed += 1;
                     continue;
                 }
-                match ciren::write_scenario(&out, &imp) {
+                match ciren::write_scenario(out, &imp) {
                     Ok(p) => {
                         ok += 1;
                         written.push(name);

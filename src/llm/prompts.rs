@@ -13,7 +13,8 @@ const GOALS_AGENT: &str = include_str!("../../prompts/goals_agent.md");
 const REPAIR: &str = include_str!("../../prompts/repair.md");
 const DSL: &str = include_str!("../../prompts/dsl.md");
 
-fn load(raw: &'static str) -> Prompt {
+/// Read a prompt file's text (header line, system part, `## user` part).
+pub fn load(raw: &'static str) -> Prompt {
     let (header, body) = raw.split_once('\n').expect("a prompt file starts with its header line");
     let tag = header.trim().trim_start_matches("<!--").trim_end_matches("-->").trim();
     let mut words = tag.split_whitespace().skip(2);

@@ -1,14 +1,101 @@
-//! Stage 3: check a candidate file (syntax, names, units, placement, rollout), read scenario
-//! text out of a model's reply, and keep the user's overrides in whatever the model wrote.
+//! Check and repair, shared by every route that lets a model write `.scn` text (`rocc text`,
+//! `rocc ciren extract`): check a candidate file (syntax, names, units, placement, rollout),
+//! read scenario text out of a model's reply, keep rocc's own decisions (seed, sliders) in
+//! whatever the model wrote, and loop: diagnostics back to the model, corrected file, check.
 
+use super::Outcome;
+use super::client::{Client, Constraint, Exchange, message};
+use super::prompts;
 use crate::diag::Diagnostic;
 use crate::source::SourceMap;
 use crate::syntax::ast::{Item, ScenarioStmt};
 use std::path::Path;
 
+/// A candidate's verdict: clean, or its diagnostics (spans into the map).
+pub type Verdict = Result<(), (Vec<Diagnostic>, SourceMap)>;
+
+/// The constraint for a reply that must be a whole `.scn` file: the decoding grammar where the
+/// server takes one and constraints are on.
+pub fn scn_constraint(client: &Client, constrain: bool) -> Constraint {
+    if constrain && client.config().server.supports_grammar() {
+        Constraint::Grammar(crate::grammar::print(
+            &crate::grammar::for_decoding(crate::grammar::language()),
+            crate::grammar::Format::Gbnf,
+        ))
+    } else {
+        Constraint::None
+    }
+}
+
+/// A model's reply read as a candidate file: its scenario text with `fix` applied and its
+/// verdict, or the reply itself with E0610 when it holds no scenario.
+pub fn candidate(reply: &str, fix: &dyn Fn(&str) -> String, name: &str, base: &Path) -> (String, Verdict) {
+    match extract_scn(reply) {
+        Some(t) => {
+            let text = fix(&t);
+            let verdict = check(name, &text, base);
+            (text, verdict)
+        }
+        None => {
+            let d = Diagnostic::error("E0610", "the reply holds no `scenario NAME { ... }` block")
+                .help("answer with the whole corrected .scn file and nothing else");
+            (reply.to_string(), Err((vec![d], SourceMap::default())))
+        }
+    }
+}
+
+/// One check-and-repair run: where requests go and what they are logged into.
+pub struct Session<'a> {
+    pub client: &'a Client,
+    pub log: &'a mut Vec<Exchange>,
+    /// Every candidate checked, in order; the caller has pushed the first.
+    pub attempts: &'a mut Vec<String>,
+    pub max_repairs: u32,
+    /// Send the decoding grammar where the server takes one.
+    pub constrain: bool,
+    /// File name diagnostics use; `base` is where `use` imports resolve.
+    pub name: &'a str,
+    pub base: &'a Path,
+    /// What the scene should show (the sentence, or a crash summary): the repair prompt's
+    /// `{{sentence}}`.
+    pub description: &'a str,
+}
+
+impl Session<'_> {
+    /// Starting from a checked candidate, send its diagnostics back for a corrected file until
+    /// one checks or `max_repairs` rounds are spent. `fix` re-imposes rocc's own decisions on
+    /// every corrected file. Client errors end the run (`Err`).
+    pub fn repair(
+        self,
+        mut text: String,
+        mut verdict: Verdict,
+        fix: &dyn Fn(&str) -> String,
+    ) -> Result<Outcome, Diagnostic> {
+        let constraint = scn_constraint(self.client, self.constrain);
+        let mut round = 0;
+        while let Err((diags, sources)) = verdict {
+            if round == self.max_repairs {
+                return Ok(Outcome::Rejected { text, diags, sources });
+            }
+            round += 1;
+            let (system, user) = prompts::repair().render(&[
+                ("dsl", prompts::dsl().text()),
+                ("sentence", self.description),
+                ("file", &text),
+                ("diagnostics", &diagnostics_json(&diags, &sources)),
+            ]);
+            let messages = vec![message("system", &system, &[]), message("user", &user, &[])];
+            let reply = self.client.chat(&format!("repair {round}"), &messages, &constraint, self.log)?;
+            (text, verdict) = candidate(&reply, fix, self.name, self.base);
+            self.attempts.push(text.clone());
+        }
+        Ok(Outcome::Accepted { text: crate::syntax::format_source(&text).unwrap_or(text) })
+    }
+}
+
 /// Everything `rocc check` enforces: parse, check, and the front passes (sample, road, place,
 /// rollout), so placement and rollout errors reach the repair loop too.
-pub fn check(name: &str, text: &str, base: &Path) -> Result<(), (Vec<Diagnostic>, SourceMap)> {
+pub fn check(name: &str, text: &str, base: &Path) -> Verdict {
     let mut sources = SourceMap::default();
     match crate::check::check_text(name, text, base, &mut sources).and_then(|s| crate::compile::front(s, None)) {
         Ok(_) => Ok(()),

