@@ -51,6 +51,27 @@ fn every_shared_ciren_case_imports_as_snapshotted() {
     }
 }
 
+/// The VLM route's worked examples (prompts/ciren/) are this importer's output, so the model is
+/// shown exactly what the deterministic route writes.
+#[test]
+fn the_vlm_worked_examples_are_the_importers_output() {
+    let mut files: Vec<PathBuf> = std::fs::read_dir("prompts/ciren")
+        .expect("prompts/ciren")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "scn"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 2, "worked examples in prompts/ciren/");
+    for f in files {
+        let id = f.file_stem().and_then(|n| n.to_str()).expect("utf-8 name").to_string();
+        let mut sources = SourceMap::default();
+        let imp = ciren::import_case(&Path::new("../shared/ciren").join(&id), &mut sources)
+            .unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+        let shown = std::fs::read_to_string(&f).expect("readable example");
+        assert_eq!(shown, imp.staged.text, "{} differs from `rocc ciren import` output", f.display());
+    }
+}
+
 #[test]
 fn every_shared_safe_extraction_imports_as_snapshotted() {
     let files = dirs("../shared/safe", false);

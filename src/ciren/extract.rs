@@ -520,18 +520,18 @@ mod tests {
         assert_eq!(
             blocks,
             [
-                "conflict { at_fault v2; struck v1; impact angle; point right; at 3 s }",
-                "conflict { at_fault v1; struck obj1; impact object; point front; at 3 s }",
+                "conflict { at_fault v2; struck v1; impact angle; point right; at 4 s }",
+                "conflict { at_fault v1; struck obj1; impact object; point front; at 4 s }",
             ]
         );
         let shown = scene_examples(&ex);
         assert!(!shown.contains("conflict {") && shown.contains("scenario ciren_100237"), "{shown}");
         let shown = conflict_examples(&ex);
         assert!(
-            shown.contains(r#"Answer: {"at":3.0,"at_fault":"v2","impact":"angle","point":"right","struck":"v1"}"#),
+            shown.contains(r#"Answer: {"at":4.0,"at_fault":"v2","impact":"angle","point":"right","struck":"v1"}"#),
             "{shown}"
         );
-        assert!(shown.contains("Agents: v1 (sedan), obj1 (tree, fixed)"), "{shown}");
+        assert!(shown.contains("Agents: obj1 (tree, fixed), v1 (sedan)"), "{shown}");
     }
 
     #[test]
