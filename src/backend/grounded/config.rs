@@ -76,7 +76,7 @@ pub struct LatticeConfig {
 #[serde(deny_unknown_fields)]
 pub struct EncoderConfig {
     /// Sample points along the anchor's length, width and height.
-    pub samples: [usize; 3],
+    pub samples: Vec<usize>,
     pub hidden: usize,
 }
 
@@ -112,7 +112,7 @@ pub struct TrainConfig {
     pub weight_clip: f32,
     pub weight_power: f32,
     /// Per-class multipliers on top (labels 0..=8).
-    pub class_boost: [f32; 9],
+    pub class_boost: Vec<f32>,
     /// Lovász-softmax runs over every voxel whose truth or prediction is an agent class plus
     /// this many uniformly drawn voxels of the crop.
     pub lovasz_samples: usize,
@@ -161,6 +161,11 @@ impl GroundedConfig {
         self.bev.strides.iter().product()
     }
 
+    /// Encoder sample points per latent.
+    pub fn encoder_samples(&self) -> usize {
+        self.encoder.samples.iter().product()
+    }
+
     pub fn bev_features(&self) -> usize {
         self.bev.channels.last().copied().unwrap_or(crate::backend::grounded::BEV_CHANNELS)
     }
@@ -202,8 +207,11 @@ impl GroundedConfig {
         if self.bev.strides.iter().any(|&s| s != 1 && s != 2) || 400 % self.bev_stride().max(1) != 0 {
             bad.push("bev `strides` must be 1 or 2 and divide 400".into());
         }
-        if self.encoder.samples.contains(&0) {
-            bad.push("encoder `samples` must be positive".into());
+        if self.encoder.samples.len() != 3 || self.encoder.samples.contains(&0) {
+            bad.push("encoder `samples` must be three positive counts [length, width, height]".into());
+        }
+        if self.train.class_boost.len() != crate::backend::layout::N_LABELS {
+            bad.push("train `class_boost` must hold 9 multipliers (labels 0..=8)".into());
         }
         if !(self.split_length_m > 0.0) || self.max_split == 0 {
             bad.push("`split_length_m` and `max_split` must be positive".into());

@@ -152,7 +152,7 @@ fn lattice(cfg: &GroundedConfig, masks: &Array3<i8>) -> Vec<Anchor> {
 /// `samples` points spread over the anchor's extents (x 1.25, so the box's surface is inside),
 /// in its own frame, one-hot. Points outside the grid read free.
 pub fn encoder_input(cfg: &GroundedConfig, a: &Anchor, labels: &Array3<u8>, out: &mut Vec<f32>) {
-    let [sx, sy, sz] = cfg.encoder.samples;
+    let (sx, sy, sz) = (cfg.encoder.samples[0], cfg.encoder.samples[1], cfg.encoder.samples[2]);
     let (c, s) = (a.yaw.cos(), a.yaw.sin());
     for u in 0..sx {
         for v in 0..sy {

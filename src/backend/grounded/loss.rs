@@ -100,12 +100,12 @@ pub fn bce_with_logits(logit: Tensor<1>, target: &[bool]) -> Tensor<1> {
 
 /// Class weights from label counts: (max count / count)^power clipped to `clip`, times `boost`;
 /// a class never seen gets `clip`.
-pub fn class_weights(counts: &[u64; N_LABELS], power: f32, clip: f32, boost: &[f32; N_LABELS]) -> [f32; N_LABELS] {
+pub fn class_weights(counts: &[u64; N_LABELS], power: f32, clip: f32, boost: &[f32]) -> [f32; N_LABELS] {
     let max = counts.iter().copied().max().unwrap_or(1).max(1) as f64;
     let mut w = [0f32; N_LABELS];
     for c in 0..N_LABELS {
         let raw = if counts[c] == 0 { clip as f64 } else { (max / counts[c] as f64).powf(power as f64).min(clip as f64) };
-        w[c] = raw as f32 * boost[c];
+        w[c] = raw as f32 * boost.get(c).copied().unwrap_or(1.0);
     }
     w
 }

@@ -215,7 +215,7 @@ pub struct AeOut {
 
 impl Autoencoder {
     pub fn new(cfg: &GroundedConfig, device: &Device) -> Self {
-        let s: usize = cfg.encoder.samples.iter().product::<usize>() * N_LABELS;
+        let s: usize = cfg.encoder_samples() * N_LABELS;
         Autoencoder {
             encoder: LatentEncoder {
                 l1: LinearConfig::new(s + ANCHOR_FEATS, cfg.encoder.hidden).init(device),
@@ -228,7 +228,7 @@ impl Autoencoder {
 
     /// The encoder's input for a batch: per latent the one-hot samples of `labels[b]`.
     pub fn encoder_input(cfg: &GroundedConfig, hb: &HostBatch, labels: &[&Array3<u8>]) -> Vec<f32> {
-        let s = cfg.encoder.samples.iter().product::<usize>() * N_LABELS;
+        let s = cfg.encoder_samples() * N_LABELS;
         let mut out = Vec::with_capacity(hb.b() * hb.q * s);
         for (b, set) in hb.anchors.iter().enumerate() {
             for a in set {
