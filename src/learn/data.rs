@@ -25,8 +25,11 @@ use std::path::{Path, PathBuf};
 /// One training frame on disk.
 #[derive(Clone, Debug)]
 pub struct Sample {
-    /// The clip it belongs to (held-out splits are by clip).
+    /// The clip it belongs to.
     pub clip: String,
+    /// The scene: held-out splits are by scene, so no view of a held-out scene is trained on
+    /// (a scenario's clips for different egos are one scene; a token is its own).
+    pub scene: String,
     pub id: String,
     pub bev: PathBuf,
     pub occ: PathBuf,
@@ -152,6 +155,7 @@ fn scan_clip(root: &Path, clip: &Path) -> Result<Vec<Sample>, String> {
             let boxes = by_frame.get(&s)?.clone();
             Some(Sample {
                 clip: name.clone(),
+                scene: name.split('/').next().unwrap_or(&name).to_string(),
                 bev: clip.join("bev").join(format!("{s}.npz")),
                 occ: clip.join("occ").join(format!("{s}.npy")),
                 id: s,
@@ -179,7 +183,7 @@ fn scan_tokens(dir: &Path) -> Result<Vec<Sample>, String> {
         };
         let bp = dir.join("boxes").join(format!("{t}.json"));
         let boxes = if bp.is_file() { token_boxes(&bp)? } else { Vec::new() };
-        out.push(Sample { clip: t.clone(), bev: dir.join("bev").join(format!("{t}.npz")), occ, id: t, boxes });
+        out.push(Sample { clip: t.clone(), scene: t.clone(), bev: dir.join("bev").join(format!("{t}.npz")), occ, id: t, boxes });
     }
     Ok(out)
 }
@@ -260,13 +264,28 @@ pub fn load(s: &Sample) -> Result<Frame, String> {
         .ok()
         .filter(|m| m.dim() == (N_AUX, GRID, GRID))
         .ok_or_else(|| format!("{}: `{KEY_AUX}` is not ({N_AUX}, {GRID}, {GRID})", s.bev.display()))?;
-    let labels = crate::eval::occ::read_occ(&s.occ).map_err(|e| format!("{}: {e}", s.occ.display()))?;
+    let labels = read_labels(&s.occ)?;
     Ok(Frame {
         masks: masks.as_standard_layout().into_owned(),
         aux: aux.as_standard_layout().into_owned(),
         labels: labels.as_standard_layout().into_owned(),
         boxes: s.boxes.clone(),
     })
+}
+
+/// Occupancy labels: rocc's own uint8 `.npy` directly, anything else through the scorer's reader
+/// (every integer dtype, sparse `.npz`).
+fn read_labels(path: &Path) -> Result<Array3<u8>, String> {
+    use ndarray_npy::ReadNpyExt;
+    if path.extension().and_then(|e| e.to_str()) == Some("npy")
+        && let Ok(f) = File::open(path)
+        && let Ok(a) = Array3::<u8>::read_npy(std::io::BufReader::new(f))
+        && a.dim() == (crate::backend::layout::NX, crate::backend::layout::NY, NZ)
+        && a.iter().all(|&l| (l as usize) < N_LABELS)
+    {
+        return Ok(a);
+    }
+    crate::eval::occ::read_occ(path).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// Label counts per height layer over a set of frames: class weights and the baseline.
@@ -276,10 +295,11 @@ pub fn layer_counts(labels: &Array3<u8>, out: &mut [[u64; N_LABELS]; NZ]) {
     }
 }
 
-/// Split samples into (train, val) by whole clips: a clip is held out when the hash of (seed,
-/// clip name) falls under `fraction`; at least one clip on each side when there are two.
+/// Split samples into (train, val) by whole scenes: a scene is held out when the hash of (seed,
+/// scene name) falls under `fraction`; at least one scene on each side when there are two.
 pub fn split(samples: Vec<Sample>, fraction: f64, seed: u64) -> (Vec<Sample>, Vec<Sample>) {
-    let mut clips: Vec<String> = samples.iter().map(|s| s.clip.clone()).collect();
+    let mut clips: Vec<String> = samples.iter().map(|s| s.scene.clone()).collect();
+    clips.sort();
     clips.dedup();
     let score = |c: &str| crate::sample::Rng::stream(seed, &format!("split:{c}")).unit();
     let mut held: Vec<&String> = clips.iter().filter(|c| score(c) < fraction).collect();
@@ -293,5 +313,5 @@ pub fn split(samples: Vec<Sample>, fraction: f64, seed: u64) -> (Vec<Sample>, Ve
         }
     }
     let held: std::collections::BTreeSet<String> = held.into_iter().cloned().collect();
-    samples.into_iter().partition(|s| !held.contains(&s.clip))
+    samples.into_iter().partition(|s| !held.contains(&s.scene))
 }

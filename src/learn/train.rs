@@ -109,6 +109,7 @@ pub struct StepOut {
 /// The two trainable models behind one loop.
 pub trait Net: Module + ModuleSnapshot + Clone + Sized {
     fn build(cfg: &GroundedConfig, device: &Device) -> Self;
+    fn decoder_mut(&mut self) -> &mut crate::backend::grounded::model::Decoder;
     fn step(&self, cfg: &GroundedConfig, frames: &[Frame], region: Region, rng: &mut Rng) -> StepOut;
     /// Whole-grid labels (a model on a plain device).
     fn predict(&self, cfg: &GroundedConfig, frame: &Frame) -> Array3<u8>;
@@ -121,6 +122,10 @@ fn anchors(cfg: &GroundedConfig, f: &Frame) -> Vec<latents::Anchor> {
 impl Net for Autoencoder {
     fn build(cfg: &GroundedConfig, device: &Device) -> Self {
         Autoencoder::new(cfg, device)
+    }
+
+    fn decoder_mut(&mut self) -> &mut crate::backend::grounded::model::Decoder {
+        &mut self.decoder
     }
 
     fn step(&self, cfg: &GroundedConfig, frames: &[Frame], region: Region, rng: &mut Rng) -> StepOut {
@@ -142,6 +147,10 @@ impl Net for Autoencoder {
 impl Net for Generator {
     fn build(cfg: &GroundedConfig, device: &Device) -> Self {
         Generator::new(cfg, device)
+    }
+
+    fn decoder_mut(&mut self) -> &mut crate::backend::grounded::model::Decoder {
+        &mut self.decoder
     }
 
     fn step(&self, cfg: &GroundedConfig, frames: &[Frame], region: Region, _rng: &mut Rng) -> StepOut {
@@ -225,14 +234,14 @@ fn shuffled(n: usize, seed: u64, epoch: usize) -> Vec<usize> {
     v
 }
 
-/// The batch's crop: around a random box of its first frame half the time, else uniform.
+/// The batch's crop: around a random box of its first frame 80 % of the time, else uniform.
 fn pick_region(cfg: &GroundedConfig, frames: &[Frame], rng: &mut Rng) -> Region {
     let c = cfg.train.crop;
     if c == 0 || c >= NX {
         return Region::full();
     }
     let boxes: Vec<&GBox> = frames.first().map(|f| f.boxes.iter().filter(|b| b.x.abs() < 50.0 && b.y.abs() < 50.0).collect()).unwrap_or_default();
-    let (ci, cj) = if !boxes.is_empty() && rng.unit() < 0.5 {
+    let (ci, cj) = if !boxes.is_empty() && rng.unit() < 0.8 {
         let b = boxes[rng.index(boxes.len())];
         (((b.x + 50.0) / 0.25) as usize, ((b.y + 50.0) / 0.25) as usize)
     } else {
@@ -241,6 +250,14 @@ fn pick_region(cfg: &GroundedConfig, frames: &[Frame], rng: &mut Rng) -> Region 
     let i0 = ci.saturating_sub(c / 2).min(NX - c);
     let j0 = cj.saturating_sub(c / 2).min(NY - c);
     Region { i0, j0, ni: c, nj: c }
+}
+
+/// Distinct scene names of a set.
+pub fn scenes(s: &[Sample]) -> Vec<String> {
+    let mut v: Vec<String> = s.iter().map(|s| s.scene.clone()).collect();
+    v.sort();
+    v.dedup();
+    v
 }
 
 fn io_err(what: &str, path: &Path, e: impl std::fmt::Display) -> Diagnostic {
@@ -296,7 +313,7 @@ pub fn layer_majority(counts: &[[u64; N_LABELS]; NZ]) -> Array3<u8> {
 
 pub fn train(opts: &TrainOptions) -> Result<TrainReport, Diagnostic> {
     match opts.stage {
-        Stage::Autoencoder => run::<Autoencoder>(opts, |m, _| Ok(m)),
+        Stage::Autoencoder => run::<Autoencoder>(opts, |m, _| Ok((m, false))),
         Stage::Generator => run::<Generator>(opts, |mut g, device| {
             let init = opts.init.clone().or_else(|| Some(opts.out.join("autoencoder.bpk")).filter(|p| p.is_file()));
             match init {
@@ -306,16 +323,20 @@ pub fn train(opts: &TrainOptions) -> Result<TrainReport, Diagnostic> {
                     if !opts.quiet {
                         eprintln!("decoder warm-started from {}", p.display());
                     }
+                    return Ok((g, true));
                 }
                 None if !opts.quiet => eprintln!("no autoencoder weights (--init): the decoder starts from scratch"),
                 None => {}
             }
-            Ok(g)
+            Ok((g, false))
         }),
     }
 }
 
-fn run<M: Net>(opts: &TrainOptions, init: impl FnOnce(M, &Device) -> Result<M, Diagnostic>) -> Result<TrainReport, Diagnostic> {
+fn run<M: Net>(
+    opts: &TrainOptions,
+    init: impl FnOnce(M, &Device) -> Result<(M, bool), Diagnostic>,
+) -> Result<TrainReport, Diagnostic> {
     let cfg = &opts.config;
     let tc = &cfg.train;
     let stage_cfg = match opts.stage {
@@ -339,14 +360,11 @@ fn run<M: Net>(opts: &TrainOptions, init: impl FnOnce(M, &Device) -> Result<M, D
     std::fs::create_dir_all(&ck).map_err(|e| io_err("create", &ck, e))?;
     let stage = opts.stage.name();
     say(format!(
-        "{stage}: {} training frame(s) in {} clip(s), {} validation frame(s); config `{}`",
+        "{stage}: {} training frame(s) from {} scene(s), {} validation frame(s) from {} held-out scene(s); config `{}`",
         train.len(),
-        {
-            let mut c: Vec<&str> = train.iter().map(|s| s.clip.as_str()).collect();
-            c.dedup();
-            c.len()
-        },
+        scenes(&train).len(),
         val.len(),
+        scenes(&val).len(),
         cfg.name
     ));
 
@@ -374,7 +392,20 @@ fn run<M: Net>(opts: &TrainOptions, init: impl FnOnce(M, &Device) -> Result<M, D
 
     let device = opts.device.clone().autodiff();
     device.seed(tc.seed);
-    let mut model = init(M::build(cfg, &device), &device)?;
+    let (mut model, warm) = init(M::build(cfg, &device), &device)?;
+    if !warm {
+        // The empty-scene prior starts at the training set's per-layer log frequencies: the
+        // model begins as the baseline and the latents learn what differs from it.
+        let prior: Vec<f32> = layers
+            .iter()
+            .flat_map(|c| {
+                let t = c.iter().sum::<u64>() as f64 + N_LABELS as f64;
+                c.iter().map(move |&n| ((n as f64 + 1.0) / t).ln() as f32).collect::<Vec<_>>()
+            })
+            .collect();
+        model.decoder_mut().layer_bias =
+            burn::module::Param::from_tensor(Tensor::from_data(TensorData::new(prior, [NZ, N_LABELS]), &device));
+    }
     let mut optim = AdamConfig::new().init();
     let state_path = ck.join(format!("{stage}-state.ron"));
     let (model_ck, optim_ck) = (ck.join(format!("{stage}-model.bpk")), ck.join(format!("{stage}-optim.bpk")));
@@ -409,6 +440,7 @@ fn run<M: Net>(opts: &TrainOptions, init: impl FnOnce(M, &Device) -> Result<M, D
     };
 
     let mut reports = Vec::new();
+    let (run_t0, first_step) = (Instant::now(), pos.step);
     let mut history_path = opts.out.join(format!("{stage}-history.json"));
     if opts.resume && history_path.is_file() {
         history_path = opts.out.join(format!("{stage}-history.json"));
@@ -479,10 +511,18 @@ fn run<M: Net>(opts: &TrainOptions, init: impl FnOnce(M, &Device) -> Result<M, D
     pb.finish_and_clear();
     // A time-boxed run that stopped mid-epoch still gets a validation line.
     if reports.last().is_none_or(|r| r.epoch != pos.epoch || pos.batch != 0) && pos.step > 0 {
+        let per_step = run_t0.elapsed().as_secs_f64() / (pos.step - first_step).max(1) as f64;
         let valid = model.valid();
         let scores = if val.is_empty() { None } else { Some(score(&val, tc.val_max_frames, |f| valid.predict(cfg, f))?) };
         if let Some(s) = &scores {
-            say(format!("stopped at step {}: validation fg-mIoU {:.2}  mIoU_US {:.2}  occ-IoU {:.2}", pos.step, s.fg_miou, s.miou_us, s.occ_iou));
+            say(format!(
+                "stopped at step {} ({:.2} s per step): validation fg-mIoU {:.2}  mIoU_US {:.2}  occ-IoU {:.2}",
+                pos.step,
+                per_step,
+                s.fg_miou,
+                s.miou_us,
+                s.occ_iou
+            ));
         }
         reports.push(EpochReport { epoch: pos.epoch + 1, steps: 0, mean_loss: f64::NAN, seconds: 0.0, val: scores });
         save(&model, &optim, pos)?;

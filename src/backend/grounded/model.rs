@@ -28,6 +28,9 @@ pub const BEV_CHANNELS: usize = N_MASKS + N_AUX;
 /// unit vector, height metres.
 const AUX_SCALE: [f32; N_AUX] = [1.0 / 20.0, 1.0 / 20.0, 1.0 / 20.0, 1.0 / 10.0, 1.0, 1.0, 0.5];
 
+/// Initial weight of a latent's own class in its Gaussians' features (see `Decoder::class_feat`).
+pub const CLASS_PRIOR: f32 = 8.0;
+
 /// Shape constants the decoder needs at run time (not parameters).
 #[derive(Clone, Debug)]
 pub struct DecoderShape {
@@ -102,6 +105,9 @@ pub struct Decoder {
     pub head: Linear,
     /// [NZ, 9]: the logits of an empty scene per height layer.
     pub layer_bias: Param<Tensor<2>>,
+    /// [9, 9]: added to the features of every Gaussian of a latent of class (row): a latent
+    /// starts out speaking for its own class (`CLASS_PRIOR` on it, half that against free).
+    pub class_feat: Param<Tensor<2>>,
     #[module(skip)]
     pub shape: DecoderShape,
 }
@@ -118,7 +124,13 @@ impl Decoder {
         for k in 0..NZ {
             bias[k * N_LABELS] = 2.0;
         }
+        let mut cf = vec![0f32; N_LABELS * N_LABELS];
+        for c in 1..N_LABELS {
+            cf[c * N_LABELS + c] = CLASS_PRIOR;
+            cf[c * N_LABELS] = -CLASS_PRIOR / 2.0;
+        }
         Decoder {
+            class_feat: Param::from_tensor(Tensor::from_data(TensorData::new(cf, [N_LABELS, N_LABELS]), device)),
             input: LinearConfig::new(cfg.latent_dim + ANCHOR_FEATS, d.width).init(device),
             transformer: TransformerEncoderConfig::new(d.width, d.ff, d.heads, d.blocks)
                 .with_dropout(0.0)
@@ -143,12 +155,13 @@ impl Decoder {
 
     /// Active Gaussians of the batch that can reach `region`: row indices into `raw` and their
     /// anchors.
-    pub fn active(&self, hb: &HostBatch, region: Region) -> (Vec<i64>, ActiveAnchors) {
+    pub fn active(&self, hb: &HostBatch, region: Region) -> (Vec<i64>, ActiveAnchors, Vec<i64>) {
         let g = self.shape.gaussians;
         let reach = self.shape.offset_bound + 3.0 * self.shape.window as f32 + 2.0;
         let (lo_i, hi_i) = (region.i0 as f32 - reach, (region.i0 + region.ni) as f32 + reach);
         let (lo_j, hi_j) = (region.j0 as f32 - reach, (region.j0 + region.nj) as f32 + reach);
         let mut rows = Vec::new();
+        let mut labels = Vec::new();
         let mut aa = ActiveAnchors::default();
         for (b, set) in hb.anchors.iter().enumerate() {
             for (q, a) in set.iter().enumerate() {
@@ -160,6 +173,7 @@ impl Decoder {
                 let (c, s) = (a.yaw.cos() as f32, a.yaw.sin() as f32);
                 for k in 0..n {
                     rows.push(((b * hb.q + q) * g + k) as i64);
+                    labels.push((a.label as usize).min(N_LABELS - 1) as i64);
                     aa.pos.push(v);
                     aa.cos.push(c);
                     aa.sin.push(s);
@@ -167,20 +181,22 @@ impl Decoder {
                 }
             }
         }
-        (rows, aa)
+        (rows, aa, labels)
     }
 
     /// Latents -> logits of `region` [b * voxels, 9]: splatted Gaussians plus the layer bias.
     pub fn forward(&self, latents: Tensor<3>, hb: &HostBatch, region: Region) -> Tensor<2> {
         let device = latents.device();
         let raw = self.raw(latents, hb);
-        let (rows, aa) = self.active(hb, region);
+        let (rows, aa, labels) = self.active(hb, region);
         let b = hb.b();
         let splatted = if rows.is_empty() {
             Tensor::zeros([b * region.voxels(), N_LABELS], &device)
         } else {
             let n = rows.len();
             let sel = raw.select(0, Tensor::<1, Int>::from_data(TensorData::new(rows, [n]), &device));
+            let prior = self.class_feat.val().select(0, Tensor::<1, Int>::from_data(TensorData::new(labels, [n]), &device));
+            let sel = sel + Tensor::cat(vec![Tensor::zeros([n, PARAMS - N_LABELS], &device), prior], 1);
             let g = activate(sel, &aa, self.shape.offset_bound, self.shape.min_scale, self.shape.max_scale);
             splat(&g, region, b, self.shape.window)
         };
