@@ -405,12 +405,23 @@ fn main() -> ExitCode {
                     return ExitCode::FAILURE;
                 }
             };
-            let opts =
-                Options { stage, frames, egos: ego, seed, mode, rig, previews: !no_previews, force, static_bev, backend };
+            let opts = Options {
+                stage,
+                frames,
+                egos: ego,
+                seed,
+                mode,
+                rig,
+                previews: !no_previews,
+                force,
+                static_bev,
+                backend,
+            };
             compile(&inputs, &out, shard.as_deref(), &opts, quiet)
         }
         Cmd::Train { what, data, config, out, val, resume, init, device, epochs, max_steps, safetensors, quiet } => {
-            let r = train_cmd(what, data, &config, out, val, resume, init, device, epochs, max_steps, safetensors, quiet);
+            let r =
+                train_cmd(what, data, &config, out, val, resume, init, device, epochs, max_steps, safetensors, quiet);
             match r {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(d) => {
@@ -631,11 +642,10 @@ fn occ_backend(
     use rocc::compile::OccBackend;
     match (backend, weights) {
         (BackendArg::Procedural, None) if config.is_none() => Ok(OccBackend::Procedural),
-        (BackendArg::Procedural, _) => Err(Diagnostic::error(
-            "E0908",
-            "`--weights` and `--grounded-config` apply to `--backend grounded` only",
-        )
-        .help("add `--backend grounded`, or drop the weights options for the procedural backend")),
+        (BackendArg::Procedural, _) => {
+            Err(Diagnostic::error("E0908", "`--weights` and `--grounded-config` apply to `--backend grounded` only")
+                .help("add `--backend grounded`, or drop the weights options for the procedural backend"))
+        }
         (BackendArg::Grounded, None) => Err(Diagnostic::error("E0901", "`--backend grounded` needs `--weights FILE`")
             .help("train weights with `rocc train generator ...` (README: \"Training the grounded backend\")")),
         (BackendArg::Grounded, Some(w)) => {
@@ -702,11 +712,16 @@ fn train_cmd(
         use rocc::backend::grounded::{Autoencoder, Generator, cpu, load_weights, save_safetensors};
         let st = report.weights.with_extension("safetensors");
         let res = match stage {
-            Stage::Autoencoder => save_safetensors(&load_weights(Autoencoder::new(&opts.config, &cpu()), &report.weights)?, &st),
-            Stage::Generator => save_safetensors(&load_weights(Generator::new(&opts.config, &cpu()), &report.weights)?, &st),
+            Stage::Autoencoder => {
+                save_safetensors(&load_weights(Autoencoder::new(&opts.config, &cpu()), &report.weights)?, &st)
+            }
+            Stage::Generator => {
+                save_safetensors(&load_weights(Generator::new(&opts.config, &cpu()), &report.weights)?, &st)
+            }
         };
         res.map_err(|e| {
-            Diagnostic::error("E0906", format!("cannot write `{}`: {e}", st.display())).help("check the output directory")
+            Diagnostic::error("E0906", format!("cannot write `{}`: {e}", st.display()))
+                .help("check the output directory")
         })?;
         if !quiet {
             eprintln!("wrote {}", st.display());

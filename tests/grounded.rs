@@ -3,6 +3,7 @@
 //! checkpoint round trips (.bpk, safetensors) and the weights diagnostics.
 
 use burn::prelude::*;
+use ndarray::Array3;
 use rocc::backend::grounded::config::GroundedConfig;
 use rocc::backend::grounded::latents::{self, Anchor, GBox};
 use rocc::backend::grounded::loss::{class_weights, lovasz_grad, lovasz_softmax, weighted_cross_entropy};
@@ -12,7 +13,6 @@ use rocc::backend::grounded::{Grounded, cpu, load_weights, save_safetensors};
 use rocc::backend::layout::{BACKGROUND, N_LABELS, NX, NY, NZ, PEDESTRIAN, VEHICLE};
 use rocc::raster::layout::{CH_DRIVABLE, GRID, N_AUX, N_MASKS};
 use rocc::sample::Rng;
-use ndarray::Array3;
 
 /// A model small enough for unit tests.
 pub fn tiny() -> GroundedConfig {
@@ -105,7 +105,9 @@ fn dense_ref(gs: &[RefGauss], region: Region, batch: usize, window: Option<i64>)
                     for g in gs.iter().filter(|g| g.batch == b) {
                         let c = g.mean.map(|m| m.floor() as i64);
                         if let Some(r) = window
-                            && ((i as i64 - c[0]).abs() > r || (j as i64 - c[1]).abs() > r || (k as i64 - c[2]).abs() > r)
+                            && ((i as i64 - c[0]).abs() > r
+                                || (j as i64 - c[1]).abs() > r
+                                || (k as i64 - c[2]).abs() > r)
                         {
                             continue;
                         }
@@ -228,7 +230,10 @@ fn splat_gradients_match_finite_differences() {
             let fd = (f(&hi) - f(&lo)) / (2.0 * eps);
             let ad = got[i] as f64;
             let what = names.get(c).copied().unwrap_or("feature");
-            assert!((fd - ad).abs() <= 2e-3 * fd.abs().max(1.0), "d loss / d {what}[{row}][{c}]: autodiff {ad}, finite difference {fd}");
+            assert!(
+                (fd - ad).abs() <= 2e-3 * fd.abs().max(1.0),
+                "d loss / d {what}[{row}][{c}]: autodiff {ad}, finite difference {fd}"
+            );
             checked += (fd.abs() > 1e-3) as usize;
         }
     }
@@ -254,7 +259,8 @@ fn lovasz_softmax_matches_a_hand_computed_case() {
     assert!((got - want).abs() < 1e-6, "lovasz {got}, by hand {want}");
     assert_eq!(lovasz_grad(&[false, true, false, true]), vec![1.0 / 3.0, 1.0 / 3.0, 1.0 / 12.0, 0.25]);
     // On hard 0/1 predictions the Lovász extension is exactly 1 - IoU, averaged over present classes.
-    let hard: Vec<f32> = [0usize, 1, 1, 1].iter().flat_map(|&c| (0..N_LABELS).map(move |k| (k == c) as u8 as f32)).collect();
+    let hard: Vec<f32> =
+        [0usize, 1, 1, 1].iter().flat_map(|&c| (0..N_LABELS).map(move |k| (k == c) as u8 as f32)).collect();
     let got = lovasz_softmax(Tensor::<2>::from_data(TensorData::new(hard, [4, N_LABELS]), &device), &target);
     // class 0: IoU 1/2; class 1: IoU 2/3.
     assert!((got.into_scalar::<f32>() as f64 - ((1.0 - 0.5) + (1.0 - 2.0 / 3.0)) / 2.0).abs() < 1e-6);
@@ -295,7 +301,11 @@ fn car(x: f64, y: f64, l: f64) -> GBox {
 fn latent_set_shapes() {
     let cfg = tiny();
     let (masks, _) = bev_with_road();
-    let boxes = [car(5.0, 0.0, 3.9), car(-20.0, 2.0, 12.0), GBox { label: PEDESTRIAN, x: 3.0, y: 8.0, z: 0.9, l: 0.6, w: 0.6, h: 1.8, yaw: 0.0 }];
+    let boxes = [
+        car(5.0, 0.0, 3.9),
+        car(-20.0, 2.0, 12.0),
+        GBox { label: PEDESTRIAN, x: 3.0, y: 8.0, z: 0.9, l: 0.6, w: 0.6, h: 1.8, yaw: 0.0 },
+    ];
     let set = latents::build(&cfg, &boxes, &masks);
     let fg: Vec<&Anchor> = set.iter().filter(|a| a.foreground).collect();
     // Longer than `split_length_m` (4 m) splits: the 12 m bus into 3 pieces of 4 m along its
@@ -362,12 +372,8 @@ fn model_shapes_and_padding_invariance() {
     assert!(pred.iter().all(|&l| (l as usize) < N_LABELS));
 }
 
+/// A probe of a model's parameters: the logits of a small scene depend on every one of them.
 fn params(g: &Generator) -> Vec<f32> {
-    // A fixed probe: the whole-region logits of a small scene are a function of every parameter
-    // that the forward pass uses; the raw tensors of the record cover the rest.
-    let rec = g.clone().into_record();
-    let bytes = rec.into_bytes().unwrap();
-    let _ = bytes;
     let (masks, aux) = bev_with_road();
     let cfg = tiny();
     let hb = HostBatch::new(vec![latents::build(&cfg, &[car(5.0, 0.0, 4.5)], &masks)]);

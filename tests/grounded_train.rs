@@ -55,10 +55,18 @@ fn a_small_model_trained_on_the_cpu_beats_the_layer_majority_baseline() {
     assert_eq!(report.steps, 30);
     let base = report.baseline.clone().expect("a validation set was given");
     let got = report.epochs.last().and_then(|e| e.val.clone()).expect("validation after the run");
-    let iou = |s: &rocc::eval::occ::OccScores, name: &str| s.classes.iter().find(|c| c.name == name).map(|c| c.iou).unwrap();
+    let iou =
+        |s: &rocc::eval::occ::OccScores, name: &str| s.classes.iter().find(|c| c.name == name).map(|c| c.iou).unwrap();
     let line = format!(
         "baseline fg-mIoU {:.2} mIoU_US {:.2} occ-IoU {:.2} vehicle {:.2}; model fg-mIoU {:.2} mIoU_US {:.2} occ-IoU {:.2} vehicle {:.2}",
-        base.fg_miou, base.miou_us, base.occ_iou, iou(&base, "vehicle"), got.fg_miou, got.miou_us, got.occ_iou, iou(&got, "vehicle")
+        base.fg_miou,
+        base.miou_us,
+        base.occ_iou,
+        iou(&base, "vehicle"),
+        got.fg_miou,
+        got.miou_us,
+        got.occ_iou,
+        iou(&got, "vehicle")
     );
     eprintln!("{line}");
     // The baseline never predicts an agent, so its vehicle IoU is 0; the model must find the

@@ -290,7 +290,9 @@ fn bench_grounded() {
     let gboxes: Vec<GBox> = boxes.iter().map(GBox::from_ego).collect();
     for name in ["cpu-small", "paper"] {
         let path = root().join(format!("configs/{name}.ron"));
-        let Ok(cfg) = std::fs::read_to_string(&path).map_err(|e| e.to_string()).and_then(|t| GroundedConfig::from_ron(&t)) else {
+        let Ok(cfg) =
+            std::fs::read_to_string(&path).map_err(|e| e.to_string()).and_then(|t| GroundedConfig::from_ron(&t))
+        else {
             println!("  {name}: cannot read {}", path.display());
             continue;
         };

@@ -128,7 +128,8 @@ fn scan_clip(root: &Path, clip: &Path) -> Result<Vec<Sample>, String> {
         };
         let mut boxes = Vec::new();
         for b in f.get("boxes").and_then(|b| b.as_array()).map(Vec::as_slice).unwrap_or(&[]) {
-            let cls = b.get("class_name").or_else(|| b.get("kind")).and_then(|c| c.as_str()).unwrap_or("generic_object");
+            let cls =
+                b.get("class_name").or_else(|| b.get("kind")).and_then(|c| c.as_str()).unwrap_or("generic_object");
             let g = (|| {
                 Some(GBox {
                     label: label_of(cls),
@@ -183,7 +184,14 @@ fn scan_tokens(dir: &Path) -> Result<Vec<Sample>, String> {
         };
         let bp = dir.join("boxes").join(format!("{t}.json"));
         let boxes = if bp.is_file() { token_boxes(&bp)? } else { Vec::new() };
-        out.push(Sample { clip: t.clone(), scene: t.clone(), bev: dir.join("bev").join(format!("{t}.npz")), occ, id: t, boxes });
+        out.push(Sample {
+            clip: t.clone(),
+            scene: t.clone(),
+            bev: dir.join("bev").join(format!("{t}.npz")),
+            occ,
+            id: t,
+            boxes,
+        });
     }
     Ok(out)
 }
@@ -191,8 +199,14 @@ fn scan_tokens(dir: &Path) -> Result<Vec<Sample>, String> {
 fn token_boxes(path: &Path) -> Result<Vec<GBox>, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
-    let boxes = v.get("gt_boxes").and_then(|b| b.as_array()).ok_or_else(|| format!("{}: no `gt_boxes` array", path.display()))?;
-    let names = v.get("gt_names").and_then(|b| b.as_array()).ok_or_else(|| format!("{}: no `gt_names` array", path.display()))?;
+    let boxes = v
+        .get("gt_boxes")
+        .and_then(|b| b.as_array())
+        .ok_or_else(|| format!("{}: no `gt_boxes` array", path.display()))?;
+    let names = v
+        .get("gt_names")
+        .and_then(|b| b.as_array())
+        .ok_or_else(|| format!("{}: no `gt_names` array", path.display()))?;
     if boxes.len() != names.len() {
         return Err(format!("{}: {} boxes but {} names", path.display(), boxes.len(), names.len()));
     }
@@ -219,33 +233,26 @@ fn token_boxes(path: &Path) -> Result<Vec<GBox>, String> {
         .collect()
 }
 
-/// Read one npz member as the given element type, trying the dtypes datasets use.
-fn member<T: Copy + Default>(npz: &mut NpzReader<File>, name: &str, casts: &dyn Fn(&mut NpzReader<File>, &str) -> Option<ndarray::ArrayD<T>>) -> Option<ndarray::ArrayD<T>> {
-    casts(npz, name)
-}
-
+/// `gt_bev_masks` as int8 0/1, whether stored as int8, uint8 or bool.
 fn read_masks(npz: &mut NpzReader<File>) -> Option<ndarray::ArrayD<i8>> {
-    member(npz, KEY_MASKS, &|z, n| {
-        if let Ok(a) = z.by_name::<ndarray::OwnedRepr<i8>, IxDyn>(n) {
-            return Some(a);
-        }
-        if let Ok(a) = z.by_name::<ndarray::OwnedRepr<u8>, IxDyn>(n) {
-            return Some(a.mapv(|v| (v != 0) as i8));
-        }
-        z.by_name::<ndarray::OwnedRepr<bool>, IxDyn>(n).ok().map(|a| a.mapv(|v| v as i8))
-    })
+    if let Ok(a) = npz.by_name::<ndarray::OwnedRepr<i8>, IxDyn>(KEY_MASKS) {
+        return Some(a);
+    }
+    if let Ok(a) = npz.by_name::<ndarray::OwnedRepr<u8>, IxDyn>(KEY_MASKS) {
+        return Some(a.mapv(|v| (v != 0) as i8));
+    }
+    npz.by_name::<ndarray::OwnedRepr<bool>, IxDyn>(KEY_MASKS).ok().map(|a| a.mapv(|v| v as i8))
 }
 
+/// `gt_aux_bev` as int32, whether stored as int32, int64 or float32.
 fn read_aux(npz: &mut NpzReader<File>) -> Option<ndarray::ArrayD<i32>> {
-    member(npz, KEY_AUX, &|z, n| {
-        if let Ok(a) = z.by_name::<ndarray::OwnedRepr<i32>, IxDyn>(n) {
-            return Some(a);
-        }
-        if let Ok(a) = z.by_name::<ndarray::OwnedRepr<i64>, IxDyn>(n) {
-            return Some(a.mapv(|v| v as i32));
-        }
-        z.by_name::<ndarray::OwnedRepr<f32>, IxDyn>(n).ok().map(|a| a.mapv(|v| v as i32))
-    })
+    if let Ok(a) = npz.by_name::<ndarray::OwnedRepr<i32>, IxDyn>(KEY_AUX) {
+        return Some(a);
+    }
+    if let Ok(a) = npz.by_name::<ndarray::OwnedRepr<i64>, IxDyn>(KEY_AUX) {
+        return Some(a.mapv(|v| v as i32));
+    }
+    npz.by_name::<ndarray::OwnedRepr<f32>, IxDyn>(KEY_AUX).ok().map(|a| a.mapv(|v| v as i32))
 }
 
 /// Load one sample. Errors name the file.

@@ -13,7 +13,9 @@
 use super::data::{self, Frame, Sample};
 use crate::backend::grounded::config::{GroundedConfig, StageConfig};
 use crate::backend::grounded::latents::{self, GBox};
-use crate::backend::grounded::loss::{bce_with_logits, class_weights, kl_divergence, lovasz_softmax, weighted_cross_entropy};
+use crate::backend::grounded::loss::{
+    bce_with_logits, class_weights, kl_divergence, lovasz_softmax, weighted_cross_entropy,
+};
 use crate::backend::grounded::model::{Autoencoder, Generator, HostBatch, bev_input};
 use crate::backend::grounded::splat::Region;
 use crate::backend::grounded::{BEV_CHANNELS, load_weights, logits_to_labels};
@@ -185,7 +187,13 @@ fn region_labels(frames: &[Frame], region: Region) -> Vec<u8> {
 }
 
 /// The step's loss and its parts (ce, lovasz, kl, background aux) for the progress line.
-pub fn step_loss(cfg: &GroundedConfig, out: StepOut, target: &[u8], weights: &[f32; N_LABELS], rng: &mut Rng) -> (Tensor<1>, [f64; 4]) {
+pub fn step_loss(
+    cfg: &GroundedConfig,
+    out: StepOut,
+    target: &[u8],
+    weights: &[f32; N_LABELS],
+    rng: &mut Rng,
+) -> (Tensor<1>, [f64; 4]) {
     let t = &cfg.train;
     let device = out.logits.device();
     let ce = weighted_cross_entropy(out.logits.clone(), target, weights);
@@ -197,7 +205,10 @@ pub fn step_loss(cfg: &GroundedConfig, out: StepOut, target: &[u8], weights: &[f
     idx.sort_unstable();
     idx.dedup();
     let sel_t: Vec<u8> = idx.iter().map(|&v| target[v]).collect();
-    let sel = Tensor::<1, Int>::from_data(TensorData::new(idx.iter().map(|&v| v as i64).collect::<Vec<_>>(), [idx.len()]), &device);
+    let sel = Tensor::<1, Int>::from_data(
+        TensorData::new(idx.iter().map(|&v| v as i64).collect::<Vec<_>>(), [idx.len()]),
+        &device,
+    );
     let lov = lovasz_softmax(softmax(out.logits.select(0, sel.clone()), 1), &sel_t);
     let mut total = ce.clone() * t.ce_weight + lov.clone() * t.lovasz_weight;
     let mut parts = [scalar(&ce), scalar(&lov), 0.0, 0.0];
@@ -240,7 +251,10 @@ fn pick_region(cfg: &GroundedConfig, frames: &[Frame], rng: &mut Rng) -> Region 
     if c == 0 || c >= NX {
         return Region::full();
     }
-    let boxes: Vec<&GBox> = frames.first().map(|f| f.boxes.iter().filter(|b| b.x.abs() < 50.0 && b.y.abs() < 50.0).collect()).unwrap_or_default();
+    let boxes: Vec<&GBox> = frames
+        .first()
+        .map(|f| f.boxes.iter().filter(|b| b.x.abs() < 50.0 && b.y.abs() < 50.0).collect())
+        .unwrap_or_default();
     let (ci, cj) = if !boxes.is_empty() && rng.unit() < 0.8 {
         let b = boxes[rng.index(boxes.len())];
         (((b.x + 50.0) / 0.25) as usize, ((b.y + 50.0) / 0.25) as usize)
@@ -284,7 +298,11 @@ fn write_text(path: &Path, text: &str) -> Result<(), Diagnostic> {
 }
 
 /// Score `predict` over `frames` (at most `max`; 0 = all) with the shared scorer.
-pub fn score(frames: &[Sample], max: usize, mut predict: impl FnMut(&Frame) -> Array3<u8>) -> Result<OccScores, Diagnostic> {
+pub fn score(
+    frames: &[Sample],
+    max: usize,
+    mut predict: impl FnMut(&Frame) -> Array3<u8>,
+) -> Result<OccScores, Diagnostic> {
     let mut sc = OccScorer::new();
     let take = if max == 0 { frames.len() } else { max.min(frames.len()) };
     for s in evenly(frames, take) {
@@ -488,7 +506,8 @@ fn run<M: Net>(
         }
         pos = Position { epoch: epoch + 1, batch: 0, step: pos.step };
         let valid = model.valid();
-        let scores = if val.is_empty() { None } else { Some(score(&val, tc.val_max_frames, |f| valid.predict(cfg, f))?) };
+        let scores =
+            if val.is_empty() { None } else { Some(score(&val, tc.val_max_frames, |f| valid.predict(cfg, f))?) };
         let rep = EpochReport {
             epoch: epoch + 1,
             steps,
@@ -513,15 +532,12 @@ fn run<M: Net>(
     if reports.last().is_none_or(|r| r.epoch != pos.epoch || pos.batch != 0) && pos.step > 0 {
         let per_step = run_t0.elapsed().as_secs_f64() / (pos.step - first_step).max(1) as f64;
         let valid = model.valid();
-        let scores = if val.is_empty() { None } else { Some(score(&val, tc.val_max_frames, |f| valid.predict(cfg, f))?) };
+        let scores =
+            if val.is_empty() { None } else { Some(score(&val, tc.val_max_frames, |f| valid.predict(cfg, f))?) };
         if let Some(s) = &scores {
             say(format!(
                 "stopped at step {} ({:.2} s per step): validation fg-mIoU {:.2}  mIoU_US {:.2}  occ-IoU {:.2}",
-                pos.step,
-                per_step,
-                s.fg_miou,
-                s.miou_us,
-                s.occ_iou
+                pos.step, per_step, s.fg_miou, s.miou_us, s.occ_iou
             ));
         }
         reports.push(EpochReport { epoch: pos.epoch + 1, steps: 0, mean_loss: f64::NAN, seconds: 0.0, val: scores });

@@ -179,7 +179,7 @@ impl GroundedConfig {
             bad.push(format!("`max_foreground` {} exceeds `latents` {}", self.max_foreground, self.latents));
         }
         let d = &self.decoder;
-        if d.width == 0 || d.heads == 0 || d.width % d.heads != 0 {
+        if d.width == 0 || d.heads == 0 || !d.width.is_multiple_of(d.heads) {
             bad.push(format!("decoder `width` {} must be a positive multiple of `heads` {}", d.width, d.heads));
         }
         if self.max_gaussians() == 0 {
@@ -192,10 +192,10 @@ impl GroundedConfig {
         if !(g.min_scale > 0.0 && g.min_scale < self.max_scale()) {
             bad.push(format!("`min_scale` {} must lie in (0, window / 3 = {})", g.min_scale, self.max_scale()));
         }
-        if !(g.offset_bound > 0.0) {
+        if g.offset_bound.is_nan() || g.offset_bound <= 0.0 {
             bad.push("`offset_bound` must be positive".into());
         }
-        if !(self.lattice.spacing_m >= 0.5) || self.lattice.z_m.is_empty() {
+        if self.lattice.spacing_m.is_nan() || self.lattice.spacing_m < 0.5 || self.lattice.z_m.is_empty() {
             bad.push("lattice `spacing_m` must be >= 0.5 m and `z_m` non-empty".into());
         }
         if self.lattice.footprint_channels.iter().any(|&c| c >= crate::raster::layout::N_MASKS) {
@@ -213,7 +213,7 @@ impl GroundedConfig {
         if self.train.class_boost.len() != crate::backend::layout::N_LABELS {
             bad.push("train `class_boost` must hold 9 multipliers (labels 0..=8)".into());
         }
-        if !(self.split_length_m > 0.0) || self.max_split == 0 {
+        if self.split_length_m.is_nan() || self.split_length_m <= 0.0 || self.max_split == 0 {
             bad.push("`split_length_m` and `max_split` must be positive".into());
         }
         let t = &self.train;

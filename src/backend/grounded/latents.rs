@@ -4,7 +4,10 @@
 //! every latent carries into the decoder. No tensors here.
 
 use super::config::GroundedConfig;
-use crate::backend::layout::{BACKGROUND, BARRIER, BICYCLE, CZONE_SIGN, GENERIC_OBJECT, N_LABELS, ORIGIN, PEDESTRIAN, TRAFFIC_CONE, VEHICLE, VOXEL};
+use crate::backend::layout::{
+    BACKGROUND, BARRIER, BICYCLE, CZONE_SIGN, GENERIC_OBJECT, N_LABELS, ORIGIN, PEDESTRIAN, TRAFFIC_CONE, VEHICLE,
+    VOXEL,
+};
 use crate::raster::layout::{GRID, RES};
 use ndarray::Array3;
 

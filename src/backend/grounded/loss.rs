@@ -63,10 +63,16 @@ pub fn lovasz_softmax(probs: Tensor<2>, target: &[u8]) -> Tensor<1> {
         order.sort_by(|&a, &b| err(b).total_cmp(&err(a)).then(a.cmp(&b)));
         let gt_sorted: Vec<bool> = order.iter().map(|&v| fg[v]).collect();
         let grad = lovasz_grad(&gt_sorted);
-        let fg_t = Tensor::<1>::from_data(TensorData::new(fg.iter().map(|&b| b as u8 as f32).collect::<Vec<_>>(), [n]), &device);
+        let fg_t = Tensor::<1>::from_data(
+            TensorData::new(fg.iter().map(|&b| b as u8 as f32).collect::<Vec<_>>(), [n]),
+            &device,
+        );
         let pc = probs.clone().slice([0..n, c..c + 1]).reshape([n]);
         let e = (fg_t - pc).abs();
-        let perm = Tensor::<1, Int>::from_data(TensorData::new(order.iter().map(|&v| v as i64).collect::<Vec<_>>(), [n]), &device);
+        let perm = Tensor::<1, Int>::from_data(
+            TensorData::new(order.iter().map(|&v| v as i64).collect::<Vec<_>>(), [n]),
+            &device,
+        );
         let g = Tensor::<1>::from_data(TensorData::new(grad, [n]), &device);
         losses.push((e.select(0, perm) * g).sum());
     }
@@ -104,7 +110,8 @@ pub fn class_weights(counts: &[u64; N_LABELS], power: f32, clip: f32, boost: &[f
     let max = counts.iter().copied().max().unwrap_or(1).max(1) as f64;
     let mut w = [0f32; N_LABELS];
     for c in 0..N_LABELS {
-        let raw = if counts[c] == 0 { clip as f64 } else { (max / counts[c] as f64).powf(power as f64).min(clip as f64) };
+        let raw =
+            if counts[c] == 0 { clip as f64 } else { (max / counts[c] as f64).powf(power as f64).min(clip as f64) };
         w[c] = raw as f32 * boost.get(c).copied().unwrap_or(1.0);
     }
     w

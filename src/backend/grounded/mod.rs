@@ -175,9 +175,8 @@ pub fn logits_to_labels(logits: Tensor<2>) -> Array3<u8> {
 }
 
 fn missing_weights(path: &Path) -> Diagnostic {
-    Diagnostic::error("E0901", format!("weights file `{}` does not exist", path.display())).help(
-        "train one with `rocc train generator --data DIR --config FILE --out DIR` (it writes DIR/generator.bpk)",
-    )
+    Diagnostic::error("E0901", format!("weights file `{}` does not exist", path.display()))
+        .help("train one with `rocc train generator --data DIR --config FILE --out DIR` (it writes DIR/generator.bpk)")
 }
 
 impl OccupancyBackend for Grounded {

@@ -195,7 +195,8 @@ impl Decoder {
         } else {
             let n = rows.len();
             let sel = raw.select(0, Tensor::<1, Int>::from_data(TensorData::new(rows, [n]), &device));
-            let prior = self.class_feat.val().select(0, Tensor::<1, Int>::from_data(TensorData::new(labels, [n]), &device));
+            let prior =
+                self.class_feat.val().select(0, Tensor::<1, Int>::from_data(TensorData::new(labels, [n]), &device));
             let sel = sel + Tensor::cat(vec![Tensor::zeros([n, PARAMS - N_LABELS], &device), prior], 1);
             let g = activate(sel, &aa, self.shape.offset_bound, self.shape.min_scale, self.shape.max_scale);
             splat(&g, region, b, self.shape.window)
@@ -274,7 +275,8 @@ impl Autoencoder {
         };
         let logits = self.decoder.forward(z, hb, region);
         // The KL term covers real latents only.
-        let real: Vec<i64> = (0..b * q).filter(|&i| !hb.pad[i] && i % q < hb.anchors[i / q].len()).map(|i| i as i64).collect();
+        let real: Vec<i64> =
+            (0..b * q).filter(|&i| !hb.pad[i] && i % q < hb.anchors[i / q].len()).map(|i| i as i64).collect();
         let n = real.len();
         let idx = Tensor::<1, Int>::from_data(TensorData::new(real, [n]), &device);
         let mu = mu.reshape([b * q, c]).select(0, idx.clone());
@@ -344,7 +346,9 @@ impl Generator {
         let f = cfg.bev_features();
         let (bg_hidden, bg_out) = if cfg.bev.background_head {
             (
-                Some(Conv2dConfig::new([f, f], [3, 3]).with_padding(PaddingConfig2d::Explicit(1, 1, 1, 1)).init(device)),
+                Some(
+                    Conv2dConfig::new([f, f], [3, 3]).with_padding(PaddingConfig2d::Explicit(1, 1, 1, 1)).init(device),
+                ),
                 Some(Conv2dConfig::new([f, NZ], [1, 1]).with_initializer(Initializer::Zeros).init(device)),
             )
         } else {

@@ -86,7 +86,13 @@ fn column(v: Vec<f32>, device: &Device) -> Tensor<2> {
 /// Raw parameters [N, PARAMS] -> Gaussians: offsets tanh-bounded to `offset_bound` voxels in the
 /// anchor's frame (rotated by its heading), scales in [min_scale, max_scale], a normalised
 /// quaternion composed with the anchor's heading, sigmoid opacity, features as they are.
-pub fn activate(raw: Tensor<2>, anchors: &ActiveAnchors, offset_bound: f32, min_scale: f32, max_scale: f32) -> Gaussians {
+pub fn activate(
+    raw: Tensor<2>,
+    anchors: &ActiveAnchors,
+    offset_bound: f32,
+    min_scale: f32,
+    max_scale: f32,
+) -> Gaussians {
     let device = raw.device();
     let n = raw.dims()[0];
     let sl = |a: usize, b: usize| raw.clone().slice([0..n, a..b]);
@@ -121,16 +127,12 @@ pub fn activate(raw: Tensor<2>, anchors: &ActiveAnchors, offset_bound: f32, min_
             -two(x.clone() * x + y.clone() * y) + 1.0,
         ],
     ];
-    let mut rot = Vec::with_capacity(9);
-    for j in 0..3 {
-        rot.push(c.clone() * rq[0][j].clone() - s.clone() * rq[1][j].clone());
-    }
-    for j in 0..3 {
-        rot.push(s.clone() * rq[0][j].clone() + c.clone() * rq[1][j].clone());
-    }
-    for j in 0..3 {
-        rot.push(rq[2][j].clone());
-    }
+    // R = Rz(anchor heading) * R(q): rows 0 and 1 rotate about z, row 2 is R(q)'s.
+    let [r0, r1, r2] = rq;
+    let mut rot: Vec<Tensor<2>> = Vec::with_capacity(9);
+    rot.extend(r0.iter().zip(&r1).map(|(a, b)| c.clone() * a.clone() - s.clone() * b.clone()));
+    rot.extend(r0.iter().zip(&r1).map(|(a, b)| s.clone() * a.clone() + c.clone() * b.clone()));
+    rot.extend(r2);
     let rot = Tensor::cat(rot, 1);
     let opacity = burn::tensor::activation::sigmoid(sl(10, 11));
     let feat = sl(11, PARAMS);
