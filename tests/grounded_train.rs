@@ -86,9 +86,20 @@ fn a_small_model_trained_on_the_cpu_beats_the_layer_majority_baseline() {
     // The trained weights drive `rocc compile`: same layout as the procedural backend.
     let weights = out.join("generator.bpk");
     assert!(weights.is_file() && out.join("generator.ron").is_file());
-    let g = rocc::backend::grounded::Grounded::load(&weights, None).unwrap();
+    let g = Arc::new(rocc::backend::grounded::Grounded::load(&weights, None).unwrap());
     let compiled = dir.join("compiled");
-    compile(&["rear_end_queue.scn"], &compiled, "0", OccBackend::Grounded(Arc::new(g)), Stage::Lidar);
+    compile(&["rear_end_queue.scn"], &compiled, "0,1", OccBackend::Grounded(g.clone()), Stage::Lidar);
+    // Deterministic on any thread count, like the procedural backend.
+    let one = dir.join("one-thread");
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(|| compile(&["rear_end_queue.scn"], &one, "0,1", OccBackend::Grounded(g.clone()), Stage::Occ));
+    for f in ["occ/000000.npy", "occ/000001.npy"] {
+        let (a, b) = (compiled.join("rear_end_queue/ego").join(f), one.join("rear_end_queue/ego").join(f));
+        assert!(std::fs::read(a).unwrap() == std::fs::read(b).unwrap(), "{f} differs between 1 and N threads");
+    }
     let clip = compiled.join("rear_end_queue/ego");
     let manifest: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(clip.join("manifest.json")).unwrap()).unwrap();

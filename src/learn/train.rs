@@ -84,6 +84,7 @@ pub struct TrainReport {
     pub stage: Stage,
     pub train_frames: usize,
     pub val_frames: usize,
+    pub val_scenes: Vec<String>,
     pub class_weights: [f32; N_LABELS],
     /// The per-layer-majority baseline on the validation frames.
     pub baseline: Option<OccScores>,
@@ -378,11 +379,12 @@ fn run<M: Net>(
     std::fs::create_dir_all(&ck).map_err(|e| io_err("create", &ck, e))?;
     let stage = opts.stage.name();
     say(format!(
-        "{stage}: {} training frame(s) from {} scene(s), {} validation frame(s) from {} held-out scene(s); config `{}`",
+        "{stage}: {} training frame(s) from {} scene(s), {} validation frame(s) from {} held-out scene(s) [{}]; config `{}`",
         train.len(),
         scenes(&train).len(),
         val.len(),
         scenes(&val).len(),
+        scenes(&val).join(", "),
         cfg.name
     ));
 
@@ -550,6 +552,7 @@ fn run<M: Net>(
         stage: opts.stage,
         train_frames: train.len(),
         val_frames: val.len(),
+        val_scenes: scenes(&val),
         class_weights: weights,
         baseline,
         epochs: reports,

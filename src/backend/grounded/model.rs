@@ -278,6 +278,11 @@ impl Autoencoder {
         let real: Vec<i64> =
             (0..b * q).filter(|&i| !hb.pad[i] && i % q < hb.anchors[i / q].len()).map(|i| i as i64).collect();
         let n = real.len();
+        if n == 0 {
+            // No anchor at all (an empty map and no boxes): nothing to regularise.
+            let z = Tensor::<2>::zeros([1, c], &device);
+            return AeOut { logits, mu: z.clone(), logvar: z };
+        }
         let idx = Tensor::<1, Int>::from_data(TensorData::new(real, [n]), &device);
         let mu = mu.reshape([b * q, c]).select(0, idx.clone());
         let logvar = logvar.reshape([b * q, c]).select(0, idx);
