@@ -11,6 +11,7 @@ pub mod eval;
 pub mod geom;
 pub mod grammar;
 pub mod import;
+pub mod learn;
 pub mod lidar;
 pub mod llm;
 pub mod output;

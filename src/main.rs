@@ -55,6 +55,32 @@ enum OccMode {
     Solid,
 }
 
+#[derive(Clone, Copy, ValueEnum, PartialEq, Eq)]
+enum BackendArg {
+    /// Shapes drawn from each box (no weights).
+    Procedural,
+    /// The learned entity-grounded model (needs `--weights`).
+    Grounded,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum TrainWhat {
+    /// Occupancy -> grounded latents -> decoder (pretrains the shared decoder).
+    Autoencoder,
+    /// BEV + boxes -> grounded latents -> decoder (warm-started from the autoencoder).
+    Generator,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum DeviceArg {
+    /// burn's `flex` backend (pure Rust, every build).
+    Cpu,
+    /// wgpu (Vulkan/Metal/DX12); needs `--features gpu`.
+    Wgpu,
+    /// CUDA device 0; needs `--features gpu`.
+    Cuda,
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 enum ConventionArg {
     Nuscenes,
@@ -246,6 +272,51 @@ enum Cmd {
         /// divider layers replace the map's, e.g. for a scene from `rocc import boxes`.
         #[arg(long)]
         static_bev: Option<PathBuf>,
+        /// Occupancy backend.
+        #[arg(long, value_enum, default_value = "procedural")]
+        backend: BackendArg,
+        /// `--backend grounded`: generator weights (`.bpk` from `rocc train`, or `.safetensors`).
+        #[arg(long)]
+        weights: Option<PathBuf>,
+        /// `--backend grounded`: the model config (default: the `.ron` beside the weights).
+        #[arg(long)]
+        grounded_config: Option<PathBuf>,
+    },
+    /// Train the grounded occupancy model on compiled clips or nuPlan-Occ-style data.
+    Train {
+        #[arg(value_enum)]
+        what: TrainWhat,
+        /// Training data: `rocc compile --stage occ` output, or bev/ occ/ boxes/ per token.
+        #[arg(long)]
+        data: PathBuf,
+        /// Model and training config (RON), e.g. configs/cpu-small.ron or configs/paper.ron.
+        #[arg(long)]
+        config: PathBuf,
+        /// Output directory: weights, config copy, checkpoints, history.
+        #[arg(short, long)]
+        out: PathBuf,
+        /// Held-out data (default: `val_fraction` of the clips of --data, by the config's seed).
+        #[arg(long)]
+        val: Option<PathBuf>,
+        /// Continue from OUT/checkpoint.
+        #[arg(long)]
+        resume: bool,
+        /// Generator: autoencoder weights to start the decoder from (default OUT/autoencoder.bpk).
+        #[arg(long)]
+        init: Option<PathBuf>,
+        #[arg(long, value_enum, default_value = "cpu")]
+        device: DeviceArg,
+        /// Override the stage's epoch count.
+        #[arg(long)]
+        epochs: Option<usize>,
+        /// Stop after this many steps in all (weights and a validation line are still written).
+        #[arg(long)]
+        max_steps: Option<usize>,
+        /// Also export the final weights as OUT/<stage>.safetensors.
+        #[arg(long)]
+        safetensors: bool,
+        #[arg(short, long)]
+        quiet: bool,
     },
     /// Turn recorded boxes into a scenario: `rocc import boxes FILE --convention nuscenes -o scene.scn`.
     Import {
@@ -373,6 +444,9 @@ fn main() -> ExitCode {
             force,
             quiet,
             static_bev,
+            backend,
+            weights,
+            grounded_config,
         } => {
             let stage = match stage {
                 StageArg::Bev => Stage::Bev,
@@ -397,8 +471,37 @@ fn main() -> ExitCode {
                     return ExitCode::FAILURE;
                 }
             };
-            let opts = Options { stage, frames, egos: ego, seed, mode, rig, previews: !no_previews, force, static_bev };
+            let backend = match occ_backend(backend, weights.as_deref(), grounded_config.as_deref()) {
+                Ok(b) => b,
+                Err(d) => {
+                    print_diags(&[d], &SourceMap::default(), MessageFormat::Human);
+                    return ExitCode::FAILURE;
+                }
+            };
+            let opts = Options {
+                stage,
+                frames,
+                egos: ego,
+                seed,
+                mode,
+                rig,
+                previews: !no_previews,
+                force,
+                static_bev,
+                backend,
+            };
             compile(&inputs, &out, shard.as_deref(), &opts, quiet)
+        }
+        Cmd::Train { what, data, config, out, val, resume, init, device, epochs, max_steps, safetensors, quiet } => {
+            let r =
+                train_cmd(what, data, &config, out, val, resume, init, device, epochs, max_steps, safetensors, quiet);
+            match r {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(d) => {
+                    print_diags(&[d], &SourceMap::default(), MessageFormat::Human);
+                    ExitCode::FAILURE
+                }
+            }
         }
         Cmd::Import { what: ImportCmd::Boxes { file, convention, out, static_bev } } => {
             import_boxes(&file, convention, &out, static_bev.as_deref())
@@ -603,6 +706,102 @@ fn load_rig(path: Option<&Path>, resolution: Option<f64>) -> Result<rocc::lidar:
         })?;
     }
     Ok(rig)
+}
+
+fn occ_backend(
+    backend: BackendArg,
+    weights: Option<&Path>,
+    config: Option<&Path>,
+) -> Result<rocc::compile::OccBackend, Diagnostic> {
+    use rocc::compile::OccBackend;
+    match (backend, weights) {
+        (BackendArg::Procedural, None) if config.is_none() => Ok(OccBackend::Procedural),
+        (BackendArg::Procedural, _) => {
+            Err(Diagnostic::error("E0908", "`--weights` and `--grounded-config` apply to `--backend grounded` only")
+                .help("add `--backend grounded`, or drop the weights options for the procedural backend"))
+        }
+        (BackendArg::Grounded, None) => Err(Diagnostic::error("E0901", "`--backend grounded` needs `--weights FILE`")
+            .help("train weights with `rocc train generator ...` (README: \"Training the grounded backend\")")),
+        (BackendArg::Grounded, Some(w)) => {
+            rocc::backend::grounded::Grounded::load(w, config).map(|g| OccBackend::Grounded(std::sync::Arc::new(g)))
+        }
+    }
+}
+
+fn train_device(d: DeviceArg) -> Result<burn::tensor::Device, Diagnostic> {
+    match d {
+        DeviceArg::Cpu => Ok(burn::tensor::Device::flex()),
+        #[cfg(feature = "gpu")]
+        DeviceArg::Wgpu => Ok(burn::tensor::Device::wgpu(Default::default())),
+        #[cfg(feature = "gpu")]
+        DeviceArg::Cuda => Ok(burn::tensor::Device::cuda(0usize)),
+        #[cfg(not(feature = "gpu"))]
+        DeviceArg::Wgpu | DeviceArg::Cuda => Err(Diagnostic::error("E0908", "this rocc was built without GPU support")
+            .help("rebuild with `cargo build --release --features gpu`, or train with `--device cpu`")),
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn train_cmd(
+    what: TrainWhat,
+    data: PathBuf,
+    config: &Path,
+    out: PathBuf,
+    val: Option<PathBuf>,
+    resume: bool,
+    init: Option<PathBuf>,
+    device: DeviceArg,
+    epochs: Option<usize>,
+    max_steps: Option<usize>,
+    safetensors: bool,
+    quiet: bool,
+) -> Result<(), Diagnostic> {
+    use rocc::learn::{Stage, TrainOptions};
+    let config = rocc::backend::grounded::load_config(config)?;
+    let stage = match what {
+        TrainWhat::Autoencoder => Stage::Autoencoder,
+        TrainWhat::Generator => Stage::Generator,
+    };
+    if let Some(p) = &init
+        && !p.is_file()
+    {
+        return Err(Diagnostic::error("E0901", format!("`--init {}` does not exist", p.display()))
+            .help("pass the autoencoder weights `rocc train autoencoder` wrote (OUT/autoencoder.bpk)"));
+    }
+    let opts = TrainOptions {
+        stage,
+        data,
+        val,
+        config,
+        out,
+        resume,
+        init,
+        device: train_device(device)?,
+        quiet,
+        max_steps,
+        epochs,
+    };
+    let report = rocc::learn::train(&opts)?;
+    if safetensors {
+        use rocc::backend::grounded::{Autoencoder, Generator, cpu, load_weights, save_safetensors};
+        let st = report.weights.with_extension("safetensors");
+        let res = match stage {
+            Stage::Autoencoder => {
+                save_safetensors(&load_weights(Autoencoder::new(&opts.config, &cpu()), &report.weights)?, &st)
+            }
+            Stage::Generator => {
+                save_safetensors(&load_weights(Generator::new(&opts.config, &cpu()), &report.weights)?, &st)
+            }
+        };
+        res.map_err(|e| {
+            Diagnostic::error("E0906", format!("cannot write `{}`: {e}", st.display()))
+                .help("check the output directory")
+        })?;
+        if !quiet {
+            eprintln!("wrote {}", st.display());
+        }
+    }
+    Ok(())
 }
 
 fn compile(inputs: &[PathBuf], out: &Path, shard: Option<&str>, opts: &Options, quiet: bool) -> ExitCode {

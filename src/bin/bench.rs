@@ -8,6 +8,9 @@
 //!   ambulance example (background traffic included), one core and every core;
 //! - e2e: `rocc compile` of the whole library at full stage into a temporary directory
 //!   (BEV + occupancy + LiDAR + compressed writes + previews), frames/s, and peak memory.
+//! - grounded: inference time per frame of the learned backend (random weights: the cost does
+//!   not depend on their values) for `configs/cpu-small.ron` and `configs/paper.ron` on the CPU,
+//!   on the ambulance example's first frame; opt in (`bench grounded`), it is not in the default set.
 
 use rayon::prelude::*;
 use rocc::backend::{Background, OccInput, Occupancy, OccupancyBackend, Procedural, write_npy};
@@ -268,5 +271,44 @@ fn main() {
     }
     if want("e2e") {
         bench_e2e();
+    }
+    // Minutes on a 2-core machine with the paper's configuration: only when asked for.
+    if args.iter().any(|a| a == "grounded") {
+        bench_grounded();
+    }
+}
+
+fn bench_grounded() {
+    use rocc::backend::grounded::{GBox, Generator, Grounded, GroundedConfig, cpu, latents};
+    println!("== grounded: inference per frame on the CPU (flex backend, one thread per frame), random weights");
+    let Some(f) = load(&root().join("scenarios/ambulance_crowded_intersection.scn")) else { return };
+    let ego = f.concrete.egos.first().copied().unwrap_or(0);
+    let boxes = frame_boxes(&f, ego, 0);
+    let mut raster = Rasterizer::new();
+    let mut bev = Bev::zeros();
+    raster.rasterize_into(&f.map, f.tracks.poses[ego][0], &boxes, &mut bev);
+    let gboxes: Vec<GBox> = boxes.iter().map(GBox::from_ego).collect();
+    for name in ["cpu-small", "paper"] {
+        let path = root().join(format!("configs/{name}.ron"));
+        let Ok(cfg) =
+            std::fs::read_to_string(&path).map_err(|e| e.to_string()).and_then(|t| GroundedConfig::from_ron(&t))
+        else {
+            println!("  {name}: cannot read {}", path.display());
+            continue;
+        };
+        let set = latents::build(&cfg, &gboxes, &bev.masks);
+        let fg = set.iter().filter(|a| a.foreground).count();
+        let g = Grounded::from_model(cfg.clone(), Generator::new(&cfg, &cpu()), name);
+        let reps = if name == "paper" { 1 } else { 3 };
+        let _warm = g.predict(&gboxes, &bev.masks, &bev.aux);
+        let t = median(reps, || {
+            std::hint::black_box(g.predict(&gboxes, &bev.masks, &bev.aux));
+        });
+        println!(
+            "  {name:<10} {:>5} latents ({fg} foreground), {:>7} parameters: {:>8.2} s per frame",
+            set.len(),
+            burn::module::Module::num_params(&g.model),
+            t
+        );
     }
 }

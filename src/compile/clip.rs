@@ -7,7 +7,7 @@
 //! what "this clip is complete" means to a resumed run.
 
 use super::{Front, Options, Stage};
-use crate::backend::{Background, OccInput, Occupancy, OccupancyBackend, Procedural, occ_frame_path, write_npy};
+use crate::backend::{Background, OccInput, Occupancy, occ_frame_path, write_npy};
 use crate::lidar::{bin_frame_path, pcd_frame_path, scan, write_bin, write_pcd};
 use crate::output::{
     FrameBoxes, Manifest, OutputFile, PREVIEW_SIDE, StageTiming, paint_bev, paint_lidar, paint_occ, write_bev_frame,
@@ -205,7 +205,7 @@ pub fn compile_clip(
     dir: &Path,
     on_frame: &(dyn Fn() + Sync),
 ) -> io::Result<ClipReport> {
-    let backend = Procedural::new(opts.mode);
+    let backend = opts.occ_backend();
     let want = expected_manifest(ci, opts, backend.name());
     if !opts.force
         && let Some(m) = complete(dir, &want)
@@ -239,7 +239,7 @@ pub fn compile_clip(
 /// Render every frame of `r` (BEV, then occupancy and LiDAR as `opts.stage` asks), the clip-level
 /// files and the manifest, into `dir`.
 pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() + Sync)) -> io::Result<ClipReport> {
-    let backend = Procedural::new(opts.mode);
+    let backend = opts.occ_backend();
     std::fs::create_dir_all(dir)?;
     // A stale manifest must not vouch for a half-rewritten directory if this run is interrupted.
     match std::fs::remove_file(dir.join("manifest.json")) {

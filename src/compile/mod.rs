@@ -61,6 +61,35 @@ pub struct Options {
     pub force: bool,
     /// A recorded BEV whose static and divider layers replace the map's (`--static-bev`).
     pub static_bev: Option<crate::import::StaticBev>,
+    /// Which occupancy backend runs (`--backend`).
+    pub backend: OccBackend,
+}
+
+/// `--backend`: the procedural default (shapes by `mode`), or loaded grounded weights.
+#[derive(Clone, Default)]
+pub enum OccBackend {
+    #[default]
+    Procedural,
+    Grounded(std::sync::Arc<crate::backend::grounded::Grounded>),
+}
+
+impl std::fmt::Debug for OccBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            OccBackend::Procedural => write!(f, "Procedural"),
+            OccBackend::Grounded(g) => write!(f, "Grounded({})", crate::backend::OccupancyBackend::name(&**g)),
+        }
+    }
+}
+
+impl Options {
+    /// The occupancy backend these options select.
+    pub fn occ_backend(&self) -> Box<dyn crate::backend::OccupancyBackend + '_> {
+        match &self.backend {
+            OccBackend::Procedural => Box::new(crate::backend::Procedural::new(self.mode)),
+            OccBackend::Grounded(g) => Box::new(&**g),
+        }
+    }
 }
 
 impl Default for Options {
@@ -75,6 +104,7 @@ impl Default for Options {
             previews: true,
             force: false,
             static_bev: None,
+            backend: OccBackend::Procedural,
         }
     }
 }

@@ -4,6 +4,7 @@
 //! E06xx: the LLM front end (`rocc text`): the HTTP client, the model's replies, the repair loop.
 //! E08xx: CIREN crash recreation (`rocc ciren`): E0800-E0849 records and SAFE extractions.
 //! E0850-E0899: the CIREN VLM route (`rocc ciren extract`): case files, the conflict descriptor.
+//! E09xx: the learned (grounded) occupancy backend and `rocc train`.
 
 pub struct Code {
     pub code: &'static str,
@@ -647,6 +648,82 @@ Nothing is written to `-o`; the last merged attempt (or the bare scene) is kept 
         explanation: "`--examples DIR` replaces the worked examples shown to the model with every `.scn` file of\n\
 DIR. Each must pass `rocc check` and carry a `conflict` block (the conflict call's examples are\n\
 derived from it). The directory could not be read, holds no `.scn` file, or one file fails.",
+    },
+    Code {
+        code: "E0901",
+        title: "grounded weights missing",
+        explanation: "`--backend grounded` (or `rocc train generator --init`) names a weights file that does not\n\
+exist, or `--backend grounded` was given without `--weights`. Train weights first:\n\n\
+    rocc compile scenarios/ -o corpus --stage occ --no-previews\n\
+    rocc train autoencoder --data corpus --config configs/cpu-small.ron --out model\n\
+    rocc train generator   --data corpus --config configs/cpu-small.ron --out model\n\
+    rocc compile FILE -o out --backend grounded --weights model/generator.bpk\n\n\
+`rocc train` writes `OUT/<stage>.bpk` and the config beside it as `OUT/<stage>.ron`.",
+    },
+    Code {
+        code: "E0902",
+        title: "grounded config unreadable or invalid",
+        explanation: "The model's shapes come from a RON config (`configs/paper.ron`, `configs/cpu-small.ron`).\n\
+By default rocc reads the `.ron` next to the weights file (`model/generator.bpk` ->\n\
+`model/generator.ron`, which `rocc train` writes); `--grounded-config FILE` names another. The\n\
+file could not be read, is not valid RON for `GroundedConfig`, or breaks a rule: `max_foreground`\n\
+<= `latents`, decoder `width` a multiple of `heads`, `window` 1..=6 voxels, `min_scale` below\n\
+`window / 3`, BEV `strides` of 1 or 2 matching `channels`, `crop` 0 or 16..=400, learning rates\n\
+positive with `lr_min <= lr`. The message lists every broken rule.",
+    },
+    Code {
+        code: "E0903",
+        title: "weights do not fit the model",
+        explanation: "The weights file was read, but its tensors do not match the model the config describes:\n\
+a tensor is missing, has another shape, or is not part of the model. Usual causes: the config is\n\
+not the one the weights were trained with (use the `.ron` `rocc train` wrote beside them), or the\n\
+file is an autoencoder checkpoint where a generator is needed (`--backend grounded` needs\n\
+`generator.bpk`). Safetensors files must name tensors by burn's module paths\n\
+(`decoder.transformer.layers.0.mha.query.weight`, ...); `rocc train` can export one\n\
+(README, \"Training the grounded backend\").",
+    },
+    Code {
+        code: "E0904",
+        title: "unknown weights format",
+        explanation: "rocc reads weights as burnpack (`.bpk`, what `rocc train` writes and checkpoints) or\n\
+safetensors (`.safetensors`, for weights trained elsewhere). Other extensions (`.pt`, `.ckpt`,\n\
+`.mpk`) are not read; convert PyTorch state dicts to safetensors with the tensor names of\n\
+burn's module paths.",
+    },
+    Code {
+        code: "E0905",
+        title: "training data unusable",
+        explanation: "`rocc train --data DIR` (or `--val DIR`) found no frames, or a frame could not be read.\n\
+Two layouts are accepted:\n\
+  1. what `rocc compile --stage occ` writes: clips with `boxes.json`, `bev/NNNNNN.npz`,\n\
+     `occ/NNNNNN.npy`, at any depth below DIR;\n\
+  2. nuPlan-Occ / UniScene style: `DIR/bev/<token>.npz` (gt_bev_masks, gt_aux_bev),\n\
+     `DIR/occ/<token>.npy` (dense (400, 400, 32) labels 0..8) or `.npz` (sparse [i, j, k, label]\n\
+     rows), `DIR/boxes/<token>.json` ({\"gt_boxes\": [[x, y, z, l, w, h, yaw], ...],\n\
+     \"gt_names\": [...]}).\n\
+The message names the file and what is wrong with it (shape, dtype, missing key). With\n\
+`val_fraction` > 0 and a single clip, nothing is left to train on: add clips or pass `--val`.",
+    },
+    Code {
+        code: "E0906",
+        title: "cannot write training output",
+        explanation: "`rocc train` could not create or write its output directory, a checkpoint, the weights or\n\
+the history file (permissions, full disk), or could not read back a checkpoint for `--resume`.\n\
+Files are written atomically, so an interrupted run leaves the previous checkpoint intact.",
+    },
+    Code {
+        code: "E0907",
+        title: "training diverged",
+        explanation: "The loss became NaN or infinite. Lower the stage's learning rate (`train.autoencoder.lr`,\n\
+`train.generator.lr`) in the config, and continue from the last good checkpoint with\n\
+`--resume` (checkpoints are written every `checkpoint_every` steps and at each epoch's end).",
+    },
+    Code {
+        code: "E0908",
+        title: "bad backend or device option",
+        explanation: "An option of the learned backend does not apply: `--weights` or `--grounded-config` given\n\
+with `--backend procedural`, or `--device wgpu|cuda` on a build without the `gpu` feature\n\
+(`cargo build --release --features gpu`; CI and the default build are CPU-only).",
     },
 ];
 

@@ -245,6 +245,16 @@ pub fn edit_clip(dir: &Path, edits: &[Edit], o: &ClipEdit) -> Result<Manifest, V
         "lidar" => Stage::Lidar,
         _ => Stage::Bev,
     };
+    if manifest.backend.starts_with("grounded") {
+        return Err(clip_err(
+            dir,
+            format!(
+                "its occupancy comes from the learned backend `{}`, which `rocc edit` cannot rerun",
+                manifest.backend
+            ),
+            "edit the scenario instead (`rocc edit FILE.scn ... -o edited.scn`) and compile it with `--backend grounded --weights W`",
+        ));
+    }
     let mode = if manifest.backend.ends_with("solid") { Mode::Solid } else { Mode::Surface };
     let rig = match (&o.rig, &manifest.rig) {
         (Some(r), _) => r.clone(),
@@ -258,8 +268,18 @@ pub fn edit_clip(dir: &Path, edits: &[Edit], o: &ClipEdit) -> Result<Manifest, V
         _ => Rig::nuplan(),
     };
     let previews = manifest.files.iter().any(|f| f.path.starts_with("preview/"));
-    let opts =
-        Options { stage, frames: None, egos: vec![], seed: None, mode, rig, previews, force: true, static_bev: None };
+    let opts = Options {
+        stage,
+        frames: None,
+        egos: vec![],
+        seed: None,
+        mode,
+        rig,
+        previews,
+        force: true,
+        static_bev: None,
+        backend: Default::default(),
+    };
     let background =
         if stage >= Stage::Occ { Background::generate(&front.map, front.concrete.seed) } else { Background::none() };
     let by_frame: BTreeMap<usize, &FrameBoxes> = frames.iter().map(|f| (f.frame, f)).collect();

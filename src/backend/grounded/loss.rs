@@ -1,0 +1,118 @@
+//! Training objectives. In: logits `[N, 9]` (or probabilities) and ground-truth labels. Out:
+//! scalar loss tensors: class-weighted cross-entropy, Lovász-softmax (Berman et al. 2018, the
+//! "present classes" variant), the VAE's KL term and the background head's auxiliary
+//! cross-entropy.
+
+use crate::backend::layout::N_LABELS;
+use burn::prelude::*;
+use burn::tensor::activation::log_softmax;
+
+fn int_column(v: Vec<i64>, device: &Device) -> Tensor<2, Int> {
+    let n = v.len();
+    Tensor::from_data(TensorData::new(v, [n, 1]), device)
+}
+
+/// sum_v w[y_v] * -log softmax(logits_v)[y_v] / sum_v w[y_v].
+pub fn weighted_cross_entropy(logits: Tensor<2>, target: &[u8], weights: &[f32; N_LABELS]) -> Tensor<1> {
+    let device = logits.device();
+    let n = target.len();
+    let lp = log_softmax(logits, 1);
+    let picked = lp.gather(1, int_column(target.iter().map(|&t| t as i64).collect(), &device));
+    let w: Vec<f32> = target.iter().map(|&t| weights[(t as usize).min(N_LABELS - 1)]).collect();
+    let total: f32 = w.iter().sum::<f32>().max(1e-12);
+    let w = Tensor::<2>::from_data(TensorData::new(w, [n, 1]), &device);
+    (picked * w).sum().neg() / total
+}
+
+/// Gradient of the Lovász extension of the Jaccard loss for ground-truth bits sorted by
+/// decreasing error (Berman et al., Alg. 1).
+pub fn lovasz_grad(gt_sorted: &[bool]) -> Vec<f32> {
+    let total: f64 = gt_sorted.iter().filter(|&&g| g).count() as f64;
+    let mut out = Vec::with_capacity(gt_sorted.len());
+    let (mut inter, mut union_extra) = (0.0f64, 0.0f64);
+    let mut prev = 0.0f64;
+    for &g in gt_sorted {
+        if g {
+            inter += 1.0;
+        } else {
+            union_extra += 1.0;
+        }
+        // Jaccard loss of predicting the first i+1 as positive.
+        let jac = 1.0 - (total - inter) / (total + union_extra);
+        out.push((jac - prev) as f32);
+        prev = jac;
+    }
+    out
+}
+
+/// Lovász-softmax over the rows of `probs` `[N, 9]`: mean over the classes present in `target`
+/// of the Lovász extension of 1 - IoU applied to the sorted errors |1[y = c] - p_c|.
+pub fn lovasz_softmax(probs: Tensor<2>, target: &[u8]) -> Tensor<1> {
+    let device = probs.device();
+    let n = target.len();
+    let host: Vec<f32> = probs.to_data().iter::<f32>().collect();
+    let mut losses = Vec::new();
+    for c in 0..N_LABELS {
+        if !target.iter().any(|&t| t as usize == c) {
+            continue;
+        }
+        let fg: Vec<bool> = target.iter().map(|&t| t as usize == c).collect();
+        let mut order: Vec<usize> = (0..n).collect();
+        let err = |v: usize| ((fg[v] as u8 as f32) - host.get(v * N_LABELS + c).copied().unwrap_or(0.0)).abs();
+        // Descending error; ties by index so the order never depends on the sort.
+        order.sort_by(|&a, &b| err(b).total_cmp(&err(a)).then(a.cmp(&b)));
+        let gt_sorted: Vec<bool> = order.iter().map(|&v| fg[v]).collect();
+        let grad = lovasz_grad(&gt_sorted);
+        let fg_t = Tensor::<1>::from_data(
+            TensorData::new(fg.iter().map(|&b| b as u8 as f32).collect::<Vec<_>>(), [n]),
+            &device,
+        );
+        let pc = probs.clone().slice([0..n, c..c + 1]).reshape([n]);
+        let e = (fg_t - pc).abs();
+        let perm = Tensor::<1, Int>::from_data(
+            TensorData::new(order.iter().map(|&v| v as i64).collect::<Vec<_>>(), [n]),
+            &device,
+        );
+        let g = Tensor::<1>::from_data(TensorData::new(grad, [n]), &device);
+        losses.push((e.select(0, perm) * g).sum());
+    }
+    if losses.is_empty() {
+        return Tensor::zeros([1], &device);
+    }
+    let k = losses.len() as f32;
+    Tensor::cat(losses, 0).sum() / k
+}
+
+/// KL(N(mu, exp(logvar)) || N(0, 1)), summed over channels, averaged over the rows.
+pub fn kl_divergence(mu: Tensor<2>, logvar: Tensor<2>) -> Tensor<1> {
+    let rows = mu.dims()[0].max(1) as f32;
+    let t = logvar.clone() + 1.0 - mu.powi_scalar(2) - logvar.exp();
+    t.sum() * (-0.5 / rows)
+}
+
+/// Binary cross-entropy with logits, averaged: the background head's auxiliary term.
+pub fn bce_with_logits(logit: Tensor<1>, target: &[bool]) -> Tensor<1> {
+    let device = logit.device();
+    let n = target.len().max(1) as f32;
+    let y = Tensor::<1>::from_data(
+        TensorData::new(target.iter().map(|&b| b as u8 as f32).collect::<Vec<_>>(), [target.len()]),
+        &device,
+    );
+    // max(x, 0) - x y + log(1 + exp(-|x|)), the stable form.
+    let pos = logit.clone().clamp_min(0.0);
+    let soft = (logit.clone().abs().neg().exp() + 1.0).log();
+    (pos - logit * y + soft).sum() / n
+}
+
+/// Class weights from label counts: (max count / count)^power clipped to `clip`, times `boost`;
+/// a class never seen gets `clip`.
+pub fn class_weights(counts: &[u64; N_LABELS], power: f32, clip: f32, boost: &[f32]) -> [f32; N_LABELS] {
+    let max = counts.iter().copied().max().unwrap_or(1).max(1) as f64;
+    let mut w = [0f32; N_LABELS];
+    for c in 0..N_LABELS {
+        let raw =
+            if counts[c] == 0 { clip as f64 } else { (max / counts[c] as f64).powf(power as f64).min(clip as f64) };
+        w[c] = raw as f32 * boost.get(c).copied().unwrap_or(1.0);
+    }
+    w
+}

@@ -1,0 +1,452 @@
+//! The networks (burn modules). In: host batches (`HostBatch`: anchors, their features, padding;
+//! plus ground truth for the autoencoder or the BEV for the generator). Out: per-voxel logits of a
+//! `Region`, `[B * voxels, 9]`.
+//!
+//! - `Decoder`, shared: latents + anchor features -> transformer -> per latent `max_gaussians`
+//!   raw Gaussians, of which the latent's class budget is splatted, plus a per-layer class bias
+//!   (the empty scene: what every column holds before any latent speaks).
+//! - `Autoencoder`: ground truth sampled around each anchor -> (mu, logvar) -> decoder.
+//! - `Generator`: BEV (18 + 7 channels) -> 2D CNN -> each latent samples its feature bilinearly
+//!   at its anchor -> latent -> decoder; plus the gated background residual head.
+
+use super::config::GroundedConfig;
+use super::latents::{ANCHOR_FEATS, Anchor, budget, encoder_input};
+use super::splat::{ActiveAnchors, PARAMS, Region, activate, splat};
+use crate::backend::layout::{N_LABELS, NZ, ORIGIN, VOXEL};
+use crate::raster::layout::{GRID, N_AUX, N_MASKS, RES};
+use burn::module::{Initializer, Param};
+use burn::nn::conv::{Conv2d, Conv2dConfig};
+use burn::nn::transformer::{TransformerEncoder, TransformerEncoderConfig, TransformerEncoderInput};
+use burn::nn::{Linear, LinearConfig, PaddingConfig2d};
+use burn::prelude::*;
+use burn::tensor::activation::{gelu, softmax};
+use ndarray::Array3;
+
+/// Channels of the generator's input: 18 masks + 7 aux.
+pub const BEV_CHANNELS: usize = N_MASKS + N_AUX;
+/// Aux channels are scaled into O(1): offsets and half-sizes are pixels, heading is a truncated
+/// unit vector, height metres.
+const AUX_SCALE: [f32; N_AUX] = [1.0 / 20.0, 1.0 / 20.0, 1.0 / 20.0, 1.0 / 10.0, 1.0, 1.0, 0.5];
+
+/// Initial weight of a latent's own class in its Gaussians' features (see `Decoder::class_feat`).
+pub const CLASS_PRIOR: f32 = 8.0;
+
+/// Shape constants the decoder needs at run time (not parameters).
+#[derive(Clone, Debug)]
+pub struct DecoderShape {
+    pub gaussians: usize,
+    pub offset_bound: f32,
+    pub min_scale: f32,
+    pub max_scale: f32,
+    pub window: usize,
+    pub budgets: [usize; N_LABELS],
+}
+
+impl DecoderShape {
+    pub fn new(cfg: &GroundedConfig) -> Self {
+        DecoderShape {
+            gaussians: cfg.max_gaussians(),
+            offset_bound: cfg.gaussians.offset_bound,
+            min_scale: cfg.gaussians.min_scale,
+            max_scale: cfg.max_scale(),
+            window: cfg.gaussians.window,
+            budgets: std::array::from_fn(|l| budget(cfg, l as u8)),
+        }
+    }
+}
+
+/// A batch of latent sets, host side.
+#[derive(Clone, Debug)]
+pub struct HostBatch {
+    pub anchors: Vec<Vec<Anchor>>,
+    /// Padded length (the longest set; padding changes nothing, see `Decoder::forward`).
+    pub q: usize,
+    /// [b * q * ANCHOR_FEATS]
+    pub feats: Vec<f32>,
+    /// [b * q], true = padding.
+    pub pad: Vec<bool>,
+}
+
+impl HostBatch {
+    pub fn new(anchors: Vec<Vec<Anchor>>) -> Self {
+        let q = anchors.iter().map(Vec::len).max().unwrap_or(0).max(1);
+        let mut feats = Vec::with_capacity(anchors.len() * q * ANCHOR_FEATS);
+        let mut pad = Vec::with_capacity(anchors.len() * q);
+        for set in &anchors {
+            for a in set {
+                a.features(&mut feats);
+                pad.push(false);
+            }
+            feats.resize(feats.len() + (q - set.len()) * ANCHOR_FEATS, 0.0);
+            // An all-padding row would make attention's softmax 0/0: one padding slot stays
+            // visible (it emits nothing: only real anchors get Gaussians).
+            pad.extend((set.len()..q).map(|i| !(set.is_empty() && i == 0)));
+        }
+        HostBatch { anchors, q, feats, pad }
+    }
+
+    pub fn b(&self) -> usize {
+        self.anchors.len()
+    }
+
+    pub fn feats_tensor(&self, device: &Device) -> Tensor<3> {
+        Tensor::from_data(TensorData::new(self.feats.clone(), [self.b(), self.q, ANCHOR_FEATS]), device)
+    }
+
+    pub fn pad_tensor(&self, device: &Device) -> Tensor<2, Bool> {
+        Tensor::from_data(TensorData::new(self.pad.clone(), [self.b(), self.q]), device)
+    }
+}
+
+#[derive(Module, Debug)]
+pub struct Decoder {
+    pub input: Linear,
+    pub transformer: TransformerEncoder,
+    pub head: Linear,
+    /// [NZ, 9]: the logits of an empty scene per height layer.
+    pub layer_bias: Param<Tensor<2>>,
+    /// [9, 9]: added to the features of every Gaussian of a latent of class (row): a latent
+    /// starts out speaking for its own class (`CLASS_PRIOR` on it, half that against free).
+    pub class_feat: Param<Tensor<2>>,
+    #[module(skip)]
+    pub shape: DecoderShape,
+}
+
+impl Decoder {
+    pub fn new(cfg: &GroundedConfig, device: &Device) -> Self {
+        let d = &cfg.decoder;
+        let shape = DecoderShape::new(cfg);
+        let head = LinearConfig::new(d.width, shape.gaussians * PARAMS)
+            .with_initializer(Initializer::Normal { mean: 0.0, std: 0.02 })
+            .init(device);
+        // Start as "free everywhere": a clear free margin, so untouched voxels read free.
+        let mut bias = vec![0f32; NZ * N_LABELS];
+        for k in 0..NZ {
+            bias[k * N_LABELS] = 2.0;
+        }
+        let mut cf = vec![0f32; N_LABELS * N_LABELS];
+        for c in 1..N_LABELS {
+            cf[c * N_LABELS + c] = CLASS_PRIOR;
+            cf[c * N_LABELS] = -CLASS_PRIOR / 2.0;
+        }
+        Decoder {
+            class_feat: Param::from_tensor(Tensor::from_data(TensorData::new(cf, [N_LABELS, N_LABELS]), device)),
+            input: LinearConfig::new(cfg.latent_dim + ANCHOR_FEATS, d.width).init(device),
+            transformer: TransformerEncoderConfig::new(d.width, d.ff, d.heads, d.blocks)
+                .with_dropout(0.0)
+                .with_norm_first(true)
+                .init(device),
+            head,
+            layer_bias: Param::from_tensor(Tensor::from_data(TensorData::new(bias, [NZ, N_LABELS]), device)),
+            shape,
+        }
+    }
+
+    /// Latents [b, q, C] -> raw Gaussian parameters [b * q * G, PARAMS]. Padded latents are
+    /// masked out of attention, so how far a set is padded does not change the real latents'
+    /// outputs.
+    pub fn raw(&self, latents: Tensor<3>, hb: &HostBatch) -> Tensor<2> {
+        let device = latents.device();
+        let x = self.input.forward(Tensor::cat(vec![latents, hb.feats_tensor(&device)], 2));
+        let x = self.transformer.forward(TransformerEncoderInput::new(x).mask_pad(hb.pad_tensor(&device)));
+        let out = self.head.forward(x);
+        out.reshape([hb.b() * hb.q * self.shape.gaussians, PARAMS])
+    }
+
+    /// Active Gaussians of the batch that can reach `region`: row indices into `raw` and their
+    /// anchors.
+    pub fn active(&self, hb: &HostBatch, region: Region) -> (Vec<i64>, ActiveAnchors, Vec<i64>) {
+        let g = self.shape.gaussians;
+        let reach = self.shape.offset_bound + 3.0 * self.shape.window as f32 + 2.0;
+        let (lo_i, hi_i) = (region.i0 as f32 - reach, (region.i0 + region.ni) as f32 + reach);
+        let (lo_j, hi_j) = (region.j0 as f32 - reach, (region.j0 + region.nj) as f32 + reach);
+        let mut rows = Vec::new();
+        let mut labels = Vec::new();
+        let mut aa = ActiveAnchors::default();
+        for (b, set) in hb.anchors.iter().enumerate() {
+            for (q, a) in set.iter().enumerate() {
+                let v = a.voxel();
+                if v[0] < lo_i || v[0] > hi_i || v[1] < lo_j || v[1] > hi_j {
+                    continue;
+                }
+                let n = self.shape.budgets[(a.label as usize).min(N_LABELS - 1)];
+                let (c, s) = (a.yaw.cos() as f32, a.yaw.sin() as f32);
+                for k in 0..n {
+                    rows.push(((b * hb.q + q) * g + k) as i64);
+                    labels.push((a.label as usize).min(N_LABELS - 1) as i64);
+                    aa.pos.push(v);
+                    aa.cos.push(c);
+                    aa.sin.push(s);
+                    aa.batch.push(b);
+                }
+            }
+        }
+        (rows, aa, labels)
+    }
+
+    /// Latents -> logits of `region` [b * voxels, 9]: splatted Gaussians plus the layer bias.
+    pub fn forward(&self, latents: Tensor<3>, hb: &HostBatch, region: Region) -> Tensor<2> {
+        let device = latents.device();
+        let raw = self.raw(latents, hb);
+        let (rows, aa, labels) = self.active(hb, region);
+        let b = hb.b();
+        let splatted = if rows.is_empty() {
+            Tensor::zeros([b * region.voxels(), N_LABELS], &device)
+        } else {
+            let n = rows.len();
+            let sel = raw.select(0, Tensor::<1, Int>::from_data(TensorData::new(rows, [n]), &device));
+            let prior =
+                self.class_feat.val().select(0, Tensor::<1, Int>::from_data(TensorData::new(labels, [n]), &device));
+            let sel = sel + Tensor::cat(vec![Tensor::zeros([n, PARAMS - N_LABELS], &device), prior], 1);
+            let g = activate(sel, &aa, self.shape.offset_bound, self.shape.min_scale, self.shape.max_scale);
+            splat(&g, region, b, self.shape.window)
+        };
+        let cols = b * region.ni * region.nj;
+        let bias = self.layer_bias.val().reshape([1, NZ, N_LABELS]).repeat_dim(0, cols).reshape([cols * NZ, N_LABELS]);
+        splatted + bias
+    }
+}
+
+/// The autoencoder's encoder: a two-layer MLP over each anchor's sampled ground truth.
+#[derive(Module, Debug)]
+pub struct LatentEncoder {
+    pub l1: Linear,
+    pub l2: Linear,
+    #[module(skip)]
+    pub latent_dim: usize,
+}
+
+#[derive(Module, Debug)]
+pub struct Autoencoder {
+    pub encoder: LatentEncoder,
+    pub decoder: Decoder,
+}
+
+/// What the autoencoder returns: logits and the posterior for the KL term.
+pub struct AeOut {
+    pub logits: Tensor<2>,
+    /// [real latents, C]
+    pub mu: Tensor<2>,
+    pub logvar: Tensor<2>,
+}
+
+impl Autoencoder {
+    pub fn new(cfg: &GroundedConfig, device: &Device) -> Self {
+        let s: usize = cfg.encoder_samples() * N_LABELS;
+        Autoencoder {
+            encoder: LatentEncoder {
+                l1: LinearConfig::new(s + ANCHOR_FEATS, cfg.encoder.hidden).init(device),
+                l2: LinearConfig::new(cfg.encoder.hidden, 2 * cfg.latent_dim).init(device),
+                latent_dim: cfg.latent_dim,
+            },
+            decoder: Decoder::new(cfg, device),
+        }
+    }
+
+    /// The encoder's input for a batch: per latent the one-hot samples of `labels[b]`.
+    pub fn encoder_input(cfg: &GroundedConfig, hb: &HostBatch, labels: &[&Array3<u8>]) -> Vec<f32> {
+        let s = cfg.encoder_samples() * N_LABELS;
+        let mut out = Vec::with_capacity(hb.b() * hb.q * s);
+        for (b, set) in hb.anchors.iter().enumerate() {
+            for a in set {
+                encoder_input(cfg, a, labels[b], &mut out);
+            }
+            out.resize(out.len() + (hb.q - set.len()) * s, 0.0);
+        }
+        out
+    }
+
+    /// `noise` [b * q * C] (standard normal) samples the posterior; `None` takes its mean.
+    pub fn forward(&self, enc_in: Vec<f32>, hb: &HostBatch, region: Region, noise: Option<Vec<f32>>) -> AeOut {
+        let device = self.decoder.layer_bias.val().device();
+        let (b, q, c) = (hb.b(), hb.q, self.encoder.latent_dim);
+        let s = enc_in.len() / (b * q).max(1);
+        let x = Tensor::<3>::from_data(TensorData::new(enc_in, [b, q, s]), &device);
+        let x = Tensor::cat(vec![x, hb.feats_tensor(&device)], 2);
+        let h = self.encoder.l2.forward(gelu(self.encoder.l1.forward(x)));
+        let mu = h.clone().slice([0..b, 0..q, 0..c]);
+        let logvar = h.slice([0..b, 0..q, c..2 * c]).clamp(-8.0, 8.0);
+        let z = match noise {
+            Some(eps) => {
+                let eps = Tensor::<3>::from_data(TensorData::new(eps, [b, q, c]), &device);
+                mu.clone() + (logvar.clone() * 0.5).exp() * eps
+            }
+            None => mu.clone(),
+        };
+        let logits = self.decoder.forward(z, hb, region);
+        // The KL term covers real latents only.
+        let real: Vec<i64> =
+            (0..b * q).filter(|&i| !hb.pad[i] && i % q < hb.anchors[i / q].len()).map(|i| i as i64).collect();
+        let n = real.len();
+        if n == 0 {
+            // No anchor at all (an empty map and no boxes): nothing to regularise.
+            let z = Tensor::<2>::zeros([1, c], &device);
+            return AeOut { logits, mu: z.clone(), logvar: z };
+        }
+        let idx = Tensor::<1, Int>::from_data(TensorData::new(real, [n]), &device);
+        let mu = mu.reshape([b * q, c]).select(0, idx.clone());
+        let logvar = logvar.reshape([b * q, c]).select(0, idx);
+        AeOut { logits, mu, logvar }
+    }
+}
+
+/// 2D BEV encoder: 3x3 convolutions with GELU.
+#[derive(Module, Debug)]
+pub struct BevEncoder {
+    pub convs: Vec<Conv2d>,
+}
+
+#[derive(Module, Debug)]
+pub struct Generator {
+    pub bev: BevEncoder,
+    pub cond1: Linear,
+    pub cond2: Linear,
+    pub decoder: Decoder,
+    pub bg_hidden: Option<Conv2d>,
+    /// Zero-initialised: the residual starts at nothing and grows where it helps.
+    pub bg_out: Option<Conv2d>,
+    #[module(skip)]
+    pub stride: usize,
+}
+
+/// What the generator returns: final logits, and the background residual (before gating) for
+/// the auxiliary term.
+pub struct GenOut {
+    pub logits: Tensor<2>,
+    pub background: Option<Tensor<2>>,
+}
+
+/// The BEV as the generator reads it: [25, 400, 400] floats, masks 0/1, aux scaled.
+pub fn bev_input(masks: &Array3<i8>, aux: &Array3<i32>, out: &mut Vec<f32>) {
+    let px = GRID * GRID;
+    for c in 0..N_MASKS {
+        if c < masks.dim().0 && masks.dim().1 == GRID && masks.dim().2 == GRID {
+            out.extend(masks.index_axis(ndarray::Axis(0), c).iter().map(|&v| (v != 0) as u8 as f32));
+        } else {
+            out.resize(out.len() + px, 0.0);
+        }
+    }
+    for (c, scale) in AUX_SCALE.iter().enumerate() {
+        if c < aux.dim().0 && aux.dim().1 == GRID && aux.dim().2 == GRID {
+            out.extend(aux.index_axis(ndarray::Axis(0), c).iter().map(|&v| v as f32 * scale));
+        } else {
+            out.resize(out.len() + px, 0.0);
+        }
+    }
+}
+
+impl Generator {
+    pub fn new(cfg: &GroundedConfig, device: &Device) -> Self {
+        let mut convs = Vec::new();
+        let mut ch = BEV_CHANNELS;
+        for (&c, &s) in cfg.bev.channels.iter().zip(&cfg.bev.strides) {
+            convs.push(
+                Conv2dConfig::new([ch, c], [3, 3])
+                    .with_stride([s, s])
+                    .with_padding(PaddingConfig2d::Explicit(1, 1, 1, 1))
+                    .init(device),
+            );
+            ch = c;
+        }
+        let f = cfg.bev_features();
+        let (bg_hidden, bg_out) = if cfg.bev.background_head {
+            (
+                Some(
+                    Conv2dConfig::new([f, f], [3, 3]).with_padding(PaddingConfig2d::Explicit(1, 1, 1, 1)).init(device),
+                ),
+                Some(Conv2dConfig::new([f, NZ], [1, 1]).with_initializer(Initializer::Zeros).init(device)),
+            )
+        } else {
+            (None, None)
+        };
+        Generator {
+            bev: BevEncoder { convs },
+            cond1: LinearConfig::new(f + ANCHOR_FEATS, cfg.bev.hidden).init(device),
+            cond2: LinearConfig::new(cfg.bev.hidden, cfg.latent_dim).init(device),
+            decoder: Decoder::new(cfg, device),
+            bg_hidden,
+            bg_out,
+            stride: cfg.bev_stride(),
+        }
+    }
+
+    fn features(&self, bev: Tensor<4>) -> Tensor<4> {
+        let mut x = bev;
+        for c in &self.bev.convs {
+            x = gelu(c.forward(x));
+        }
+        x
+    }
+
+    /// `bev` is `bev_input` of each frame, concatenated.
+    pub fn forward(&self, bev: Vec<f32>, hb: &HostBatch, region: Region) -> GenOut {
+        let device = self.decoder.layer_bias.val().device();
+        let b = hb.b();
+        let x = Tensor::<4>::from_data(TensorData::new(bev, [b, BEV_CHANNELS, GRID, GRID]), &device);
+        let fmap = self.features(x);
+        let [_, f, h, w] = fmap.dims();
+        let rows = fmap.clone().permute([0, 2, 3, 1]).reshape([b * h * w, f]);
+        // Bilinear sampling at each anchor: feature pixel a's centre is BEV pixel (a + 0.5) * stride.
+        let cell = RES * self.stride as f64;
+        let mut idx = Vec::with_capacity(b * hb.q * 4);
+        let mut wts = Vec::with_capacity(b * hb.q * 4);
+        for (bi, set) in hb.anchors.iter().enumerate() {
+            for qi in 0..hb.q {
+                let Some(a) = set.get(qi) else {
+                    idx.extend([0i64; 4]);
+                    wts.extend([0f32; 4]);
+                    continue;
+                };
+                let fa = ((a.pos[0] + 50.0) / cell - 0.5).clamp(0.0, (h - 1) as f64);
+                let fb = ((a.pos[1] + 50.0) / cell - 0.5).clamp(0.0, (w - 1) as f64);
+                let (a0, b0) = (fa.floor() as usize, fb.floor() as usize);
+                let (a1, b1) = ((a0 + 1).min(h - 1), (b0 + 1).min(w - 1));
+                let (ta, tb) = ((fa - a0 as f64) as f32, (fb - b0 as f64) as f32);
+                for (ai, bj, wt) in [
+                    (a0, b0, (1.0 - ta) * (1.0 - tb)),
+                    (a1, b0, ta * (1.0 - tb)),
+                    (a0, b1, (1.0 - ta) * tb),
+                    (a1, b1, ta * tb),
+                ] {
+                    idx.push(((bi * h + ai) * w + bj) as i64);
+                    wts.push(wt);
+                }
+            }
+        }
+        let n = idx.len();
+        let sampled = rows.select(0, Tensor::<1, Int>::from_data(TensorData::new(idx, [n]), &device));
+        let wts = Tensor::<3>::from_data(TensorData::new(wts, [n / 4, 4, 1]), &device);
+        let sampled = (sampled.reshape([n / 4, 4, f]) * wts).sum_dim(1).reshape([b, hb.q, f]);
+        let z = self.cond2.forward(gelu(self.cond1.forward(Tensor::cat(vec![sampled, hb.feats_tensor(&device)], 2))));
+        let logits = self.decoder.forward(z, hb, region);
+        let (Some(hid), Some(out)) = (&self.bg_hidden, &self.bg_out) else {
+            return GenOut { logits, background: None };
+        };
+        // The background head at feature resolution, read by each column of the region (nearest).
+        let r = out.forward(gelu(hid.forward(fmap))).permute([0, 2, 3, 1]).reshape([b * h * w, NZ]);
+        let mut cols = Vec::with_capacity(b * region.ni * region.nj);
+        for bi in 0..b {
+            for li in 0..region.ni {
+                for lj in 0..region.nj {
+                    let (a, c) = ((region.i0 + li) / self.stride, (region.j0 + lj) / self.stride);
+                    cols.push(((bi * h + a.min(h - 1)) * w + c.min(w - 1)) as i64);
+                }
+            }
+        }
+        let nc = cols.len();
+        let r = r.select(0, Tensor::<1, Int>::from_data(TensorData::new(cols, [nc]), &device)).reshape([nc * NZ, 1]);
+        // Gate: the residual only acts where free or background already dominate, and it moves
+        // mass from free to background, never touching the agent channels.
+        let nv = nc * NZ;
+        let p = softmax(logits.clone().detach(), 1);
+        let gate = p.slice([0..nv, 0..2]).sum_dim(1);
+        let rr = r.clone() * gate;
+        let delta = Tensor::cat(vec![rr.clone().neg(), rr, Tensor::zeros([nv, N_LABELS - 2], &device)], 1);
+        GenOut { logits: logits + delta, background: Some(r) }
+    }
+}
+
+/// Voxel (continuous) -> ego frame metres, for documentation and tests.
+pub fn voxel_to_metres(v: [f32; 3]) -> [f64; 3] {
+    [0, 1, 2].map(|a| ORIGIN[a] + VOXEL * v[a] as f64)
+}

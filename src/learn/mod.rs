@@ -1,0 +1,9 @@
+//! Training the grounded occupancy backend (`rocc train`). In: a data directory — what
+//! `rocc compile --stage occ` writes, or nuPlan-Occ / UniScene-style BEV, occupancy and boxes
+//! (`data`) — and a `GroundedConfig`. Out: weights (`.bpk`) with their config, checkpoints,
+//! per-epoch validation under the shared scorer (`train`).
+
+pub mod data;
+pub mod train;
+
+pub use train::{Stage, TrainOptions, TrainReport, train};

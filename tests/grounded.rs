@@ -1,0 +1,448 @@
+//! The learned backend's parts: the splat against a brute-force dense reference, gradients by
+//! finite differences, Lovász-softmax against a hand-computed case, shapes, padding invariance,
+//! checkpoint round trips (.bpk, safetensors) and the weights diagnostics.
+
+use burn::prelude::*;
+use ndarray::Array3;
+use rocc::backend::grounded::config::GroundedConfig;
+use rocc::backend::grounded::latents::{self, Anchor, GBox};
+use rocc::backend::grounded::loss::{class_weights, lovasz_grad, lovasz_softmax, weighted_cross_entropy};
+use rocc::backend::grounded::model::{Autoencoder, Generator, HostBatch};
+use rocc::backend::grounded::splat::{ActiveAnchors, PARAMS, Region, activate, splat};
+use rocc::backend::grounded::{Grounded, cpu, load_weights, save_safetensors};
+use rocc::backend::layout::{BACKGROUND, N_LABELS, NX, NY, NZ, PEDESTRIAN, VEHICLE};
+use rocc::raster::layout::{CH_DRIVABLE, GRID, N_AUX, N_MASKS};
+use rocc::sample::Rng;
+
+/// A model small enough for unit tests.
+pub fn tiny() -> GroundedConfig {
+    let mut c = GroundedConfig::from_ron(include_str!("../configs/cpu-small.ron")).unwrap();
+    c.name = "tiny".into();
+    c.latents = 64;
+    c.max_foreground = 32;
+    c.latent_dim = 8;
+    c.decoder = rocc::backend::grounded::config::DecoderConfig { width: 16, blocks: 1, heads: 2, ff: 32 };
+    c.gaussians.vehicle = 6;
+    c.gaussians.mid = 4;
+    c.gaussians.small = 3;
+    c.gaussians.background = 2;
+    c.lattice.spacing_m = 10.0;
+    c.encoder.samples = vec![3, 2, 2];
+    c.encoder.hidden = 16;
+    c.bev.channels = vec![4, 8];
+    c.bev.strides = vec![2, 2];
+    c.bev.hidden = 16;
+    c
+}
+
+fn raw_params(n: usize, seed: u64) -> Vec<f32> {
+    let mut r = Rng::new(seed);
+    (0..n * PARAMS).map(|_| (r.normal() * 0.8) as f32).collect()
+}
+
+/// f64 host version of `activate` + the windowed splat: the reference both tests compare with.
+struct RefGauss {
+    mean: [f64; 3],
+    scale: [f64; 3],
+    rot: [f64; 9],
+    opacity: f64,
+    feat: [f64; N_LABELS],
+    batch: usize,
+}
+
+fn sigmoid(x: f64) -> f64 {
+    1.0 / (1.0 + (-x).exp())
+}
+
+fn activate_ref(raw: &[f64], a: &ActiveAnchors, bound: f64, smin: f64, smax: f64) -> Vec<RefGauss> {
+    (0..a.pos.len())
+        .map(|n| {
+            let p = &raw[n * PARAMS..(n + 1) * PARAMS];
+            let (c, s) = (a.cos[n] as f64, a.sin[n] as f64);
+            let o: Vec<f64> = (0..3).map(|i| p[i].tanh() * bound).collect();
+            let mean = [
+                a.pos[n][0] as f64 + c * o[0] - s * o[1],
+                a.pos[n][1] as f64 + s * o[0] + c * o[1],
+                a.pos[n][2] as f64 + o[2],
+            ];
+            let scale = [0, 1, 2].map(|i| smin + (smax - smin) * sigmoid(p[3 + i]));
+            let q = [p[6] + 1.0, p[7], p[8], p[9]];
+            let norm = (q.iter().map(|v| v * v).sum::<f64>() + 1e-8).sqrt();
+            let [w, x, y, z] = q.map(|v| v / norm);
+            let rq = [
+                [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)],
+                [2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)],
+                [2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)],
+            ];
+            let mut rot = [0.0; 9];
+            for j in 0..3 {
+                rot[j] = c * rq[0][j] - s * rq[1][j];
+                rot[3 + j] = s * rq[0][j] + c * rq[1][j];
+                rot[6 + j] = rq[2][j];
+            }
+            RefGauss {
+                mean,
+                scale,
+                rot,
+                opacity: sigmoid(p[10]),
+                feat: std::array::from_fn(|k| p[11 + k]),
+                batch: a.batch[n],
+            }
+        })
+        .collect()
+}
+
+/// Brute force: every voxel of the region against every Gaussian; `window` = None evaluates
+/// the untruncated Gaussian everywhere.
+fn dense_ref(gs: &[RefGauss], region: Region, batch: usize, window: Option<i64>) -> Vec<f64> {
+    let mut out = vec![0.0; batch * region.voxels() * N_LABELS];
+    for b in 0..batch {
+        for li in 0..region.ni {
+            for lj in 0..region.nj {
+                for k in 0..NZ {
+                    let (i, j) = (region.i0 + li, region.j0 + lj);
+                    let v = b * region.voxels() + (li * region.nj + lj) * NZ + k;
+                    for g in gs.iter().filter(|g| g.batch == b) {
+                        let c = g.mean.map(|m| m.floor() as i64);
+                        if let Some(r) = window
+                            && ((i as i64 - c[0]).abs() > r
+                                || (j as i64 - c[1]).abs() > r
+                                || (k as i64 - c[2]).abs() > r)
+                        {
+                            continue;
+                        }
+                        let d = [i as f64 + 0.5 - g.mean[0], j as f64 + 0.5 - g.mean[1], k as f64 + 0.5 - g.mean[2]];
+                        let mut m = 0.0;
+                        for a in 0..3 {
+                            let u = d[0] * g.rot[a] + d[1] * g.rot[3 + a] + d[2] * g.rot[6 + a];
+                            m += (u / g.scale[a]).powi(2);
+                        }
+                        let w = g.opacity * (-0.5 * m).exp();
+                        for c in 0..N_LABELS {
+                            out[v * N_LABELS + c] += w * g.feat[c];
+                        }
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Anchors for a tiny splat case: two Gaussians in batch 0 (one near the region's edge, so its
+/// window is clipped), one in batch 1, one at the top of the grid (clipped in z).
+fn case() -> (ActiveAnchors, Region) {
+    let region = Region { i0: 100, j0: 200, ni: 10, nj: 9 };
+    let mut a = ActiveAnchors::default();
+    for (pos, yaw, b) in [
+        ([104.3f32, 204.6, 14.2], 0.3f32, 0usize),
+        ([100.2, 207.7, 10.6], -1.2, 0),
+        ([106.4, 202.3, 20.4], 2.0, 1),
+        ([103.6, 203.3, 31.4], 0.0, 1),
+    ] {
+        a.pos.push(pos);
+        a.cos.push(yaw.cos());
+        a.sin.push(yaw.sin());
+        a.batch.push(b);
+    }
+    (a, region)
+}
+
+const BOUND: f32 = 1.5;
+const SMIN: f32 = 0.25;
+const WINDOW: usize = 2;
+
+#[test]
+fn splat_matches_a_brute_force_dense_reference() {
+    let device = cpu();
+    let (a, region) = case();
+    let raw = raw_params(a.pos.len(), 1);
+    let smax = WINDOW as f32 / 3.0;
+    let t = Tensor::<2>::from_data(TensorData::new(raw.clone(), [a.pos.len(), PARAMS]), &device);
+    let g = activate(t, &a, BOUND, SMIN, smax);
+    let got: Vec<f32> = splat(&g, region, 2, WINDOW).to_data().iter::<f32>().collect();
+    let raw64: Vec<f64> = raw.iter().map(|&v| v as f64).collect();
+    let gs = activate_ref(&raw64, &a, BOUND as f64, SMIN as f64, smax as f64);
+    let want = dense_ref(&gs, region, 2, Some(WINDOW as i64));
+    assert_eq!(got.len(), want.len());
+    let mut max_err = 0.0f64;
+    for (g, w) in got.iter().zip(&want) {
+        max_err = max_err.max((*g as f64 - w).abs());
+    }
+    assert!(max_err < 1e-4, "windowed splat differs from the dense reference by {max_err}");
+    // The window loses little: the untruncated Gaussians differ by at most exp(-4.5) of their peak
+    // mass per voxel, so the totals agree within a few percent.
+    let full = dense_ref(&gs, region, 2, None);
+    let (sa, sf): (f64, f64) = (want.iter().map(|v| v.abs()).sum(), full.iter().map(|v| v.abs()).sum());
+    assert!(sa > 0.1, "the case must put mass in the region");
+    assert!((sa - sf).abs() / sf < 0.05, "window keeps {sa} of {sf}");
+    // Geometry bounds: offsets within the bound of the anchor, rotations orthonormal.
+    for (g, n) in gs.iter().zip(0..) {
+        let (c, s) = (a.cos[n] as f64, a.sin[n] as f64);
+        let d = [g.mean[0] - a.pos[n][0] as f64, g.mean[1] - a.pos[n][1] as f64, g.mean[2] - a.pos[n][2] as f64];
+        let local = [c * d[0] + s * d[1], -s * d[0] + c * d[1], d[2]];
+        assert!(local.iter().all(|v| v.abs() <= BOUND as f64 + 1e-9), "{local:?}");
+        assert!(g.scale.iter().all(|&s| s >= SMIN as f64 && s <= smax as f64));
+        for p in 0..3 {
+            for q in 0..3 {
+                let dot: f64 = (0..3).map(|r| g.rot[3 * r + p] * g.rot[3 * r + q]).sum();
+                assert!((dot - (p == q) as u8 as f64).abs() < 1e-6);
+            }
+        }
+    }
+}
+
+#[test]
+fn splat_gradients_match_finite_differences() {
+    let device = cpu().autodiff();
+    let (a, region) = case();
+    let n = a.pos.len();
+    let smax = WINDOW as f32 / 3.0;
+    let raw = raw_params(n, 2);
+    let mut r = Rng::new(9);
+    let weights: Vec<f64> = (0..2 * region.voxels() * N_LABELS).map(|_| r.normal()).collect();
+    let t = Tensor::<2>::from_data(TensorData::new(raw.clone(), [n, PARAMS]), &device).require_grad();
+    let w = Tensor::<2>::from_data(
+        TensorData::new(weights.iter().map(|&v| v as f32).collect::<Vec<_>>(), [2 * region.voxels(), N_LABELS]),
+        &device,
+    );
+    let loss = (splat(&activate(t.clone(), &a, BOUND, SMIN, smax), region, 2, WINDOW) * w).sum();
+    let grads = loss.backward();
+    let got: Vec<f32> = t.grad(&grads).expect("raw params get a gradient").to_data().iter::<f32>().collect();
+    let f = |p: &[f64]| -> f64 {
+        let gs = activate_ref(p, &a, BOUND as f64, SMIN as f64, smax as f64);
+        dense_ref(&gs, region, 2, Some(WINDOW as i64)).iter().zip(&weights).map(|(x, y)| x * y).sum()
+    };
+    let base: Vec<f64> = raw.iter().map(|&v| v as f64).collect();
+    // The means must sit away from voxel faces so a step never changes the window.
+    for g in activate_ref(&base, &a, BOUND as f64, SMIN as f64, smax as f64) {
+        assert!(g.mean.iter().all(|m| (m - m.floor()) > 0.01 && (m - m.floor()) < 0.99), "{:?}", g.mean);
+    }
+    let names = ["offset", "offset", "offset", "scale", "scale", "scale", "rot", "rot", "rot", "rot", "opacity"];
+    let eps = 1e-6;
+    let mut checked = 0;
+    for row in 0..n {
+        for c in 0..PARAMS {
+            let i = row * PARAMS + c;
+            let (mut hi, mut lo) = (base.clone(), base.clone());
+            hi[i] += eps;
+            lo[i] -= eps;
+            let fd = (f(&hi) - f(&lo)) / (2.0 * eps);
+            let ad = got[i] as f64;
+            let what = names.get(c).copied().unwrap_or("feature");
+            assert!(
+                (fd - ad).abs() <= 2e-3 * fd.abs().max(1.0),
+                "d loss / d {what}[{row}][{c}]: autodiff {ad}, finite difference {fd}"
+            );
+            checked += (fd.abs() > 1e-3) as usize;
+        }
+    }
+    assert!(checked > n * 8, "most parameters must matter in this case ({checked})");
+}
+
+#[test]
+fn lovasz_softmax_matches_a_hand_computed_case() {
+    let device = cpu();
+    // Four voxels, classes 0 (free) and 1 (background) present; see the comment for the numbers.
+    let mut p = vec![0f32; 4 * N_LABELS];
+    for (v, (p0, p1)) in [(0.9, 0.1), (0.4, 0.6), (0.3, 0.7), (0.8, 0.2)].into_iter().enumerate() {
+        p[v * N_LABELS] = p0;
+        p[v * N_LABELS + 1] = p1;
+    }
+    let target = [0u8, 0, 1, 1];
+    // Class 0: errors [0.1, 0.6, 0.3, 0.8] -> order v3 v1 v2 v0, truth [0, 1, 0, 1], Jaccard
+    // 1/3, 2/3, 3/4, 1 -> grad [1/3, 1/3, 1/12, 1/4] -> 0.8/3 + 0.6/3 + 0.3/12 + 0.1/4.
+    // Class 1: same errors, truth [1, 0, 1, 0], Jaccard 1/2, 2/3, 1, 1 -> 0.4 + 0.1 + 0.1 + 0.
+    let want = ((0.8 / 3.0 + 0.6 / 3.0 + 0.3 / 12.0 + 0.1 / 4.0) + (0.4 + 0.1 + 0.1)) / 2.0;
+    let probs = Tensor::<2>::from_data(TensorData::new(p, [4, N_LABELS]), &device);
+    let got = lovasz_softmax(probs, &target).into_scalar::<f32>() as f64;
+    assert!((got - want).abs() < 1e-6, "lovasz {got}, by hand {want}");
+    assert_eq!(lovasz_grad(&[false, true, false, true]), vec![1.0 / 3.0, 1.0 / 3.0, 1.0 / 12.0, 0.25]);
+    // On hard 0/1 predictions the Lovász extension is exactly 1 - IoU, averaged over present classes.
+    let hard: Vec<f32> =
+        [0usize, 1, 1, 1].iter().flat_map(|&c| (0..N_LABELS).map(move |k| (k == c) as u8 as f32)).collect();
+    let got = lovasz_softmax(Tensor::<2>::from_data(TensorData::new(hard, [4, N_LABELS]), &device), &target);
+    // class 0: IoU 1/2; class 1: IoU 2/3.
+    assert!((got.into_scalar::<f32>() as f64 - ((1.0 - 0.5) + (1.0 - 2.0 / 3.0)) / 2.0).abs() < 1e-6);
+}
+
+#[test]
+fn weighted_cross_entropy_and_class_weights() {
+    let device = cpu();
+    let logits = Tensor::<2>::from_data(TensorData::new(vec![0f32; 2 * N_LABELS], [2, N_LABELS]), &device);
+    let mut w = [1f32; N_LABELS];
+    w[2] = 3.0;
+    // Uniform logits: -log(1/9) per voxel whatever the weights.
+    let ce = weighted_cross_entropy(logits, &[0, 2], &w).into_scalar::<f32>() as f64;
+    assert!((ce - 9f64.ln()).abs() < 1e-5);
+    let mut counts = [0u64; N_LABELS];
+    counts[0] = 1_000_000;
+    counts[1] = 10_000;
+    counts[2] = 100;
+    let cw = class_weights(&counts, 0.5, 25.0, &[1.0; N_LABELS]);
+    assert_eq!(cw[0], 1.0);
+    assert!((cw[1] - 10.0).abs() < 1e-4);
+    assert_eq!(cw[2], 25.0, "clipped");
+    assert_eq!(cw[5], 25.0, "unseen classes get the clip");
+}
+
+fn bev_with_road() -> (Array3<i8>, Array3<i32>) {
+    let mut masks = Array3::<i8>::zeros((N_MASKS, GRID, GRID));
+    // A 10 m wide road along x.
+    masks.slice_mut(ndarray::s![CH_DRIVABLE, .., 180..220]).fill(1);
+    (masks, Array3::zeros((N_AUX, GRID, GRID)))
+}
+
+fn car(x: f64, y: f64, l: f64) -> GBox {
+    GBox { label: VEHICLE, x, y, z: 0.8, l, w: 1.9, h: 1.6, yaw: 0.4 }
+}
+
+#[test]
+fn latent_set_shapes() {
+    let cfg = tiny();
+    let (masks, _) = bev_with_road();
+    let boxes = [
+        car(5.0, 0.0, 3.9),
+        car(-20.0, 2.0, 12.0),
+        GBox { label: PEDESTRIAN, x: 3.0, y: 8.0, z: 0.9, l: 0.6, w: 0.6, h: 1.8, yaw: 0.0 },
+    ];
+    let set = latents::build(&cfg, &boxes, &masks);
+    let fg: Vec<&Anchor> = set.iter().filter(|a| a.foreground).collect();
+    // Longer than `split_length_m` (4 m) splits: the 12 m bus into 3 pieces of 4 m along its
+    // heading; the 3.9 m car and the pedestrian stay whole.
+    assert_eq!(fg.len(), 5);
+    let bus: Vec<&&Anchor> = fg.iter().filter(|a| (a.ext[0] - 4.0).abs() < 1e-9).collect();
+    assert_eq!(bus.len(), 3);
+    let mid = bus.iter().map(|a| a.pos[0]).sum::<f64>() / 3.0;
+    assert!((mid + 20.0).abs() < 1e-9);
+    // Foreground nearest the ego first.
+    assert_eq!(fg[0].label, VEHICLE);
+    assert!((fg[0].pos[0] - 5.0).abs() < 1e-9);
+    // Background only over the road's footprint (|y| <= 5 m, cells of 10 m).
+    let bg: Vec<&Anchor> = set.iter().filter(|a| !a.foreground).collect();
+    assert!(!bg.is_empty());
+    assert!(bg.iter().all(|a| a.label == BACKGROUND && a.pos[1].abs() <= 10.0), "{bg:?}");
+    assert!(set.len() <= cfg.latents);
+    assert_eq!(latents::budget(&cfg, VEHICLE), 6);
+    assert_eq!(latents::budget(&cfg, PEDESTRIAN), 3);
+    // Capacity: Q caps the set, foreground kept first.
+    let mut small = cfg.clone();
+    small.latents = 6;
+    small.max_foreground = 4;
+    let capped = latents::build(&small, &boxes, &masks);
+    assert_eq!(capped.len(), 6);
+    assert_eq!(capped.iter().filter(|a| a.foreground).count(), 4);
+}
+
+#[test]
+fn model_shapes_and_padding_invariance() {
+    let cfg = tiny();
+    let device = cpu();
+    let (masks, aux) = bev_with_road();
+    let a = latents::build(&cfg, &[car(5.0, 0.0, 4.5)], &masks);
+    let b = latents::build(&cfg, &[car(-3.0, 1.0, 4.0), car(10.0, -2.0, 5.0)], &masks);
+    let region = Region { i0: 180, j0: 180, ni: 40, nj: 40 };
+    let hb = HostBatch::new(vec![a.clone(), b.clone()]);
+    assert_eq!(hb.q, a.len().max(b.len()));
+    assert_eq!(hb.pad.iter().filter(|&&p| !p).count(), a.len() + b.len());
+    let g = Generator::new(&cfg, &device);
+    let mut bev = Vec::new();
+    rocc::backend::grounded::model::bev_input(&masks, &aux, &mut bev);
+    let bev2 = [bev.clone(), bev.clone()].concat();
+    let out = g.forward(bev2, &hb, region);
+    assert_eq!(out.logits.dims(), [2 * region.voxels(), N_LABELS]);
+    assert_eq!(out.background.as_ref().map(|t| t.dims()), Some([2 * region.voxels(), 1]));
+    // The zero-initialised background head adds nothing at first.
+    assert_eq!(out.background.unwrap().abs().max().into_scalar::<f32>(), 0.0);
+    // Padding further changes nothing: frame `a` alone (q = |a|) vs in the padded batch.
+    let alone = g.forward(bev.clone(), &HostBatch::new(vec![a.clone()]), region).logits;
+    let batched = out.logits.slice([0..region.voxels(), 0..N_LABELS]);
+    let diff = (alone - batched).abs().max().into_scalar::<f32>();
+    assert!(diff < 1e-4, "padding changed the logits by {diff}");
+    let ae = Autoencoder::new(&cfg, &device);
+    let labels = Array3::<u8>::zeros((NX, NY, NZ));
+    let enc = Autoencoder::encoder_input(&cfg, &hb, &[&labels, &labels]);
+    assert_eq!(enc.len(), 2 * hb.q * 12 * N_LABELS);
+    let o = ae.forward(enc, &hb, region, None);
+    assert_eq!(o.logits.dims(), [2 * region.voxels(), N_LABELS]);
+    assert_eq!(o.mu.dims(), [a.len() + b.len(), cfg.latent_dim]);
+    // A whole-grid prediction has the occupancy layout.
+    let pred = Grounded::from_model(cfg.clone(), g, "t").predict(&[car(5.0, 0.0, 4.5)], &masks, &aux);
+    assert_eq!(pred.dim(), (NX, NY, NZ));
+    assert!(pred.iter().all(|&l| (l as usize) < N_LABELS));
+}
+
+/// A probe of a model's parameters: the logits of a small scene depend on every one of them.
+fn params(g: &Generator) -> Vec<f32> {
+    let (masks, aux) = bev_with_road();
+    let cfg = tiny();
+    let hb = HostBatch::new(vec![latents::build(&cfg, &[car(5.0, 0.0, 4.5)], &masks)]);
+    let mut bev = Vec::new();
+    rocc::backend::grounded::model::bev_input(&masks, &aux, &mut bev);
+    g.forward(bev, &hb, Region { i0: 200, j0: 190, ni: 30, nj: 20 }).logits.to_data().iter::<f32>().collect()
+}
+
+#[test]
+fn checkpoints_round_trip_and_bad_weights_are_diagnosed() {
+    let cfg = tiny();
+    let device = cpu();
+    device.seed(3);
+    let g = Generator::new(&cfg, &device);
+    let dir = tempdir("roundtrip");
+    let bpk = dir.join("generator.bpk");
+    g.clone().save_file(&bpk).unwrap();
+    std::fs::write(dir.join("generator.ron"), cfg.to_ron()).unwrap();
+    device.seed(4);
+    let fresh = Generator::new(&cfg, &device);
+    assert_ne!(params(&fresh), params(&g), "two seeds must differ for this test to mean anything");
+    let loaded = load_weights(Generator::new(&cfg, &device), &bpk).unwrap();
+    assert_eq!(params(&loaded), params(&g));
+    let st = dir.join("generator.safetensors");
+    save_safetensors(&g, &st).unwrap();
+    let loaded = load_weights(Generator::new(&cfg, &device), &st).unwrap();
+    assert_eq!(params(&loaded), params(&g));
+    // Through the backend: the `.ron` beside the weights is found.
+    let backend = Grounded::load(&bpk, None).unwrap();
+    assert!(rocc::backend::OccupancyBackend::name(&backend).starts_with("grounded-tiny-"));
+    // Diagnostics.
+    let code = |r: Result<Grounded, rocc::diag::Diagnostic>| r.err().map(|d| d.code.to_string());
+    assert_eq!(code(Grounded::load(&dir.join("nope.bpk"), None)), Some("E0901".into()));
+    std::fs::write(dir.join("w.pt"), b"x").unwrap();
+    std::fs::write(dir.join("w.ron"), cfg.to_ron()).unwrap();
+    assert_eq!(code(Grounded::load(&dir.join("w.pt"), None)), Some("E0904".into()));
+    std::fs::copy(&st, dir.join("orphan.safetensors")).unwrap();
+    assert_eq!(code(Grounded::load(&dir.join("orphan.safetensors"), None)), Some("E0902".into()));
+    let mut other = cfg.clone();
+    other.decoder.width = 32;
+    std::fs::write(dir.join("other.ron"), other.to_ron()).unwrap();
+    assert_eq!(code(Grounded::load(&bpk, Some(&dir.join("other.ron")))), Some("E0903".into()));
+    assert_eq!(code(Grounded::load(&st, Some(&dir.join("other.ron")))), Some("E0903".into()));
+    let ae = dir.join("autoencoder.bpk");
+    Autoencoder::new(&cfg, &device).save_file(&ae).unwrap();
+    assert_eq!(code(Grounded::load(&ae, Some(&dir.join("generator.ron")))), Some("E0903".into()));
+    std::fs::write(dir.join("bad.ron"), "(name: \"x\")").unwrap();
+    assert_eq!(code(Grounded::load(&bpk, Some(&dir.join("bad.ron")))), Some("E0902".into()));
+}
+
+#[test]
+fn bundled_configs_are_valid() {
+    let paper = GroundedConfig::from_ron(include_str!("../configs/paper.ron")).unwrap();
+    assert_eq!((paper.latents, paper.latent_dim, paper.max_foreground), (4096, 128, 512));
+    assert_eq!((paper.decoder.width, paper.decoder.blocks, paper.decoder.heads), (384, 6, 6));
+    assert_eq!(paper.max_gaussians(), 96);
+    assert_eq!((paper.gaussians.offset_bound, paper.gaussians.min_scale), (7.0, 0.25));
+    let small = GroundedConfig::from_ron(include_str!("../configs/cpu-small.ron")).unwrap();
+    assert_eq!(GroundedConfig::from_ron(&small.to_ron()).unwrap(), small);
+    let mut bad = small.clone();
+    bad.decoder.heads = 5;
+    bad.max_foreground = 10_000;
+    let e = bad.validate().unwrap_err();
+    assert!(e.contains("multiple of `heads`") && e.contains("max_foreground"), "{e}");
+}
+
+pub fn tempdir(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("rocc-grounded-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
