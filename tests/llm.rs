@@ -88,6 +88,11 @@ fn lark_export_defines_every_rule_it_uses() {
     let lark = rocc::grammar::export(rocc::grammar::Format::Lark);
     let defined: Vec<&str> = lark.lines().filter_map(|l| l.split_once(": ").map(|(n, _)| n)).collect();
     assert!(defined.contains(&"start") && defined.contains(&"scenario") && defined.contains(&"ws"));
+    // Lark rejects a grammar defining a rule twice ("Rule 'start' defined more than once").
+    let mut seen = std::collections::BTreeSet::new();
+    for n in &defined {
+        assert!(seen.insert(*n), "lark rule `{n}` is defined more than once");
+    }
     for l in lark.lines().filter(|l| !l.starts_with("//")) {
         let (_, body) = l.split_once(": ").unwrap();
         // Names outside literals and regexes must be defined rules.
@@ -102,6 +107,43 @@ fn lark_export_defines_every_rule_it_uses() {
             assert!(defined.contains(&w), "lark rule `{w}` is not defined (line: {l})");
         }
     }
+}
+
+/// The export loads in Python `lark` (Earley) and parses the scenario library.
+#[test]
+fn python_lark_loads_the_export_and_parses_scenarios() {
+    let has_lark =
+        std::process::Command::new("python3").args(["-c", "import lark"]).output().is_ok_and(|o| o.status.success());
+    if !has_lark {
+        eprintln!("SKIP: python3 with lark not available (CI installs it with `pip install lark`)");
+        return;
+    }
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let dir = std::env::temp_dir().join(format!("rocc-lark-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let grammar = dir.join("scn.lark");
+    std::fs::write(&grammar, rocc::grammar::export(rocc::grammar::Format::Lark)).unwrap();
+    let mut scenarios: Vec<_> = std::fs::read_dir(root.join("scenarios"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "scn"))
+        .collect();
+    scenarios.sort();
+    assert!(scenarios.len() >= 3);
+    let out = std::process::Command::new("python3")
+        .arg(root.join("tests/python/check_lark.py"))
+        .arg(&grammar)
+        .args(&scenarios)
+        .output()
+        .expect("run python3");
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(
+        out.status.success(),
+        "check_lark.py failed:\n{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), format!("ok {}", scenarios.len()));
 }
 
 #[test]
