@@ -167,6 +167,21 @@ fn bad_egos_frames_and_duplicate_names_are_diagnosed() {
     assert_eq!(r.failures[0].diags[0].code, "E0303");
 }
 
+#[test]
+fn duplicate_names_in_different_shards_are_diagnosed() {
+    let twice = vec![root().join("scenarios/car_u_turn.scn"), root().join("../shared/examples/car_u_turn.scn")];
+    let out = tmp("dup-shards");
+    let o = Options { previews: false, ..opts(Stage::Bev, "0") };
+    // Shard 1 of 2 owns the first file: it compiles, as it would without sharding.
+    let first = batch::run_shard(&twice, Some((1, 2)), &out, &o, true);
+    assert_eq!((first.clips.len(), first.failures.len()), (1, 0));
+    // Shard 2 of 2 owns only the second: its name clashes with a file of shard 1.
+    let second = batch::run_shard(&twice, Some((2, 2)), &out, &o, true);
+    assert_eq!((second.clips.len(), second.failures.len()), (0, 1));
+    assert_eq!(second.failures[0].diags[0].code, "E0303");
+    assert_eq!(second.failures[0].input, twice[1]);
+}
+
 fn python_with_numpy() -> bool {
     Command::new("python3").args(["-c", "import numpy"]).output().is_ok_and(|o| o.status.success())
 }

@@ -45,12 +45,33 @@ const CHUNK_PER_THREAD: usize = 4;
 /// rollout) and rendered chunk by chunk, clips and frames in parallel, so peak memory depends on
 /// the chunk, not on the corpus. Failures never stop the others.
 pub fn run(inputs: &[PathBuf], out: &Path, opts: &Options, quiet: bool) -> BatchReport {
+    run_shard(inputs, None, out, opts, quiet)
+}
+
+/// `run` for shard `k` of `n` of `inputs` (all of them, before sharding): duplicate scenario
+/// names are found over every input, so two files that land in different shards still clash
+/// (E0303 goes to the later one in input order, as without sharding). Errors in files of
+/// other shards are theirs to report.
+pub fn run_shard(
+    inputs: &[PathBuf],
+    shard: Option<(usize, usize)>,
+    out: &Path,
+    opts: &Options,
+    quiet: bool,
+) -> BatchReport {
     let mut report = BatchReport::default();
+    let mine = |i: usize| shard.is_none_or(|(k, n)| i % n == k - 1);
     let surveyed: Vec<Result<(String, usize), Failure>> = inputs.par_iter().map(|p| survey(p, opts)).collect();
     let mut owner: BTreeMap<String, &PathBuf> = BTreeMap::new();
     let mut todo = Vec::new();
     let mut total = 0;
-    for (input, r) in inputs.iter().zip(surveyed) {
+    for (i, (input, r)) in inputs.iter().zip(surveyed).enumerate() {
+        if !mine(i) {
+            if let Ok((name, _)) = r {
+                owner.entry(name).or_insert(input);
+            }
+            continue;
+        }
         match r {
             Ok((name, frames)) => match owner.get(&name) {
                 Some(first) => report.failures.push(Failure {
