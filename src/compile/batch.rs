@@ -30,6 +30,7 @@ pub struct BatchReport {
 struct Prepared {
     input: PathBuf,
     bytes: Vec<u8>,
+    sources: SourceMap,
     front: Front,
     background: Background,
     egos: Vec<usize>,
@@ -128,6 +129,7 @@ fn render(p: &Prepared, ego: usize, out: &Path, opts: &Options, progress: &Progr
     let ci = ClipInput {
         input: &input,
         input_bytes: &p.bytes,
+        sources: &p.sources,
         front: &p.front,
         background: &p.background,
         ego,
@@ -182,7 +184,7 @@ fn prepare(path: &Path, opts: &Options) -> Result<Prepared, Failure> {
     } else {
         Background::none()
     };
-    Ok(Prepared { input: path.to_path_buf(), bytes, front, background, egos, frames })
+    Ok(Prepared { input: path.to_path_buf(), bytes, sources, front, background, egos, frames })
 }
 
 /// Expand files and directories (recursively, `*.scn`) into a sorted, de-duplicated list.
