@@ -365,6 +365,11 @@ fn clip_edits_change_exactly_the_box_list_and_rerun_the_stages() {
     assert_eq!(code(ins("sedan at 1,0 yaw 0")), "E0711", "the ego's own box");
     assert_eq!(code(Edit::Delete { agent: "cuter".into() }), "E0709");
     assert_eq!(code(ins("sedna at 20,0 yaw 0")), "E0713");
+    // Frames of the scenario the clip does not hold (it holds 0..2): an error, not a no-op.
+    let later = ClipEdit { frames: Some("20..=25".into()), ..o.clone() };
+    let err = edit_clip(&dir, &[ins("sedan at 20,0 yaw 0")], &later).unwrap_err();
+    assert_eq!(err[0].code, "E0718");
+    assert!(err[0].message.contains("--frames 20..=25"), "{}", err[0].message);
     assert_eq!(std::fs::read(dir.join("manifest.json")).unwrap(), manifest_before);
     assert_eq!(parse_edit("insert", &["sedan".into(), "at".into(), "x".into()]).unwrap_err().code, "E0717");
 
