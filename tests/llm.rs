@@ -308,6 +308,44 @@ fn repair_budget_exhausted_keeps_the_last_attempt() {
     assert_eq!(r.attempts.len(), 2);
 }
 
+fn cut_off(content: &str) -> Reply {
+    ok(json!({"choices": [{"index": 0, "finish_reason": "length",
+        "message": {"role": "assistant", "content": content}}]}))
+}
+
+#[test]
+fn truncated_or_empty_repair_replies_spend_a_round_and_are_sent_back() {
+    let fake = serve(vec![
+        chat(&schema("stop_line")),
+        chat(GOALS),
+        cut_off("scenario two_cars {\n    seed 1\n    road straight { lanes 1; lanes 1; lanes 1;"),
+        chat("   "),
+        chat(FIXED),
+    ]);
+    let mut o = opts(&fake.url, Server::Vllm);
+    o.max_repairs = 3;
+    let (out, r) = run(&o);
+    assert_eq!(code(&out), "accepted", "{out:?}");
+    assert_eq!(r.attempts.len(), 2, "only readable replies are candidates");
+    let reqs = fake.requests();
+    assert_eq!(reqs.len(), 5);
+    let after_cut = reqs[3]["messages"][1]["content"].as_str().unwrap();
+    assert!(after_cut.contains(r#""code":"E0606""#) && after_cut.contains(r#""code":"E0111""#), "{after_cut}");
+    let after_empty = reqs[4]["messages"][1]["content"].as_str().unwrap();
+    assert!(after_empty.contains(r#""code":"E0605""#) && !after_empty.contains("E0606"), "{after_empty}");
+    assert!(after_empty.contains(r#""code":"E0111""#), "the file's own errors still go back");
+
+    // With no round left, a cut-off reply ends in a rejection that says why, not a failure.
+    let fake = serve(vec![chat(&schema("stop_line")), chat(GOALS), cut_off("scenario s {")]);
+    let mut o = opts(&fake.url, Server::Vllm);
+    o.max_repairs = 1;
+    let (out, r) = run(&o);
+    let Outcome::Rejected { diags, .. } = out else { panic!("{out:?}") };
+    assert_eq!(diags[0].code, "E0606");
+    assert!(diags.iter().any(|d| d.code == "E0111"));
+    assert_eq!(r.attempts.len(), 1);
+}
+
 #[test]
 fn prose_in_the_repair_loop_is_e0610_and_sent_back() {
     let fake =
