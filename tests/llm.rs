@@ -81,6 +81,10 @@ fn decoding_grammar_accepts_the_corpus_without_comments() {
             .collect();
         assert!(g.accepts(&bare), "the decoding grammar rejects {}:\n{bare}", f.display());
     }
+    // Road parameters at most once each: a looping model cannot repeat them to --max-tokens.
+    let file = |road: &str| format!("scenario s {{\n    duration 4 s\n    road straight {{ {road} }}\n}}\n");
+    assert!(g.accepts(&file("lanes 2; speed_limit 50 km/h")));
+    assert!(!g.accepts(&file("lanes 2; speed_limit 50 km/h; lanes 2; speed_limit 50 km/h")));
 }
 
 #[test]
