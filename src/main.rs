@@ -812,16 +812,18 @@ fn compile(inputs: &[PathBuf], out: &Path, shard: Option<&str>, opts: &Options, 
             return ExitCode::FAILURE;
         }
     };
-    let files = match batch::collect_inputs(inputs) {
-        Ok(f) => batch::shard(f, shard),
+    let all = match batch::collect_inputs(inputs) {
+        Ok(f) => f,
         Err(m) => {
             let d = Diagnostic::error("E0002", m).help("pass `.scn` files or directories that hold them");
             print_diags(&[d], &SourceMap::default(), MessageFormat::Human);
             return ExitCode::FAILURE;
         }
     };
+    // Names are checked for duplicates over all inputs, not only this shard's.
+    let files = batch::shard(all.clone(), shard);
     let started = std::time::Instant::now();
-    let report = batch::run(&files, out, opts, quiet);
+    let report = batch::run_shard(&all, shard, out, opts, quiet);
     for f in &report.failures {
         eprintln!("failed: {}", f.input.display());
         print_diags(&f.diags, &f.sources, MessageFormat::Human);

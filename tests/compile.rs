@@ -153,6 +153,36 @@ fn a_failing_file_does_not_stop_the_batch() {
 }
 
 #[test]
+fn resume_recompiles_when_the_rig_or_an_import_changed() {
+    // A different `--lidar-resolution` keeps the rig's name but changes every scan.
+    let input = vec![root().join("scenarios/replayed_cut_in.scn")];
+    let out = tmp("resume-rig");
+    let o = Options { previews: false, ..opts(Stage::Lidar, "0") };
+    assert!(batch::run(&input, &out, &o, true).clips.iter().all(|c| !c.resumed));
+    assert!(batch::run(&input, &out, &o, true).clips.iter().all(|c| c.resumed));
+    let mut finer = o.clone();
+    finer.rig.horizontal_resolution_deg = 1.5;
+    assert_eq!(finer.rig.name, o.rig.name);
+    let r = batch::run(&input, &out, &finer, true);
+    assert!(r.failures.is_empty() && r.clips.iter().all(|c| !c.resumed), "a stale LiDAR clip was kept");
+
+    // An edited import changes the scene though the root file's bytes are the same.
+    let dir = tmp("resume-import");
+    std::fs::create_dir_all(dir.join("kinds")).expect("mkdir");
+    std::fs::copy(root().join("scenarios/car_into_tree.scn"), dir.join("car_into_tree.scn")).expect("copy");
+    let kinds = std::fs::read_to_string(root().join("scenarios/kinds/rural.scn")).expect("kinds");
+    std::fs::write(dir.join("kinds/rural.scn"), &kinds).expect("write");
+    let input = vec![dir.join("car_into_tree.scn")];
+    let out = dir.join("out");
+    let o = Options { previews: false, ..opts(Stage::Bev, "0") };
+    assert!(batch::run(&input, &out, &o, true).clips.iter().all(|c| !c.resumed));
+    assert!(batch::run(&input, &out, &o, true).clips.iter().all(|c| c.resumed));
+    std::fs::write(dir.join("kinds/rural.scn"), format!("{kinds}\n// edited\n")).expect("write");
+    let r = batch::run(&input, &out, &o, true);
+    assert!(r.failures.is_empty() && r.clips.iter().all(|c| !c.resumed), "a clip of a changed import was kept");
+}
+
+#[test]
 fn bad_egos_frames_and_duplicate_names_are_diagnosed() {
     let input = vec![root().join("scenarios/replayed_cut_in.scn")];
     let out = tmp("bad-options");
@@ -165,6 +195,21 @@ fn bad_egos_frames_and_duplicate_names_are_diagnosed() {
     let r = batch::run(&twice, &out, &Options { previews: false, ..opts(Stage::Bev, "0") }, true);
     assert_eq!((r.clips.len(), r.failures.len()), (1, 1));
     assert_eq!(r.failures[0].diags[0].code, "E0303");
+}
+
+#[test]
+fn duplicate_names_in_different_shards_are_diagnosed() {
+    let twice = vec![root().join("scenarios/car_u_turn.scn"), root().join("../shared/examples/car_u_turn.scn")];
+    let out = tmp("dup-shards");
+    let o = Options { previews: false, ..opts(Stage::Bev, "0") };
+    // Shard 1 of 2 owns the first file: it compiles, as it would without sharding.
+    let first = batch::run_shard(&twice, Some((1, 2)), &out, &o, true);
+    assert_eq!((first.clips.len(), first.failures.len()), (1, 0));
+    // Shard 2 of 2 owns only the second: its name clashes with a file of shard 1.
+    let second = batch::run_shard(&twice, Some((2, 2)), &out, &o, true);
+    assert_eq!((second.clips.len(), second.failures.len()), (0, 1));
+    assert_eq!(second.failures[0].diags[0].code, "E0303");
+    assert_eq!(second.failures[0].input, twice[1]);
 }
 
 fn python_with_numpy() -> bool {

@@ -117,6 +117,27 @@ fn identical_sets_score_100_and_sparse_npz_reads_like_dense() {
 }
 
 #[test]
+fn a_compiled_clip_directory_scores_its_occupancy_and_skips_bev_archives() {
+    use rocc::compile::{Options, Stage, batch};
+    let d = tmp_dir("occ-clip");
+    let input = vec![PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios/replayed_cut_in.scn")];
+    let o = Options { stage: Stage::Occ, frames: Some("0".into()), previews: false, ..Options::default() };
+    let r = batch::run(&input, &d, &o, true);
+    assert!(r.failures.is_empty());
+    let clip = d.join("replayed_cut_in/ego");
+    assert!(clip.join("bev/000000.npz").is_file() && clip.join("occ/000000.npy").is_file());
+    // The recursive scan finds bev/*.npz too; those are BEV maps, not occupancy.
+    let s = score_occ_dirs(&clip, &clip).expect("a clip directory scores");
+    assert_eq!(s.occ_iou, 100.0);
+    // A sparse archive under any member name is still occupancy, and still checked.
+    let rows = Array2::<i64>::from_shape_vec((1, 4), vec![0, 0, 0, 9]).unwrap();
+    let mut w = NpzWriter::new(std::fs::File::create(clip.join("bad_rows.npz")).unwrap());
+    w.add_array("rows", &rows).unwrap();
+    w.finish().unwrap();
+    assert_eq!(score_occ_dirs(&clip, &clip).unwrap_err()[0].code, "E0701");
+}
+
+#[test]
 fn lidar_metrics_on_hand_computed_fixtures() {
     // Disjoint distributions: JS distance sqrt(ln 2).
     assert!((js_distance(&[1.0, 0.0], &[0.0, 1.0]) - 2f64.ln().sqrt()).abs() < 1e-12);
@@ -344,6 +365,11 @@ fn clip_edits_change_exactly_the_box_list_and_rerun_the_stages() {
     assert_eq!(code(ins("sedan at 1,0 yaw 0")), "E0711", "the ego's own box");
     assert_eq!(code(Edit::Delete { agent: "cuter".into() }), "E0709");
     assert_eq!(code(ins("sedna at 20,0 yaw 0")), "E0713");
+    // Frames of the scenario the clip does not hold (it holds 0..2): an error, not a no-op.
+    let later = ClipEdit { frames: Some("20..=25".into()), ..o.clone() };
+    let err = edit_clip(&dir, &[ins("sedan at 20,0 yaw 0")], &later).unwrap_err();
+    assert_eq!(err[0].code, "E0718");
+    assert!(err[0].message.contains("--frames 20..=25"), "{}", err[0].message);
     assert_eq!(std::fs::read(dir.join("manifest.json")).unwrap(), manifest_before);
     assert_eq!(parse_edit("insert", &["sedan".into(), "at".into(), "x".into()]).unwrap_err().code, "E0717");
 

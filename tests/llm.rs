@@ -81,6 +81,10 @@ fn decoding_grammar_accepts_the_corpus_without_comments() {
             .collect();
         assert!(g.accepts(&bare), "the decoding grammar rejects {}:\n{bare}", f.display());
     }
+    // Road parameters at most once each: a looping model cannot repeat them to --max-tokens.
+    let file = |road: &str| format!("scenario s {{\n    duration 4 s\n    road straight {{ {road} }}\n}}\n");
+    assert!(g.accepts(&file("lanes 2; speed_limit 50 km/h")));
+    assert!(!g.accepts(&file("lanes 2; speed_limit 50 km/h; lanes 2; speed_limit 50 km/h")));
 }
 
 #[test]
@@ -88,6 +92,11 @@ fn lark_export_defines_every_rule_it_uses() {
     let lark = rocc::grammar::export(rocc::grammar::Format::Lark);
     let defined: Vec<&str> = lark.lines().filter_map(|l| l.split_once(": ").map(|(n, _)| n)).collect();
     assert!(defined.contains(&"start") && defined.contains(&"scenario") && defined.contains(&"ws"));
+    // Lark rejects a grammar defining a rule twice ("Rule 'start' defined more than once").
+    let mut seen = std::collections::BTreeSet::new();
+    for n in &defined {
+        assert!(seen.insert(*n), "lark rule `{n}` is defined more than once");
+    }
     for l in lark.lines().filter(|l| !l.starts_with("//")) {
         let (_, body) = l.split_once(": ").unwrap();
         // Names outside literals and regexes must be defined rules.
@@ -102,6 +111,43 @@ fn lark_export_defines_every_rule_it_uses() {
             assert!(defined.contains(&w), "lark rule `{w}` is not defined (line: {l})");
         }
     }
+}
+
+/// The export loads in Python `lark` (Earley) and parses the scenario library.
+#[test]
+fn python_lark_loads_the_export_and_parses_scenarios() {
+    let has_lark =
+        std::process::Command::new("python3").args(["-c", "import lark"]).output().is_ok_and(|o| o.status.success());
+    if !has_lark {
+        eprintln!("SKIP: python3 with lark not available (CI installs it with `pip install lark`)");
+        return;
+    }
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let dir = std::env::temp_dir().join(format!("rocc-lark-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let grammar = dir.join("scn.lark");
+    std::fs::write(&grammar, rocc::grammar::export(rocc::grammar::Format::Lark)).unwrap();
+    let mut scenarios: Vec<_> = std::fs::read_dir(root.join("scenarios"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "scn"))
+        .collect();
+    scenarios.sort();
+    assert!(scenarios.len() >= 3);
+    let out = std::process::Command::new("python3")
+        .arg(root.join("tests/python/check_lark.py"))
+        .arg(&grammar)
+        .args(&scenarios)
+        .output()
+        .expect("run python3");
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(
+        out.status.success(),
+        "check_lark.py failed:\n{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), format!("ok {}", scenarios.len()));
 }
 
 #[test]
@@ -264,6 +310,44 @@ fn repair_budget_exhausted_keeps_the_last_attempt() {
     assert!(text.contains("scenario s"), "the last attempt, not the first");
     assert_eq!(diags[0].code, "E0111");
     assert_eq!(r.attempts.len(), 2);
+}
+
+fn cut_off(content: &str) -> Reply {
+    ok(json!({"choices": [{"index": 0, "finish_reason": "length",
+        "message": {"role": "assistant", "content": content}}]}))
+}
+
+#[test]
+fn truncated_or_empty_repair_replies_spend_a_round_and_are_sent_back() {
+    let fake = serve(vec![
+        chat(&schema("stop_line")),
+        chat(GOALS),
+        cut_off("scenario two_cars {\n    seed 1\n    road straight { lanes 1; lanes 1; lanes 1;"),
+        chat("   "),
+        chat(FIXED),
+    ]);
+    let mut o = opts(&fake.url, Server::Vllm);
+    o.max_repairs = 3;
+    let (out, r) = run(&o);
+    assert_eq!(code(&out), "accepted", "{out:?}");
+    assert_eq!(r.attempts.len(), 2, "only readable replies are candidates");
+    let reqs = fake.requests();
+    assert_eq!(reqs.len(), 5);
+    let after_cut = reqs[3]["messages"][1]["content"].as_str().unwrap();
+    assert!(after_cut.contains(r#""code":"E0606""#) && after_cut.contains(r#""code":"E0111""#), "{after_cut}");
+    let after_empty = reqs[4]["messages"][1]["content"].as_str().unwrap();
+    assert!(after_empty.contains(r#""code":"E0605""#) && !after_empty.contains("E0606"), "{after_empty}");
+    assert!(after_empty.contains(r#""code":"E0111""#), "the file's own errors still go back");
+
+    // With no round left, a cut-off reply ends in a rejection that says why, not a failure.
+    let fake = serve(vec![chat(&schema("stop_line")), chat(GOALS), cut_off("scenario s {")]);
+    let mut o = opts(&fake.url, Server::Vllm);
+    o.max_repairs = 1;
+    let (out, r) = run(&o);
+    let Outcome::Rejected { diags, .. } = out else { panic!("{out:?}") };
+    assert_eq!(diags[0].code, "E0606");
+    assert!(diags.iter().any(|d| d.code == "E0111"));
+    assert_eq!(r.attempts.len(), 1);
 }
 
 #[test]

@@ -45,6 +45,21 @@ pub fn check_program(p: &load::Program) -> Result<Scenario, Vec<Diagnostic>> {
     }
 }
 
+/// Every road parameter of any template, in the order the decoding grammar offers them
+/// (the scenario library's order).
+pub const ROAD_PARAMS: [&str; 10] = [
+    "lanes",
+    "lane_width",
+    "radius",
+    "angle",
+    "speed_limit",
+    "shoulder",
+    "median",
+    "crosswalks",
+    "sidewalks",
+    "length",
+];
+
 struct Checker {
     diags: Vec<Diagnostic>,
     kinds: BTreeMap<String, (Kind, Span)>,
@@ -514,18 +529,7 @@ impl Checker {
         for p in &r.params {
             let n = p.name.name.as_str();
             if !allowed.contains(&n) {
-                let all = [
-                    "lanes",
-                    "lane_width",
-                    "speed_limit",
-                    "shoulder",
-                    "median",
-                    "crosswalks",
-                    "sidewalks",
-                    "length",
-                    "radius",
-                    "angle",
-                ];
+                let all = ROAD_PARAMS;
                 let msg = if all.contains(&n) {
                     format!("`{n}` does not apply to a {} road", template.name())
                 } else {

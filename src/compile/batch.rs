@@ -30,6 +30,7 @@ pub struct BatchReport {
 struct Prepared {
     input: PathBuf,
     bytes: Vec<u8>,
+    sources: SourceMap,
     front: Front,
     background: Background,
     egos: Vec<usize>,
@@ -45,12 +46,33 @@ const CHUNK_PER_THREAD: usize = 4;
 /// rollout) and rendered chunk by chunk, clips and frames in parallel, so peak memory depends on
 /// the chunk, not on the corpus. Failures never stop the others.
 pub fn run(inputs: &[PathBuf], out: &Path, opts: &Options, quiet: bool) -> BatchReport {
+    run_shard(inputs, None, out, opts, quiet)
+}
+
+/// `run` for shard `k` of `n` of `inputs` (all of them, before sharding): duplicate scenario
+/// names are found over every input, so two files that land in different shards still clash
+/// (E0303 goes to the later one in input order, as without sharding). Errors in files of
+/// other shards are theirs to report.
+pub fn run_shard(
+    inputs: &[PathBuf],
+    shard: Option<(usize, usize)>,
+    out: &Path,
+    opts: &Options,
+    quiet: bool,
+) -> BatchReport {
     let mut report = BatchReport::default();
+    let mine = |i: usize| shard.is_none_or(|(k, n)| i % n == k - 1);
     let surveyed: Vec<Result<(String, usize), Failure>> = inputs.par_iter().map(|p| survey(p, opts)).collect();
     let mut owner: BTreeMap<String, &PathBuf> = BTreeMap::new();
     let mut todo = Vec::new();
     let mut total = 0;
-    for (input, r) in inputs.iter().zip(surveyed) {
+    for (i, (input, r)) in inputs.iter().zip(surveyed).enumerate() {
+        if !mine(i) {
+            if let Ok((name, _)) = r {
+                owner.entry(name).or_insert(input);
+            }
+            continue;
+        }
         match r {
             Ok((name, frames)) => match owner.get(&name) {
                 Some(first) => report.failures.push(Failure {
@@ -107,6 +129,7 @@ fn render(p: &Prepared, ego: usize, out: &Path, opts: &Options, progress: &Progr
     let ci = ClipInput {
         input: &input,
         input_bytes: &p.bytes,
+        sources: &p.sources,
         front: &p.front,
         background: &p.background,
         ego,
@@ -161,7 +184,7 @@ fn prepare(path: &Path, opts: &Options) -> Result<Prepared, Failure> {
     } else {
         Background::none()
     };
-    Ok(Prepared { input: path.to_path_buf(), bytes, front, background, egos, frames })
+    Ok(Prepared { input: path.to_path_buf(), bytes, sources, front, background, egos, frames })
 }
 
 /// Expand files and directories (recursively, `*.scn`) into a sorted, de-duplicated list.

@@ -16,6 +16,7 @@ use crate::output::{
 use crate::place::Pose;
 use crate::raster::{Bev, Rasterizer};
 use crate::sample::Rng;
+use crate::source::SourceMap;
 use crate::view::{AgentState, EgoBox, to_ego};
 use rayon::prelude::*;
 use std::io;
@@ -35,6 +36,8 @@ pub struct ClipInput<'a> {
     /// The input file as named on the command line, and its bytes (hashed into the manifest).
     pub input: &'a str,
     pub input_bytes: &'a [u8],
+    /// Every loaded source (prelude, root, imports), as the checker's source map holds them.
+    pub sources: &'a SourceMap,
     pub front: &'a Front,
     pub background: &'a Background,
     /// Track index of the ego.
@@ -112,16 +115,38 @@ fn expected_manifest(ci: &ClipInput, opts: &Options, backend: &str) -> Manifest 
     m.stage = opts.stage.name().to_string();
     m.frames = ci.frames.to_vec();
     m.static_bev = opts.static_bev.as_ref().map(|b| b.source.clone());
+    m.build_key = build_key(ci.sources, (opts.stage >= Stage::Lidar).then_some(&opts.rig));
     m
 }
 
-/// A complete earlier run of the same clip: same compiler, input, seed, stage, frames, backend,
-/// rig, and every file it lists present with its recorded size.
+/// What, besides the fields compared by name, decides a clip's bytes: the compiler version,
+/// every loaded source (an edited import or prelude changes the scene) and the effective rig
+/// (`--lidar-resolution` changes the rig but not its name).
+fn build_key(sources: &SourceMap, rig: Option<&crate::lidar::Rig>) -> String {
+    let mut bytes = Vec::new();
+    let mut field = |b: &[u8]| {
+        bytes.extend_from_slice(&(b.len() as u64).to_le_bytes());
+        bytes.extend_from_slice(b);
+    };
+    field(env!("CARGO_PKG_VERSION").as_bytes());
+    // Texts, not names: the same files named from another directory compile the same.
+    for f in &sources.files {
+        field(f.text.as_bytes());
+    }
+    if let Some(r) = rig {
+        field(serde_json::to_string(r).unwrap_or_default().as_bytes());
+    }
+    crate::output::input_hash(&bytes)
+}
+
+/// A complete earlier run of the same clip: same compiler, input (and its imports and prelude),
+/// seed, stage, frames, backend, effective rig, and every file it lists present with its recorded size.
 fn complete(dir: &Path, want: &Manifest) -> Option<Manifest> {
     let text = std::fs::read_to_string(dir.join("manifest.json")).ok()?;
     let m: Manifest = serde_json::from_str(&text).ok()?;
     let same = m.compiler_version == want.compiler_version
         && m.input_hash == want.input_hash
+        && m.build_key == want.build_key
         && m.seed == want.seed
         && m.stage == want.stage
         && m.frames == want.frames

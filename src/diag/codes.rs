@@ -375,6 +375,14 @@ Coordinates are metres: in each edited frame's ego frame (x forward, y left) for
 clip, in the world frame for a `.scn`.",
     },
     Code {
+        code: "E0718",
+        title: "edit selects no compiled frame",
+        explanation: "`rocc edit CLIP --frames SPEC` edits only frames the clip holds: `rocc compile --frames`
+may have written a subset (manifest.json lists them under `frames`). None of the frames SPEC
+names was compiled, so the edit would change nothing; nothing is written. Pick frames from the
+manifest, or recompile the clip with the frames to edit.",
+    },
+    Code {
         code: "E0601",
         title: "LLM endpoint unreachable",
         explanation: "`rocc text` could not connect to the model server: nothing listens at the address, the\n\

@@ -229,7 +229,22 @@ pub fn edit_clip(dir: &Path, edits: &[Edit], o: &ClipEdit) -> Result<Manifest, V
         None => clip_frames.clone(),
         Some(spec) => {
             let all = crate::compile::parse_frames(Some(spec), front.tracks.frames).map_err(|d| vec![d])?;
-            all.into_iter().filter(|f| clip_frames.contains(f)).collect()
+            let selected: Vec<usize> = all.into_iter().filter(|f| clip_frames.contains(f)).collect();
+            if selected.is_empty() {
+                let shown = match (clip_frames.first(), clip_frames.last()) {
+                    (Some(a), Some(b)) if a != b => format!("{} frames, {a} to {b}", clip_frames.len()),
+                    (Some(a), _) => format!("only frame {a}"),
+                    _ => "no frames".to_string(),
+                };
+                return Err(vec![
+                    Diagnostic::error(
+                        "E0718",
+                        format!("`--frames {spec}` selects no frame compiled into `{}` ({shown})", dir.display()),
+                    )
+                    .help("pick frames the clip holds (see manifest.json `frames`), or recompile it with those frames"),
+                ]);
+            }
+            selected
         }
     };
     let bev_of = |f: usize| -> Result<Bev, Diagnostic> {

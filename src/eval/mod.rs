@@ -51,7 +51,11 @@ pub fn list_files(dir: &Path, exts: &[&str]) -> Result<Vec<PathBuf>, Diagnostic>
 /// Score every ground-truth frame under `gt` against the prediction at the same relative path
 /// (`.npy` and `.npz` may stand in for each other), in one accumulator.
 pub fn score_occ_dirs(pred: &Path, gt: &Path) -> Result<OccScores, Vec<Diagnostic>> {
-    let gts = list_files(gt, &["npy", "npz"]).map_err(|d| vec![d])?;
+    let mut gts = list_files(gt, &["npy", "npz"]).map_err(|d| vec![d])?;
+    // A clip directory holds `bev/*.npz` next to `occ/*.npy`: keep only occupancy archives.
+    gts.retain(|rel| {
+        !rel.extension().is_some_and(|x| x.eq_ignore_ascii_case("npz")) || occ::npz_may_hold_occupancy(&gt.join(rel))
+    });
     if gts.is_empty() {
         return Err(vec![
             Diagnostic::error("E0703", format!("no `.npy` or `.npz` occupancy frames under `{}`", gt.display()))

@@ -271,10 +271,14 @@ fn read_npz_any(path: &Path) -> Result<ArrayD<i64>, String> {
         .or(names.first())
         .cloned()
         .ok_or("the archive holds no array")?;
+    npz_member(&mut npz, &pick)
+}
+
+fn npz_member(npz: &mut NpzReader<File>, name: &str) -> Result<ArrayD<i64>, String> {
     // ndarray-npy hands out typed arrays only: try each dtype a label array may have.
     macro_rules! try_types {
         ($($t:ty => $c:expr),*) => {{
-            $(if let Ok(a) = npz.by_name::<ndarray::OwnedRepr<$t>, IxDyn>(&pick) { return to_i64(a, $c); })*
+            $(if let Ok(a) = npz.by_name::<ndarray::OwnedRepr<$t>, IxDyn>(name) { return to_i64(a, $c); })*
         }};
     }
     try_types!(
@@ -282,5 +286,22 @@ fn read_npz_any(path: &Path) -> Result<ArrayD<i64>, String> {
         i16 => |v| Some(v as i64), u32 => |v| Some(v as i64), i32 => |v| Some(v as i64),
         i64 => Some, u64 => |v| i64::try_from(v).ok(), f32 => float_int, f64 => float_int
     );
-    Err(format!("member `{pick}` is not a numeric array"))
+    Err(format!("member `{name}` is not a numeric array"))
+}
+
+/// False for a readable `.npz` that holds no occupancy-shaped array (sparse (N, 4) rows or a
+/// dense grid), such as a compiled clip's `bev/*.npz`: a recursive scan of a clip directory
+/// must not read BEV maps as occupancy. An unreadable archive is kept, so its error is reported.
+pub fn npz_may_hold_occupancy(path: &Path) -> bool {
+    let Ok(f) = File::open(path) else { return true };
+    let Ok(mut npz) = NpzReader::new(f) else { return true };
+    let Ok(names) = npz.names() else { return true };
+    // rocc's and UniScene's BEV archives, known by their keys without decompressing them.
+    if names.iter().any(|n| matches!(n.trim_end_matches(".npy"), "gt_bev_masks" | "gt_aux_bev")) {
+        return false;
+    }
+    names.iter().any(|n| match npz_member(&mut npz, n) {
+        Ok(a) => (a.ndim() == 2 && a.shape()[1] == 4) || a.shape() == [NX, NY, NZ],
+        Err(_) => false,
+    })
 }

@@ -2,61 +2,95 @@
 //! Printed at character level with the explicit `ws` rule, so no `%ignore` and no lexer
 //! conflicts between keywords and identifiers.
 
+use std::collections::{BTreeMap, BTreeSet};
+
 use super::lower::{Cfg, ClassItem, Node};
 
 /// Lark rule names are lowercase; a leading `_` would inline the rule, so none is produced.
-fn name(n: &str) -> String {
+fn base_name(n: &str) -> String {
     let n = n.to_ascii_lowercase();
     n.trim_start_matches('_').to_string()
 }
 
+/// Pest rule name -> Lark rule name. Lark rejects a rule defined twice, and lowercasing,
+/// dropping `_` and the added `start` can all make two names meet (the goal statement's
+/// `start` rule did), so a clashing name gets a numbered suffix.
+struct Names(BTreeMap<String, String>);
+
+impl Names {
+    fn new(cfg: &Cfg) -> Names {
+        let mut taken: BTreeSet<String> = BTreeSet::from(["start".to_string()]);
+        let mut map = BTreeMap::new();
+        for (n, _) in &cfg.rules {
+            if map.contains_key(n) {
+                continue;
+            }
+            let base = base_name(n);
+            let mut candidate = base.clone();
+            let mut k = 1;
+            while taken.contains(&candidate) {
+                candidate = format!("{base}_{k}");
+                k += 1;
+            }
+            taken.insert(candidate.clone());
+            map.insert(n.clone(), candidate);
+        }
+        Names(map)
+    }
+
+    fn get(&self, n: &str) -> String {
+        self.0.get(n).cloned().unwrap_or_else(|| base_name(n))
+    }
+}
+
 pub fn print(cfg: &Cfg) -> String {
+    let names = Names::new(cfg);
     let mut out = String::from(
         "// The rocc .scn language, exported from grammar/scn.pest by `rocc grammar --format lark`.\n\
          // Lookaheads are dropped, so this accepts a superset of what `rocc check` parses.\n",
     );
-    out.push_str(&format!("start: {}\n", name(&cfg.root)));
+    out.push_str(&format!("start: {}\n", names.get(&cfg.root)));
     for (n, node) in &cfg.rules {
-        out.push_str(&format!("{}: {}\n", name(n), expr(node)));
+        out.push_str(&format!("{}: {}\n", names.get(n), expr(&names, node)));
     }
     out
 }
 
-fn expr(n: &Node) -> String {
+fn expr(names: &Names, n: &Node) -> String {
     match n {
-        Node::Alt(alts) => alts.iter().map(seq).collect::<Vec<_>>().join(" | "),
-        n => seq(n),
+        Node::Alt(alts) => alts.iter().map(|a| seq(names, a)).collect::<Vec<_>>().join(" | "),
+        n => seq(names, n),
     }
 }
 
-fn seq(n: &Node) -> String {
+fn seq(names: &Names, n: &Node) -> String {
     match n {
         Node::Seq(parts) => {
-            let parts: Vec<String> = parts.iter().filter(|p| **p != Node::Empty).map(atom).collect();
+            let parts: Vec<String> = parts.iter().filter(|p| **p != Node::Empty).map(|p| atom(names, p)).collect();
             if parts.is_empty() { "\"\"".to_string() } else { parts.join(" ") }
         }
-        Node::Alt(_) => format!("({})", expr(n)),
-        n => atom(n),
+        Node::Alt(_) => format!("({})", expr(names, n)),
+        n => atom(names, n),
     }
 }
 
-fn atom(n: &Node) -> String {
+fn atom(names: &Names, n: &Node) -> String {
     match n {
         Node::Empty => "\"\"".to_string(),
         Node::Lit(s) => serde_json::to_string(s).expect("a string serialises"),
         Node::Class { negated, items } => class(*negated, items),
-        Node::Ref(r) => name(r),
-        Node::Seq(_) | Node::Alt(_) => format!("({})", expr(n)),
-        Node::Opt(x) => format!("{}?", operand(x)),
-        Node::Star(x) => format!("{}*", operand(x)),
-        Node::Plus(x) => format!("{}+", operand(x)),
+        Node::Ref(r) => names.get(r),
+        Node::Seq(_) | Node::Alt(_) => format!("({})", expr(names, n)),
+        Node::Opt(x) => format!("{}?", operand(names, x)),
+        Node::Star(x) => format!("{}*", operand(names, x)),
+        Node::Plus(x) => format!("{}+", operand(names, x)),
     }
 }
 
-fn operand(n: &Node) -> String {
+fn operand(names: &Names, n: &Node) -> String {
     match n {
-        Node::Lit(_) | Node::Class { .. } | Node::Ref(_) => atom(n),
-        _ => format!("({})", expr(n)),
+        Node::Lit(_) | Node::Class { .. } | Node::Ref(_) => atom(names, n),
+        _ => format!("({})", expr(names, n)),
     }
 }
 

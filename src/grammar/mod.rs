@@ -72,6 +72,24 @@ pub fn for_decoding(mut cfg: Cfg) -> Cfg {
         }
     }
     cfg.rules.retain(|(n, _)| n != "COMMENT" && n != "WHITESPACE");
+    // Each road parameter at most once, in a fixed order (a subset of what the parser takes,
+    // as for goal blocks): a small model looped `lanes 2; speed_limit 50 km/h;` until
+    // --max-tokens under the open `(param sep*)*`.
+    if let Some((_, node)) = cfg.rules.iter_mut().find(|(n, _)| n == "road_body") {
+        let ws = || Node::Ref(lower::WS.into());
+        let mut seq = vec![Node::Lit("{".into()), ws()];
+        seq.extend(crate::check::ROAD_PARAMS.iter().map(|p| {
+            Node::Opt(Box::new(Node::Seq(vec![
+                Node::Lit((*p).into()),
+                ws(),
+                Node::Ref("param_value".into()),
+                ws(),
+                Node::Opt(Box::new(Node::Seq(vec![Node::Ref("sep".into()), ws()]))),
+            ])))
+        }));
+        seq.push(Node::Lit("}".into()));
+        *node = Node::Seq(seq);
+    }
     cfg
 }
 

@@ -64,7 +64,8 @@ pub struct Session<'a> {
 impl Session<'_> {
     /// Starting from a checked candidate, send its diagnostics back for a corrected file until
     /// one checks or `max_repairs` rounds are spent. `fix` re-imposes rocc's own decisions on
-    /// every corrected file. Client errors end the run (`Err`).
+    /// every corrected file. A truncated or empty reply (E0606, E0605) spends a round and is
+    /// reported to the model with the same file; other client errors end the run (`Err`).
     pub fn repair(
         self,
         mut text: String,
@@ -85,12 +86,28 @@ impl Session<'_> {
                 ("diagnostics", &diagnostics_json(&diags, &sources)),
             ]);
             let messages = vec![message("system", &system, &[]), message("user", &user, &[])];
-            let reply = self.client.chat(&format!("repair {round}"), &messages, &constraint, self.log)?;
-            (text, verdict) = candidate(&reply, fix, self.name, self.base);
-            self.attempts.push(text.clone());
+            match self.client.chat(&format!("repair {round}"), &messages, &constraint, self.log) {
+                Ok(reply) => {
+                    (text, verdict) = candidate(&reply, fix, self.name, self.base);
+                    self.attempts.push(text.clone());
+                }
+                // A cut-off or empty reply is a failed round, not the end of the run: the same
+                // file goes back with the reason first, while rounds are left.
+                Err(d) if is_bad_reply(&d) => {
+                    let mut diags: Vec<Diagnostic> = diags.into_iter().filter(|x| !is_bad_reply(x)).collect();
+                    diags.insert(0, d);
+                    verdict = Err((diags, sources));
+                }
+                Err(d) => return Err(d),
+            }
         }
         Ok(Outcome::Accepted { text: crate::syntax::format_source(&text).unwrap_or(text) })
     }
+}
+
+/// A reply the client could not use as text: cut off at `--max-tokens` (E0606) or empty (E0605).
+fn is_bad_reply(d: &Diagnostic) -> bool {
+    matches!(d.code, "E0605" | "E0606")
 }
 
 /// Everything `rocc check` enforces: parse, check, and the front passes (sample, road, place,

@@ -184,6 +184,11 @@ pub struct Manifest {
     pub input: String,
     /// `input_hash(bytes of the input)`.
     pub input_hash: String,
+    /// `input_hash` of everything else the output depends on: the compiler version, every
+    /// loaded source (prelude, root, imports) and, with LiDAR, the effective rig (after
+    /// `--lidar-resolution`). A resumed run keeps a clip only when this matches too.
+    #[serde(default)]
+    pub build_key: String,
     pub seed: u64,
     pub backend: String,
     /// Sensor rig name or description; `None` when no LiDAR was produced.
@@ -217,6 +222,7 @@ impl Manifest {
             compiler_version: env!("CARGO_PKG_VERSION").to_string(),
             input: input.to_string(),
             input_hash: input_hash(input_bytes),
+            build_key: String::new(),
             seed,
             backend: "procedural".to_string(),
             rig: None,
