@@ -204,3 +204,25 @@ fn formatter_expands_long_blocks_and_keeps_blank_lines() {
     let out = rocc::syntax::format_source(src).expect("formats");
     insta::assert_snapshot!("fmt_expand", out);
 }
+
+/// A `use` path that stays under the root textually but leaves it through a symbolic link is
+/// refused, and the outside file's text never reaches a diagnostic.
+#[cfg(unix)]
+#[test]
+fn import_through_a_symlink_out_of_the_root_is_refused() {
+    let tmp = std::env::temp_dir().join(format!("rocc-symlink-{}", std::process::id()));
+    let (root_dir, outside) = (tmp.join("project"), tmp.join("outside"));
+    std::fs::create_dir_all(root_dir.join("kinds")).expect("mkdir");
+    std::fs::create_dir_all(&outside).expect("mkdir");
+    std::fs::write(outside.join("passwd"), "root:x:0:0:secret-line\n").expect("write");
+    std::os::unix::fs::symlink(&outside, root_dir.join("kinds/etc")).expect("symlink");
+    let text = "use \"kinds/etc/passwd\"\nscenario s { road straight { lanes 1 } }\n";
+    let mut sources = SourceMap::default();
+    let r = check::check_text("s.scn", text, &root_dir, &mut sources);
+    let _ = std::fs::remove_dir_all(&tmp);
+    let diags = r.expect_err("an import through an escaping symlink must fail");
+    assert_eq!(diags[0].code, "E0004", "{}", render_all(&diags, &sources));
+    assert!(diags[0].message.contains("symbolic link"), "{}", diags[0].message);
+    let all = render_all(&diags, &sources);
+    assert!(!all.contains("secret-line"), "outside file leaked into a diagnostic: {all}");
+}
