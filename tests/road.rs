@@ -139,16 +139,18 @@ fn check_map(r: &Road, m: &Map) -> Result<(), TestCaseError> {
     Ok(())
 }
 
+/// Any road the checker accepts: every per-parameter range in full, and for curves and
+/// roundabouts a radius from the cross-section's minimum (`check::min_radius`) up.
 fn any_road(template: Template) -> impl Strategy<Value = Road> {
     (
-        1u32..=4,
-        2.8f64..4.5,
-        prop_oneof![Just(0.0), 0.5f64..3.0],
-        prop_oneof![Just(0.0), 0.5f64..4.0],
+        1u32..=6,
+        2.5f64..=6.0,
+        prop_oneof![Just(0.0), 0.0f64..=6.0],
+        prop_oneof![Just(0.0), 0.0f64..=20.0],
         any::<bool>(),
         any::<bool>(),
-        40f64..200.0,
-        (0.0f64..1.0, 0.0f64..1.0),
+        20f64..=1000.0,
+        (0.0f64..=1.0, 0.0f64..=1.0),
     )
         .prop_map(move |(lanes, lane_width, shoulder, median, crosswalks, sidewalks, length, (a, b))| {
             let mut r = road(template);
@@ -159,12 +161,17 @@ fn any_road(template: Template) -> impl Strategy<Value = Road> {
             r.crosswalks = crosswalks;
             r.sidewalks = sidewalks;
             r.length = length;
+            let min = rocc::check::min_radius(&r).unwrap_or(0.0);
             match template {
                 Template::Curve => {
-                    r.radius = 60.0 + 240.0 * a;
-                    r.angle = (5.0 + 175.0 * b).to_radians();
+                    let lo = min.max(20.0);
+                    r.radius = lo + (2000.0 - lo) * a * a;
+                    r.angle = (1.0 + 179.0 * b).to_radians();
                 }
-                Template::Roundabout => r.radius = 8.0 + 52.0 * a,
+                Template::Roundabout => {
+                    let lo = min.max(8.0);
+                    r.radius = lo + (60.0 - lo) * a;
+                }
                 _ => {}
             }
             r

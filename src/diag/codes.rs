@@ -68,7 +68,9 @@ Bare numbers are counts.\n\n\
         title: "value out of range",
         explanation: "A value is outside what rocc accepts for that statement: a negative speed or size, a\n\
 duration over 120 s, a rate over 100 Hz, a lane count outside 1..=6, a density outside 0..1, a\n\
-percentage outside 0..100 %.",
+percentage outside 0..100 %. Some limits join parameters: a `curve` radius must exceed the\n\
+road's half width (median / 2 + lanes x lane_width + shoulder, plus 3 m of sidewalk) by 5 m, and\n\
+a `roundabout` radius must leave a central island of at least 3 m inside its ring.",
     },
     Code {
         code: "E0104",
