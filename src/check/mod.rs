@@ -507,6 +507,8 @@ impl Checker {
         match template {
             Template::Curve => allowed.extend(["radius", "angle"]),
             Template::Roundabout => allowed.push("radius"),
+            // The on-ramp has no pedestrian crossing: a switch that builds nothing is refused.
+            Template::Merge => allowed.retain(|p| *p != "crosswalks"),
             _ => {}
         }
         let mut seen: BTreeMap<&str, Span> = BTreeMap::new();
