@@ -337,6 +337,20 @@ fn vehicle_off_the_road_is_e0201() {
 }
 
 #[test]
+fn static_object_far_off_the_map_is_e0201() {
+    let src = |at: &str| {
+        format!(
+            "scenario s {{ duration 4 s\n road straight {{ lanes 1 }}\n agent ego: sedan {{ at west.in[1], 20 m before center }}\n object c: traffic_cone {{ at {at} }}\n}}\n"
+        )
+    };
+    let errs = place_src(&src("(500 m, 500 m)")).expect_err("500 m from a 120 m road");
+    assert_eq!(errs[0].code, "E0201", "{errs:?}");
+    assert!(errs[0].message.contains("within 10 m") && errs[0].message.contains("`c`"), "{}", errs[0].message);
+    // Beside the road (off the paving but within 10 m of the map) stays allowed.
+    place_src(&src("(0 m, 9 m)")).expect("a cone just off the kerb");
+}
+
+#[test]
 fn placements_on_every_template_land_where_they_say() {
     for (t, lane) in [
         ("straight", "west.in[1], 10 m before center"),
@@ -347,8 +361,10 @@ fn placements_on_every_template_land_where_they_say() {
         ("merge", "main.out[2], 10 m after junction"),
         ("roundabout", "east.in[1], 3 m before stop_line"),
     ] {
+        // A merge has no crosswalk, and the checker refuses the switch there.
+        let walks = if t == "merge" { "" } else { "; crosswalks on" };
         let src = format!(
-            "scenario s {{ duration 4 s\n road {t} {{ lanes 2; sidewalks on; crosswalks on }}\n agent ego: sedan {{ at {lane} }}\n}}\n"
+            "scenario s {{ duration 4 s\n road {t} {{ lanes 2; sidewalks on{walks} }}\n agent ego: sedan {{ at {lane} }}\n}}\n"
         );
         let p = place_src(&src).unwrap_or_else(|e| panic!("{t}: {e:?}"));
         assert_eq!(p.agents.len(), 1);
