@@ -4,6 +4,9 @@
 //! E06xx: the LLM front end (`rocc text`): the HTTP client, the model's replies, the repair loop.
 //! E08xx: CIREN crash recreation (`rocc ciren`): E0800-E0849 records and SAFE extractions.
 //! E0850-E0899: the CIREN VLM route (`rocc ciren extract`): case files, the conflict descriptor.
+//!
+//! A `\` line continuation also eats the next line's leading spaces, so an indented example
+//! line follows a literal line break (no `\n\` before it); a test guards this.
 
 pub struct Code {
     pub code: &'static str,
@@ -17,8 +20,8 @@ pub const CODES: &[Code] = &[
         title: "syntax error",
         explanation: "The file does not follow the grammar of the `.scn` language. The error points at the\n\
 first token the parser could not accept; when a block was left open, the label also shows\n\
-where it was opened.\n\n\
-    agent ego: sedan { at west.in[1], 20 m before center     // `}` missing here\n\
+where it was opened.\n
+    agent ego: sedan { at west.in[1], 20 m before center     // `}` missing here
     agent other: sedan { ... }\n\n\
 Close every `{` with `}`. Statements are separated by newlines or `;`.",
     },
@@ -31,7 +34,7 @@ is not UTF-8 text, or is larger than the 4 MiB rocc accepts for one source file.
     Code {
         code: "E0003",
         title: "import cycle",
-        explanation: "`use` imports form a cycle: a file imports itself, directly or through others.\n\n\
+        explanation: "`use` imports form a cycle: a file imports itself, directly or through others.\n
     // a.scn\n    use \"b.scn\"\n    // b.scn\n    use \"a.scn\"      // error: cycle a.scn -> b.scn -> a.scn\n\n\
 Move the shared kinds into a third file that both import.",
     },
@@ -40,7 +43,7 @@ Move the shared kinds into a third file that both import.",
         title: "import escapes the project",
         explanation: "`use` paths are relative to the importing file and must stay inside the directory of\n\
 the scenario being compiled: absolute paths and paths that climb out with `..` are rejected, so\n\
-a scenario library can be moved and compiled anywhere.\n\n\
+a scenario library can be moved and compiled anywhere.\n
     use \"kinds/trucks.scn\"      // fine\n    use \"/etc/kinds.scn\"        // error\n    use \"../../kinds.scn\"       // error",
     },
     Code {
@@ -52,9 +55,9 @@ imported file holds only `kind` items and further `use` imports.",
     Code {
         code: "E0101",
         title: "unit of the wrong dimension",
-        explanation: "Numbers carry units and each statement expects one dimension:\n\
+        explanation: "Numbers carry units and each statement expects one dimension:
   length m, cm, km; speed m/s, km/h, mph; time s, ms; angle deg, rad; frequency Hz; ratio %.\n\
-Bare numbers are counts.\n\n\
+Bare numbers are counts.\n
     speed 5 m          // error: a speed needs m/s, km/h or mph\n    speed 5 m/s        // fine",
     },
     Code {
@@ -75,7 +78,7 @@ a `roundabout` radius must leave a central island of at least 3 m inside its rin
     Code {
         code: "E0104",
         title: "empty or reversed range",
-        explanation: "A range `a..b` samples uniformly in [a, b]; it needs a <= b.\n\n\
+        explanation: "A range `a..b` samples uniformly in [a, b]; it needs a <= b.\n
     length 4.9..4.4 m     // error\n    length 4.4..4.9 m     // fine",
     },
     Code {
@@ -95,16 +98,16 @@ object needs a placement `at ...` (or a replayed `track`); a conflict needs `at_
         code: "E0107",
         title: "unknown agent",
         explanation: "A statement names an agent that the scenario does not declare. Agent names are used by\n\
-`egos [...]`, `stop behind NAME`, `lateral away_from NAME` and `conflict` fields.\n\n\
-    agent front: sedan { at south.in[1], 2 m before stop_line }\n\
-    agent ego: sedan { at south.in[1], 12 m before stop_line; goal { stop behind frnt } }\n\
+`egos [...]`, `stop behind NAME`, `lateral away_from NAME` and `conflict` fields.\n
+    agent front: sedan { at south.in[1], 2 m before stop_line }
+    agent ego: sedan { at south.in[1], 12 m before stop_line; goal { stop behind frnt } }
                                                                   // error: did you mean `front`?",
     },
     Code {
         code: "E0108",
         title: "unknown kind",
         explanation: "`agent NAME: KIND` names a kind that neither the stdlib prelude (`stdlib/kinds.scn`)\n\
-nor a `use`d file defines. Define new kinds in a kind file:\n\n\
+nor a `use`d file defines. Define new kinds in a kind file:\n
     kind tractor: vehicle { length 3.5..4.5 m; width 2.0..2.4 m; height 2.5..3.0 m }",
     },
     Code {
@@ -125,15 +128,15 @@ Traffic parameters: density, randomness.",
         title: "unknown road arm or landmark",
         explanation: "A placement names an arm the template does not have (`north` on a straight road) or a\n\
 landmark that does not exist there: `stop_line` and `junction` exist on junction templates only\n\
-(four_way, t_junction, roundabout, merge); `center` exists everywhere.\n\n\
-  straight, curve: west, east\n  four_way, roundabout: north, east, south, west\n\
+(four_way, t_junction, roundabout, merge); `center` exists everywhere.\n
+  straight, curve: west, east\n  four_way, roundabout: north, east, south, west
   t_junction: west, east, south\n  merge: main, ramp",
     },
     Code {
         code: "E0112",
         title: "lane index out of range",
         explanation: "`ARM.in[k]` and `ARM.out[k]` count lanes from 1 (nearest the centre line) to the road's\n\
-`lanes` per direction.\n\n\
+`lanes` per direction.\n
     road straight { lanes 2 }\n    agent ego: sedan { at west.in[3], 20 m before center }   // error: 2 lanes",
     },
     Code {
@@ -151,7 +154,7 @@ out-lane, or on a road without a junction.",
         explanation: "A `conflict` stages a crash between two different agents. `at_fault` must be a mover;\n\
 `impact` is one of rear_end, head_on, angle, sideswipe, pedestrian, object; `point` is a side of\n\
 the struck agent: front, rear, left, right, front_left, front_right, rear_left, rear_right.\n\
-`impact pedestrian` needs a pedestrian as `struck`, `impact object` a static one.\n\n\
+`impact pedestrian` needs a pedestrian as `struck`, `impact object` a static one.\n
     conflict { at_fault v1; struck v2; impact sideswipe; point right; at 3 s }",
     },
     Code {
@@ -192,7 +195,7 @@ motion so that the rest of the agent (its goal, its placement) stays valid whate
         title: "placement off a valid surface",
         explanation: "Each class has surfaces it may start on: vehicles on lanes or shoulders; pedestrians\n\
 and bicycles on sidewalks, crosswalks, shoulders (and lanes for bicycles), or wherever a `cross`\n\
-goal starts; static objects anywhere on the map.\n\n\
+goal starts; static objects anywhere on the map.\n
     agent ego: sedan { at sidewalk(east.out), 10 m after center }   // error",
     },
     Code {
@@ -214,7 +217,7 @@ exist because `crosswalks`/`sidewalks` is off.",
         explanation: "An agent's goal asks for something the road does not offer from where the agent starts:\n\
 a `turn` where its lane has no junction connector of that kind, a `change_lane` toward a lane\n\
 that does not exist, `stop at stop_line` on a lane with no stop line ahead, or `cross` with no\n\
-road nearby to cross.\n\n\
+road nearby to cross.\n
     road straight { lanes 1 }\n    agent ego: sedan { at west.in[1], 20 m before center; goal { turn left } }   // error\n\n\
 Place the agent on a lane that reaches a junction offering the turn, or change the goal.",
     },
@@ -223,7 +226,7 @@ Place the agent on a lane that reaches a junction offering the turn, or change t
         title: "unknown ego",
         explanation: "`rocc compile --ego NAME` names an agent the scenario does not declare, or one that cannot\n\
 carry sensors (a static object or a row element). Egos are declared agents; background traffic\n\
-and rows have generated names that may change with the seed.\n\n\
+and rows have generated names that may change with the seed.\n
     rocc compile scenarios/fire_lane.scn --ego ambulance -o out     // error if no agent is called `ambulance`\n\n\
 `rocc check FILE` prints the scenario's egos; any declared mover may be chosen.",
     },
@@ -276,11 +279,11 @@ LiDAR sets are compared as sets and need at least one cloud each.",
     Code {
         code: "E0705",
         title: "box stream is not valid JSON of the expected layout",
-        explanation: "`rocc import boxes FILE` reads\n\n\
-    { \"rate_hz\": 2.0, \"ego_size\": [l, w, h], \"sensor_to_ego\": {\"x\": 0, \"y\": 0, \"yaw\": 0},\n\
-      \"frames\": [ { \"frame\": 0, \"time\": 0.0,\n\
-          \"ego_pose\": {\"x\": 1.0, \"y\": 2.0, \"yaw\": 0.1},\n\
-          \"boxes\": [ {\"track\": \"a1\", \"class\": \"vehicle.car\",\n\
+        explanation: "`rocc import boxes FILE` reads\n
+    { \"rate_hz\": 2.0, \"ego_size\": [l, w, h], \"sensor_to_ego\": {\"x\": 0, \"y\": 0, \"yaw\": 0},
+      \"frames\": [ { \"frame\": 0, \"time\": 0.0,
+          \"ego_pose\": {\"x\": 1.0, \"y\": 2.0, \"yaw\": 0.1},
+          \"boxes\": [ {\"track\": \"a1\", \"class\": \"vehicle.car\",
                       \"center\": [x, y, z], \"size\": [a, b, c], \"yaw\": 0.3} ] } ] }\n\n\
 Only `frames` is required. `ego_pose` may also be {\"translation\": [x, y, z], \"rotation\":\n\
 [w, x, y, z]}. With `--convention mmdet3d` a box may be `\"box\": [cx, cy, cz, w, l, h, yaw]`.",
@@ -368,9 +371,9 @@ boxes in one frame (the second dropped). That frame's BEV footprint differs from
     Code {
         code: "E0717",
         title: "malformed edit",
-        explanation: "Edits are written\n\n\
-    --insert KIND at X,Y [yaw A]    A in degrees, or with `rad`\n\
-    --delete AGENT\n\
+        explanation: "Edits are written\n
+    --insert KIND at X,Y [yaw A]    A in degrees, or with `rad`
+    --delete AGENT
     --move AGENT by DX,DY\n\n\
 Coordinates are metres: in each edited frame's ego frame (x forward, y left) for a compiled\n\
 clip, in the world frame for a `.scn`.",
@@ -380,7 +383,7 @@ clip, in the world frame for a `.scn`.",
         title: "LLM endpoint unreachable",
         explanation: "`rocc text` could not connect to the model server: nothing listens at the address, the\n\
 host name does not resolve, or the connection was reset. Start the server first and pass its\n\
-OpenAI-compatible base URL:\n\n\
+OpenAI-compatible base URL:\n
     rocc text \"...\" -o scene.scn --server llamacpp --endpoint http://127.0.0.1:8080/v1\n\n\
 The endpoint may also come from ROCC_LLM_ENDPOINT. docs/llm.md has the server commands.",
     },
@@ -581,7 +584,7 @@ file. Files are written under a temporary name and renamed, so nothing partial i
         explanation: "`rocc ciren extract CASE_DIR` needs a case folder holding the investigator's scene\n\
 sketch: `sketch.jpeg` (CIREN case folders), `Sketch.jpg` (SAFE extraction folders), or\n\
 `sketch.jpg`, `Sketch.jpeg`, `sketch.png`, `Sketch.png`. The path is not a directory, or none of\n\
-these files is there or readable. Nothing is sent to the model.\n\n\
+these files is there or readable. Nothing is sent to the model.\n
     rocc ciren extract ../shared/ciren/100237 -o 100237.scn --endpoint ... --model ...",
     },
     Code {
@@ -604,7 +607,7 @@ the parser could not accept. Fetch the case record again.",
         code: "E0853",
         title: "CIREN summary is not UTF-8",
         explanation: "`crash_report.xml` or `Summary.txt` holds bytes that are not UTF-8 (often Latin-1 from an\n\
-old export). The message gives the offset and line of the first bad byte. Convert the file:\n\n\
+old export). The message gives the offset and line of the first bad byte. Convert the file:\n
     iconv -f latin1 -t utf-8 Summary.txt > fixed && mv fixed Summary.txt",
     },
     Code {
