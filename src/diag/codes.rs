@@ -29,7 +29,9 @@ Close every `{` with `}`. Statements are separated by newlines or `;`.",
         code: "E0002",
         title: "cannot read file",
         explanation: "A scenario or an imported file could not be read: it does not exist, is a directory,\n\
-is not UTF-8 text, or is larger than the 4 MiB rocc accepts for one source file.",
+is not UTF-8 text, or is larger than the 4 MiB rocc accepts for one source file.\n
+    use \"kinds/trucks.scn\"      // error when kinds/trucks.scn does not exist
+    $ rocc check missing.scn     // error: cannot read `missing.scn`",
     },
     Code {
         code: "E0003",
@@ -50,7 +52,10 @@ a scenario library can be moved and compiled anywhere.\n
         code: "E0005",
         title: "wrong items in a file",
         explanation: "A scenario file holds exactly one `scenario` block (plus `use` and `kind` items); an\n\
-imported file holds only `kind` items and further `use` imports.",
+imported file holds only `kind` items and further `use` imports.\n
+    // kinds.scn, imported with `use \"kinds.scn\"`
+    kind forklift: vehicle { length 3 m; width 1.2 m; height 2.1 m }   // fine
+    scenario s { ... }                                                        // error",
     },
     Code {
         code: "E0101",
@@ -64,7 +69,9 @@ Bare numbers are counts.\n
         code: "E0102",
         title: "missing unit",
         explanation: "A physical quantity was written without a unit. rocc never guesses units: write\n\
-`20 m`, `30 km/h`, `4 s`.",
+`20 m`, `30 km/h`, `4 s`.\n
+    goal { speed 30 }        // error: 30 what?
+    goal { speed 30 km/h }   // fine",
     },
     Code {
         code: "E0103",
@@ -73,7 +80,10 @@ Bare numbers are counts.\n
 duration over 120 s, a rate over 100 Hz, a lane count outside 1..=6, a density outside 0..1, a\n\
 percentage outside 0..100 %. Some limits join parameters: a `curve` radius must exceed the\n\
 road's half width (median / 2 + lanes x lane_width + shoulder, plus 3 m of sidewalk) by 5 m, and\n\
-a `roundabout` radius must leave a central island of at least 3 m inside its ring.",
+a `roundabout` radius must leave a central island of at least 3 m inside its ring.\n
+    duration 300 s                                  // error: at most 120 s
+    road straight { lanes 8 }                       // error: 1..=6 lanes
+    road curve { radius 20 m; lanes 6; lane_width 6 m; median 20 m }   // error: radius 51 m or more",
     },
     Code {
         code: "E0104",
@@ -85,14 +95,18 @@ a `roundabout` radius must leave a central island of at least 3 m inside its rin
         code: "E0105",
         title: "duplicate statement",
         explanation: "A block states the same property twice (two `speed`s, two `road`s, two agents of\n\
-the same name). Keep one; both places are shown.",
+the same name). Keep one; both places are shown.\n
+    agent a: sedan { at west.in[1], 20 m before center }
+    agent a: suv { at west.in[2], 10 m before center }   // error: `a` again",
     },
     Code {
         code: "E0106",
         title: "missing statement",
         explanation: "Something required is missing: a scenario needs `duration` and `road`; an agent or\n\
 object needs a placement `at ...` (or a replayed `track`); a conflict needs `at_fault`, `struck`,\n\
-`impact` and `point`.",
+`impact` and `point`.\n
+    scenario s { road straight }                    // error: no `duration`
+    agent ego: sedan { goal { speed 30 km/h } }     // error: no `at ...`",
     },
     Code {
         code: "E0107",
@@ -113,15 +127,21 @@ nor a `use`d file defines. Define new kinds in a kind file:\n
     Code {
         code: "E0109",
         title: "unknown road template",
-        explanation: "`road TEMPLATE` must be one of straight, curve, four_way, t_junction, merge, roundabout.",
+        explanation: "`road TEMPLATE` must be one of straight, curve, four_way, t_junction, merge, roundabout.\n
+    road crossroads { lanes 2 }    // error: not a template
+    road four_way { lanes 2 }      // fine",
     },
     Code {
         code: "E0110",
         title: "unknown or inapplicable parameter",
         explanation: "A `road` or `traffic` block sets a parameter that does not exist or does not apply to\n\
 the template (`radius` on a straight road). Road parameters: lanes, lane_width, speed_limit,\n\
-shoulder, median, crosswalks, sidewalks, length, and radius/angle on curve, radius on roundabout.\n\
-Traffic parameters: density, randomness.",
+shoulder, median, crosswalks (not on merge, which has no crossing), sidewalks, length, and\n\
+radius/angle on curve, radius on roundabout.\n\
+Traffic parameters: density, randomness.\n
+    road straight { lanes 1; radius 50 m }   // error: a straight road has no radius
+    road merge { crosswalks on }             // error: a merge has no crosswalk
+    traffic { density 0.5; speed 30 km/h }   // error: unknown traffic parameter",
     },
     Code {
         code: "E0111",
@@ -130,7 +150,10 @@ Traffic parameters: density, randomness.",
 landmark that does not exist there: `stop_line` and `junction` exist on junction templates only\n\
 (four_way, t_junction, roundabout, merge); `center` exists everywhere.\n
   straight, curve: west, east\n  four_way, roundabout: north, east, south, west
-  t_junction: west, east, south\n  merge: main, ramp",
+  t_junction: west, east, south\n  merge: main, ramp\n
+    road straight { lanes 2 }
+    agent ego: sedan { at north.in[1], 20 m before center }      // error: no arm `north`
+    agent ego: sedan { at west.in[1], 20 m before stop_line }    // error: no stop lines",
     },
     Code {
         code: "E0112",
@@ -146,7 +169,11 @@ landmark that does not exist there: `stop_line` and `junction` exist on junction
 have no goal and no speed. Pedestrians and animals walk: they may `cross`, keep a speed and stop,\n\
 but cannot change lane, pull to the shoulder or turn. Vehicles cannot `cross`. A goal that\n\
 cannot be met from the placement is rejected too: `stop at stop_line` or `turn` from an\n\
-out-lane, or on a road without a junction.",
+out-lane, or on a road without a junction.\n
+    object c: traffic_cone { at west.in[1], 10 m before center; goal { speed 5 km/h } }  // error
+    road straight { lanes 2; sidewalks on }
+    agent p: pedestrian { at sidewalk(west.in), 5 m before center; goal { lateral change_lane left } }  // error
+    agent p: pedestrian { at sidewalk(west.in), 5 m before center; goal { speed 1.4 m/s; lateral cross } }  // fine",
     },
     Code {
         code: "E0114",
@@ -161,7 +188,9 @@ the struck agent: front, rear, left, right, front_left, front_right, rear_left, 
         code: "E0115",
         title: "invalid ego",
         explanation: "`egos [a, b]` lists agents whose viewpoint gets a clip; each must be a mover (a vehicle,\n\
-bicycle, pedestrian or animal), not a static object. `egos vehicles` takes every vehicle.",
+bicycle, pedestrian or animal), not a static object. `egos vehicles` takes every vehicle.\n
+    object c: traffic_cone { at west.in[1], 10 m before center }
+    egos [c]        // error: a cone has no viewpoint to drive from",
     },
     Code {
         code: "E0116",
@@ -169,47 +198,66 @@ bicycle, pedestrian or animal), not a static object. `egos vehicles` takes every
         explanation: "A closed vocabulary got a word it does not contain: a lateral goal (hold_lane,\n\
 change_lane left|right, pull_to_shoulder, away_from NAME, cross), a turn (left, right, straight,\n\
 u_turn), a side (left, right), a landmark (center, junction, stop_line), a class or motion in a\n\
-kind definition.",
+kind definition.\n
+    goal { lateral change_lane lft }     // error: did you mean `left`?
+    goal { turn leftt }                  // error: did you mean `left`?",
     },
     Code {
         code: "E0117",
         title: "invalid track",
         explanation: "A `track` replays recorded keyframes `TIME: (X, Y) yaw ANGLE` in the world frame. Times\n\
-must strictly increase and start at or after 0 s; an agent with a track has no `at` and no goal.",
+must strictly increase and start at or after 0 s; an agent with a track has no `at` and no goal.\n
+    agent v: sedan {
+        track { 0 s: (0 m, 0 m) yaw 0 deg; 1 s: (10 m, 0 m) yaw 0 deg }   // fine
+    }
+    agent w: sedan {
+        track { 1 s: (0 m, 0 m) yaw 0 deg; 0.5 s: (5 m, 0 m) yaw 0 deg } // error: time goes back
+    }",
     },
     Code {
         code: "E0118",
         title: "invalid row",
         explanation: "`row KIND from PLACE to PLACE every DIST` lines up static objects. Both ends must use\n\
 the same placement form on the same lane or sidewalk (or both world coordinates), the spacing\n\
-must be positive, and a row may hold at most 500 objects.",
+must be positive, and a row may hold at most 500 objects.\n
+    row traffic_cone from west.in[2], 20 m before center to east.out[2], 30 m after center every 5 m   // error: two lanes",
     },
     Code {
         code: "E0119",
         title: "kinds of different classes in one_of",
         explanation: "`one_of [a, b]` picks a kind with the seed; all choices must map to the same class and\n\
-motion so that the rest of the agent (its goal, its placement) stays valid whatever is picked.",
+motion so that the rest of the agent (its goal, its placement) stays valid whatever is picked.\n
+    agent a: one_of [sedan, pedestrian] { ... }   // error: vehicle and pedestrian
+    agent a: one_of [sedan, suv, van] { ... }     // fine: all vehicles",
     },
     Code {
         code: "E0201",
         title: "placement off a valid surface",
         explanation: "Each class has surfaces it may start on: vehicles on lanes or shoulders; pedestrians\n\
 and bicycles on sidewalks, crosswalks, shoulders (and lanes for bicycles), or wherever a `cross`\n\
-goal starts; static objects anywhere on the map.\n
-    agent ego: sedan { at sidewalk(east.out), 10 m after center }   // error",
+goal starts; other objects (cones, barriers, debris, animals), static or moving, on the map or\n\
+within 10 m of it.\n
+    agent ego: sedan { at sidewalk(east.out), 10 m after center }   // error
+    object c: traffic_cone { at (500 m, 500 m) }                    // error: far off the map",
     },
     Code {
         code: "E0202",
         title: "initial boxes overlap",
         explanation: "Two agents' boxes overlap at their initial placement. Both are named with their spans;\n\
-move one further along the lane, to another lane, or shorten the boxes.",
+move one further along the lane, to another lane, or shorten the boxes.\n
+    agent a: sedan { at west.in[1], 20 m before center }
+    agent b: sedan { at west.in[1], 22 m before center }   // error: a sedan is ~4.7 m long
+    agent b: sedan { at west.in[1], 30 m before center }   // fine",
     },
     Code {
         code: "E0203",
         title: "placement off the road",
         explanation: "A lane-relative placement lies beyond the end of the lane (the road is `length` long;\n\
 default 120 m, junction arms 60 m), or a crosswalk/sidewalk named by the placement does not\n\
-exist because `crosswalks`/`sidewalks` is off.",
+exist because `crosswalks`/`sidewalks` is off.\n
+    road straight { lanes 1 }                                     // 120 m: 60 m each side
+    agent ego: sedan { at west.in[1], 70 m before center }        // error: lane ends 60 m before
+    agent p: pedestrian { at crosswalk(west), 50 % }              // error: `crosswalks` is off",
     },
     Code {
         code: "E0204",
@@ -235,7 +283,10 @@ and rows have generated names that may change with the seed.\n
         title: "bad frame selection",
         explanation: "`--frames` takes a comma-separated list of frame indices and ranges: `0`, `0..10` (10\n\
 excluded), `0..=10`, `50..` (to the end), e.g. `--frames 0,10..20`. Every index must be below the\n\
-clip's frame count (duration x rate).",
+clip's frame count (duration x rate).\n
+    $ rocc compile s.scn -o out --frames 0,10..20     // fine
+    $ rocc compile s.scn -o out --frames 10..5        // error: empty range
+    $ rocc compile s.scn -o out --frames 500          // error when the clip has 80 frames",
     },
     Code {
         code: "E0303",
@@ -248,13 +299,16 @@ scenario name would overwrite each other. Rename one of the scenarios (`scenario
         title: "bad sensor rig file",
         explanation: "`--rig FILE` must be a RON rig description like `rigs/nuplan.ron`: a name, horizontal\n\
 resolution, range limits, one reflectivity per occupancy label (9), the intensity, drop and noise\n\
-models, and at least one sensor with beam elevations and an azimuth sector.",
+models, and at least one sensor with beam elevations and an azimuth sector.\n
+    $ rocc compile s.scn -o out --rig rigs/nuplan.ron     // fine
+    $ rocc compile s.scn -o out --rig my_rig.ron         // error if a field is missing or no sensor is given",
     },
     Code {
         code: "E0401",
         title: "cannot write output",
         explanation: "An output file or directory could not be created or written. rocc writes to a\n\
-temporary name and renames, so no truncated file is left behind.",
+temporary name and renames, so no truncated file is left behind.\n
+    $ rocc compile s.scn -o /read-only/out    // error: permission denied",
     },
     Code {
         code: "E0701",
