@@ -292,7 +292,9 @@ clip's frame count (duration x rate).\n
         code: "E0303",
         title: "two inputs write the same output directory",
         explanation: "Outputs go to OUT/<scenario>/<ego>/, so two files in one batch that declare the same\n\
-scenario name would overwrite each other. Rename one of the scenarios (`scenario NAME { ... }`).",
+scenario name would overwrite each other. Rename one of the scenarios (`scenario NAME { ... }`).\n
+    // a.scn and b.scn both say `scenario cut_in { ... }`
+    $ rocc compile a.scn b.scn -o out      // error: both write out/cut_in/",
     },
     Code {
         code: "E0304",
@@ -315,20 +317,24 @@ temporary name and renames, so no truncated file is left behind.\n
         title: "unreadable occupancy frame",
         explanation: "`rocc eval occ` reads occupancy frames as a dense `.npy` of shape (400, 400, 32) (rocc's\n\
 uint8 output, or nuPlan-Occ's dense grid in any integer dtype) or as a sparse `.npz` whose array\n\
-is (N, 4) rows of [i, j, k, label] (unlisted voxels are free). Labels are 0..=8 (SPEC.md).",
+is (N, 4) rows of [i, j, k, label] (unlisted voxels are free). Labels are 0..=8 (SPEC.md).\n
+    $ rocc eval occ --pred pred/ --gt gt/    // error if a frame is (200, 200, 16) or holds label 12",
     },
     Code {
         code: "E0703",
         title: "prediction and ground-truth sets do not match",
         explanation: "`--pred` and `--gt` must be directories. Occupancy frames are paired by relative path\n\
 (`.npy` and `.npz` may stand in for each other); every ground-truth frame needs a prediction.\n\
-LiDAR sets are compared as sets and need at least one cloud each.",
+LiDAR sets are compared as sets and need at least one cloud each.\n
+    $ rocc eval occ --pred pred/ --gt gt/    // error if gt/scene/0007.npy has no pred/scene/0007.np[yz]
+    $ rocc eval occ --pred pred.npy --gt gt/  // error: --pred must be a directory",
     },
     Code {
         code: "E0704",
         title: "unreadable point cloud",
         explanation: "`rocc eval lidar` reads KITTI-style `.bin` (float32 x, y, z, intensity per point) or a\n\
-`.npy` of shape (N, >= 3), float32 or float64.",
+`.npy` of shape (N, >= 3), float32 or float64.\n
+    $ rocc eval lidar --pred pred/ --gt gt/  // error if a .bin length is not a multiple of 16 bytes",
     },
     Code {
         code: "E0705",
@@ -446,7 +452,8 @@ The endpoint may also come from ROCC_LLM_ENDPOINT. docs/llm.md has the server co
         title: "LLM request timed out",
         explanation: "The model server accepted the request but did not answer within `--timeout` seconds\n\
 (default 120). Long grammar-constrained generations on a CPU can be slow: raise `--timeout`, lower\n\
-`--max-tokens`, or use a smaller model. Timeouts are not retried: the server is probably busy.",
+`--max-tokens`, or use a smaller model. Timeouts are not retried: the server is probably busy.\n
+    $ rocc text \"a deer crosses at dusk\" -o deer.scn --timeout 600   // give a slow CPU server more time",
     },
     Code {
         code: "E0603",
