@@ -139,8 +139,10 @@ fn check_map(r: &Road, m: &Map) -> Result<(), TestCaseError> {
     Ok(())
 }
 
-/// Any road the checker accepts: every per-parameter range in full, and for curves and
-/// roundabouts a radius from the cross-section's minimum (`check::min_radius`) up.
+/// Roads the checker accepts: every cross-section parameter over its full range, and for curves
+/// and roundabouts a radius from the cross-section's minimum (`check::min_radius`) up. Lengths
+/// stop at 200 m and curve radii at 300 m: the full 1000 m / 2000 m domain took about 60 s here
+/// against 8 s, and long straight runs and gentle bends are not where the geometry is tight.
 fn any_road(template: Template) -> impl Strategy<Value = Road> {
     (
         1u32..=6,
@@ -149,7 +151,7 @@ fn any_road(template: Template) -> impl Strategy<Value = Road> {
         prop_oneof![Just(0.0), 0.0f64..=20.0],
         any::<bool>(),
         any::<bool>(),
-        20f64..=1000.0,
+        20f64..=200.0,
         (0.0f64..=1.0, 0.0f64..=1.0),
     )
         .prop_map(move |(lanes, lane_width, shoulder, median, crosswalks, sidewalks, length, (a, b))| {
@@ -165,7 +167,7 @@ fn any_road(template: Template) -> impl Strategy<Value = Road> {
             match template {
                 Template::Curve => {
                     let lo = min.max(20.0);
-                    r.radius = lo + (2000.0 - lo) * a * a;
+                    r.radius = lo + (300.0 - lo) * a * a;
                     r.angle = (1.0 + 179.0 * b).to_radians();
                 }
                 Template::Roundabout => {
