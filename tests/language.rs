@@ -145,26 +145,59 @@ fn json_diagnostics_carry_code_span_position_and_help() {
     assert!(j["file"].as_str().expect("file").ends_with("unknown_agent.scn"));
 }
 
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for e in std::fs::read_dir(dir).unwrap_or_else(|e| panic!("reading {}: {e}", dir.display())) {
+        let p = e.expect("entry").path();
+        if p.is_dir() {
+            rust_files(&p, out);
+        } else if p.extension().is_some_and(|e| e == "rs") {
+            out.push(p);
+        }
+    }
+}
+
 #[test]
 fn explain_covers_every_code_the_sources_emit() {
+    let mut files = vec![];
+    rust_files(&root().join("src"), &mut files);
+    assert!(files.iter().any(|p| p.ends_with("src/road/mod.rs")), "the walk must reach every pass folder");
     let mut missing = vec![];
-    for dir in ["src/check", "src/syntax", "src/diag", "src", "src/llm", "src/ciren"] {
-        for e in std::fs::read_dir(root().join(dir)).expect("src dir") {
-            let p = e.expect("entry").path();
-            if p.extension().is_none_or(|e| e != "rs") {
-                continue;
-            }
-            let text = std::fs::read_to_string(&p).expect("read source");
-            for (i, _) in text.match_indices("\"E0") {
-                let code = &text[i + 1..i + 6];
-                if rocc::diag::codes::lookup(code).is_none() {
-                    missing.push(format!("{code} in {}", p.display()));
-                }
+    for p in files {
+        let text = std::fs::read_to_string(&p).expect("read source");
+        for (i, _) in text.match_indices("\"E0") {
+            let code = &text[i + 1..(i + 6).min(text.len())];
+            if rocc::diag::codes::lookup(code).is_none() {
+                missing.push(format!("{code} in {}", p.display()));
             }
         }
     }
     assert!(missing.is_empty(), "codes without an explanation: {missing:?}");
 }
+
+#[test]
+fn explanations_keep_the_indentation_of_their_examples() {
+    // A `\` continuation before an indented line strips the indentation from the printed text.
+    let src = std::fs::read_to_string(root().join("src/diag/codes.rs")).expect("read codes.rs");
+    let bad: Vec<&str> = src
+        .split("\\\n")
+        .skip(1)
+        .filter(|rest| rest.starts_with(' '))
+        .map(|rest| rest.lines().next().unwrap_or_default())
+        .collect();
+    assert!(bad.is_empty(), "indented lines after a `\\` continuation lose their indentation: {bad:?}");
+    let e0001 = rocc::diag::codes::lookup("E0001").expect("E0001").explanation;
+    assert!(e0001.contains("\n\n    agent ego: sedan {"), "{e0001}");
+    // Every explanation shows an example: an indented line.
+    let bare: Vec<&str> = rocc::diag::codes::CODES
+        .iter()
+        .filter(|c| !c.explanation.lines().any(|l| l.starts_with("    ")))
+        .map(|c| c.code)
+        .collect();
+    assert!(bare.len() <= BARE_EXPLANATIONS_ALLOWED, "explanations without an example: {bare:?}");
+}
+
+/// Explanations still without an example; lower it as examples are added, never raise it.
+const BARE_EXPLANATIONS_ALLOWED: usize = 38;
 
 fn comments(text: &str) -> Vec<String> {
     text.lines().filter_map(|l| l.find("//").map(|i| l[i..].trim_end().to_string())).collect()
@@ -203,4 +236,26 @@ fn formatter_expands_long_blocks_and_keeps_blank_lines() {
     let src = "scenario s { duration 4 s\n\n\n  road straight { lanes 2; lane_width 3.5 m; speed_limit 50 km/h; shoulder 2.0 m; median 1.0 m; sidewalks on }   // wide\n agent ego: sedan { at west.in[1], 20 m before center } }\n";
     let out = rocc::syntax::format_source(src).expect("formats");
     insta::assert_snapshot!("fmt_expand", out);
+}
+
+/// A `use` path that stays under the root textually but leaves it through a symbolic link is
+/// refused, and the outside file's text never reaches a diagnostic.
+#[cfg(unix)]
+#[test]
+fn import_through_a_symlink_out_of_the_root_is_refused() {
+    let tmp = std::env::temp_dir().join(format!("rocc-symlink-{}", std::process::id()));
+    let (root_dir, outside) = (tmp.join("project"), tmp.join("outside"));
+    std::fs::create_dir_all(root_dir.join("kinds")).expect("mkdir");
+    std::fs::create_dir_all(&outside).expect("mkdir");
+    std::fs::write(outside.join("passwd"), "root:x:0:0:secret-line\n").expect("write");
+    std::os::unix::fs::symlink(&outside, root_dir.join("kinds/etc")).expect("symlink");
+    let text = "use \"kinds/etc/passwd\"\nscenario s { road straight { lanes 1 } }\n";
+    let mut sources = SourceMap::default();
+    let r = check::check_text("s.scn", text, &root_dir, &mut sources);
+    let _ = std::fs::remove_dir_all(&tmp);
+    let diags = r.expect_err("an import through an escaping symlink must fail");
+    assert_eq!(diags[0].code, "E0004", "{}", render_all(&diags, &sources));
+    assert!(diags[0].message.contains("symbolic link"), "{}", diags[0].message);
+    let all = render_all(&diags, &sources);
+    assert!(!all.contains("secret-line"), "outside file leaked into a diagnostic: {all}");
 }

@@ -603,3 +603,19 @@ fn real_llamacpp_server() {
         "{content}"
     );
 }
+
+/// The structured route never asks a merge for crosswalks (the checker refuses the switch
+/// there), so a model's stray `crosswalks: true` does not cost a repair round.
+#[test]
+fn schema_route_drops_crosswalks_on_a_merge() {
+    let reply = r#"{"name": "m", "road": {"template": "merge", "lanes": 2, "crosswalks": true},
+        "agents": [{"name": "ego", "kind": "sedan", "arm": "main", "ego": true, "speed_kmh": 50}]}"#;
+    let s = rocc::llm::schema::parse(reply).expect("parses");
+    let text = rocc::llm::schema::emit(&s, &[None], &|_| false);
+    assert!(text.contains("road merge {") && !text.contains("crosswalks"), "{text}");
+    let checked = rocc::check::check_text("m.scn", &text, Path::new("."), &mut rocc::source::SourceMap::default());
+    assert!(checked.is_ok(), "{text}\n{:?}", checked.err());
+    let reply = reply.replace("merge", "four_way").replace("\"main\"", "\"south\"");
+    let text = rocc::llm::schema::emit(&rocc::llm::schema::parse(&reply).expect("parses"), &[None], &|_| false);
+    assert!(text.contains("crosswalks on"), "other templates keep the switch: {text}");
+}

@@ -146,6 +146,24 @@ impl Loader<'_> {
                 );
                 continue;
             }
+            // The textual check above cannot see symlinks: `kinds/etc` may point at `/etc`.
+            // Where the target exists, its real location must also stay under the root.
+            if let Ok(real) = std::fs::canonicalize(&target)
+                && !real.starts_with(&self.root_dir)
+            {
+                self.diags.push(
+                    Diagnostic::error(
+                        "E0004",
+                        format!("import path `{}` leaves the scenario's directory through a symbolic link", u.path),
+                    )
+                    .label(u.span, "resolves outside the scenario's directory")
+                    .help(format!(
+                        "keep imported files (and the links leading to them) under `{}`",
+                        self.shown(&self.root_dir).display()
+                    )),
+                );
+                continue;
+            }
             if let Some(i) = stack.iter().position(|p| *p == target) {
                 let chain: Vec<String> = stack[i..].iter().chain([&target]).map(|p| display_name(p)).collect();
                 self.diags.push(

@@ -522,10 +522,13 @@ impl Checker {
         match template {
             Template::Curve => allowed.extend(["radius", "angle"]),
             Template::Roundabout => allowed.push("radius"),
+            // The on-ramp has no pedestrian crossing: a switch that builds nothing is refused.
+            Template::Merge => allowed.retain(|p| *p != "crosswalks"),
             _ => {}
         }
         let mut seen: BTreeMap<&str, Span> = BTreeMap::new();
         let mut ok = true;
+        let mut radius_span = None;
         for p in &r.params {
             let n = p.name.name.as_str();
             if !allowed.contains(&n) {
@@ -553,6 +556,12 @@ impl Checker {
                 continue;
             }
             seen.insert(n, p.span);
+            if n == "radius" {
+                radius_span = Some(match &p.value {
+                    ast::ParamValue::Value(v) => v.span,
+                    ast::ParamValue::Switch { span, .. } => *span,
+                });
+            }
             let v = match (&p.value, n) {
                 (ast::ParamValue::Switch { on, .. }, "crosswalks") => {
                     road.crosswalks = *on;
@@ -620,7 +629,47 @@ impl Checker {
             };
             ok &= got.is_some();
         }
+        if ok {
+            ok = self.radius_fits(&road, r, radius_span);
+        }
         ok.then_some(road)
+    }
+
+    /// The cross-parameter rule the per-parameter ranges cannot express: the bend or ring must
+    /// be wider than the carriageway it carries.
+    fn radius_fits(&mut self, road: &Road, r: &ast::Road, radius_span: Option<Span>) -> bool {
+        let Some(min) = min_radius(road) else { return true };
+        if road.radius >= min - 1e-9 {
+            return true;
+        }
+        let min_shown = (min * 10.0).ceil() / 10.0;
+        let m = |x: f64| (x * 100.0).round() / 100.0;
+        let (msg, why) = if road.template == Template::Roundabout {
+            (
+                format!(
+                    "a roundabout of radius {} m with {} lane(s) of {} m leaves no central island",
+                    m(road.radius),
+                    road.lanes,
+                    m(road.lane_width)
+                ),
+                format!("the ring is {} m wide around its middle line", m(f64::from(road.lanes) * road.lane_width)),
+            )
+        } else {
+            (
+                format!("a curve of radius {} m is tighter than its own carriageway", m(road.radius)),
+                format!("the road reaches {} m either side of its centre line", m(min - CURVE_MARGIN_M)),
+            )
+        };
+        let label = match radius_span {
+            Some(s) => (s, "radius too small for this cross-section"),
+            None => (r.template.span, "the default radius is too small for this cross-section"),
+        };
+        self.err(
+            Diagnostic::error("E0103", msg)
+                .label(label.0, label.1)
+                .help(format!("{why}; use `radius {min_shown} m` or more, or fewer or narrower lanes")),
+        );
+        false
     }
 
     fn traffic(&mut self, t: &ast::ParamBlock) -> Option<Traffic> {
@@ -1424,6 +1473,29 @@ fn side_name(s: Side) -> &'static str {
 }
 
 /// Lanes on one side of one arm.
+/// Width of a sidewalk beside the road (m); the road pass builds them this wide.
+pub const SIDEWALK_WIDTH_M: f64 = 3.0;
+/// Clearance between a curve's inner road edge and the bend's centre (m).
+pub const CURVE_MARGIN_M: f64 = 5.0;
+/// Smallest central island a roundabout's inner ring edge must leave (m).
+pub const ISLAND_MIN_M: f64 = 3.0;
+
+/// The smallest `radius` a curve or roundabout with this cross-section accepts (`None` for the
+/// other templates): a curve's centre line must clear the road's half width (median, lanes,
+/// shoulder and sidewalk) by `CURVE_MARGIN_M`, and a roundabout's ring middle must sit half the
+/// ring's width plus `ISLAND_MIN_M` from the centre.
+pub fn min_radius(road: &Road) -> Option<f64> {
+    let lanes = f64::from(road.lanes) * road.lane_width;
+    match road.template {
+        Template::Curve => {
+            let walk = if road.sidewalks { SIDEWALK_WIDTH_M } else { 0.0 };
+            Some(road.median / 2.0 + lanes + road.shoulder + walk + CURVE_MARGIN_M)
+        }
+        Template::Roundabout => Some(lanes / 2.0 + ISLAND_MIN_M),
+        _ => None,
+    }
+}
+
 pub fn lane_count(road: &Road, arm: Arm, dir: Dir) -> u32 {
     match (road.template, arm, dir) {
         (Template::Merge, Arm::Ramp, Dir::In) => 1,

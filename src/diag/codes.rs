@@ -5,6 +5,9 @@
 //! E08xx: CIREN crash recreation (`rocc ciren`): E0800-E0849 records and SAFE extractions.
 //! E0850-E0899: the CIREN VLM route (`rocc ciren extract`): case files, the conflict descriptor.
 //! E09xx: the learned (grounded) occupancy backend and `rocc train`.
+//!
+//! A `\` line continuation also eats the next line's leading spaces, so an indented example
+//! line follows a literal line break (no `\n\` before it); a test guards this.
 
 pub struct Code {
     pub code: &'static str,
@@ -18,8 +21,8 @@ pub const CODES: &[Code] = &[
         title: "syntax error",
         explanation: "The file does not follow the grammar of the `.scn` language. The error points at the\n\
 first token the parser could not accept; when a block was left open, the label also shows\n\
-where it was opened.\n\n\
-    agent ego: sedan { at west.in[1], 20 m before center     // `}` missing here\n\
+where it was opened.\n
+    agent ego: sedan { at west.in[1], 20 m before center     // `}` missing here
     agent other: sedan { ... }\n\n\
 Close every `{` with `}`. Statements are separated by newlines or `;`.",
     },
@@ -27,12 +30,14 @@ Close every `{` with `}`. Statements are separated by newlines or `;`.",
         code: "E0002",
         title: "cannot read file",
         explanation: "A scenario or an imported file could not be read: it does not exist, is a directory,\n\
-is not UTF-8 text, or is larger than the 4 MiB rocc accepts for one source file.",
+is not UTF-8 text, or is larger than the 4 MiB rocc accepts for one source file.\n
+    use \"kinds/trucks.scn\"      // error when kinds/trucks.scn does not exist
+    $ rocc check missing.scn     // error: cannot read `missing.scn`",
     },
     Code {
         code: "E0003",
         title: "import cycle",
-        explanation: "`use` imports form a cycle: a file imports itself, directly or through others.\n\n\
+        explanation: "`use` imports form a cycle: a file imports itself, directly or through others.\n
     // a.scn\n    use \"b.scn\"\n    // b.scn\n    use \"a.scn\"      // error: cycle a.scn -> b.scn -> a.scn\n\n\
 Move the shared kinds into a third file that both import.",
     },
@@ -41,98 +46,121 @@ Move the shared kinds into a third file that both import.",
         title: "import escapes the project",
         explanation: "`use` paths are relative to the importing file and must stay inside the directory of\n\
 the scenario being compiled: absolute paths and paths that climb out with `..` are rejected, so\n\
-a scenario library can be moved and compiled anywhere.\n\n\
+a scenario library can be moved and compiled anywhere.\n
     use \"kinds/trucks.scn\"      // fine\n    use \"/etc/kinds.scn\"        // error\n    use \"../../kinds.scn\"       // error",
     },
     Code {
         code: "E0005",
         title: "wrong items in a file",
         explanation: "A scenario file holds exactly one `scenario` block (plus `use` and `kind` items); an\n\
-imported file holds only `kind` items and further `use` imports.",
+imported file holds only `kind` items and further `use` imports.\n
+    // kinds.scn, imported with `use \"kinds.scn\"`
+    kind forklift: vehicle { length 3 m; width 1.2 m; height 2.1 m }   // fine
+    scenario s { ... }                                                        // error",
     },
     Code {
         code: "E0101",
         title: "unit of the wrong dimension",
-        explanation: "Numbers carry units and each statement expects one dimension:\n\
+        explanation: "Numbers carry units and each statement expects one dimension:
   length m, cm, km; speed m/s, km/h, mph; time s, ms; angle deg, rad; frequency Hz; ratio %.\n\
-Bare numbers are counts.\n\n\
+Bare numbers are counts.\n
     speed 5 m          // error: a speed needs m/s, km/h or mph\n    speed 5 m/s        // fine",
     },
     Code {
         code: "E0102",
         title: "missing unit",
         explanation: "A physical quantity was written without a unit. rocc never guesses units: write\n\
-`20 m`, `30 km/h`, `4 s`.",
+`20 m`, `30 km/h`, `4 s`.\n
+    goal { speed 30 }        // error: 30 what?
+    goal { speed 30 km/h }   // fine",
     },
     Code {
         code: "E0103",
         title: "value out of range",
         explanation: "A value is outside what rocc accepts for that statement: a negative speed or size, a\n\
 duration over 120 s, a rate over 100 Hz, a lane count outside 1..=6, a density outside 0..1, a\n\
-percentage outside 0..100 %.",
+percentage outside 0..100 %. Some limits join parameters: a `curve` radius must exceed the\n\
+road's half width (median / 2 + lanes x lane_width + shoulder, plus 3 m of sidewalk) by 5 m, and\n\
+a `roundabout` radius must leave a central island of at least 3 m inside its ring.\n
+    duration 300 s                                  // error: at most 120 s
+    road straight { lanes 8 }                       // error: 1..=6 lanes
+    road curve { radius 20 m; lanes 6; lane_width 6 m; median 20 m }   // error: radius 51 m or more",
     },
     Code {
         code: "E0104",
         title: "empty or reversed range",
-        explanation: "A range `a..b` samples uniformly in [a, b]; it needs a <= b.\n\n\
+        explanation: "A range `a..b` samples uniformly in [a, b]; it needs a <= b.\n
     length 4.9..4.4 m     // error\n    length 4.4..4.9 m     // fine",
     },
     Code {
         code: "E0105",
         title: "duplicate statement",
         explanation: "A block states the same property twice (two `speed`s, two `road`s, two agents of\n\
-the same name). Keep one; both places are shown.",
+the same name). Keep one; both places are shown.\n
+    agent a: sedan { at west.in[1], 20 m before center }
+    agent a: suv { at west.in[2], 10 m before center }   // error: `a` again",
     },
     Code {
         code: "E0106",
         title: "missing statement",
         explanation: "Something required is missing: a scenario needs `duration` and `road`; an agent or\n\
 object needs a placement `at ...` (or a replayed `track`); a conflict needs `at_fault`, `struck`,\n\
-`impact` and `point`.",
+`impact` and `point`.\n
+    scenario s { road straight }                    // error: no `duration`
+    agent ego: sedan { goal { speed 30 km/h } }     // error: no `at ...`",
     },
     Code {
         code: "E0107",
         title: "unknown agent",
         explanation: "A statement names an agent that the scenario does not declare. Agent names are used by\n\
-`egos [...]`, `stop behind NAME`, `lateral away_from NAME` and `conflict` fields.\n\n\
-    agent front: sedan { at south.in[1], 2 m before stop_line }\n\
-    agent ego: sedan { at south.in[1], 12 m before stop_line; goal { stop behind frnt } }\n\
+`egos [...]`, `stop behind NAME`, `lateral away_from NAME` and `conflict` fields.\n
+    agent front: sedan { at south.in[1], 2 m before stop_line }
+    agent ego: sedan { at south.in[1], 12 m before stop_line; goal { stop behind frnt } }
                                                                   // error: did you mean `front`?",
     },
     Code {
         code: "E0108",
         title: "unknown kind",
         explanation: "`agent NAME: KIND` names a kind that neither the stdlib prelude (`stdlib/kinds.scn`)\n\
-nor a `use`d file defines. Define new kinds in a kind file:\n\n\
+nor a `use`d file defines. Define new kinds in a kind file:\n
     kind tractor: vehicle { length 3.5..4.5 m; width 2.0..2.4 m; height 2.5..3.0 m }",
     },
     Code {
         code: "E0109",
         title: "unknown road template",
-        explanation: "`road TEMPLATE` must be one of straight, curve, four_way, t_junction, merge, roundabout.",
+        explanation: "`road TEMPLATE` must be one of straight, curve, four_way, t_junction, merge, roundabout.\n
+    road crossroads { lanes 2 }    // error: not a template
+    road four_way { lanes 2 }      // fine",
     },
     Code {
         code: "E0110",
         title: "unknown or inapplicable parameter",
         explanation: "A `road` or `traffic` block sets a parameter that does not exist or does not apply to\n\
 the template (`radius` on a straight road). Road parameters: lanes, lane_width, speed_limit,\n\
-shoulder, median, crosswalks, sidewalks, length, and radius/angle on curve, radius on roundabout.\n\
-Traffic parameters: density, randomness.",
+shoulder, median, crosswalks (not on merge, which has no crossing), sidewalks, length, and\n\
+radius/angle on curve, radius on roundabout.\n\
+Traffic parameters: density, randomness.\n
+    road straight { lanes 1; radius 50 m }   // error: a straight road has no radius
+    road merge { crosswalks on }             // error: a merge has no crosswalk
+    traffic { density 0.5; speed 30 km/h }   // error: unknown traffic parameter",
     },
     Code {
         code: "E0111",
         title: "unknown road arm or landmark",
         explanation: "A placement names an arm the template does not have (`north` on a straight road) or a\n\
 landmark that does not exist there: `stop_line` and `junction` exist on junction templates only\n\
-(four_way, t_junction, roundabout, merge); `center` exists everywhere.\n\n\
-  straight, curve: west, east\n  four_way, roundabout: north, east, south, west\n\
-  t_junction: west, east, south\n  merge: main, ramp",
+(four_way, t_junction, roundabout, merge); `center` exists everywhere.\n
+  straight, curve: west, east\n  four_way, roundabout: north, east, south, west
+  t_junction: west, east, south\n  merge: main, ramp\n
+    road straight { lanes 2 }
+    agent ego: sedan { at north.in[1], 20 m before center }      // error: no arm `north`
+    agent ego: sedan { at west.in[1], 20 m before stop_line }    // error: no stop lines",
     },
     Code {
         code: "E0112",
         title: "lane index out of range",
         explanation: "`ARM.in[k]` and `ARM.out[k]` count lanes from 1 (nearest the centre line) to the road's\n\
-`lanes` per direction.\n\n\
+`lanes` per direction.\n
     road straight { lanes 2 }\n    agent ego: sedan { at west.in[3], 20 m before center }   // error: 2 lanes",
     },
     Code {
@@ -142,7 +170,11 @@ landmark that does not exist there: `stop_line` and `junction` exist on junction
 have no goal and no speed. Pedestrians and animals walk: they may `cross`, keep a speed and stop,\n\
 but cannot change lane, pull to the shoulder or turn. Vehicles cannot `cross`. A goal that\n\
 cannot be met from the placement is rejected too: `stop at stop_line` or `turn` from an\n\
-out-lane, or on a road without a junction.",
+out-lane, or on a road without a junction.\n
+    object c: traffic_cone { at west.in[1], 10 m before center; goal { speed 5 km/h } }  // error
+    road straight { lanes 2; sidewalks on }
+    agent p: pedestrian { at sidewalk(west.in), 5 m before center; goal { lateral change_lane left } }  // error
+    agent p: pedestrian { at sidewalk(west.in), 5 m before center; goal { speed 1.4 m/s; lateral cross } }  // fine",
     },
     Code {
         code: "E0114",
@@ -150,14 +182,16 @@ out-lane, or on a road without a junction.",
         explanation: "A `conflict` stages a crash between two different agents. `at_fault` must be a mover;\n\
 `impact` is one of rear_end, head_on, angle, sideswipe, pedestrian, object; `point` is a side of\n\
 the struck agent: front, rear, left, right, front_left, front_right, rear_left, rear_right.\n\
-`impact pedestrian` needs a pedestrian as `struck`, `impact object` a static one.\n\n\
+`impact pedestrian` needs a pedestrian as `struck`, `impact object` a static one.\n
     conflict { at_fault v1; struck v2; impact sideswipe; point right; at 3 s }",
     },
     Code {
         code: "E0115",
         title: "invalid ego",
         explanation: "`egos [a, b]` lists agents whose viewpoint gets a clip; each must be a mover (a vehicle,\n\
-bicycle, pedestrian or animal), not a static object. `egos vehicles` takes every vehicle.",
+bicycle, pedestrian or animal), not a static object. `egos vehicles` takes every vehicle.\n
+    object c: traffic_cone { at west.in[1], 10 m before center }
+    egos [c]        // error: a cone has no viewpoint to drive from",
     },
     Code {
         code: "E0116",
@@ -165,47 +199,66 @@ bicycle, pedestrian or animal), not a static object. `egos vehicles` takes every
         explanation: "A closed vocabulary got a word it does not contain: a lateral goal (hold_lane,\n\
 change_lane left|right, pull_to_shoulder, away_from NAME, cross), a turn (left, right, straight,\n\
 u_turn), a side (left, right), a landmark (center, junction, stop_line), a class or motion in a\n\
-kind definition.",
+kind definition.\n
+    goal { lateral change_lane lft }     // error: did you mean `left`?
+    goal { turn leftt }                  // error: did you mean `left`?",
     },
     Code {
         code: "E0117",
         title: "invalid track",
         explanation: "A `track` replays recorded keyframes `TIME: (X, Y) yaw ANGLE` in the world frame. Times\n\
-must strictly increase and start at or after 0 s; an agent with a track has no `at` and no goal.",
+must strictly increase and start at or after 0 s; an agent with a track has no `at` and no goal.\n
+    agent v: sedan {
+        track { 0 s: (0 m, 0 m) yaw 0 deg; 1 s: (10 m, 0 m) yaw 0 deg }   // fine
+    }
+    agent w: sedan {
+        track { 1 s: (0 m, 0 m) yaw 0 deg; 0.5 s: (5 m, 0 m) yaw 0 deg } // error: time goes back
+    }",
     },
     Code {
         code: "E0118",
         title: "invalid row",
         explanation: "`row KIND from PLACE to PLACE every DIST` lines up static objects. Both ends must use\n\
 the same placement form on the same lane or sidewalk (or both world coordinates), the spacing\n\
-must be positive, and a row may hold at most 500 objects.",
+must be positive, and a row may hold at most 500 objects.\n
+    row traffic_cone from west.in[2], 20 m before center to east.out[2], 30 m after center every 5 m   // error: two lanes",
     },
     Code {
         code: "E0119",
         title: "kinds of different classes in one_of",
         explanation: "`one_of [a, b]` picks a kind with the seed; all choices must map to the same class and\n\
-motion so that the rest of the agent (its goal, its placement) stays valid whatever is picked.",
+motion so that the rest of the agent (its goal, its placement) stays valid whatever is picked.\n
+    agent a: one_of [sedan, pedestrian] { ... }   // error: vehicle and pedestrian
+    agent a: one_of [sedan, suv, van] { ... }     // fine: all vehicles",
     },
     Code {
         code: "E0201",
         title: "placement off a valid surface",
         explanation: "Each class has surfaces it may start on: vehicles on lanes or shoulders; pedestrians\n\
 and bicycles on sidewalks, crosswalks, shoulders (and lanes for bicycles), or wherever a `cross`\n\
-goal starts; static objects anywhere on the map.\n\n\
-    agent ego: sedan { at sidewalk(east.out), 10 m after center }   // error",
+goal starts; other objects (cones, barriers, debris, animals), static or moving, on the map or\n\
+within 10 m of it.\n
+    agent ego: sedan { at sidewalk(east.out), 10 m after center }   // error
+    object c: traffic_cone { at (500 m, 500 m) }                    // error: far off the map",
     },
     Code {
         code: "E0202",
         title: "initial boxes overlap",
         explanation: "Two agents' boxes overlap at their initial placement. Both are named with their spans;\n\
-move one further along the lane, to another lane, or shorten the boxes.",
+move one further along the lane, to another lane, or shorten the boxes.\n
+    agent a: sedan { at west.in[1], 20 m before center }
+    agent b: sedan { at west.in[1], 22 m before center }   // error: a sedan is ~4.7 m long
+    agent b: sedan { at west.in[1], 30 m before center }   // fine",
     },
     Code {
         code: "E0203",
         title: "placement off the road",
         explanation: "A lane-relative placement lies beyond the end of the lane (the road is `length` long;\n\
 default 120 m, junction arms 60 m), or a crosswalk/sidewalk named by the placement does not\n\
-exist because `crosswalks`/`sidewalks` is off.",
+exist because `crosswalks`/`sidewalks` is off.\n
+    road straight { lanes 1 }                                     // 120 m: 60 m each side
+    agent ego: sedan { at west.in[1], 70 m before center }        // error: lane ends 60 m before
+    agent p: pedestrian { at crosswalk(west), 50 % }              // error: `crosswalks` is off",
     },
     Code {
         code: "E0204",
@@ -213,7 +266,7 @@ exist because `crosswalks`/`sidewalks` is off.",
         explanation: "An agent's goal asks for something the road does not offer from where the agent starts:\n\
 a `turn` where its lane has no junction connector of that kind, a `change_lane` toward a lane\n\
 that does not exist, `stop at stop_line` on a lane with no stop line ahead, or `cross` with no\n\
-road nearby to cross.\n\n\
+road nearby to cross.\n
     road straight { lanes 1 }\n    agent ego: sedan { at west.in[1], 20 m before center; goal { turn left } }   // error\n\n\
 Place the agent on a lane that reaches a junction offering the turn, or change the goal.",
     },
@@ -222,7 +275,7 @@ Place the agent on a lane that reaches a junction offering the turn, or change t
         title: "unknown ego",
         explanation: "`rocc compile --ego NAME` names an agent the scenario does not declare, or one that cannot\n\
 carry sensors (a static object or a row element). Egos are declared agents; background traffic\n\
-and rows have generated names that may change with the seed.\n\n\
+and rows have generated names that may change with the seed.\n
     rocc compile scenarios/fire_lane.scn --ego ambulance -o out     // error if no agent is called `ambulance`\n\n\
 `rocc check FILE` prints the scenario's egos; any declared mover may be chosen.",
     },
@@ -231,55 +284,67 @@ and rows have generated names that may change with the seed.\n\n\
         title: "bad frame selection",
         explanation: "`--frames` takes a comma-separated list of frame indices and ranges: `0`, `0..10` (10\n\
 excluded), `0..=10`, `50..` (to the end), e.g. `--frames 0,10..20`. Every index must be below the\n\
-clip's frame count (duration x rate).",
+clip's frame count (duration x rate).\n
+    $ rocc compile s.scn -o out --frames 0,10..20     // fine
+    $ rocc compile s.scn -o out --frames 10..5        // error: empty range
+    $ rocc compile s.scn -o out --frames 500          // error when the clip has 80 frames",
     },
     Code {
         code: "E0303",
         title: "two inputs write the same output directory",
         explanation: "Outputs go to OUT/<scenario>/<ego>/, so two files in one batch that declare the same\n\
-scenario name would overwrite each other. Rename one of the scenarios (`scenario NAME { ... }`).",
+scenario name would overwrite each other. Rename one of the scenarios (`scenario NAME { ... }`).\n
+    // a.scn and b.scn both say `scenario cut_in { ... }`
+    $ rocc compile a.scn b.scn -o out      // error: both write out/cut_in/",
     },
     Code {
         code: "E0304",
         title: "bad sensor rig file",
         explanation: "`--rig FILE` must be a RON rig description like `rigs/nuplan.ron`: a name, horizontal\n\
 resolution, range limits, one reflectivity per occupancy label (9), the intensity, drop and noise\n\
-models, and at least one sensor with beam elevations and an azimuth sector.",
+models, and at least one sensor with beam elevations and an azimuth sector.\n
+    $ rocc compile s.scn -o out --rig rigs/nuplan.ron     // fine
+    $ rocc compile s.scn -o out --rig my_rig.ron         // error if a field is missing or no sensor is given",
     },
     Code {
         code: "E0401",
         title: "cannot write output",
         explanation: "An output file or directory could not be created or written. rocc writes to a\n\
-temporary name and renames, so no truncated file is left behind.",
+temporary name and renames, so no truncated file is left behind.\n
+    $ rocc compile s.scn -o /read-only/out    // error: permission denied",
     },
     Code {
         code: "E0701",
         title: "unreadable occupancy frame",
         explanation: "`rocc eval occ` reads occupancy frames as a dense `.npy` of shape (400, 400, 32) (rocc's\n\
 uint8 output, or nuPlan-Occ's dense grid in any integer dtype) or as a sparse `.npz` whose array\n\
-is (N, 4) rows of [i, j, k, label] (unlisted voxels are free). Labels are 0..=8 (SPEC.md).",
+is (N, 4) rows of [i, j, k, label] (unlisted voxels are free). Labels are 0..=8 (SPEC.md).\n
+    $ rocc eval occ --pred pred/ --gt gt/    // error if a frame is (200, 200, 16) or holds label 12",
     },
     Code {
         code: "E0703",
         title: "prediction and ground-truth sets do not match",
         explanation: "`--pred` and `--gt` must be directories. Occupancy frames are paired by relative path\n\
 (`.npy` and `.npz` may stand in for each other); every ground-truth frame needs a prediction.\n\
-LiDAR sets are compared as sets and need at least one cloud each.",
+LiDAR sets are compared as sets and need at least one cloud each.\n
+    $ rocc eval occ --pred pred/ --gt gt/    // error if gt/scene/0007.npy has no pred/scene/0007.np[yz]
+    $ rocc eval occ --pred pred.npy --gt gt/  // error: --pred must be a directory",
     },
     Code {
         code: "E0704",
         title: "unreadable point cloud",
         explanation: "`rocc eval lidar` reads KITTI-style `.bin` (float32 x, y, z, intensity per point) or a\n\
-`.npy` of shape (N, >= 3), float32 or float64.",
+`.npy` of shape (N, >= 3), float32 or float64.\n
+    $ rocc eval lidar --pred pred/ --gt gt/  // error if a .bin length is not a multiple of 16 bytes",
     },
     Code {
         code: "E0705",
         title: "box stream is not valid JSON of the expected layout",
-        explanation: "`rocc import boxes FILE` reads\n\n\
-    { \"rate_hz\": 2.0, \"ego_size\": [l, w, h], \"sensor_to_ego\": {\"x\": 0, \"y\": 0, \"yaw\": 0},\n\
-      \"frames\": [ { \"frame\": 0, \"time\": 0.0,\n\
-          \"ego_pose\": {\"x\": 1.0, \"y\": 2.0, \"yaw\": 0.1},\n\
-          \"boxes\": [ {\"track\": \"a1\", \"class\": \"vehicle.car\",\n\
+        explanation: "`rocc import boxes FILE` reads\n
+    { \"rate_hz\": 2.0, \"ego_size\": [l, w, h], \"sensor_to_ego\": {\"x\": 0, \"y\": 0, \"yaw\": 0},
+      \"frames\": [ { \"frame\": 0, \"time\": 0.0,
+          \"ego_pose\": {\"x\": 1.0, \"y\": 2.0, \"yaw\": 0.1},
+          \"boxes\": [ {\"track\": \"a1\", \"class\": \"vehicle.car\",
                       \"center\": [x, y, z], \"size\": [a, b, c], \"yaw\": 0.3} ] } ] }\n\n\
 Only `frames` is required. `ego_pose` may also be {\"translation\": [x, y, z], \"rotation\":\n\
 [w, x, y, z]}. With `--convention mmdet3d` a box may be `\"box\": [cx, cy, cz, w, l, h, yaw]`.",
@@ -367,9 +432,9 @@ boxes in one frame (the second dropped). That frame's BEV footprint differs from
     Code {
         code: "E0717",
         title: "malformed edit",
-        explanation: "Edits are written\n\n\
-    --insert KIND at X,Y [yaw A]    A in degrees, or with `rad`\n\
-    --delete AGENT\n\
+        explanation: "Edits are written\n
+    --insert KIND at X,Y [yaw A]    A in degrees, or with `rad`
+    --delete AGENT
     --move AGENT by DX,DY\n\n\
 Coordinates are metres: in each edited frame's ego frame (x forward, y left) for a compiled\n\
 clip, in the world frame for a `.scn`.",
@@ -387,7 +452,7 @@ manifest, or recompile the clip with the frames to edit.",
         title: "LLM endpoint unreachable",
         explanation: "`rocc text` could not connect to the model server: nothing listens at the address, the\n\
 host name does not resolve, or the connection was reset. Start the server first and pass its\n\
-OpenAI-compatible base URL:\n\n\
+OpenAI-compatible base URL:\n
     rocc text \"...\" -o scene.scn --server llamacpp --endpoint http://127.0.0.1:8080/v1\n\n\
 The endpoint may also come from ROCC_LLM_ENDPOINT. docs/llm.md has the server commands.",
     },
@@ -396,7 +461,8 @@ The endpoint may also come from ROCC_LLM_ENDPOINT. docs/llm.md has the server co
         title: "LLM request timed out",
         explanation: "The model server accepted the request but did not answer within `--timeout` seconds\n\
 (default 120). Long grammar-constrained generations on a CPU can be slow: raise `--timeout`, lower\n\
-`--max-tokens`, or use a smaller model. Timeouts are not retried: the server is probably busy.",
+`--max-tokens`, or use a smaller model. Timeouts are not retried: the server is probably busy.\n
+    $ rocc text \"a deer crosses at dusk\" -o deer.scn --timeout 600   // give a slow CPU server more time",
     },
     Code {
         code: "E0603",
@@ -588,7 +654,7 @@ file. Files are written under a temporary name and renamed, so nothing partial i
         explanation: "`rocc ciren extract CASE_DIR` needs a case folder holding the investigator's scene\n\
 sketch: `sketch.jpeg` (CIREN case folders), `Sketch.jpg` (SAFE extraction folders), or\n\
 `sketch.jpg`, `Sketch.jpeg`, `sketch.png`, `Sketch.png`. The path is not a directory, or none of\n\
-these files is there or readable. Nothing is sent to the model.\n\n\
+these files is there or readable. Nothing is sent to the model.\n
     rocc ciren extract ../shared/ciren/100237 -o 100237.scn --endpoint ... --model ...",
     },
     Code {
@@ -611,7 +677,7 @@ the parser could not accept. Fetch the case record again.",
         code: "E0853",
         title: "CIREN summary is not UTF-8",
         explanation: "`crash_report.xml` or `Summary.txt` holds bytes that are not UTF-8 (often Latin-1 from an\n\
-old export). The message gives the offset and line of the first bad byte. Convert the file:\n\n\
+old export). The message gives the offset and line of the first bad byte. Convert the file:\n
     iconv -f latin1 -t utf-8 Summary.txt > fixed && mv fixed Summary.txt",
     },
     Code {

@@ -199,13 +199,36 @@ pub fn levenshtein(a: &str, b: &str) -> usize {
     prev[b.len()]
 }
 
+/// Optimal-string-alignment distance: Levenshtein plus the swap of two adjacent characters as
+/// one edit, the commonest typing slip (`agnet` for `agent`).
+pub fn osa_distance(a: &str, b: &str) -> usize {
+    let (a, b): (Vec<char>, Vec<char>) = (a.chars().collect(), b.chars().collect());
+    // Three rows: i-2, i-1 and i.
+    let mut before: Vec<usize> = vec![0; b.len() + 1];
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    let mut cur = vec![0; b.len() + 1];
+    for i in 0..a.len() {
+        cur[0] = i + 1;
+        for j in 0..b.len() {
+            let mut d = (prev[j] + usize::from(a[i] != b[j])).min(prev[j + 1] + 1).min(cur[j] + 1);
+            if i > 0 && j > 0 && a[i] == b[j - 1] && a[i - 1] == b[j] {
+                d = d.min(before[j - 1] + 1);
+            }
+            cur[j + 1] = d;
+        }
+        std::mem::swap(&mut before, &mut prev);
+        std::mem::swap(&mut prev, &mut cur);
+    }
+    prev[b.len()]
+}
+
 /// The closest candidate within an edit distance that scales with the word's length.
 pub fn suggest<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
     let limit = (word.chars().count() / 3).max(1) + usize::from(word.len() > 5);
     candidates
         .into_iter()
         .filter(|c| *c != word)
-        .map(|c| (levenshtein(word, c), c))
+        .map(|c| (osa_distance(word, c), c))
         .filter(|(d, _)| *d <= limit)
         .min_by_key(|(d, c)| (*d, *c))
         .map(|(_, c)| c)
@@ -233,5 +256,12 @@ mod tests {
         assert_eq!(suggest("sidewlk", ["sidewalks", "crosswalks"]), Some("sidewalks"));
         assert_eq!(suggest("xyz", ["front", "ego"]), None);
         assert_eq!(levenshtein("kitten", "sitting"), 3);
+        // A transposition is one edit, so short words get their suggestion too.
+        assert_eq!(osa_distance("agnet", "agent"), 1);
+        assert_eq!(osa_distance("ca", "abc"), 3);
+        assert_eq!(osa_distance("kitten", "sitting"), 3);
+        assert_eq!(osa_distance("", "abc"), 3);
+        assert_eq!(suggest("agnet", ["agent", "object", "row"]), Some("agent"));
+        assert_eq!(suggest("laens", ["lanes", "length"]), Some("lanes"));
     }
 }

@@ -266,7 +266,9 @@ pub fn emit(s: &Schema, goals: &[Option<String>], is_static: &dyn Fn(&str) -> bo
     }
     let r = &s.road;
     let sidewalks = r.sidewalks || s.agents.iter().any(|a| a.on == "sidewalk");
-    let crosswalks = r.crosswalks || s.agents.iter().any(|a| a.on == "crosswalk");
+    // A merge has no crossing and the checker refuses the switch there; an agent placed on a
+    // crosswalk still asks for it, so that mistake reaches the repair loop as a diagnostic.
+    let crosswalks = (r.crosswalks && r.template != "merge") || s.agents.iter().any(|a| a.on == "crosswalk");
     let mut params = vec![format!("lanes {}", r.lanes)];
     if let Some(v) = r.speed_limit_kmh {
         params.push(format!("speed_limit {} km/h", num(v)));

@@ -170,7 +170,10 @@ fn surface_ok(map: &Map, class: Class, motion: Motion, cross: bool, pose: Pose) 
         Class::Pedestrian => {
             (cross || s.sidewalk || s.crosswalk || s.shoulder, "a sidewalk, a crosswalk or the shoulder")
         }
-        _ if motion == Motion::Static => (true, ""),
+        // A road-less scene (replayed tracks) has no map for a static object to be near.
+        _ if motion == Motion::Static && map.lanes.is_empty() => (true, ""),
+        // Cones, barriers, debris (static or moving) stand on or beside the road: an object far
+        // off the map is outside every frame and almost surely a mistaken coordinate.
         _ => {
             let (lo, hi) = map.bounds;
             let near =

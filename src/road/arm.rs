@@ -12,8 +12,8 @@ use super::shape::{dashes, parallel, reversed, strip};
 use crate::check::scenario::{Arm, Dir, LaneId};
 use crate::geom::Polyline;
 
-/// Sidewalk width (m).
-pub(crate) const SIDEWALK: f64 = 3.0;
+/// Sidewalk width (m); the checker's minimum curve radius counts it too.
+pub(crate) const SIDEWALK: f64 = crate::check::SIDEWALK_WIDTH_M;
 /// Crosswalk width along the road (m).
 pub(crate) const CROSSWALK: f64 = 4.0;
 

@@ -494,7 +494,11 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
         // Prefer the words that are valid right here; fall back to every keyword.
         let here: Vec<&str> = expected.iter().flat_map(rule_words).copied().collect();
         let candidates: &[&str] = if unit_expected { UNITS } else { KEYWORDS };
-        match diag::suggest(word, here.iter().copied()).or_else(|| diag::suggest(word, candidates.iter().copied())) {
+        let spelled = if unit_expected { unit_respelling(word) } else { None };
+        match spelled
+            .or_else(|| diag::suggest(word, here.iter().copied()))
+            .or_else(|| diag::suggest(word, candidates.iter().copied()))
+        {
             Some(s) => format!("did you mean `{s}`?"),
             None if unit_expected => {
                 format!("units: {}", UNITS.join(", "))
@@ -505,6 +509,23 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
         "statements are separated by newlines or `;`; see the language section of the README".to_string()
     };
     d.help(help)
+}
+
+/// A unit written without its slash or in another case or common spelling (`kmh`, `kph`,
+/// `MPS`, `hz`): edit distance alone would offer `km` for `kmh`, a unit of the wrong dimension.
+fn unit_respelling(word: &str) -> Option<&'static str> {
+    let w = word.to_ascii_lowercase();
+    let alias = match w.as_str() {
+        "kph" | "kmph" => Some("km/h"),
+        "mps" => Some("m/s"),
+        "sec" | "secs" | "seconds" => Some("s"),
+        "degree" | "degrees" => Some("deg"),
+        "meter" | "meters" | "metre" | "metres" => Some("m"),
+        _ => None,
+    };
+    alias.or_else(|| {
+        UNITS.iter().copied().find(|u| u.len() > 1 && u.replace('/', "").to_ascii_lowercase() == w && *u != word)
+    })
 }
 
 fn is_block_keyword(w: &str) -> bool {
