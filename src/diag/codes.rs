@@ -727,10 +727,10 @@ derived from it). The directory could not be read, holds no `.scn` file, or one 
         code: "E0901",
         title: "grounded weights missing",
         explanation: "`--backend grounded` (or `rocc train generator --init`) names a weights file that does not\n\
-exist, or `--backend grounded` was given without `--weights`. Train weights first:\n\n\
-    rocc compile scenarios/ -o corpus --stage occ --no-previews\n\
-    rocc train autoencoder --data corpus --config configs/cpu-small.ron --out model\n\
-    rocc train generator   --data corpus --config configs/cpu-small.ron --out model\n\
+exist, or `--backend grounded` was given without `--weights`. Train weights first:\n
+    rocc compile scenarios/ -o corpus --stage occ --no-previews
+    rocc train autoencoder --data corpus --config configs/cpu-small.ron --out model
+    rocc train generator   --data corpus --config configs/cpu-small.ron --out model
     rocc compile FILE -o out --backend grounded --weights model/generator.bpk\n\n\
 `rocc train` writes `OUT/<stage>.bpk` and the config beside it as `OUT/<stage>.ron`.",
     },
@@ -768,12 +768,12 @@ burn's module paths.",
         code: "E0905",
         title: "training data unusable",
         explanation: "`rocc train --data DIR` (or `--val DIR`) found no frames, or a frame could not be read.\n\
-Two layouts are accepted:\n\
-  1. what `rocc compile --stage occ` writes: clips with `boxes.json`, `bev/NNNNNN.npz`,\n\
-     `occ/NNNNNN.npy`, at any depth below DIR;\n\
-  2. nuPlan-Occ / UniScene style: `DIR/bev/<token>.npz` (gt_bev_masks, gt_aux_bev),\n\
-     `DIR/occ/<token>.npy` (dense (400, 400, 32) labels 0..8) or `.npz` (sparse [i, j, k, label]\n\
-     rows), `DIR/boxes/<token>.json` ({\"gt_boxes\": [[x, y, z, l, w, h, yaw], ...],\n\
+Two layouts are accepted:
+  1. what `rocc compile --stage occ` writes: clips with `boxes.json`, `bev/NNNNNN.npz`,
+     `occ/NNNNNN.npy`, at any depth below DIR;
+  2. nuPlan-Occ / UniScene style: `DIR/bev/<token>.npz` (gt_bev_masks, gt_aux_bev),
+     `DIR/occ/<token>.npy` (dense (400, 400, 32) labels 0..8) or `.npz` (sparse [i, j, k, label]
+     rows), `DIR/boxes/<token>.json` ({\"gt_boxes\": [[x, y, z, l, w, h, yaw], ...],
      \"gt_names\": [...]}).\n\
 The message names the file and what is wrong with it (shape, dtype, missing key). With\n\
 `val_fraction` > 0 and a single clip, nothing is left to train on: add clips or pass `--val`.",
