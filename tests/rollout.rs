@@ -598,6 +598,49 @@ fn pedestrian_crosses_and_traffic_yields() {
     assert!(t.speeds[1].iter().any(|&v| v < 6.0));
 }
 
+/// A car and an emergency vehicle (or a car of an ordinary kind) heading straight into the
+/// junction from the south and the west: the car's and the other's tracks.
+fn crossing_pair(other: &'static str) -> (Tracks, usize, usize) {
+    let m = four_way();
+    let straight = |v: f64| Some(Goal { speed: Some(v), turn: Some(Turn::Straight), ..goal() });
+    // The car would reach its stop line (s = 59) first: 16.7 m to go against the other's 36.7 m.
+    let c = car("car", on(&m, id(Arm::South, Dir::In, 1), 40.0, 0.0), 8.0, straight(8.0));
+    let e = car(other, on(&m, id(Arm::West, Dir::In, 1), 20.0, 0.0), 11.0, straight(11.0));
+    let t = run(vec![c, e], vec![], &m, 10.0);
+    assert!(overlaps(&t, &[]).is_empty());
+    check_limits(&t);
+    (t, 0, 1)
+}
+
+#[test]
+fn cross_traffic_holds_at_the_stop_line_for_an_emergency_vehicle() {
+    let (t, car, amb) = crossing_pair("ambulance");
+    let start = t.poses[car][0];
+    let travelled = |f: usize| DVec2::new(t.poses[car][f].x - start.x, t.poses[car][f].y - start.y).length();
+    // Front bumper at the stop line: 59 - 40 - 4.6 / 2.
+    let to_line = 59.0 - 40.0 - CAR[0] / 2.0;
+    let cleared = (0..t.frames).find(|&f| t.poses[amb][f].x - CAR[0] / 2.0 > J).expect("the ambulance crosses");
+    for f in 0..=cleared {
+        assert!(travelled(f) < to_line + 0.05, "frame {f}: the car is {:.2} m past its line", travelled(f) - to_line);
+    }
+    // It held, then went on once the ambulance had left the junction.
+    assert!(t.speeds[car][cleared] < 0.5, "the car did not hold: {:.2} m/s", t.speeds[car][cleared]);
+    assert!(travelled(t.frames - 1) > to_line + 5.0, "the car never went on");
+}
+
+#[test]
+fn an_ordinary_car_in_the_same_place_gets_no_such_priority() {
+    let (t, car, other) = crossing_pair("sedan");
+    let start = t.poses[car][0];
+    let past_line = (0..t.frames)
+        .find(|&f| {
+            DVec2::new(t.poses[car][f].x - start.x, t.poses[car][f].y - start.y).length()
+                > 59.0 - 40.0 - CAR[0] / 2.0 + 0.5
+        })
+        .expect("the car enters the junction");
+    assert!(t.poses[other][past_line].x < -J, "the car went in only after the other reached the junction");
+}
+
 #[test]
 fn replayed_agents_interpolate_and_hold() {
     let m = straight(1);
