@@ -642,6 +642,57 @@ fn an_ordinary_car_in_the_same_place_gets_no_such_priority() {
 }
 
 #[test]
+fn route_goals_from_rest_without_a_speed_start_off() {
+    let m = four_way();
+    // No goal speed and no initial speed: a turn drives at the lane limit (11 m/s here).
+    let turner = car(
+        "turner",
+        on(&m, id(Arm::South, Dir::In, 1), 20.0, 0.0),
+        0.0,
+        Some(Goal { turn: Some(Turn::Left), ..goal() }),
+    );
+    let t = run(vec![turner], vec![], &m, 8.0);
+    let top = t.speeds[0].iter().copied().fold(0.0, f64::max);
+    assert!(top > 10.0 && top < 11.0 + 1e-6, "turner's top speed {top:.2} m/s");
+    check_limits(&t);
+    // A lane change likewise.
+    let m = straight(2);
+    let changer = car(
+        "changer",
+        on(&m, id(Arm::West, Dir::In, 1), 50.0, 0.0),
+        0.0,
+        Some(Goal { lateral: Lateral::ChangeLane(Side::Right), ..goal() }),
+    );
+    let t = run(vec![changer], vec![], &m, 8.0);
+    assert!(t.speeds[0][t.frames - 1] > 5.0, "changer ends at {:.2} m/s", t.speeds[0][t.frames - 1]);
+    // A walker crossing walks at 1.4 m/s.
+    let ped = Spec {
+        name: "walker",
+        class: Class::Pedestrian,
+        motion: Motion::Holonomic,
+        size: [0.6, 0.6, 1.7],
+        pose: Pose { x: 40.0, y: -2.0 * W - 1.5, yaw: 0.0 },
+        speed: 0.0,
+        goal: Some(Goal { lateral: Lateral::Cross, ..goal() }),
+        object: false,
+        track: None,
+    };
+    let t = run(vec![ped], vec![], &m, 4.0);
+    let v = t.speeds[0][t.frames - 1];
+    assert!((v - 1.4).abs() < 0.05, "walker ends at {v:.2} m/s");
+    // A goal that goes nowhere keeps a standing agent standing.
+    let m = four_way();
+    let queued = car(
+        "queued",
+        on(&m, id(Arm::South, Dir::In, 1), 50.0, 0.0),
+        0.0,
+        Some(Goal { stop: Some(Stop::AtStopLine), ..goal() }),
+    );
+    let t = run(vec![queued], vec![], &m, 4.0);
+    assert!(t.speeds[0].iter().all(|&v| v == 0.0));
+}
+
+#[test]
 fn replayed_agents_interpolate_and_hold() {
     let m = straight(1);
     let keys = vec![Keyframe { t: 0.0, x: 0.0, y: 10.0, yaw: 3.0 }, Keyframe { t: 2.0, x: 10.0, y: 10.0, yaw: -3.0 }];

@@ -17,6 +17,8 @@ use glam::DVec2;
 /// Length of the straight run appended after a route's last lane, m: agents that reach the end
 /// of the map keep going instead of piling up at the edge.
 const RUN_OUT: f64 = 300.0;
+/// Pace of a `cross` goal given no speed at all, m/s.
+const WALK_SPEED: f64 = 1.4;
 /// Lateral manoeuvre durations, s.
 const LANE_CHANGE_S: f64 = 4.0;
 const ASIDE_S: f64 = 2.5;
@@ -364,9 +366,14 @@ fn build_actor(
     }
     a.path.set_caps(a.lim.lat_acc, a.lim.yaw_rate, a.lim.brake);
     // An explicit goal speed may exceed the lane limit (an ambulance); a kept speed may not.
+    // A route goal (a turn, a lane change, a crossing) means to go somewhere: started from rest
+    // with no goal speed, it drives at the lane limit, or walks at an ordinary pace.
+    let goes = goal.is_some_and(|g| g.turn.is_some() || matches!(g.lateral, Lateral::ChangeLane(_)));
     a.v_goal = match goal.and_then(|g| g.speed) {
         Some(v) => v.max(0.0),
+        None if a.vehicle && goes && a.v0 < 0.05 && limit.is_finite() => limit,
         None if a.vehicle => a.v0.min(limit),
+        None if lateral == Lateral::Cross && a.v0 < 0.05 => WALK_SPEED,
         None => a.v0,
     };
     let lane = lane_here.map(|l| &map.lanes[l]);
