@@ -185,6 +185,34 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         let plans: Vec<Option<Plan>> =
             confs.iter().map(|k| stage::choose(k, &actors, &pass1, dt, c.duration)).collect();
         Sim::new(&actors, &confs, &plans, Some(&pass1), dt).run(&mut out);
+        // A staged crash that does not happen near its time is not silently dropped. (Without a
+        // plan the at-fault agent is not ours to steer, e.g. a replayed track: nothing to check.)
+        for (k, _) in confs.iter().zip(&plans).filter(|(_, p)| p.is_some()) {
+            let t_req = stage::requested_time(&k.c, dt, frames, c.duration);
+            let hit = out.impacts.iter().find(|r| r.conflict == k.index).map(|r| r.frame as f64 * dt);
+            if hit.is_none_or(|t| (t - t_req).abs() > stage::WINDOW_S + 0.5 * dt) {
+                let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
+                let what = match hit {
+                    Some(t) => format!("they first touch at {t:.1} s"),
+                    None => "they never touch".to_string(),
+                };
+                errs.push(
+                    Diagnostic::error(
+                        "E0205",
+                        format!("the conflict between `{a}` and `{b}` cannot be staged at {t_req:.1} s: {what}"),
+                    )
+                    .label(k.c.span, "no contact near this time")
+                    .help(format!(
+                        "`{a}` must be able to reach `{b}` within {:.1} s of `at` at its limits: \
+                         start them closer, give them speeds that bring them together, or move `at`",
+                        stage::WINDOW_S
+                    )),
+                );
+            }
+        }
+    }
+    if !errs.is_empty() {
+        return Err(errs);
     }
     Ok(out)
 }
