@@ -813,37 +813,3 @@ proptest! {
         prop_assert_eq!(&t, &rollout(&c, &m, &p).expect("rollout"));
     }
 }
-
-/// Cost per agent-frame on a 50-agent scene. `cargo test --release --test rollout -- --ignored
-/// --nocapture bench` prints it.
-#[test]
-#[ignore]
-fn bench_rollout_50_agents() {
-    let m = straight(2);
-    let gens: Vec<Gen> = (0..10)
-        .map(|i| Gen {
-            lane: 1 + (i % 2) as u32,
-            west: i % 4 < 2,
-            gap: 2.0,
-            speed: 10.0,
-            goal: (i % 3) as u8,
-            goal_speed: 12.0,
-        })
-        .collect();
-    let specs = generated(&gens);
-    let (c, p) = scene(specs, vec![], Some(Traffic { density: 1.0, randomness: 0.3 }), 20.0);
-    let t = rollout(&c, &m, &p).expect("rollout");
-    let n = t.agents.len();
-    let reps = 20;
-    let start = std::time::Instant::now();
-    for _ in 0..reps {
-        std::hint::black_box(rollout(&c, &m, &p).expect("rollout"));
-    }
-    let el = start.elapsed().as_secs_f64() / reps as f64;
-    println!(
-        "{n} agents x {} frames: {:.3} ms per rollout, {:.0} ns per agent-frame",
-        t.frames,
-        el * 1e3,
-        el * 1e9 / (n * t.frames) as f64
-    );
-}
