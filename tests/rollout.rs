@@ -598,6 +598,100 @@ fn pedestrian_crosses_and_traffic_yields() {
     assert!(t.speeds[1].iter().any(|&v| v < 6.0));
 }
 
+/// A car and an emergency vehicle (or a car of an ordinary kind) heading straight into the
+/// junction from the south and the west: the car's and the other's tracks.
+fn crossing_pair(other: &'static str) -> (Tracks, usize, usize) {
+    let m = four_way();
+    let straight = |v: f64| Some(Goal { speed: Some(v), turn: Some(Turn::Straight), ..goal() });
+    // The car would reach its stop line (s = 59) first: 16.7 m to go against the other's 36.7 m.
+    let c = car("car", on(&m, id(Arm::South, Dir::In, 1), 40.0, 0.0), 8.0, straight(8.0));
+    let e = car(other, on(&m, id(Arm::West, Dir::In, 1), 20.0, 0.0), 11.0, straight(11.0));
+    let t = run(vec![c, e], vec![], &m, 10.0);
+    assert!(overlaps(&t, &[]).is_empty());
+    check_limits(&t);
+    (t, 0, 1)
+}
+
+#[test]
+fn cross_traffic_holds_at_the_stop_line_for_an_emergency_vehicle() {
+    let (t, car, amb) = crossing_pair("ambulance");
+    let start = t.poses[car][0];
+    let travelled = |f: usize| DVec2::new(t.poses[car][f].x - start.x, t.poses[car][f].y - start.y).length();
+    // Front bumper at the stop line: 59 - 40 - 4.6 / 2.
+    let to_line = 59.0 - 40.0 - CAR[0] / 2.0;
+    let cleared = (0..t.frames).find(|&f| t.poses[amb][f].x - CAR[0] / 2.0 > J).expect("the ambulance crosses");
+    for f in 0..=cleared {
+        assert!(travelled(f) < to_line + 0.05, "frame {f}: the car is {:.2} m past its line", travelled(f) - to_line);
+    }
+    // It held, then went on once the ambulance had left the junction.
+    assert!(t.speeds[car][cleared] < 0.5, "the car did not hold: {:.2} m/s", t.speeds[car][cleared]);
+    assert!(travelled(t.frames - 1) > to_line + 5.0, "the car never went on");
+}
+
+#[test]
+fn an_ordinary_car_in_the_same_place_gets_no_such_priority() {
+    let (t, car, other) = crossing_pair("sedan");
+    let start = t.poses[car][0];
+    let past_line = (0..t.frames)
+        .find(|&f| {
+            DVec2::new(t.poses[car][f].x - start.x, t.poses[car][f].y - start.y).length()
+                > 59.0 - 40.0 - CAR[0] / 2.0 + 0.5
+        })
+        .expect("the car enters the junction");
+    assert!(t.poses[other][past_line].x < -J, "the car went in only after the other reached the junction");
+}
+
+#[test]
+fn route_goals_from_rest_without_a_speed_start_off() {
+    let m = four_way();
+    // No goal speed and no initial speed: a turn drives at the lane limit (11 m/s here).
+    let turner = car(
+        "turner",
+        on(&m, id(Arm::South, Dir::In, 1), 20.0, 0.0),
+        0.0,
+        Some(Goal { turn: Some(Turn::Left), ..goal() }),
+    );
+    let t = run(vec![turner], vec![], &m, 8.0);
+    let top = t.speeds[0].iter().copied().fold(0.0, f64::max);
+    assert!(top > 10.0 && top < 11.0 + 1e-6, "turner's top speed {top:.2} m/s");
+    check_limits(&t);
+    // A lane change likewise.
+    let m = straight(2);
+    let changer = car(
+        "changer",
+        on(&m, id(Arm::West, Dir::In, 1), 50.0, 0.0),
+        0.0,
+        Some(Goal { lateral: Lateral::ChangeLane(Side::Right), ..goal() }),
+    );
+    let t = run(vec![changer], vec![], &m, 8.0);
+    assert!(t.speeds[0][t.frames - 1] > 5.0, "changer ends at {:.2} m/s", t.speeds[0][t.frames - 1]);
+    // A walker crossing walks at 1.4 m/s.
+    let ped = Spec {
+        name: "walker",
+        class: Class::Pedestrian,
+        motion: Motion::Holonomic,
+        size: [0.6, 0.6, 1.7],
+        pose: Pose { x: 40.0, y: -2.0 * W - 1.5, yaw: 0.0 },
+        speed: 0.0,
+        goal: Some(Goal { lateral: Lateral::Cross, ..goal() }),
+        object: false,
+        track: None,
+    };
+    let t = run(vec![ped], vec![], &m, 4.0);
+    let v = t.speeds[0][t.frames - 1];
+    assert!((v - 1.4).abs() < 0.05, "walker ends at {v:.2} m/s");
+    // A goal that goes nowhere keeps a standing agent standing.
+    let m = four_way();
+    let queued = car(
+        "queued",
+        on(&m, id(Arm::South, Dir::In, 1), 50.0, 0.0),
+        0.0,
+        Some(Goal { stop: Some(Stop::AtStopLine), ..goal() }),
+    );
+    let t = run(vec![queued], vec![], &m, 4.0);
+    assert!(t.speeds[0].iter().all(|&v| v == 0.0));
+}
+
 #[test]
 fn replayed_agents_interpolate_and_hold() {
     let m = straight(1);
@@ -718,38 +812,4 @@ proptest! {
         check_limits(&t);
         prop_assert_eq!(&t, &rollout(&c, &m, &p).expect("rollout"));
     }
-}
-
-/// Cost per agent-frame on a 50-agent scene. `cargo test --release --test rollout -- --ignored
-/// --nocapture bench` prints it.
-#[test]
-#[ignore]
-fn bench_rollout_50_agents() {
-    let m = straight(2);
-    let gens: Vec<Gen> = (0..10)
-        .map(|i| Gen {
-            lane: 1 + (i % 2) as u32,
-            west: i % 4 < 2,
-            gap: 2.0,
-            speed: 10.0,
-            goal: (i % 3) as u8,
-            goal_speed: 12.0,
-        })
-        .collect();
-    let specs = generated(&gens);
-    let (c, p) = scene(specs, vec![], Some(Traffic { density: 1.0, randomness: 0.3 }), 20.0);
-    let t = rollout(&c, &m, &p).expect("rollout");
-    let n = t.agents.len();
-    let reps = 20;
-    let start = std::time::Instant::now();
-    for _ in 0..reps {
-        std::hint::black_box(rollout(&c, &m, &p).expect("rollout"));
-    }
-    let el = start.elapsed().as_secs_f64() / reps as f64;
-    println!(
-        "{n} agents x {} frames: {:.3} ms per rollout, {:.0} ns per agent-frame",
-        t.frames,
-        el * 1e3,
-        el * 1e9 / (n * t.frames) as f64
-    );
 }

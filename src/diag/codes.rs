@@ -271,6 +271,18 @@ road nearby to cross.\n
 Place the agent on a lane that reaches a junction offering the turn, or change the goal.",
     },
     Code {
+        code: "E0205",
+        title: "conflict makes no contact near its time",
+        explanation: "A `conflict` is staged by steering the at-fault agent, within its motion limits, into\n\
+the struck agent so that they touch within 1.5 s of `at` (mid-clip without `at`). When the two\n\
+are too far apart for that, or their motion keeps them apart, the crash would be silently missing\n\
+from the clip; instead `rocc check` and `rocc compile` report it at the conflict.\n\n\
+    agent a: sedan { at west.in[1], 50 m before center; speed 30 km/h }\n\
+    agent b: sedan { at west.in[1], 50 m after center; speed 30 km/h }\n\
+    conflict { at_fault a; struck b; impact rear_end; point rear; at 0.5 s }   // error: 100 m apart\n\n\
+Start the pair closer, give them speeds that bring them together by then, or move `at` later.",
+    },
+    Code {
         code: "E0301",
         title: "unknown ego",
         explanation: "`rocc compile --ego NAME` names an agent the scenario does not declare, or one that cannot\n\

@@ -10,6 +10,8 @@
 //!   that lands exactly on stop targets (stop line, queue gap, distance);
 //! - lateral: offsets from the route's centre line, moved along quintic profiles that pause while
 //!   the target side is occupied;
+//! - junctions: vehicles whose junction path crosses an approaching emergency vehicle's hold at
+//!   their stop line, and those already committed clear the junction first;
 //! - a last safety net: a move that would make two boxes overlap is undone (the agent holds its
 //!   previous pose), so the only overlaps in `Tracks` are conflict pairs from their impact on.
 //!

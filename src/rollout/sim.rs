@@ -17,6 +17,8 @@ use glam::DVec2;
 /// Length of the straight run appended after a route's last lane, m: agents that reach the end
 /// of the map keep going instead of piling up at the edge.
 const RUN_OUT: f64 = 300.0;
+/// Pace of a `cross` goal given no speed at all, m/s.
+const WALK_SPEED: f64 = 1.4;
 /// Lateral manoeuvre durations, s.
 const LANE_CHANGE_S: f64 = 4.0;
 const ASIDE_S: f64 = 2.5;
@@ -71,7 +73,35 @@ pub(super) struct Actor {
     pub lateral: Lat,
     pub stop: StopGoal,
     pub info: TrackAgent,
+    /// An emergency vehicle (see `EMERGENCY_KINDS`): cross traffic holds for it.
+    pub emergency: bool,
+    /// The first junction on the route, if any.
+    pub junction: Option<Junction>,
+    /// Emergency vehicles (track indices) whose junction path crosses this agent's: while one
+    /// approaches or is inside the junction, this agent holds at its stop line.
+    pub yield_to: Vec<usize>,
 }
+
+/// Where a route passes its first junction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Junction {
+    /// Arc length where a yielding front bumper halts (the stop line, else the junction entry).
+    pub stop: f64,
+    /// Arc length where the route leaves the junction.
+    pub exit: f64,
+    /// Index into `Map::connectors`.
+    pub conn: usize,
+}
+
+/// Kinds that drive with lights and siren: everyone else gives them the junction.
+const EMERGENCY_KINDS: [&str; 3] = ["ambulance", "fire_truck", "police_car"];
+/// How far ahead of an emergency vehicle the junction is cleared: this many seconds at its
+/// speed, and at least `EMERGENCY_NEAR_M`.
+const EMERGENCY_NEAR_S: f64 = 8.0;
+const EMERGENCY_NEAR_M: f64 = 30.0;
+/// Share of emergency braking a driver uses to hold for an emergency vehicle; closer than that
+/// to the stop line, it goes on and clears the junction.
+const YIELD_BRAKE: f64 = 0.75;
 
 impl Actor {
     fn obb(&self, st: &State) -> Obb {
@@ -143,6 +173,7 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
     for k in &confs {
         face_the_striker(&mut actors, k);
     }
+    assign_yields(map, &mut actors, &confs);
     let frames = c.frame_count();
     let dt = if c.rate > 0.0 { 1.0 / c.rate } else { 0.1 };
     let mut out = empty_tracks(&actors, c.rate, frames);
@@ -154,6 +185,34 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         let plans: Vec<Option<Plan>> =
             confs.iter().map(|k| stage::choose(k, &actors, &pass1, dt, c.duration)).collect();
         Sim::new(&actors, &confs, &plans, Some(&pass1), dt).run(&mut out);
+        // A staged crash that does not happen near its time is not silently dropped. (Without a
+        // plan the at-fault agent is not ours to steer, e.g. a replayed track: nothing to check.)
+        for (k, _) in confs.iter().zip(&plans).filter(|(_, p)| p.is_some()) {
+            let t_req = stage::requested_time(&k.c, dt, frames, c.duration);
+            let hit = out.impacts.iter().find(|r| r.conflict == k.index).map(|r| r.frame as f64 * dt);
+            if hit.is_none_or(|t| (t - t_req).abs() > stage::WINDOW_S + 0.5 * dt) {
+                let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
+                let what = match hit {
+                    Some(t) => format!("they first touch at {t:.1} s"),
+                    None => "they never touch".to_string(),
+                };
+                errs.push(
+                    Diagnostic::error(
+                        "E0205",
+                        format!("the conflict between `{a}` and `{b}` cannot be staged at {t_req:.1} s: {what}"),
+                    )
+                    .label(k.c.span, "no contact near this time")
+                    .help(format!(
+                        "`{a}` must be able to reach `{b}` within {:.1} s of `at` at its limits: \
+                         start them closer, give them speeds that bring them together, or move `at`",
+                        stage::WINDOW_S
+                    )),
+                );
+            }
+        }
+    }
+    if !errs.is_empty() {
+        return Err(errs);
     }
     Ok(out)
 }
@@ -226,6 +285,9 @@ fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Class, drive:
         start: 0.0,
         lateral: Lat::Hold,
         stop: StopGoal::None,
+        emergency: EMERGENCY_KINDS.contains(&info.kind.as_str()) && motion == Motion::Vehicle,
+        junction: None,
+        yield_to: vec![],
         info,
     }
 }
@@ -292,7 +354,8 @@ fn build_actor(
             Some(l) => {
                 let lane = &map.lanes[l];
                 let turn = goal.and_then(|g| g.turn);
-                let (pts, ok) = chain(map, l, turn);
+                let (pts, ok, junction) = chain(map, l, turn);
+                a.junction = junction;
                 if !ok {
                     fail(
                         errs,
@@ -331,9 +394,14 @@ fn build_actor(
     }
     a.path.set_caps(a.lim.lat_acc, a.lim.yaw_rate, a.lim.brake);
     // An explicit goal speed may exceed the lane limit (an ambulance); a kept speed may not.
+    // A route goal (a turn, a lane change, a crossing) means to go somewhere: started from rest
+    // with no goal speed, it drives at the lane limit, or walks at an ordinary pace.
+    let goes = goal.is_some_and(|g| g.turn.is_some() || matches!(g.lateral, Lateral::ChangeLane(_)));
     a.v_goal = match goal.and_then(|g| g.speed) {
         Some(v) => v.max(0.0),
+        None if a.vehicle && goes && a.v0 < 0.05 && limit.is_finite() => limit,
         None if a.vehicle => a.v0.min(limit),
+        None if lateral == Lateral::Cross && a.v0 < 0.05 => WALK_SPEED,
         None => a.v0,
     };
     let lane = lane_here.map(|l| &map.lanes[l]);
@@ -385,7 +453,8 @@ fn background_actor(map: &Map, s: traffic::Spawn) -> Actor {
         background: true,
     };
     let mut a = base_actor(info, Pose { x: p.x, y: p.y, yaw }, Motion::Vehicle, Class::Vehicle, Drive::Mover);
-    let (pts, _) = chain(map, s.lane, None);
+    let (pts, _, junction) = chain(map, s.lane, None);
+    a.junction = junction;
     a.path = Path::new(&pts);
     a.path.set_caps(a.lim.lat_acc, a.lim.yaw_rate, a.lim.brake);
     a.s0 = s.s;
@@ -440,20 +509,22 @@ pub(super) fn find_lane(map: &Map, p: DVec2, yaw: f64) -> Option<(usize, f64, f6
 
 /// Points of the route starting with lane `l`: its centre, then at each lane end the connector
 /// of the requested turn (consumed at the first junction) or else straight on, then the next
-/// lane. `false` when a requested turn finds no connector before the route runs out.
-pub(super) fn chain(map: &Map, l: usize, turn: Option<Turn>) -> (Vec<DVec2>, bool) {
+/// lane. `false` when a requested turn finds no connector before the route runs out. Also where
+/// the route passes its first junction.
+pub(super) fn chain(map: &Map, l: usize, turn: Option<Turn>) -> (Vec<DVec2>, bool, Option<Junction>) {
     let mut pts: Vec<DVec2> = map.lanes[l].centre.points.clone();
     let mut cur = l;
     let mut pending = turn;
     let mut ok = true;
+    let mut junction = None;
     let mut total = map.lanes[l].centre.length();
     for _ in 0..6 {
         if total > 800.0 {
             break;
         }
-        let mut from_here = map.connectors.iter().filter(|c| c.from == cur && c.to < map.lanes.len());
+        let mut from_here = map.connectors.iter().enumerate().filter(|(_, c)| c.from == cur && c.to < map.lanes.len());
         let pick = match pending {
-            Some(t) => match from_here.clone().find(|c| c.turn == t) {
+            Some(t) => match from_here.clone().find(|(_, c)| c.turn == t) {
                 Some(cn) => Some(cn),
                 None if map.lanes[cur].next.is_some() => None,
                 None => {
@@ -463,11 +534,17 @@ pub(super) fn chain(map: &Map, l: usize, turn: Option<Turn>) -> (Vec<DVec2>, boo
             },
             None => from_here
                 .clone()
-                .find(|c| c.turn == Turn::Straight)
+                .find(|(_, c)| c.turn == Turn::Straight)
                 .or_else(|| if map.lanes[cur].next.is_some() { None } else { from_here.next() }),
         };
         let nxt = match pick {
-            Some(cn) => {
+            Some((ci, cn)) => {
+                if junction.is_none() {
+                    // The stop line counts only on the lane the route starts in.
+                    let stop = if cur == l { map.lanes[l].stop_line_s } else { None };
+                    let (entry, len) = (total, cn.path.length());
+                    junction = Some(Junction { stop: stop.unwrap_or(entry), exit: entry + len, conn: ci });
+                }
                 pts.extend_from_slice(&cn.path.points);
                 total += cn.path.length();
                 pending = None;
@@ -490,7 +567,51 @@ pub(super) fn chain(map: &Map, l: usize, turn: Option<Turn>) -> (Vec<DVec2>, boo
         let dir = (pts[n - 1] - pts[n - 2]).normalize_or_zero();
         pts.push(pts[n - 1] + dir * RUN_OUT);
     }
-    (pts, ok)
+    (pts, ok, junction)
+}
+
+/// Whether two junction paths cross or merge: some point of one lies within `gap` of the other,
+/// away from their shared start (two paths from the same lane diverge; they do not cross).
+fn paths_cross(map: &Map, a: usize, b: usize, gap: f64) -> bool {
+    let (ca, cb) = (&map.connectors[a], &map.connectors[b]);
+    if ca.from == cb.from {
+        return false;
+    }
+    let (la, lb) = (ca.path.length(), cb.path.length());
+    let n = (la / 0.5).ceil().max(1.0) as usize;
+    (0..=n).any(|k| {
+        let (p, _) = ca.path.pose_at(la * k as f64 / n as f64);
+        let (s, d) = cb.path.project(p);
+        s > -0.5 && s < lb + 0.5 && d.abs() < gap
+    })
+}
+
+/// Fill every agent's `yield_to`: the emergency vehicles whose junction path crosses its own.
+/// Emergency vehicles and staged conflict agents (their goal is the crash) do not yield.
+fn assign_yields(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
+    let em: Vec<usize> = (0..actors.len())
+        .filter(|&e| actors[e].emergency && matches!(actors[e].drive, Drive::Mover) && actors[e].junction.is_some())
+        .collect();
+    if em.is_empty() {
+        return;
+    }
+    for i in 0..actors.len() {
+        let a = &actors[i];
+        let Some(ji) = a.junction else { continue };
+        if a.emergency || !a.vehicle || !matches!(a.drive, Drive::Mover) || confs.iter().any(|k| k.af == i || k.st == i)
+        {
+            continue;
+        }
+        let ys: Vec<usize> = em
+            .iter()
+            .copied()
+            .filter(|&e| {
+                let je = actors[e].junction.map(|j| j.conn).unwrap_or(ji.conn);
+                paths_cross(map, ji.conn, je, a.hw + actors[e].hw + 0.5)
+            })
+            .collect();
+        actors[i].yield_to = ys;
+    }
 }
 
 /// Heading and length of a walk straight across the nearest road from `p`: perpendicular to
@@ -544,6 +665,8 @@ struct Sim<'a> {
     next: Vec<State>,
     /// Unit heading of every agent in `cur`: pair checks use dot and cross products, not trig.
     dirs: Vec<DVec2>,
+    /// Per agent, this frame: `yield_state`.
+    yielding: Vec<(Option<f64>, bool)>,
 }
 
 impl<'a> Sim<'a> {
@@ -572,6 +695,7 @@ impl<'a> Sim<'a> {
             dt,
             next: cur.clone(),
             dirs: cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect(),
+            yielding: vec![(None, false); actors.len()],
             cur,
         }
     }
@@ -585,6 +709,9 @@ impl<'a> Sim<'a> {
             let t = (f - 1) as f64 * self.dt;
             self.dirs.clear();
             self.dirs.extend(self.cur.iter().map(|s| DVec2::from_angle(s.yaw)));
+            for i in 0..self.actors.len() {
+                self.yielding[i] = self.yield_state(i);
+            }
             for i in 0..self.actors.len() {
                 self.next[i] = self.step(i, t, f);
             }
@@ -689,6 +816,7 @@ impl<'a> Sim<'a> {
             StopGoal::Behind(k) if active => Some(k),
             _ => None,
         };
+        let (yield_rem, clearing) = self.yielding[i];
         for (j, (o, b)) in self.cur.iter().zip(self.actors.iter()).enumerate() {
             if j == i || self.exempt(i, j) {
                 continue;
@@ -752,7 +880,11 @@ impl<'a> Sim<'a> {
             // Someone about to cut across our corridor (a crossing pedestrian, a car in the
             // junction, a lane changer) counts as in it. Walkers do not wait for predicted
             // vehicles: vehicles yield to them, which keeps the two from waiting on each other.
-            if !obstacle && a.vehicle && v_lat.abs() > 0.3 {
+            // One holding at its stop line for an emergency vehicle stays out of the junction;
+            // one clearing the junction for it has the right of way over predicted crossers
+            // (they yield to it), so the two never wait on each other.
+            let gives_way = self.yielding[j].0.is_some() || clearing;
+            if !obstacle && a.vehicle && v_lat.abs() > 0.3 && !gives_way {
                 // A walker or an animal heading for the road gets two more seconds of slack:
                 // drivers brake for someone stepping off the kerb, not only for someone already
                 // in their lane, and a walker's path is the least predictable.
@@ -789,6 +921,11 @@ impl<'a> Sim<'a> {
             let shortest = (st.v * dt - 0.5 * lim.brake_max * dt * dt).max(0.0);
             hard = hard.min(rem.max(shortest));
         }
+        if let Some(rem) = yield_rem {
+            acc = acc.min(stop_law(st.v, rem, lim, dt));
+            let shortest = (st.v * dt - 0.5 * lim.brake_max * dt * dt).max(0.0);
+            hard = hard.min(rem.max(shortest));
+        }
         // Do not run off the end of the path.
         hard = hard.min(a.path.length() - st.s);
 
@@ -819,6 +956,41 @@ impl<'a> Sim<'a> {
             stopped,
             frozen: false,
         }
+    }
+
+    /// How agent `i` gives the junction to an emergency vehicle on a crossing path: short of the
+    /// stop line, it holds there (the distance left to it); past it, or too close to stop firmly,
+    /// it clears the junction without waiting for the emergency vehicle's predicted path (`true`).
+    fn yield_state(&self, i: usize) -> (Option<f64>, bool) {
+        let (a, st) = (&self.actors[i], &self.cur[i]);
+        let Some(j) = a.junction else { return (None, false) };
+        if !a.yield_to.iter().any(|&e| self.emergency_near(e)) {
+            return (None, false);
+        }
+        let rem = j.stop - 0.3 - (st.s + a.hl);
+        if rem > -0.05 && st.v * st.v / (2.0 * rem.max(1e-3)) <= YIELD_BRAKE * a.lim.brake_max {
+            (Some(rem.max(0.0)), false)
+        } else {
+            (None, st.s - a.hl < j.exit)
+        }
+    }
+
+    /// Whether emergency vehicle `e` is close to its junction or inside it: within
+    /// `EMERGENCY_NEAR_S` of its stop point, its rear not yet out of the junction.
+    fn emergency_near(&self, e: usize) -> bool {
+        let (a, st) = (&self.actors[e], &self.cur[e]);
+        let Some(j) = a.junction else { return false };
+        if st.frozen || st.stopped || (a.v_goal < 0.5 && st.v < 0.5) {
+            return false;
+        }
+        // One that means to stop short of the junction's far side does not need it cleared.
+        if let StopGoal::Front(sf) | StopGoal::Centre(sf) = a.stop
+            && sf < j.exit
+        {
+            return false;
+        }
+        let to_stop = j.stop - (st.s + a.hl);
+        st.s - a.hl < j.exit && to_stop < EMERGENCY_NEAR_M.max(st.v.max(a.v_goal) * EMERGENCY_NEAR_S)
     }
 
     /// The lateral offset at which agent `i` clears an agent ahead that is easing aside for it

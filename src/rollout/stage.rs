@@ -137,6 +137,15 @@ pub(super) fn relative(
 }
 
 /// Pick the impact frame and departure time for a conflict from pass 1.
+/// How far from its requested time a staged impact may land, s.
+pub(super) const WINDOW_S: f64 = 1.5;
+
+/// The impact time a conflict asks for: its `at`, else mid-clip, within the clip's frames.
+pub(super) fn requested_time(c: &crate::check::scenario::Conflict, dt: f64, frames: usize, duration: f64) -> f64 {
+    let last = frames.saturating_sub(1);
+    c.at.unwrap_or(duration / 2.0).clamp(2.0 * dt, (last as f64 * dt).max(2.0 * dt))
+}
+
 pub(super) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration: f64) -> Option<Plan> {
     let (af, st) = (&actors[k.af], &actors[k.st]);
     if !matches!(af.drive, Drive::Mover) || p1.frames < 4 {
@@ -158,9 +167,9 @@ pub(super) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
         a.overlaps(&b)
     });
     let last = p1.frames - 1;
-    let t_req = k.c.at.unwrap_or(duration / 2.0).clamp(2.0 * dt, last as f64 * dt);
-    let lo = ((t_req - 1.5) / dt).round().max(2.0) as usize;
-    let hi = (((t_req + 1.5) / dt).round() as usize).min(last);
+    let t_req = requested_time(&k.c, dt, p1.frames, duration);
+    let lo = ((t_req - WINDOW_S) / dt).round().max(2.0) as usize;
+    let hi = (((t_req + WINDOW_S) / dt).round() as usize).min(last);
     let lim = af.lim;
     let mut best: Option<(f64, Plan)> = None;
     for (fi, &struck_at) in ps.iter().enumerate().take(hi + 1).skip(lo) {
