@@ -276,9 +276,9 @@ Place the agent on a lane that reaches a junction offering the turn, or change t
         explanation: "A `conflict` is staged by steering the at-fault agent, within its motion limits, into\n\
 the struck agent so that they touch within 1.5 s of `at` (mid-clip without `at`). When the two\n\
 are too far apart for that, or their motion keeps them apart, the crash would be silently missing\n\
-from the clip; instead `rocc check` and `rocc compile` report it at the conflict.\n\n\
-    agent a: sedan { at west.in[1], 50 m before center; speed 30 km/h }\n\
-    agent b: sedan { at west.in[1], 50 m after center; speed 30 km/h }\n\
+from the clip; instead `rocc check` and `rocc compile` report it at the conflict.\n
+    agent a: sedan { at west.in[1], 50 m before center; speed 30 km/h }
+    agent b: sedan { at west.in[1], 50 m after center; speed 30 km/h }
     conflict { at_fault a; struck b; impact rear_end; point rear; at 0.5 s }   // error: 100 m apart\n\n\
 Start the pair closer, give them speeds that bring them together by then, or move `at` later.",
     },
@@ -457,7 +457,10 @@ clip, in the world frame for a `.scn`.",
         explanation: "`rocc edit CLIP --frames SPEC` edits only frames the clip holds: `rocc compile --frames`
 may have written a subset (manifest.json lists them under `frames`). None of the frames SPEC
 names was compiled, so the edit would change nothing; nothing is written. Pick frames from the
-manifest, or recompile the clip with the frames to edit.",
+manifest, or recompile the clip with the frames to edit.
+
+    rocc compile scenarios/replayed_cut_in.scn -o out --frames 0..2
+    rocc edit out/replayed_cut_in/ego --frames 20..25 --delete cutter   // error: frames 20..25 were not compiled",
     },
     Code {
         code: "E0601",
@@ -755,7 +758,9 @@ By default rocc reads the `.ron` next to the weights file (`model/generator.bpk`
 file could not be read, is not valid RON for `GroundedConfig`, or breaks a rule: `max_foreground`\n\
 <= `latents`, decoder `width` a multiple of `heads`, `window` 1..=6 voxels, `min_scale` below\n\
 `window / 3`, BEV `strides` of 1 or 2 matching `channels`, `crop` 0 or 16..=400, learning rates\n\
-positive with `lr_min <= lr`. The message lists every broken rule.",
+positive with `lr_min <= lr`. The message lists every broken rule.
+
+    ( batch: 0, lr: 1e-3, ... )   // error: `batch` must be at least 1",
     },
     Code {
         code: "E0903",
@@ -766,7 +771,10 @@ not the one the weights were trained with (use the `.ron` `rocc train` wrote bes
 file is an autoencoder checkpoint where a generator is needed (`--backend grounded` needs\n\
 `generator.bpk`). Safetensors files must name tensors by burn's module paths\n\
 (`decoder.transformer.layers.0.mha.query.weight`, ...); `rocc train` can export one\n\
-(README, \"Training the grounded backend\").",
+(README, \"Training the grounded backend\").
+
+    rocc compile FILE -o out --backend grounded --weights paper/generator.bpk   // error if the
+    // weights were trained with configs/cpu-small.ron: pass the matching config beside them",
     },
     Code {
         code: "E0904",
@@ -774,7 +782,10 @@ file is an autoencoder checkpoint where a generator is needed (`--backend ground
         explanation: "rocc reads weights as burnpack (`.bpk`, what `rocc train` writes and checkpoints) or\n\
 safetensors (`.safetensors`, for weights trained elsewhere). Other extensions (`.pt`, `.ckpt`,\n\
 `.mpk`) are not read; convert PyTorch state dicts to safetensors with the tensor names of\n\
-burn's module paths.",
+burn's module paths.
+
+    rocc compile FILE -o out --backend grounded --weights model.safetensors   // error: no tensor
+    // named like a burn module path (e.g. `decoder.blocks.0.attn.query.weight`)",
     },
     Code {
         code: "E0905",
@@ -795,21 +806,27 @@ The message names the file and what is wrong with it (shape, dtype, missing key)
         title: "cannot write training output",
         explanation: "`rocc train` could not create or write its output directory, a checkpoint, the weights or\n\
 the history file (permissions, full disk), or could not read back a checkpoint for `--resume`.\n\
-Files are written atomically, so an interrupted run leaves the previous checkpoint intact.",
+Files are written atomically, so an interrupted run leaves the previous checkpoint intact.
+
+    rocc train autoencoder --data corpus --config configs/cpu-small.ron --out /read-only/dir",
     },
     Code {
         code: "E0907",
         title: "training diverged",
         explanation: "The loss became NaN or infinite. Lower the stage's learning rate (`train.autoencoder.lr`,\n\
 `train.generator.lr`) in the config, and continue from the last good checkpoint with\n\
-`--resume` (checkpoints are written every `checkpoint_every` steps and at each epoch's end).",
+`--resume` (checkpoints are written every `checkpoint_every` steps and at each epoch's end).
+
+    rocc train generator --data corpus --config configs/cpu-small.ron --out model --resume   // error: nothing to resume",
     },
     Code {
         code: "E0908",
         title: "bad backend or device option",
         explanation: "An option of the learned backend does not apply: `--weights` or `--grounded-config` given\n\
 with `--backend procedural`, or `--device wgpu|cuda` on a build without the `gpu` feature\n\
-(`cargo build --release --features gpu`; CI and the default build are CPU-only).",
+(`cargo build --release --features gpu`; CI and the default build are CPU-only).
+
+    rocc train autoencoder --data corpus --config configs/paper.ron --out paper --device cuda   // error in a default build",
     },
 ];
 
