@@ -366,28 +366,32 @@ Only `frames` is required. `ego_pose` may also be {\"translation\": [x, y, z], \
         title: "box stream values are inconsistent",
         explanation: "The frames of a box stream must have distinct indices and increasing times, a rate in\n\
 0.5..100 Hz (from `rate_hz` or the median frame interval), at most 120 s in all, and finite\n\
-numbers. A `convention` written in the file must agree with `--convention`.",
+numbers. A `convention` written in the file must agree with `--convention`.\n
+    $ rocc import boxes clip.json -o clip.scn   // error if two frames both have \"frame\": 3",
     },
     Code {
         code: "E0707",
         title: "recorded coordinates too far apart",
         explanation: "Replayed coordinates in a `.scn` stay within 1 km of the scenario's origin. The importer\n\
 moves the origin (by whole kilometres) to the clip's first ego pose when the recording uses\n\
-large coordinates (nuPlan's UTM metres); a clip that still spans more must be split.",
+large coordinates (nuPlan's UTM metres); a clip that still spans more must be split.\n
+    $ rocc import boxes long_drive.json -o drive.scn   // error: ego travels 3 km; split the clip",
     },
     Code {
         code: "E0708",
         title: "bad static BEV",
         explanation: "`--static-bev` takes a nuPlan-Occ BEV `.npz` (key `gt_bev_masks`, int8 (18, 400, 400)),\n\
 whose channels 0-7 and 15-17 replace the map's in every frame, or a directory of per-frame\n\
-`NNNNNN.npz` files (a compiled clip's `bev/`), matched by frame index.",
+`NNNNNN.npz` files (a compiled clip's `bev/`), matched by frame index.\n
+    $ rocc import boxes clip.json -o clip.scn --static-bev bev.npz   // error if gt_bev_masks is (16, 200, 200)",
     },
     Code {
         code: "E0709",
         title: "edit names an unknown agent",
         explanation: "`--delete AGENT` and `--move AGENT by DX,DY` name an agent by the name in `boxes.json`\n\
 (clips) or the declaration (`.scn`). Row elements and background traffic have generated names;\n\
-`boxes.json` lists them.",
+`boxes.json` lists them.\n
+    $ rocc edit out/cut_in/ego --delete cuter   // error: no agent `cuter` in boxes.json",
     },
     Code {
         code: "E0710",
@@ -395,13 +399,15 @@ whose channels 0-7 and 15-17 replace the map's in every frame, or a directory of
         explanation: "An inserted or moved box must stand where the BEV's map layers allow its class:\n\
 vehicles on drivable area (channels 0, 1, 3, 5, 6), bicycles there or on walkways and\n\
 crosswalks, pedestrians on walkways, crosswalks or the shoulder; static objects anywhere in the\n\
-100 m grid. The check is at the box centre, in every edited frame.",
+100 m grid. The check is at the box centre, in every edited frame.\n
+    $ rocc edit out/cut_in/ego --insert pedestrian at 10,0   // error: a pedestrian in the middle of the lane",
     },
     Code {
         code: "E0711",
         title: "edited box overlaps another",
         explanation: "An inserted or moved box may touch another box or the ego but not interpenetrate it\n\
-(more than 1 cm per side). Choose a free spot; `boxes.json` lists every box of every frame.",
+(more than 1 cm per side). Choose a free spot; `boxes.json` lists every box of every frame.\n
+    $ rocc edit out/cut_in/ego --insert sedan at 2,0   // error: overlaps the ego",
     },
     Code {
         code: "E0712",
@@ -409,20 +415,23 @@ crosswalks, pedestrians on walkways, crosswalks or the shoulder; static objects 
         explanation: "`rocc edit DIR` needs a directory written by `rocc compile` (manifest.json, boxes.json,\n\
 bev/). The later stages need the scene the clip came from (ego poses, background), so the\n\
 scenario named in the manifest must be readable and unchanged (same hash); pass `--scenario\n\
-FILE` when it moved. A clip compiled with a custom rig needs the same `--rig`.",
+FILE` when it moved. A clip compiled with a custom rig needs the same `--rig`.\n
+    $ rocc edit out/cut_in/ego/bev --delete cutter   // error: no manifest.json in bev/",
     },
     Code {
         code: "E0713",
         title: "unknown kind",
         explanation: "`--insert KIND at X,Y` takes a kind of the stdlib prelude (stdlib/kinds.scn), e.g.\n\
-sedan, van, bicycle, pedestrian, traffic_cone, barrier, construction_sign, debris.",
+sedan, van, bicycle, pedestrian, traffic_cone, barrier, construction_sign, debris.\n
+    $ rocc edit out/cut_in/ego --insert tractor at 20,3.5   // error: unknown kind `tractor`",
     },
     Code {
         code: "E0714",
         title: "edit does not apply to this scenario",
         explanation: "On a `.scn`, `--move` shifts agents placed at world coordinates `(X m, Y m)` or replaying\n\
 a `track`; an agent placed relative to the road moves by changing its distance or `offset`.\n\
-The file must declare a scenario.",
+The file must declare a scenario.\n
+    $ rocc edit cut_in.scn --move cutter by 0,1   // error if `cutter` is placed 20 m before center",
     },
     Code {
         code: "E0715",
@@ -432,14 +441,16 @@ rocc knows. The box is kept, as `generic_object` (kind `debris`), never dropped.
 vehicle, bicycle, pedestrian, traffic_cone, barrier, czone_sign, generic_object; vehicle.*,\n\
 human.pedestrian.*, movable_object.{trafficcone, barrier, debris, pushable_pullable},\n\
 static_object.bicycle_rack, animal; car, truck, bus, trailer, construction_vehicle,\n\
-motorcycle (nuPlan counts two-wheelers as bicycle).",
+motorcycle (nuPlan counts two-wheelers as bicycle).\n
+    $ rocc import boxes clip.json -o clip.scn   // warning: class `vehicle.hovercraft` imported as generic_object",
     },
     Code {
         code: "E0716",
         title: "box imported with a change",
         explanation: "A warning: a box could not be replayed exactly — its size was outside 0.05..40 m\n\
 (clamped), its track changed size (a replayed agent keeps its first size), or the track had two\n\
-boxes in one frame (the second dropped). That frame's BEV footprint differs from the recording's.",
+boxes in one frame (the second dropped). That frame's BEV footprint differs from the recording's.\n
+    $ rocc import boxes clip.json -o clip.scn   // warning: track a1 changed size in frame 12; first size kept",
     },
     Code {
         code: "E0717",
@@ -488,47 +499,56 @@ other statuses are reported at once. 401/403: pass `--api-key` or set ROCC_LLM_A
 the endpoint should end in `/v1` and the model name must exist on the server. 400: the server\n\
 rejected the request body; if it names `grammar` or `structured_outputs`, the server does not\n\
 support grammar-constrained decoding in that form: pick the right `--server` or pass\n\
-`--no-grammar`.",
+`--no-grammar`.\n
+    $ rocc text \"a van cuts in\" -o cut_in.scn --endpoint https://api.example.com/v1   // error: 401 Unauthorized
+    $ rocc text \"a van cuts in\" -o cut_in.scn --endpoint https://api.example.com/v1 --api-key $KEY   // fine",
     },
     Code {
         code: "E0604",
         title: "LLM reply is not a chat completion",
         explanation: "The server's reply is not JSON, or is JSON without the OpenAI chat-completion shape\n\
 (`choices[0].message.content`). The endpoint is probably not an OpenAI-compatible\n\
-`/v1/chat/completions` (a web page, a proxy error, another API). Check `--endpoint`.",
+`/v1/chat/completions` (a web page, a proxy error, another API). Check `--endpoint`.\n
+    $ rocc text \"a van cuts in\" -o cut_in.scn --endpoint http://127.0.0.1:8080   // error if that serves a web page
+    $ rocc text \"a van cuts in\" -o cut_in.scn --endpoint http://127.0.0.1:8080/v1   // fine",
     },
     Code {
         code: "E0605",
         title: "LLM reply is empty",
         explanation: "The reply has no choices, or the message content is empty or null. Some servers do this\n\
 when the prompt exceeds the context window or when a grammar admits no continuation. Use a model\n\
-with a larger context, or look at the exchange with `--transcript`.",
+with a larger context, or look at the exchange with `--transcript`.\n
+    $ rocc text \"a van cuts in\" -o cut_in.scn --transcript   // saves every request and reply beside the output",
     },
     Code {
         code: "E0606",
         title: "LLM reply truncated",
         explanation: "The model stopped because it hit `--max-tokens` (`finish_reason: length`), so its text is\n\
 incomplete. Raise `--max-tokens`; a model that keeps generating whitespace or comments under a\n\
-grammar constraint is a sign the model is too small for the task.",
+grammar constraint is a sign the model is too small for the task.\n
+    $ rocc text \"a van cuts in\" -o cut_in.scn --max-tokens 4096   // room for the whole scenario",
     },
     Code {
         code: "E0607",
         title: "LLM refused",
         explanation: "The model refused the request (an OpenAI `refusal` field, or `finish_reason:\n\
 content_filter`). Rephrase the sentence; scenario descriptions of crashes and emergencies are\n\
-ordinary traffic-safety engineering, which saying so in the sentence often helps with.",
+ordinary traffic-safety engineering, which saying so in the sentence often helps with.\n
+    $ rocc text \"a van cuts in front of the ego, for a safety test\" -o cut_in.scn",
     },
     Code {
         code: "E0608",
         title: "LLM reply is not UTF-8",
         explanation: "The reply body is not valid UTF-8 text. rocc reads replies as JSON, which is UTF-8 by\n\
-definition; the server or a proxy in between is misconfigured.",
+definition; the server or a proxy in between is misconfigured.\n
+    $ rocc text \"a van cuts in\" -o cut_in.scn   // error if a proxy answers in Latin-1",
     },
     Code {
         code: "E0609",
         title: "LLM reply too long",
         explanation: "The reply body is over 4 MiB or the message content over 64 KiB: far more than any scenario\n\
-needs. rocc stops reading rather than buffer a runaway generation; lower `--max-tokens`.",
+needs. rocc stops reading rather than buffer a runaway generation; lower `--max-tokens`.\n
+    $ rocc text \"a van cuts in\" -o cut_in.scn --max-tokens 2048   // bound the generation",
     },
     Code {
         code: "E0610",
@@ -536,7 +556,8 @@ needs. rocc stops reading rather than buffer a runaway generation; lower `--max-
         explanation: "The model answered with text that holds no `scenario NAME { ... }` block (prose, an\n\
 apology, another language). In the repair loop this counts as a failed attempt: the diagnostic is\n\
 sent back and the model is asked again, up to `--max-repairs` times. Grammar-constrained decoding\n\
-(`--server vllm` or `llamacpp`) makes this impossible.",
+(`--server vllm` or `llamacpp`) makes this impossible.\n
+    I'm sorry, I can only describe scenes in English.   // error: no `scenario` block in the reply",
     },
     Code {
         code: "E0611",
@@ -544,7 +565,8 @@ sent back and the model is asked again, up to `--max-repairs` times. Grammar-con
         explanation: "The schema stage asks for one JSON object (road template, agents with kinds and\n\
 placements, a brief). The reply was not such an object after `--max-repairs` corrections: not\n\
 JSON, missing fields, or values of the wrong type. The last reply and the parse error are shown;\n\
-`--transcript` keeps the whole exchange.",
+`--transcript` keeps the whole exchange.\n
+    { \"road\": \"four_way\", \"agents\": \"two cars\" }   // error: `agents` must be an array",
     },
     Code {
         code: "E0612",
@@ -552,7 +574,9 @@ JSON, missing fields, or values of the wrong type. The last reply and the parse 
         explanation: "The goal stage (\"traffic director\") asks for `goal { ... }` blocks in the goal\n\
 vocabulary. A reply without a block that parses, or naming agents that do not exist, is corrected\n\
 up to `--max-repairs` times; after that the agent keeps its initial speed and no goal (a warning)\n\
-and the checker has the last word on the emitted file.",
+and the checker has the last word on the emitted file.\n
+    goal { cutter: change_lane left }   // fine, when the scene declares `cutter`
+    goal { truck: stop }                // error if the scene has no agent `truck`",
     },
     Code {
         code: "E0613",
@@ -560,7 +584,8 @@ and the checker has the last word on the emitted file.",
         explanation: "The emitted `.scn` did not check (syntax, names, units, placement or rollout) and\n\
 `--max-repairs` rounds of sending the diagnostics back did not fix it. Nothing is written to\n\
 `-o`; the last attempt is kept beside it as `NAME.rejected.scn` with its diagnostics, so it can be\n\
-fixed by hand (`rocc check NAME.rejected.scn`) or the run repeated with a stronger model.",
+fixed by hand (`rocc check NAME.rejected.scn`) or the run repeated with a stronger model.\n
+    $ rocc check cut_in.rejected.scn   // the last attempt, with its diagnostics",
     },
     Code {
         code: "E0614",
@@ -568,7 +593,8 @@ fixed by hand (`rocc check NAME.rejected.scn`) or the run repeated with a strong
         explanation: "An option of `rocc text` is unusable: the endpoint is not an http(s) URL (https needs the\n\
 `https` build feature), `--model` is missing for a server that needs one, `--density` or\n\
 `--randomness` is outside 0..1, the `--image` file cannot be read or is not PNG/JPEG/WebP/GIF, or\n\
-the sentence is empty.",
+the sentence is empty.\n
+    $ rocc text \"a van cuts in\" -o cut_in.scn --density 1.5   // error: --density must be in 0..1",
     },
     Code {
         code: "E0800",
@@ -587,7 +613,9 @@ exit status is 1.
         title: "malformed CIREN or SAFE file",
         explanation: "The case record is not well-formed XML, or the SAFE extraction is not valid JSON. The
 label points at the first place the parser could not accept. Re-export the record from the
-CIREN database (or repair the extraction); nothing is written for this case.",
+CIREN database (or repair the extraction); nothing is written for this case.
+
+    <CaseSummary><Configuration>angle</CaseSummary>   // error: mismatched closing tag",
     },
     Code {
         code: "E0802",
@@ -597,7 +625,9 @@ an `Events/EventSum` row with `AreaOfDamage`, `Contacted` and `ContactedAreaOfDa
 `GeneralVehicleForm` of a vehicle the event names; for a SAFE extraction, `meta`, `dsl`,
 `Actors` (with Model, Initial_position, Actions, Speed) or a `Conflict` field. Fields that only
 refine the scene (speeds, lane counts, directions) are not required: their defaults are
-warnings (E0807).",
+warnings (E0807).
+
+    rocc ciren import ../shared/ciren/100237 -o scn/   # error if the record has no EventSum rows",
     },
     Code {
         code: "E0803",
@@ -607,7 +637,9 @@ R, T, U; a configuration other than angle/sideswipe, head-on, rear end, object; 
 no rocc kind; or, in a SAFE extraction, a road_type, Initial_position (W2E, E2W, S2N, N2S,
 On-ramp, Main road), Actions, Speed (mph 0..150 or \"N/A\"), Model, vehicle name or impact_type
 it does not know. rocc never guesses a value it cannot read: fix the field, or write the
-scenario by hand.",
+scenario by hand.
+
+    \"Initial_position\": \"NE2SW\"   // error: not W2E, E2W, S2N, N2S, On-ramp or Main road",
     },
     Code {
         code: "E0804",
@@ -617,7 +649,9 @@ the message says which: a rollover (rocc stages planar contacts between boxes on
 non-collision, a pedestrian record, a contact by a vehicle's back, top or undercarriage (rocc
 strikes with a front or a side), a fixed object rocc has no kind for (ditch, embankment, curb),
 a side impact with a tree, a T-junction approached from its missing leg, or a SAFE extraction
-with one vehicle or more than two.",
+with one vehicle or more than two.
+
+    rocc ciren import ../shared/ciren/100412 -o scn/   # error: the case codes a rollover",
     },
     Code {
         code: "E0805",
@@ -628,13 +662,17 @@ defined) and the striker's coded face (front, or the coded side for a sideswipe)
 impact times are tried; this error means none of them landed there, and it names what the last
 attempt did. Nothing is written. Typical cause: an impact the rollout meets square-on (`angle`)
 between vehicles whose paths do not let the striker reach the struck side, e.g. a vehicle hit
-on its side by oncoming traffic after it spun.",
+on its side by oncoming traffic after it spun.
+
+    rocc ciren import ../shared/ciren/100237 -o scn/   # error: contact landed on the struck vehicle's front, not its right side",
     },
     Code {
         code: "E0806",
         title: "later crash events not staged",
         explanation: "A CIREN record codes several events (a second contact, a sideslap); rocc stages one
-conflict per scenario, the first-ranked event. This warning names each event left out.",
+conflict per scenario, the first-ranked event. This warning names each event left out.
+
+    rocc ciren import ../shared/ciren/100237 -o scn/   # warning: event 2 (V1 left side by V2 front) not staged",
     },
     Code {
         code: "E0807",
@@ -644,7 +682,9 @@ made a documented choice, also written as a comment in the generated file. Examp
 narrated direction of travel, no leg count for an intersection, a SAFE `struck_vehicle` that
 the `point_of_impact` text contradicts (the point_of_impact, which names the damaged parts, is
 followed), a speed of \"N/A\" for a moving vehicle, a `point_of_impact` naming a trailer
-rather than a side (staged as a sideswipe).",
+rather than a side (staged as a sideswipe).
+
+    // rocc: no narrated direction of travel; V1 staged west to east (E0807)",
     },
     Code {
         code: "E0808",
@@ -661,7 +701,9 @@ struck) or `and` (head-on), where PART is front, rear/back, left side, right sid
         title: "cannot write imported scenario",
         explanation: "The `.scn` of an imported case could not be written (the directory is not writable, the
 disk is full), or two inputs of one batch have the same case id and would write the same
-file. Files are written under a temporary name and renamed, so nothing partial is left.",
+file. Files are written under a temporary name and renamed, so nothing partial is left.
+
+    rocc ciren import ../shared/ciren -o /read-only/   # error: permission denied",
     },
     Code {
         code: "E0850",
@@ -679,14 +721,16 @@ these files is there or readable. Nothing is sent to the model.\n
 `Summary` element of `crash_report.xml` (CaseSummary/Summary in NHTSA case records), or, when\n\
 there is no report, from `Summary.txt`. Neither file exists, the report has no `Summary`\n\
 element, or the summary is empty. Coded records without a narrative go through\n\
-`rocc ciren import` instead.",
+`rocc ciren import` instead.\n
+    rocc ciren extract ../shared/ciren/100237 -o 100237.scn ...   # error if Summary is empty and there is no Summary.txt",
     },
     Code {
         code: "E0852",
         title: "CIREN crash report is not well-formed XML",
         explanation: "`crash_report.xml` could not be parsed as XML (an unclosed element, a stray `&`, a\n\
 truncated download, a DOCTYPE, which rocc refuses). The diagnostic points at the first position\n\
-the parser could not accept. Fetch the case record again.",
+the parser could not accept. Fetch the case record again.\n
+    <Summary>V1 & V2 collided</Summary>   <!-- error: a bare `&`; write &amp; -->",
     },
     Code {
         code: "E0853",
@@ -701,14 +745,17 @@ old export). The message gives the offset and line of the first bad byte. Conver
         explanation: "The sketch is sent to the vision model as a base64 data URL. Files over 20 MiB are\n\
 refused before they are read (servers reject such requests anyway), and a file whose first bytes\n\
 are not a JPEG, PNG, GIF or WebP header is refused whatever its name. Scale the sketch down or\n\
-replace it with the case's scene diagram.",
+replace it with the case's scene diagram.\n
+    file sketch.jpeg                                        # check what the sketch really is
+    convert sketch.jpeg -resize 2000x2000 sketch.jpeg        # scale a huge scan down",
     },
     Code {
         code: "E0855",
         title: "CIREN case file too large",
         explanation: "The summary is over 16 KiB (CIREN summaries are a few paragraphs, and every byte is sent\n\
 again on each repair round), or `crash_report.xml` is over 32 MiB (real ones are about 100 KiB).\n\
-The file is refused without being sent.",
+The file is refused without being sent.\n
+    wc -c Summary.txt crash_report.xml   # the summary must be at most 16 KiB, the report 32 MiB",
     },
     Code {
         code: "E0856",
@@ -717,7 +764,8 @@ The file is refused without being sent.",
 names, units, placement or rollout), and `--max-repairs` rounds of sending the diagnostics back\n\
 did not fix it. Nothing is written to `-o`; the last attempt is kept beside it as\n\
 `NAME.rejected.scn` with its diagnostics. Fix it by hand (`rocc check NAME.rejected.scn`), run\n\
-again with a stronger model, or use the coded record (`rocc ciren import`).",
+again with a stronger model, or use the coded record (`rocc ciren import`).\n
+    rocc check 100237.rejected.scn   # the last attempt, with its diagnostics",
     },
     Code {
         code: "E0857",
@@ -729,14 +777,16 @@ the scene lacks, used a word outside the impact or point vocabulary, or the scen
 merged conflict failed to check (for instance, the at-fault vehicle cannot reach the struck one);\n\
 `--max-repairs` further conflict calls did not fix it. The scene itself is never re-generated.\n\
 Nothing is written to `-o`; the last merged attempt (or the bare scene) is kept as\n\
-`NAME.rejected.scn`.",
+`NAME.rejected.scn`.\n
+    {\"at_fault\": \"v3\", \"struck\": \"v1\", \"impact\": \"angle\", \"point\": \"right\", \"at\": 3}   // error if the scene has no v3",
     },
     Code {
         code: "E0858",
         title: "unusable worked example",
         explanation: "`--examples DIR` replaces the worked examples shown to the model with every `.scn` file of\n\
 DIR. Each must pass `rocc check` and carry a `conflict` block (the conflict call's examples are\n\
-derived from it). The directory could not be read, holds no `.scn` file, or one file fails.",
+derived from it). The directory could not be read, holds no `.scn` file, or one file fails.\n
+    rocc ciren extract ../shared/ciren/100237 -o 100237.scn --examples my_examples/ ...   # error if a file has no conflict block",
     },
     Code {
         code: "E0901",
