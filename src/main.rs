@@ -531,19 +531,11 @@ fn main() -> ExitCode {
             no_grammar,
             transcript,
         } => {
-            let server = match server {
-                ServerArg::Vllm => llm::client::Server::Vllm,
-                ServerArg::Llamacpp => llm::client::Server::Llamacpp,
-                ServerArg::Ollama => llm::client::Server::Ollama,
-                ServerArg::Openai => llm::client::Server::Openai,
-            };
-            let env = |k: &str| std::env::var(k).ok().filter(|v| !v.is_empty());
+            let (server, endpoint, model, api_key) = llm_connection(server, endpoint, model, api_key);
             let args = TextArgs {
-                endpoint: endpoint
-                    .or_else(|| env("ROCC_LLM_ENDPOINT"))
-                    .unwrap_or_else(|| server.default_endpoint().into()),
-                model: model.or_else(|| env("ROCC_LLM_MODEL")),
-                api_key: api_key.or_else(|| env("ROCC_LLM_API_KEY")).or_else(|| env("OPENAI_API_KEY")),
+                endpoint,
+                model,
+                api_key,
                 server,
                 plan: match plan {
                     PlanArg::Joint => llm::Plan::Joint,
@@ -988,6 +980,27 @@ fn text(sentence: &str, out: &Path, args: TextArgs) -> ExitCode {
     }
 }
 
+/// The server dialect, endpoint, model and API key of an LLM command: each flag, else its
+/// environment variable, else the dialect's usual local endpoint.
+fn llm_connection(
+    server: ServerArg,
+    endpoint: Option<String>,
+    model: Option<String>,
+    api_key: Option<String>,
+) -> (llm::client::Server, String, Option<String>, Option<String>) {
+    let server = match server {
+        ServerArg::Vllm => llm::client::Server::Vllm,
+        ServerArg::Llamacpp => llm::client::Server::Llamacpp,
+        ServerArg::Ollama => llm::client::Server::Ollama,
+        ServerArg::Openai => llm::client::Server::Openai,
+    };
+    let env = |k: &str| std::env::var(k).ok().filter(|v| !v.is_empty());
+    let endpoint = endpoint.or_else(|| env("ROCC_LLM_ENDPOINT")).unwrap_or_else(|| server.default_endpoint().into());
+    let model = model.or_else(|| env("ROCC_LLM_MODEL"));
+    let api_key = api_key.or_else(|| env("ROCC_LLM_API_KEY")).or_else(|| env("OPENAI_API_KEY"));
+    (server, endpoint, model, api_key)
+}
+
 /// `rocc ciren import | import-safe | extract`.
 fn ciren(what: CirenCmd) -> ExitCode {
     match what {
@@ -1014,20 +1027,12 @@ fn ciren(what: CirenCmd) -> ExitCode {
             no_grammar,
             transcript,
         } => {
-            let server = match server {
-                ServerArg::Vllm => llm::client::Server::Vllm,
-                ServerArg::Llamacpp => llm::client::Server::Llamacpp,
-                ServerArg::Ollama => llm::client::Server::Ollama,
-                ServerArg::Openai => llm::client::Server::Openai,
-            };
-            let env = |k: &str| std::env::var(k).ok().filter(|v| !v.is_empty());
+            let (server, endpoint, model, api_key) = llm_connection(server, endpoint, model, api_key);
             // The client options are `rocc text`'s, validated the same way.
             let args = TextArgs {
-                endpoint: endpoint
-                    .or_else(|| env("ROCC_LLM_ENDPOINT"))
-                    .unwrap_or_else(|| server.default_endpoint().into()),
-                model: model.or_else(|| env("ROCC_LLM_MODEL")),
-                api_key: api_key.or_else(|| env("ROCC_LLM_API_KEY")).or_else(|| env("OPENAI_API_KEY")),
+                endpoint,
+                model,
+                api_key,
                 server,
                 plan: llm::Plan::Joint,
                 max_repairs,
