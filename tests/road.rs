@@ -171,15 +171,6 @@ fn any_road(template: Template) -> impl Strategy<Value = Road> {
                     r.angle = (1.0 + 179.0 * b).to_radians();
                 }
                 Template::Roundabout => {
-                    // Known gap: wide roundabouts (6 lanes of 4 m with a wide median and
-                    // shoulder on the arms, radius at the minimum) put a divider within 0.3 m of
-                    // a lane centre; until the ring builder is fixed the property covers the
-                    // domain it holds on, the one tested before the ranges were widened.
-                    r.lanes = r.lanes.min(4);
-                    r.lane_width = r.lane_width.min(4.5);
-                    r.median = r.median.min(6.0);
-                    r.shoulder = r.shoulder.min(3.0);
-                    let min = rocc::check::min_radius(&r).unwrap_or(0.0);
                     let lo = min.max(8.0);
                     r.radius = lo + (60.0 - lo) * a;
                 }
