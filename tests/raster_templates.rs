@@ -301,3 +301,49 @@ fn t_junction_is_mirror_symmetric_about_its_stem() {
         }
     }
 }
+
+/// Ch 17 against an independent reference: each pixel centre is taken back to the world and
+/// tested point-in-polygon against the map's plain road-segment and junction polygons (no fill,
+/// no rounding, no shared code with the rasteriser); the reference outline is the pixels of that
+/// union with a 4-neighbour outside it (the canvas border is not an edge, SPEC.md). The
+/// rasteriser fills cv2-style on rounded vertices, so its edges may sit one pixel off the exact
+/// ones: every outline pixel of either must have one of the other within one pixel, and none may
+/// be further (gaps between adjacent polygons, a missing layer or an 8-neighbour rule would be).
+#[test]
+fn boundary_matches_a_point_in_polygon_reference_on_every_template() {
+    use rocc::geom::point_in_polygon;
+    for (n, &t) in TEMPLATES.iter().enumerate() {
+        let map = rocc::road::build(&road(t, 2, 3.5, true, true, 1.0));
+        let ego = Pose { x: 4.0 - n as f64, y: -3.0 + n as f64, yaw: 0.35 + 0.4 * n as f64 };
+        let bev = rasterize(&map, ego, &[]);
+        let polys: Vec<(glam::DVec2, glam::DVec2, &Vec<glam::DVec2>)> = map
+            .road_segments
+            .iter()
+            .chain(&map.intersections)
+            .map(|p| {
+                let lo = p.iter().fold(glam::DVec2::INFINITY, |a, q| a.min(*q));
+                let hi = p.iter().fold(glam::DVec2::NEG_INFINITY, |a, q| a.max(*q));
+                (lo, hi, p)
+            })
+            .collect();
+        let (c, s) = (ego.yaw.cos(), ego.yaw.sin());
+        let road = ndarray::Array2::from_shape_fn((GRID, GRID), |(i, j)| {
+            let (x, y) = ((i as f64 - 200.0) * RES, (j as f64 - 200.0) * RES);
+            let w = glam::DVec2::new(ego.x + c * x - s * y, ego.y + s * x + c * y);
+            polys.iter().any(|(lo, hi, p)| w.cmpge(*lo).all() && w.cmple(*hi).all() && point_in_polygon(w, p))
+        });
+        let reference = ndarray::Array2::from_shape_fn((GRID, GRID), |(i, j)| {
+            let out = |a: i64, b: i64| {
+                (0..GRID as i64).contains(&a) && (0..GRID as i64).contains(&b) && !road[[a as usize, b as usize]]
+            };
+            let (a, b) = (i as i64, j as i64);
+            i8::from(road[[i, j]] && (out(a - 1, b) || out(a + 1, b) || out(a, b - 1) || out(a, b + 1)))
+        });
+        let got = plane(&bev, CH_BOUNDARY);
+        let n_ref = reference.iter().filter(|&&v| v != 0).count();
+        let n_got = got.iter().filter(|&&v| v != 0).count();
+        assert!(n_ref > 400, "{t:?}: a non-trivial outline ({n_ref} px)");
+        let (missing, extra) = (unmatched(reference.view(), got), unmatched(got, reference.view()));
+        assert!(missing == 0 && extra == 0, "{t:?}: {missing} reference px and {extra} raster px unmatched ({n_ref} / {n_got})");
+    }
+}
