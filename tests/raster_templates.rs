@@ -262,7 +262,9 @@ fn rerasterising_gives_iou_1_on_every_template() {
             assert_eq!(fresh.structure, b.structure, "{t:?} run {k}: structure");
         }
         // The boxes are on the canvas: the agent channels are not trivially empty.
-        assert!(plane(&fresh, CH_VEHICLE).iter().any(|&v| v != 0) && plane(&fresh, CH_PEDESTRIAN).iter().any(|&v| v != 0));
+        assert!(
+            plane(&fresh, CH_VEHICLE).iter().any(|&v| v != 0) && plane(&fresh, CH_PEDESTRIAN).iter().any(|&v| v != 0)
+        );
     }
 }
 
@@ -274,7 +276,10 @@ fn rerasterising_gives_iou_1_on_every_template() {
 #[test]
 fn t_junction_is_mirror_symmetric_about_its_stem() {
     let map = rocc::road::build(&road(Template::TJunction, 2, 3.5, true, true, 1.5));
-    for ego in [Pose { x: 0.0, y: 0.0, yaw: -std::f64::consts::FRAC_PI_2 }, Pose { x: 0.0, y: -12.0, yaw: std::f64::consts::FRAC_PI_2 }] {
+    for ego in [
+        Pose { x: 0.0, y: 0.0, yaw: -std::f64::consts::FRAC_PI_2 },
+        Pose { x: 0.0, y: -12.0, yaw: std::f64::consts::FRAC_PI_2 },
+    ] {
         let b = rasterize(&map, ego, &[]);
         let map_channels = [
             CH_INTERSECTIONS,
@@ -290,7 +295,8 @@ fn t_junction_is_mirror_symmetric_about_its_stem() {
         ];
         for ch in map_channels {
             let p = plane(&b, ch);
-            let mirrored = ndarray::Array2::from_shape_fn((GRID, GRID), |(i, j)| if j == 0 { 0 } else { p[[i, GRID - j]] });
+            let mirrored =
+                ndarray::Array2::from_shape_fn((GRID, GRID), |(i, j)| if j == 0 { 0 } else { p[[i, GRID - j]] });
             // Column 0 has no mirror image on the canvas.
             let mut orig = p.to_owned();
             orig.column_mut(0).fill(0);
@@ -345,7 +351,10 @@ fn boundary_matches_a_point_in_polygon_reference_on_every_template() {
         let n_got = got.iter().filter(|&&v| v != 0).count();
         assert!(n_ref > 400, "{t:?}: a non-trivial outline ({n_ref} px)");
         let (missing, extra) = (unmatched(reference.view(), got), unmatched(got, reference.view()));
-        assert!(missing == 0 && extra == 0, "{t:?}: {missing} reference px and {extra} raster px unmatched ({n_ref} / {n_got})");
+        assert!(
+            missing == 0 && extra == 0,
+            "{t:?}: {missing} reference px and {extra} raster px unmatched ({n_ref} / {n_got})"
+        );
         // Within one pixel is not enough on its own: a thicker outline (an 8-neighbour rule) still
         // lies within a pixel of the right one. The outline's length in pixels must agree too;
         // vertex rounding and the inclusive fill shift it by a pixel but change its pixel count by

@@ -209,6 +209,19 @@ proptest! {
     }
 }
 
+/// The two roundabouts the property test shrank to: neighbouring arms overlapped on a ring too
+/// small for their width (a divider of one arm ran through the next arm's outer lane), and once
+/// the ring kept them apart, an outer lane's right-turn slip cut across the unpaved corner.
+#[test]
+fn wide_roundabouts_keep_their_arms_apart() {
+    for (lanes, lane_width, median, radius) in
+        [(5, 4.071648894706772, 9.590307539541177, 13.179122236766931), (2, 3.491772123669769, 8.450016123965797, 8.0)]
+    {
+        let r = Road { lanes, lane_width, median, radius, length: 20.0, ..road(Template::Roundabout) };
+        check_map(&r, &road::build(&r)).unwrap_or_else(|e| panic!("{lanes} lanes of {lane_width} m: {e}"));
+    }
+}
+
 #[test]
 fn t_junction_has_the_turns_it_should() {
     use rocc::check::scenario::{Arm, Turn};
@@ -471,7 +484,11 @@ fn each_class_starts_only_on_its_surfaces() {
     ] {
         for (spot, at) in spots {
             // An object needs a mover to view it from: a car well away from the spot.
-            let stmt = if class == "traffic_cone" { "agent ego: sedan { at west.in[1], 50 m before center }\n object" } else { "agent" };
+            let stmt = if class == "traffic_cone" {
+                "agent ego: sedan { at west.in[1], 50 m before center }\n object"
+            } else {
+                "agent"
+            };
             let src = format!(
                 "scenario s {{ duration 4 s\n road straight {{ lanes 1; shoulder 1.5 m; sidewalks on }}\n {stmt} x: {kind} {{ at {at} }}\n}}\n"
             );
@@ -485,6 +502,8 @@ fn each_class_starts_only_on_its_surfaces() {
         }
     }
     // A vehicle in the junction area is on the road.
-    place_src("scenario s { duration 4 s\n road four_way { lanes 1 }\n agent x: sedan { at (0 m, 0 m) heading 0 deg }\n}\n")
-        .expect("the junction is drivable");
+    place_src(
+        "scenario s { duration 4 s\n road four_way { lanes 1 }\n agent x: sedan { at (0 m, 0 m) heading 0 deg }\n}\n",
+    )
+    .expect("the junction is drivable");
 }
