@@ -1,5 +1,5 @@
-//! BEV rasters of the real road templates and of every example: layer containment and symmetry
-//! properties per template, and a snapshot per example clip of frame 0's per-channel pixel
+//! BEV rasters of the real road templates and of every example: layer containment, symmetry,
+//! re-raster IoU and a point-in-polygon boundary reference per template, and a snapshot per example clip of frame 0's per-channel pixel
 //! counts with a coarse ASCII thumbnail (what changed is visible in a review diff).
 
 use proptest::prelude::*;

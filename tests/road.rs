@@ -1,7 +1,8 @@
 //! Road and place passes. In: random template parameters and the shared example scenarios. Out:
 //! pass/fail on the map invariants (lanes on drivable paving, crosswalks inside it, lane counts,
-//! dividers clear of lane centres, four-way symmetry) and on placement (examples place, overlaps
-//! and off-road placements are reported).
+//! dividers clear of lane centres, four-way symmetry) and on placement (examples place, every
+//! placement form lands on its hand-computed pose, each class starts only on its surfaces,
+//! overlaps and off-road placements are reported).
 
 use glam::DVec2;
 use proptest::prelude::*;
