@@ -168,6 +168,8 @@ fn map_layers_land_in_their_channels() {
     assert_eq!(bev.masks[[CH_ROAD_SEGMENTS, 399, 200]], 1);
 }
 
+/// The rule spelled out on the rasterised channels; tests/raster_templates.rs checks ch 17
+/// against an independent point-in-polygon reference on every template.
 #[test]
 fn boundary_is_the_outline_of_road_segments_and_intersections() {
     let ego = Pose { x: 2.0, y: 1.0, yaw: 0.35 };

@@ -2,7 +2,8 @@
 //!
 //! A counter-clockwise ring (right-hand traffic) centred on the origin with `lanes` circulating
 //! lanes around a central island. `radius` is the radius of the ring's middle; the ring grows when
-//! the arms need more room (its outer kerb stays at least 3 m beyond an arm's half width, and the
+//! the arms need more room (its outer kerb stays at least 3 m beyond an arm's half width and at
+//! least sqrt(2) x the arm's half width with sidewalks, so neighbouring arms never overlap, and the
 //! arms' mouths stay 2 m clear of the island). Arms north/east/south/west start at the outer kerb
 //! (`J = sqrt(R_out^2 - half_width^2)` from the origin, where an arm's corners touch the ring) with
 //! a yield line 1 m out (behind the crosswalk when crosswalks are on). The junction area is the
@@ -33,7 +34,12 @@ const FLARE: f64 = 8.0;
 pub(crate) fn build(road: &Road) -> Map {
     let (n, w) = (f64::from(road.lanes), road.lane_width);
     let h = road.median / 2.0 + n * w + road.shoulder;
-    let mut r_out = (road.radius + n * w / 2.0).max(h + 3.0);
+    // Neighbouring arms are a quarter turn apart: they stay apart (sidewalks included) only if
+    // each arm's mouth, where its corners touch the ring, lies at least the arm's outer half
+    // width from the centre, which takes a ring of radius sqrt(2) x that half width. A narrower
+    // ring let the arms overlap, and one arm's lane dividers ran across the next arm's lanes.
+    let h_walk = h + if road.sidewalks { SIDEWALK } else { 0.0 };
+    let mut r_out = (road.radius + n * w / 2.0).max(h + 3.0).max(std::f64::consts::SQRT_2 * h_walk);
     while (r_out * r_out - h * h).sqrt() < r_out - n * w + 2.0 {
         r_out += 0.5;
     }
@@ -129,6 +135,13 @@ pub(crate) fn build(road: &Road) -> Map {
                 let th_out = phi + quarters as f64 * FRAC_PI_2 - p3.perp_dot(*v).abs().atan2(j) - ease;
                 let pts = if th_out - th_in < 0.1 {
                     let k = p0.distance(p3) / 3.0;
+                    let hull = vec![p0, p0 - *u * k, p3 - *v * k, p3];
+                    // A slip cuts the corner between two arms, which a ring large enough to keep
+                    // the arms apart leaves unpaved: pave the Bezier's control hull, which holds
+                    // the whole curve.
+                    map.intersections.push(hull.clone());
+                    map.drivable.push(hull.clone());
+                    map.lane_group_connectors.push(hull);
                     cubic(p0, p0 - *u * k, p3 - *v * k, p3)
                 } else {
                     let (q_in, q_out) = (DVec2::from_angle(th_in) * r, DVec2::from_angle(th_out) * r);
