@@ -363,7 +363,12 @@ fn on_flat_ground_every_downward_beam_returns_where_geometry_says() {
             let pts: Vec<_> = pc.points.iter().filter(|p| p.lidar == s.id && p.ring as usize == ring).collect();
             let sin_down = -el.to_radians().sin();
             if sin_down <= 0.0 {
-                assert!(pts.is_empty(), "{} ring {ring} ({el} deg) sees {} points above a flat road", s.name, pts.len());
+                assert!(
+                    pts.is_empty(),
+                    "{} ring {ring} ({el} deg) sees {} points above a flat road",
+                    s.name,
+                    pts.len()
+                );
                 continue;
             }
             let t = o[2] / sin_down;

@@ -62,6 +62,8 @@ const NBY: usize = NY / B;
 #[derive(Clone, Debug)]
 pub struct Skip {
     top: Vec<f64>,
+    /// The highest `top` of all: a ray at or above it that does not descend can hit nothing more.
+    max_top: f64,
 }
 
 impl Skip {
@@ -93,12 +95,17 @@ impl Skip {
                 *b = b.max(z);
             }
         }
-        Skip { top }
+        let max_top = top.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Skip { top, max_top }
     }
 
     /// Same result as `cast`, skipping blocks the ray passes above.
     pub fn cast(&self, labels: &[u8], o: [f64; 3], d: [f64; 3], t_max: f64) -> Option<Hit> {
         let (t_in, t_out) = clip_to_grid(o, d, t_max)?;
+        // Level or rising rays above every occupied voxel (most of the upper beams): nothing to hit.
+        if d[2] >= 0.0 && o[2] + t_in * d[2] >= self.max_top {
+            return None;
+        }
         let bs = VOXEL * B as f64;
         let nb = [NBX as i64, NBY as i64];
         let mut idx = [0i64; 2];
@@ -132,7 +139,7 @@ impl Skip {
                     return Some(h);
                 }
             }
-            if t_next[a] > t_out {
+            if t_next[a] > t_out || (d[2] >= 0.0 && o[2] + t_next[a] * d[2] >= self.max_top) {
                 return None;
             }
             t = t_next[a];
