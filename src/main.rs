@@ -800,7 +800,9 @@ fn compile(inputs: &[PathBuf], out: &Path, shard: Option<&str>, opts: &Options, 
     let shard = match shard.map(batch::parse_shard).transpose() {
         Ok(s) => s,
         Err(m) => {
-            eprintln!("error: --shard {m}");
+            let d = Diagnostic::error("E0402", format!("--shard {m}"))
+                .help("K/N with 1 <= K <= N, e.g. `--shard 3/16` (see `rocc explain E0402`)");
+            print_diags(&[d], &SourceMap::default(), MessageFormat::Human);
             return ExitCode::FAILURE;
         }
     };

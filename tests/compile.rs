@@ -242,3 +242,44 @@ fn compiled_files_load_in_numpy_like_nuplan_occ_data() {
         .expect("python");
     assert!(occ.status.success(), "{}{}", String::from_utf8_lossy(&occ.stdout), String::from_utf8_lossy(&occ.stderr));
 }
+
+#[test]
+fn a_batch_keeps_clip_summaries_and_sweeps_an_interrupted_runs_temporaries() {
+    let input = vec![root().join("scenarios/rear_end_queue.scn")];
+    let o = Options { force: true, ..opts(Stage::Bev, "0..=1") };
+    let out = tmp("sweep");
+    let r = batch::run(&input, &out, &o, true);
+    assert!(r.failures.is_empty());
+    let clip = &r.clips[0];
+    // The report holds counts, not the file list: memory does not grow with the corpus.
+    assert!(clip.manifest.files.is_empty());
+    let on_disk: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(clip.dir.join("manifest.json")).expect("manifest"))
+            .expect("json");
+    let files = on_disk["files"].as_array().expect("file list on disk");
+    assert_eq!(clip.files, files.len());
+    assert_eq!(clip.bytes, files.iter().map(|f| f["bytes"].as_u64().expect("bytes")).sum::<u64>());
+    assert!(clip.files >= 3 && clip.bytes > 0);
+    // What a killed run leaves: temporaries of `write_atomic`, in the clip and its sub-directories.
+    let stale = [clip.dir.join(".boxes.json.tmp-4242-0"), clip.dir.join("bev/.000001.npz.tmp-4242-17")];
+    let keep = [clip.dir.join(".notes"), clip.dir.join("bev/notes.tmp-1-2"), clip.dir.join(".x.tmp-12")];
+    for p in stale.iter().chain(&keep) {
+        std::fs::write(p, b"partial").expect("write");
+    }
+    // Another clip's directory is not this clip's to sweep.
+    let other = out.join("rear_end_queue/striker/bev/.000000.npz.tmp-4242-3");
+    std::fs::create_dir_all(other.parent().expect("dir")).expect("dir");
+    std::fs::write(&other, b"partial").expect("write");
+    let o1 = Options { egos: vec!["ego".into()], ..o.clone() };
+    let r = batch::run(&input, &out, &o1, true);
+    assert!(r.failures.is_empty() && r.clips.len() == 1);
+    for p in &stale {
+        assert!(!p.exists(), "{} survived", p.display());
+    }
+    for p in keep.iter().chain([&other]) {
+        assert!(p.exists(), "{} was removed", p.display());
+    }
+    assert!(rocc::output::is_atomic_tmp(".000001.npz.tmp-4242-17"));
+    assert!(!rocc::output::is_atomic_tmp("000001.npz.tmp-4242-17") && !rocc::output::is_atomic_tmp(".tmp-1-2"));
+    let _ = std::fs::remove_dir_all(&out);
+}

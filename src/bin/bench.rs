@@ -170,8 +170,6 @@ fn bench_stages() {
         frame: i,
     };
     let occs: Vec<Occupancy> = frames.iter().map(|&i| backend.occupancy(&occ_input(i))).collect();
-    let rays: usize =
-        rig.sensors.iter().map(|s| s.elevations_deg.len() * s.azimuths(rig.horizontal_resolution_deg).count()).sum();
 
     let fps = |threads: usize, work: &(dyn Fn(usize) + Sync)| {
         let p = pool(threads);
@@ -196,12 +194,22 @@ fn bench_stages() {
         O.with(|o| backend.occupancy_into(&occ_input(i), &mut o.borrow_mut()));
     };
     report("occupancy (procedural)", &occ_work, &|_| String::new());
-    let lidar_work = |i: usize| {
-        std::hint::black_box(scan(&occs[i], &rig, 1, i).points.len());
-    };
-    report("lidar (nuPlan rig, 0.4 deg)", &lidar_work, &|fps| {
-        format!("{rays} rays/frame, {:.2} M rays/s", fps * rays as f64 / 1e6)
-    });
+    for res in [0.4, 0.2] {
+        let mut r = rig.clone();
+        r.horizontal_resolution_deg = res;
+        let rays: usize =
+            r.sensors.iter().map(|s| s.elevations_deg.len() * s.azimuths(r.horizontal_resolution_deg).count()).sum();
+        let lidar_work = |i: usize| {
+            std::hint::black_box(scan(&occs[i], &r, 1, i).points.len());
+        };
+        report(&format!("lidar (nuPlan rig, {res} deg)"), &lidar_work, &|fps| {
+            format!(
+                "{rays} rays/frame, {:.2} M rays/s, {:.1} ms CPU/frame",
+                fps * rays as f64 / 1e6,
+                1e3 * cores as f64 / fps
+            )
+        });
+    }
     let dir = std::env::temp_dir().join(format!("rocc-bench-{}", std::process::id()));
     let _ = std::fs::create_dir_all(&dir);
     let npz = |i: usize| {

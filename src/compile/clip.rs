@@ -51,7 +51,26 @@ pub struct ClipReport {
     pub frames: usize,
     /// True when a complete earlier run was found and nothing was written.
     pub resumed: bool,
+    /// The manifest written (or kept). A batch keeps only its summary: see `summary`.
     pub manifest: Manifest,
+    /// Files the clip holds and their total size (set whatever `manifest.files` holds).
+    pub files: usize,
+    pub bytes: u64,
+}
+
+impl ClipReport {
+    fn new(dir: &Path, frames: usize, resumed: bool, manifest: Manifest) -> Self {
+        let files = manifest.files.len();
+        let bytes = manifest.files.iter().map(|f| f.bytes).sum();
+        ClipReport { dir: dir.to_path_buf(), frames, resumed, manifest, files, bytes }
+    }
+
+    /// Drop the per-file list (kept on disk in manifest.json), so a batch report's memory does not
+    /// grow with the number of files per clip; counts and sizes stay in `files` and `bytes`.
+    pub fn summary(mut self) -> Self {
+        self.manifest.files = Vec::new();
+        self
+    }
 }
 
 #[derive(Default)]
@@ -238,7 +257,7 @@ pub fn compile_clip(
         for _ in ci.frames {
             on_frame();
         }
-        return Ok(ClipReport { dir: dir.to_path_buf(), frames: ci.frames.len(), resumed: true, manifest: m });
+        return Ok(ClipReport::new(dir, ci.frames.len(), true, m));
     }
     let front = ci.front;
     let source = |f: usize, raster: &mut Rasterizer, bev: &mut Bev| -> io::Result<(Pose, Vec<EgoBox>)> {
@@ -271,6 +290,8 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
         Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(e),
         _ => {}
     }
+    // Temporaries of an interrupted earlier run of this clip (never another clip's: one dir each).
+    crate::output::sweep_stale_tmp(dir)?;
 
     let seed = r.seed;
     let (gif_picks, sheet_picks) = if opts.previews { preview_picks(r.frames.len()) } else { (vec![], vec![]) };
@@ -387,7 +408,7 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
         timings.into_iter().map(|(n, a)| StageTiming { stage: n.to_string(), seconds: secs(a) }).collect();
     manifest.files = files;
     write_manifest(dir, &manifest)?;
-    Ok(ClipReport { dir: dir.to_path_buf(), frames: r.frames.len(), resumed: false, manifest })
+    Ok(ClipReport::new(dir, r.frames.len(), false, manifest))
 }
 
 fn rel(dir: &Path, p: &Path) -> String {

@@ -326,6 +326,16 @@ temporary name and renames, so no truncated file is left behind.\n
     $ rocc compile s.scn -o /read-only/out    // error: permission denied",
     },
     Code {
+        code: "E0402",
+        title: "bad --shard",
+        explanation: "`--shard K/N` runs the K-th of N parts of a batch (1 <= K <= N), so that N jobs of an\n\
+array (a Slurm array, a Kubernetes indexed job) split the sorted input list without talking to\n\
+each other: job K compiles every N-th file starting at the K-th.\n
+    $ rocc compile scenarios/ -o out --shard 3/16    // fine: the third of 16 parts
+    $ rocc compile scenarios/ -o out --shard 0/16    // error: K counts from 1
+    $ rocc compile scenarios/ -o out --shard 3       // error: expected K/N",
+    },
+    Code {
         code: "E0701",
         title: "unreadable occupancy frame",
         explanation: "`rocc eval occ` reads occupancy frames as a dense `.npy` of shape (400, 400, 32) (rocc's\n\

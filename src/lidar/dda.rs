@@ -14,7 +14,7 @@
 //! The voxel walk's boundaries are always computed from the ray origin, so the result is the same
 //! voxel and distance as `cast`'s (a test compares them on a full scene).
 
-use crate::backend::layout::{NX, NY, NZ, ORIGIN, UPPER, VOXEL, flat};
+use crate::backend::layout::{K_GROUND, K_GROUND_TOP, NX, NY, NZ, ORIGIN, UPPER, VOXEL, flat};
 
 /// The first occupied voxel along a ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -62,13 +62,22 @@ const NBY: usize = NY / B;
 #[derive(Clone, Debug)]
 pub struct Skip {
     top: Vec<f64>,
+    /// The highest `top` of all: a ray at or above it that does not descend can hit nothing more.
+    max_top: f64,
+    /// Blocks whose only occupied voxels are the ground layer (k = K_GROUND) in every column:
+    /// a descending ray's hit there is where it crosses z = 0, found without walking voxels.
+    ground_only: Vec<bool>,
 }
 
 impl Skip {
     pub fn new(labels: &[u8]) -> Self {
         let mut top = vec![f64::NEG_INFINITY; NBX * NBY];
+        let mut ground_only = vec![true; NBX * NBY];
         for (c, col) in labels.chunks_exact(NZ).enumerate() {
             let (i, j) = (c / NY, c % NY);
+            if col[K_GROUND] == 0 || col.iter().enumerate().any(|(k, &v)| k != K_GROUND && v != 0) {
+                ground_only[(i / B) * NBY + j / B] = false;
+            }
             // Highest non-zero byte of the column, 8 bytes at a time.
             let mut k_top = None;
             for q in (0..NZ / 8).rev() {
@@ -93,12 +102,17 @@ impl Skip {
                 *b = b.max(z);
             }
         }
-        Skip { top }
+        let max_top = top.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Skip { top, max_top, ground_only }
     }
 
     /// Same result as `cast`, skipping blocks the ray passes above.
     pub fn cast(&self, labels: &[u8], o: [f64; 3], d: [f64; 3], t_max: f64) -> Option<Hit> {
         let (t_in, t_out) = clip_to_grid(o, d, t_max)?;
+        // Level or rising rays above every occupied voxel (most of the upper beams): nothing to hit.
+        if d[2] >= 0.0 && o[2] + t_in * d[2] >= self.max_top {
+            return None;
+        }
         let bs = VOXEL * B as f64;
         let nb = [NBX as i64, NBY as i64];
         let mut idx = [0i64; 2];
@@ -125,14 +139,22 @@ impl Skip {
             let t_end = t_next[a].min(t_out);
             let top = self.top[idx[0] as usize * NBY + idx[1] as usize];
             let z_low = (o[2] + t * d[2]).min(o[2] + t_end * d[2]);
-            if z_low < top {
+            let block = idx[0] as usize * NBY + idx[1] as usize;
+            if z_low < top && self.ground_only[block] && d[2] < 0.0 && o[2] + t * d[2] >= GROUND_Z {
+                // Above the ground on entry and descending: the only thing to hit is the ground's
+                // top face, at the same distance the voxel walk computes for that boundary.
+                let tg = (GROUND_Z - o[2]) / d[2];
+                if tg <= t_end {
+                    return ground_hit(labels, o, d, tg, t_out);
+                }
+            } else if z_low < top {
                 let lo = [idx[0] * B as i64, idx[1] * B as i64, 0];
                 let hi = [lo[0] + B as i64, lo[1] + B as i64, NZ as i64];
                 if let Some(h) = walk(labels, o, d, t, t_end, axis, lo, hi) {
                     return Some(h);
                 }
             }
-            if t_next[a] > t_out {
+            if t_next[a] > t_out || (d[2] >= 0.0 && o[2] + t_next[a] * d[2] >= self.max_top) {
                 return None;
             }
             t = t_next[a];
@@ -144,6 +166,28 @@ impl Skip {
             axis = a;
         }
     }
+}
+
+/// z of the ground layer's top face (the k = K_GROUND_TOP boundary, 0 m).
+const GROUND_Z: f64 = ORIGIN[2] + VOXEL * K_GROUND_TOP as f64;
+
+/// The hit on the ground voxel a descending ray enters through its top face at distance `tg`.
+fn ground_hit(labels: &[u8], o: [f64; 3], d: [f64; 3], tg: f64, t_out: f64) -> Option<Hit> {
+    let n = [NX, NY];
+    let mut voxel = [0usize, 0, K_GROUND];
+    let mut t_exit = (GROUND_Z - VOXEL - o[2]) / d[2];
+    for a in 0..2 {
+        let p = o[a] + tg * d[a];
+        let i = (((p - ORIGIN[a]) / VOXEL).floor() as i64).clamp(0, n[a] as i64 - 1) as usize;
+        voxel[a] = i;
+        if d[a] > 0.0 {
+            t_exit = t_exit.min((ORIGIN[a] + (i + 1) as f64 * VOXEL - o[a]) / d[a]);
+        } else if d[a] < 0.0 {
+            t_exit = t_exit.min((ORIGIN[a] + i as f64 * VOXEL - o[a]) / d[a]);
+        }
+    }
+    let label = labels[flat(voxel[0], voxel[1], voxel[2])];
+    Some(Hit { t: tg, t_exit: t_exit.min(t_out.max(tg)), voxel, label, axis: 2 })
 }
 
 /// The voxel walk from distance `t_in` to `t_out` inside voxel index box [lo, hi); `axis` is

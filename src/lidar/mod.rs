@@ -101,7 +101,7 @@ fn fire_beam(
 ) -> Vec<Point> {
     let mut rng = beam_rng(seed, frame, sensor.id, beam);
     let rot = sensor.rotation();
-    let o = [sensor.origin.0, sensor.origin.1, sensor.origin.2];
+    let o = rig.sensor_origin(sensor);
     let el = sensor.elevations_deg[beam].to_radians();
     let (ce, se) = (el.cos(), el.sin());
     let mut out = Vec::new();

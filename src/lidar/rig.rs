@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 pub const NUPLAN_RON: &str = include_str!("../../rigs/nuplan.ron");
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Rig {
     pub name: String,
     /// Azimuth step between firings (deg), for every sensor that does not set its own.
@@ -23,10 +24,31 @@ pub struct Rig {
     pub intensity: Intensity,
     pub drop: Drop,
     pub noise: Noise,
+    /// The frame the sensors' `origin`s are given in (see `Mount`). Absent: rocc's own ego frame.
+    #[serde(default)]
+    pub mount: Mount,
     pub sensors: Vec<Sensor>,
 }
 
+/// Where the frame of the mounting poses sits in rocc's ego frame (SPEC.md "Frames": origin at
+/// the ego box's centre projected to the ground, x forward, y left, z up). Calibration files
+/// rarely use that point: nuPlan gives its extrinsics relative to the rear axle, at axle height.
+/// A rig states its frame here instead of having its numbers rewritten, so the file keeps the
+/// published values and the conversion is one documented offset. Axes stay parallel (a mounting
+/// frame is always the vehicle's own x forward, y left, z up); only the origin moves.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Mount {
+    /// Free text naming the frame (recorded for people; not interpreted).
+    #[serde(default)]
+    pub frame: String,
+    /// Position of the mounting frame's origin in rocc's ego frame (m). A sensor at `origin`
+    /// in the mounting frame sits at `frame_origin + origin` in the ego frame.
+    pub frame_origin: (f64, f64, f64),
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Intensity {
     /// Share of the return following Lambert's cosine law (the rest does not depend on angle).
     pub lambert: f64,
@@ -37,6 +59,7 @@ pub struct Intensity {
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Drop {
     /// P(drop) = base + incidence (1 - cos i)^2 + range (r / max_range)^2, clamped to [0, 1].
     pub base: f64,
@@ -45,6 +68,7 @@ pub struct Drop {
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Noise {
     /// Range noise sigma = sigma_m + sigma_per_m r (m).
     pub sigma_m: f64,
@@ -52,11 +76,13 @@ pub struct Noise {
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Sensor {
     /// Written into every point's `lidar` field.
     pub id: u8,
     pub name: String,
-    /// Mounting position in the ego frame (m).
+    /// Mounting position (m) in the rig's mounting frame (`Rig::mount`; by default the ego frame).
+    /// Use `Rig::sensor_origin` for the position in the ego frame.
     pub origin: (f64, f64, f64),
     /// Mounting rotation (roll, pitch, yaw) in degrees, applied as Rz(yaw) Ry(pitch) Rx(roll) to
     /// the sensor's own axes; zero means aligned with the ego frame.
@@ -92,6 +118,12 @@ impl Rig {
         Ok(rig)
     }
 
+    /// Where `sensor` sits in rocc's ego frame: its mounting position moved by the rig's frame.
+    pub fn sensor_origin(&self, sensor: &Sensor) -> [f64; 3] {
+        let f = self.mount.frame_origin;
+        [f.0 + sensor.origin.0, f.1 + sensor.origin.1, f.2 + sensor.origin.2]
+    }
+
     pub fn to_ron(&self) -> String {
         // Plain data with no maps keyed by non-strings: serialisation cannot fail.
         ron::ser::to_string_pretty(self, ron::ser::PrettyConfig::default()).expect("a rig serialises")
@@ -122,6 +154,10 @@ impl Rig {
         ];
         if finite.iter().any(|v| !v.is_finite() || *v < 0.0) {
             return bad("intensity, drop and noise parameters must be finite and >= 0".into());
+        }
+        let f = self.mount.frame_origin;
+        if [f.0, f.1, f.2].iter().any(|v| !v.is_finite()) {
+            return bad("mount.frame_origin must be finite".into());
         }
         if self.sensors.is_empty() {
             return bad("no sensors".into());
@@ -186,6 +222,10 @@ mod tests {
         assert_eq!(beams, [40, 40, 40, 20, 20]);
         let top = &rig.sensors[0];
         assert_eq!(top.origin, (1.5283, -0.0081, 1.6157));
+        // The published poses are rear-axle relative; the rig moves them onto the box centre.
+        assert_eq!(rig.mount.frame_origin, (-1.461, 0.0, 0.369));
+        let o = rig.sensor_origin(top);
+        assert!((o[0] - 0.0673).abs() < 1e-9 && (o[2] - 1.9847).abs() < 1e-9, "{o:?}");
         let (lo, hi) = top.elevations_deg.iter().fold((f64::MAX, f64::MIN), |(a, b), e| (a.min(*e), b.max(*e)));
         assert_eq!((lo, hi), (-25.0, 15.0));
         assert_eq!(top.azimuths(0.4).count(), 900);
@@ -205,5 +245,22 @@ mod tests {
         let mut rig = Rig::nuplan();
         rig.reflectivity.pop();
         assert!(Rig::from_ron(&rig.to_ron()).is_err());
+        let mut rig = Rig::nuplan();
+        rig.mount.frame_origin.2 = f64::NAN;
+        assert!(rig.validate().is_err());
+    }
+
+    #[test]
+    fn a_rig_without_a_mount_is_in_the_ego_frame() {
+        let text = NUPLAN_RON.replace("mount:", "_unused:");
+        // A misspelt field is an error, not a silently defaulted frame.
+        assert!(Rig::from_ron(&text).is_err());
+        // The shipped file less its `mount` block.
+        let start = NUPLAN_RON.find("    mount: (").expect("the shipped rig states its frame");
+        let end = start + NUPLAN_RON[start..].find("\n    ),\n").expect("block end") + 8;
+        let without = format!("{}{}", &NUPLAN_RON[..start], &NUPLAN_RON[end..]);
+        let back = Rig::from_ron(&without).expect("mount is optional");
+        assert_eq!(back.mount, Mount::default());
+        assert_eq!(back.sensor_origin(&back.sensors[4]), [4.0223, -0.0238, 0.0084]);
     }
 }

@@ -57,6 +57,39 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut BufWriter<File>) -> io::
     result
 }
 
+/// Whether `name` is one of `write_atomic`'s temporaries: `.{file}.tmp-{pid}-{n}`.
+pub fn is_atomic_tmp(name: &str) -> bool {
+    let Some(rest) = name.strip_prefix('.') else { return false };
+    let Some(at) = rest.rfind(".tmp-") else { return false };
+    let mut parts = rest[at + 5..].split('-');
+    let num = |p: Option<&str>| p.is_some_and(|p| !p.is_empty() && p.bytes().all(|b| b.is_ascii_digit()));
+    at > 0 && num(parts.next()) && num(parts.next()) && parts.next().is_none()
+}
+
+/// Remove the temporaries an interrupted run left in `dir` and its sub-directories (a killed
+/// process never reaches its clean-up). Call it only on a directory this process alone writes:
+/// a clip's directory at the start of its compile (shards write different clips). Returns how
+/// many were removed; a missing `dir` has none.
+pub fn sweep_stale_tmp(dir: &Path) -> io::Result<usize> {
+    let mut n = 0;
+    let entries = match fs::read_dir(dir) {
+        Ok(e) => e,
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(0),
+        Err(e) => return Err(e),
+    };
+    for e in entries {
+        let e = e?;
+        let ty = e.file_type()?;
+        if ty.is_dir() {
+            n += sweep_stale_tmp(&e.path())?;
+        } else if ty.is_file() && is_atomic_tmp(&e.file_name().to_string_lossy()) {
+            fs::remove_file(e.path())?;
+            n += 1;
+        }
+    }
+    Ok(n)
+}
+
 fn npz_err(e: impl std::fmt::Display) -> io::Error {
     io::Error::other(format!("npz: {e}"))
 }
