@@ -459,8 +459,9 @@ boxes in one frame (the second dropped). That frame's BEV footprint differs from
     --insert KIND at X,Y [yaw A]    A in degrees, or with `rad`
     --delete AGENT
     --move AGENT by DX,DY\n\n\
-Coordinates are metres: in each edited frame's ego frame (x forward, y left) for a compiled\n\
-clip, in the world frame for a `.scn`.",
+Coordinates are metres: for a compiled clip, in the ego frame (x forward, y left) of the first\n\
+edited frame, and the edit then stays fixed in the world in every other frame; for a `.scn`, in\n\
+the scenario's world frame.",
     },
     Code {
         code: "E0718",
