@@ -163,6 +163,14 @@ fn complete(dir: &Path, want: &Manifest) -> Option<Manifest> {
     (same && files_ok).then_some(m)
 }
 
+/// The manifest of a clip in `dir` that `rocc edit` has changed since it was compiled, if any:
+/// `rocc compile` does not overwrite it without `--force`.
+pub fn edited_clip(dir: &Path) -> Option<Manifest> {
+    let text = std::fs::read_to_string(dir.join("manifest.json")).ok()?;
+    let m: Manifest = serde_json::from_str(&text).ok()?;
+    (!m.edits.is_empty()).then_some(m)
+}
+
 /// Every box of frame `f` in the ego's frame, the ego itself excluded (nuPlan's annotations never
 /// contain the ego), and only boxes whose footprint can reach the 100 m grid.
 pub fn frame_boxes(front: &Front, ego: usize, f: usize) -> Vec<EgoBox> {

@@ -326,6 +326,20 @@ temporary name and renames, so no truncated file is left behind.\n
     $ rocc compile s.scn -o /read-only/out    // error: permission denied",
     },
     Code {
+        code: "E0402",
+        title: "output directory holds an edited clip",
+        explanation: "`rocc edit` changed this clip after it was compiled (its manifest.json lists the edits).\n\
+Compiling the same scenario into the same directory would rewrite the clip from the scenario and\n\
+lose those edits, so `rocc compile` leaves it alone and reports this error; the other clips are\n\
+still compiled. Pass `--force` to recompile it anyway (the edits are discarded), compile into\n\
+another `-o` directory, or, to keep an edit for good, apply it to the `.scn` (`rocc edit\n\
+FILE.scn ... -o edited.scn`) and compile that.\n
+    $ rocc compile scenarios/replayed_cut_in.scn -o out
+    $ rocc edit out/replayed_cut_in/ego --delete cutter
+    $ rocc compile scenarios/replayed_cut_in.scn -o out           // error: the clip was edited
+    $ rocc compile scenarios/replayed_cut_in.scn -o out --force   // recompiles, edits discarded",
+    },
+    Code {
         code: "E0701",
         title: "unreadable occupancy frame",
         explanation: "`rocc eval occ` reads occupancy frames as a dense `.npy` of shape (400, 400, 32) (rocc's\n\
