@@ -5,7 +5,7 @@ use ndarray_npy::{NpzWriter, WriteNpyExt};
 use rocc::backend::layout::{NX, NY, NZ};
 use rocc::check::scenario::Class;
 use rocc::edit::{ClipEdit, Edit, edit_clip, edit_scn, parse_edit, read_boxes_json, rerasterize};
-use rocc::eval::lidar::{bev_map, js_distance, jsd, mmd};
+use rocc::eval::lidar::{bev_map, js_distance, jsd, mmd, read_points};
 use rocc::eval::{OccScorer, read_occ, score_lidar_dirs, score_occ_dirs};
 use rocc::import::{Convention, import_boxes, map_class, reference_frames};
 use rocc::output::{bev_frame_path, read_npz};
@@ -180,6 +180,55 @@ fn identical_lidar_sets_give_mmd_and_jsd_zero() {
     assert_eq!((s.mmd, s.jsd), (0.0, 0.0));
     std::fs::write(d.join("pred/000001.bin"), [0u8; 7]).unwrap();
     assert_eq!(score_lidar_dirs(&d.join("pred"), &d.join("gt"), false).unwrap_err()[0].code, "E0704");
+}
+
+#[test]
+fn eval_lidar_reads_the_clouds_of_clip_directories_and_pcd_files() {
+    let compile = |out: &Path, stage: &str| {
+        let scn = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/replayed_cut_in.scn");
+        let st = std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
+            .args(["compile", scn.to_str().unwrap(), "-o", out.to_str().unwrap(), "--frames", "0..2", "-q"])
+            .args(["--no-previews", "--lidar-resolution", "2", "--stage", stage])
+            .status()
+            .unwrap();
+        assert!(st.success());
+        out.join("replayed_cut_in/ego")
+    };
+    let out = tmp_dir("lidar-clip");
+    let clip = compile(&out, "lidar");
+    // The clip, the whole output and the lidar folder hold the same two clouds: each frame's
+    // `.bin` and `.pcd` count once, and `occ/*.npy` is never read as a cloud.
+    for d in [&clip, &out, &clip.join("lidar")] {
+        let s = score_lidar_dirs(d, &clip, false).unwrap_or_else(|e| panic!("{}: {}", d.display(), e[0].message));
+        assert_eq!((s.pred_clouds, s.gt_clouds, s.mmd, s.jsd), (2, 2, 0.0, 0.0), "{}", d.display());
+    }
+    // PCD (binary, as rocc writes it) reads like the `.bin`; a plain directory of `.pcd` scores alike.
+    let plain = out.join("plain");
+    std::fs::create_dir_all(&plain).unwrap();
+    for f in 0..2 {
+        let (bin, pcd) = (clip.join(format!("lidar/{f:06}.bin")), clip.join(format!("lidar/{f:06}.pcd")));
+        let pts = read_points(&bin).unwrap();
+        assert!(pts.len() > 1000);
+        assert_eq!(read_points(&pcd).unwrap(), pts);
+        std::fs::copy(&pcd, plain.join(format!("{f:06}.pcd"))).unwrap();
+    }
+    let s = score_lidar_dirs(&plain, &clip, false).unwrap();
+    assert_eq!((s.pred_clouds, s.mmd, s.jsd), (2, 0.0, 0.0));
+    // ASCII PCD with extra fields and counts.
+    let ascii = "VERSION 0.7\nFIELDS ring x y z rgb\nSIZE 2 4 4 4 4\nTYPE U F F F F\nCOUNT 1 1 1 1 2\n\
+                 WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n3 1.5 -2 0.25 0 0\n4 10 20 -1 0 0\n";
+    assert_eq!(rocc::eval::lidar::read_pcd(ascii.as_bytes()).unwrap(), vec![[1.5, -2.0, 0.25], [10.0, 20.0, -1.0]]);
+    assert!(
+        rocc::eval::lidar::read_pcd(b"VERSION 0.7\nFIELDS a b\nSIZE 4 4\nTYPE F F\nPOINTS 0\nDATA ascii\n").is_err()
+    );
+    // A clip compiled without LiDAR, or a directory with no clouds: E0703 naming it, not an
+    // attempt to read `occ/*.npy` as points.
+    let occ_only = compile(&tmp_dir("lidar-none"), "occ");
+    let e = score_lidar_dirs(&occ_only, &clip, false).unwrap_err();
+    assert_eq!(e[0].code, "E0703");
+    assert!(e[0].message.contains("no LiDAR frames") && e[0].message.contains("replayed_cut_in"), "{}", e[0].message);
+    let empty = tmp_dir("lidar-empty");
+    assert_eq!(score_lidar_dirs(&clip, &empty, false).unwrap_err()[0].code, "E0703");
 }
 
 // ------------------------------------------------------------------ import
