@@ -115,6 +115,13 @@ fn expected_manifest(ci: &ClipInput, opts: &Options, backend: &str) -> Manifest 
     m.stage = opts.stage.name().to_string();
     m.frames = ci.frames.to_vec();
     m.static_bev = opts.static_bev.as_ref().map(|b| b.source.clone());
+    if opts.stage >= Stage::Occ
+        && let super::OccBackend::Grounded(g) = &opts.backend
+        && let Some((w, c)) = g.files()
+    {
+        m.weights = Some(w.display().to_string());
+        m.grounded_config = Some(c.display().to_string());
+    }
     m.build_key = build_key(ci.sources, (opts.stage >= Stage::Lidar).then_some(&opts.rig));
     m
 }

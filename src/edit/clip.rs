@@ -6,9 +6,10 @@
 //! of the occupancy. Re-rasterising unedited boxes reproduces every BEV exactly (a test).
 
 use super::{Edit, kind_info, no_overlap, validate_box};
+use crate::backend::grounded::Grounded;
 use crate::backend::{Background, Mode};
 use crate::check::scenario::Class;
-use crate::compile::{Options, Render, Stage, clip_seed, render_clip};
+use crate::compile::{OccBackend, Options, Render, Stage, clip_seed, render_clip};
 use crate::diag::{Diagnostic, did_you_mean};
 use crate::lidar::Rig;
 use crate::output::{FrameBoxes, Manifest, bev_frame_path, read_npz};
@@ -18,6 +19,7 @@ use crate::road::Map;
 use crate::view::{EgoBox, EgoFrame};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Half the BEV's side (m).
 const HALF_EXTENT: f64 = 50.0;
@@ -31,6 +33,12 @@ pub struct ClipEdit {
     pub frames: Option<String>,
     /// `--rig`, needed only when the clip was compiled with a rig other than the bundled one.
     pub rig: Option<Rig>,
+    /// `--weights`: for a clip of the learned backend, its weights when not where the manifest
+    /// says (they must be the same weights: the hash in the backend name is checked).
+    pub weights: Option<PathBuf>,
+    /// `--grounded-config`: the model config, when not the manifest's (or, with `--weights`, the
+    /// `.ron` beside them).
+    pub grounded_config: Option<PathBuf>,
 }
 
 fn clip_err(dir: &Path, m: String, help: &str) -> Vec<Diagnostic> {
@@ -258,6 +266,52 @@ fn validate_in_frame(
     no_overlap(b, others, ego_size, frame, what)
 }
 
+/// The learned backend a clip was compiled with, loaded again from the files its manifest
+/// records (or `--weights` / `--grounded-config`), and checked to be the same weights.
+fn grounded_backend(dir: &Path, manifest: &Manifest, o: &ClipEdit) -> Result<Grounded, Vec<Diagnostic>> {
+    let (weights, config) = match (&o.weights, &manifest.weights) {
+        (Some(w), _) => (w.clone(), o.grounded_config.clone()),
+        (None, Some(w)) => (
+            PathBuf::from(w),
+            o.grounded_config.clone().or_else(|| manifest.grounded_config.as_ref().map(PathBuf::from)),
+        ),
+        (None, None) => {
+            return Err(clip_err(
+                dir,
+                format!(
+                    "its occupancy comes from `{}`, but manifest.json does not record the weights",
+                    manifest.backend
+                ),
+                "pass the weights it was compiled with: `--weights FILE` (and `--grounded-config FILE` if the `.ron` \
+                 is not beside them)",
+            ));
+        }
+    };
+    if !weights.is_file() {
+        return Err(vec![
+            Diagnostic::error(
+                "E0901",
+                format!(
+                    "clip `{}` was compiled with the learned backend, and its weights file `{}` does not exist",
+                    dir.display(),
+                    weights.display()
+                ),
+            )
+            .help("restore that file, or pass the same weights with `--weights FILE` (rocc edit reruns the model)"),
+        ]);
+    }
+    let g = Grounded::load(&weights, config.as_deref()).map_err(|d| vec![d])?;
+    let name = crate::backend::OccupancyBackend::name(&g);
+    if name != manifest.backend {
+        return Err(clip_err(
+            dir,
+            format!("it was compiled with `{}`, but `{}` loads as `{name}`", manifest.backend, weights.display()),
+            "pass the weights (and config) the clip was compiled with; other weights would mix two models in one clip",
+        ));
+    }
+    Ok(g)
+}
+
 /// Edit a compiled clip in place. Nothing is written unless every edit is valid in every
 /// selected frame; then every stage of every frame of the clip is rewritten (atomically per file).
 pub fn edit_clip(dir: &Path, edits: &[Edit], o: &ClipEdit) -> Result<Manifest, Vec<Diagnostic>> {
@@ -332,16 +386,11 @@ pub fn edit_clip(dir: &Path, edits: &[Edit], o: &ClipEdit) -> Result<Manifest, V
         "lidar" => Stage::Lidar,
         _ => Stage::Bev,
     };
-    if manifest.backend.starts_with("grounded") {
-        return Err(clip_err(
-            dir,
-            format!(
-                "its occupancy comes from the learned backend `{}`, which `rocc edit` cannot rerun",
-                manifest.backend
-            ),
-            "edit the scenario instead (`rocc edit FILE.scn ... -o edited.scn`) and compile it with `--backend grounded --weights W`",
-        ));
-    }
+    let backend = if manifest.backend.starts_with("grounded") {
+        OccBackend::Grounded(Arc::new(grounded_backend(dir, &manifest, o)?))
+    } else {
+        OccBackend::Procedural
+    };
     let mode = if manifest.backend.ends_with("solid") { Mode::Solid } else { Mode::Surface };
     let rig = match (&o.rig, &manifest.rig) {
         (Some(r), _) => r.clone(),
@@ -365,7 +414,7 @@ pub fn edit_clip(dir: &Path, edits: &[Edit], o: &ClipEdit) -> Result<Manifest, V
         previews,
         force: true,
         static_bev: None,
-        backend: Default::default(),
+        backend,
     };
     let background =
         if stage >= Stage::Occ { Background::generate(&front.map, front.concrete.seed) } else { Background::none() };
@@ -377,6 +426,12 @@ pub fn edit_clip(dir: &Path, edits: &[Edit], o: &ClipEdit) -> Result<Manifest, V
         Ok((front.tracks.poses[ego][f], boxes))
     };
     let mut m = manifest.clone();
+    if let OccBackend::Grounded(g) = &opts.backend
+        && let Some((w, c)) = g.files()
+    {
+        m.weights = Some(w.display().to_string());
+        m.grounded_config = Some(c.display().to_string());
+    }
     m.files.clear();
     m.timings.clear();
     // The history says which frame the coordinates were given in and which frames changed.
