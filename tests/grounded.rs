@@ -485,7 +485,7 @@ fn rocc_edit_reruns_the_learned_backend_of_a_grounded_clip() {
     // Other weights (another seed) are refused: they would mix two models in one clip.
     std::fs::write(moved.join("g.ron"), cfg.to_ron()).unwrap();
     device.seed(12);
-    Generator::new(&cfg, &device).save_file(&moved.join("other.bpk")).unwrap();
+    Generator::new(&cfg, &device).save_file(moved.join("other.bpk")).unwrap();
     std::fs::write(moved.join("other.ron"), cfg.to_ron()).unwrap();
     let other = ClipEdit { weights: Some(moved.join("other.bpk")), ..ce.clone() };
     assert_eq!(edit_clip(&clip, std::slice::from_ref(&del), &other).unwrap_err()[0].code, "E0712");

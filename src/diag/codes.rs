@@ -429,7 +429,9 @@ crosswalks, pedestrians on walkways, crosswalks or the shoulder; static objects 
         explanation: "`rocc edit DIR` needs a directory written by `rocc compile` (manifest.json, boxes.json,\n\
 bev/). The later stages need the scene the clip came from (ego poses, background), so the\n\
 scenario named in the manifest must be readable and unchanged (same hash); pass `--scenario\n\
-FILE` when it moved. A clip compiled with a custom rig needs the same `--rig`.\n
+FILE` when it moved. A clip compiled with a custom rig needs the same `--rig`. A clip of the\n\
+learned backend is rerun with the weights its manifest records (or `--weights FILE`), which must\n\
+be the same weights (the hash in the manifest's `backend`).\n
     $ rocc edit out/cut_in/ego/bev --delete cutter   // error: no manifest.json in bev/",
     },
     Code {
@@ -812,7 +814,9 @@ exist, or `--backend grounded` was given without `--weights`. Train weights firs
     rocc train autoencoder --data corpus --config configs/cpu-small.ron --out model
     rocc train generator   --data corpus --config configs/cpu-small.ron --out model
     rocc compile FILE -o out --backend grounded --weights model/generator.bpk\n\n\
-`rocc train` writes `OUT/<stage>.bpk` and the config beside it as `OUT/<stage>.ron`.",
+`rocc train` writes `OUT/<stage>.bpk` and the config beside it as `OUT/<stage>.ron`. `rocc edit`\n\
+on a clip of the learned backend reruns it with the weights its manifest records; if they moved,\n\
+pass the same file with `--weights`.",
     },
     Code {
         code: "E0902",
