@@ -185,8 +185,10 @@ enum EvalCmd {
     },
     /// LiDAR MMD and JSD between two sets of clouds.
     Lidar {
+        /// Compiled clip directories (their lidar/ frames), or directories of .bin / .pcd / .npy clouds.
         #[arg(long)]
         pred: PathBuf,
+        /// As `--pred`.
         #[arg(long)]
         gt: PathBuf,
         /// Keep only points with 3 < range < 50 m.

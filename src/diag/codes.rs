@@ -352,15 +352,17 @@ is (N, 4) rows of [i, j, k, label] (unlisted voxels are free). Labels are 0..=8 
         title: "prediction and ground-truth sets do not match",
         explanation: "`--pred` and `--gt` must be directories. Occupancy frames are paired by relative path\n\
 (`.npy` and `.npz` may stand in for each other); every ground-truth frame needs a prediction.\n\
-LiDAR sets are compared as sets and need at least one cloud each.\n
+LiDAR sets are compared as sets and need at least one cloud each: a clip compiled with\n\
+`--stage occ` has none (its `occ/*.npy` are not clouds).\n
     $ rocc eval occ --pred pred/ --gt gt/    // error if gt/scene/0007.npy has no pred/scene/0007.np[yz]
     $ rocc eval occ --pred pred.npy --gt gt/  // error: --pred must be a directory",
     },
     Code {
         code: "E0704",
         title: "unreadable point cloud",
-        explanation: "`rocc eval lidar` reads KITTI-style `.bin` (float32 x, y, z, intensity per point) or a\n\
-`.npy` of shape (N, >= 3), float32 or float64.\n
+        explanation: "`rocc eval lidar` reads KITTI-style `.bin` (float32 x, y, z, intensity per point), PCD v0.7\n\
+(`DATA ascii` or `binary`, float fields x, y, z) or a `.npy` of shape (N, >= 3), float32 or\n\
+float64. In a compiled clip directory only `lidar/` is read.\n
     $ rocc eval lidar --pred pred/ --gt gt/  // error if a .bin length is not a multiple of 16 bytes",
     },
     Code {
