@@ -185,8 +185,10 @@ enum EvalCmd {
     },
     /// LiDAR MMD and JSD between two sets of clouds.
     Lidar {
+        /// Compiled clip directories (their lidar/ frames), or directories of .bin / .pcd / .npy clouds.
         #[arg(long)]
         pred: PathBuf,
+        /// As `--pred`.
         #[arg(long)]
         gt: PathBuf,
         /// Keep only points with 3 < range < 50 m.
@@ -350,6 +352,12 @@ enum Cmd {
         /// Clips: the rig it was compiled with, if not the bundled nuPlan rig.
         #[arg(long)]
         rig: Option<PathBuf>,
+        /// Clips of `--backend grounded`: its weights, if not where the manifest says (same weights).
+        #[arg(long)]
+        weights: Option<PathBuf>,
+        /// Clips of `--backend grounded`: its model config, if not the manifest's.
+        #[arg(long)]
+        grounded_config: Option<PathBuf>,
         /// `.scn`: write the edited scenario here (default: rewrite the file).
         #[arg(short, long)]
         out: Option<PathBuf>,
@@ -506,8 +514,9 @@ fn main() -> ExitCode {
         Cmd::Import { what: ImportCmd::Boxes { file, convention, out, static_bev } } => {
             import_boxes(&file, convention, &out, static_bev.as_deref())
         }
-        Cmd::Edit { target, insert, delete, move_, frames, scenario, rig, out } => {
-            edit(&target, &insert, &delete, &move_, frames, scenario, rig.as_deref(), out.as_deref())
+        Cmd::Edit { target, insert, delete, move_, frames, scenario, rig, weights, grounded_config, out } => {
+            let o = ClipEditArgs { frames, scenario, weights, grounded_config };
+            edit(&target, &insert, &delete, &move_, o, rig.as_deref(), out.as_deref())
         }
         Cmd::Eval { what } => eval(what),
         Cmd::Ciren { what } => ciren(what),
@@ -1306,14 +1315,20 @@ fn ciren_import(inputs: Vec<Result<PathBuf, Diagnostic>>, out: &Path, safe: bool
     if failed > 0 { ExitCode::FAILURE } else { ExitCode::SUCCESS }
 }
 
-#[allow(clippy::too_many_arguments)]
+/// `rocc edit`'s clip options, as given.
+struct ClipEditArgs {
+    frames: Option<String>,
+    scenario: Option<PathBuf>,
+    weights: Option<PathBuf>,
+    grounded_config: Option<PathBuf>,
+}
+
 fn edit(
     target: &Path,
     insert: &[String],
     delete: &[String],
     move_: &[String],
-    frames: Option<String>,
-    scenario: Option<PathBuf>,
+    args: ClipEditArgs,
     rig: Option<&Path>,
     out: Option<&Path>,
 ) -> ExitCode {
@@ -1344,7 +1359,17 @@ fn edit(
             Ok(r) => r,
             Err(d) => return fail(vec![d], &SourceMap::default()),
         };
-        match rocc::edit::edit_clip(target, &edits, &ClipEdit { scenario, frames, rig }) {
+        match rocc::edit::edit_clip(
+            target,
+            &edits,
+            &ClipEdit {
+                scenario: args.scenario,
+                frames: args.frames,
+                rig,
+                weights: args.weights,
+                grounded_config: args.grounded_config,
+            },
+        ) {
             Ok(m) => {
                 eprintln!("edited {} ({} frames): {}", target.display(), m.frames.len(), m.edits.join("; "));
                 ExitCode::SUCCESS

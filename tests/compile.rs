@@ -130,6 +130,44 @@ fn a_complete_clip_is_kept_and_force_recompiles_it() {
 }
 
 #[test]
+fn an_edited_clip_is_not_overwritten_without_force() {
+    let input = vec![root().join("scenarios/replayed_cut_in.scn")];
+    let out = tmp("edited");
+    let o = Options { previews: false, ..opts(Stage::Bev, "0..2") };
+    assert!(batch::run(&input, &out, &o, true).failures.is_empty());
+    let clip = out.join("replayed_cut_in/ego");
+    let edit = rocc::edit::Edit::Delete { agent: "cutter".into() };
+    let ce = rocc::edit::ClipEdit { scenario: Some(input[0].clone()), ..Default::default() };
+    rocc::edit::edit_clip(&clip, &[edit], &ce).expect("edit");
+    let edited = tree(&clip);
+    let manifest = std::fs::read(clip.join("manifest.json")).expect("manifest");
+    // A later compile into the same directory refuses, names the edit and leaves every byte.
+    let again = batch::run(&input, &out, &o, true);
+    assert!(again.clips.is_empty(), "the edited clip was recompiled");
+    let d = &again.failures[0].diags[0];
+    assert_eq!(d.code, "E0403");
+    assert!(d.message.contains("delete cutter") && d.message.contains("replayed_cut_in"), "{}", d.message);
+    assert!(d.help.as_deref().is_some_and(|h| h.contains("--force")));
+    assert_eq!(tree(&clip), edited);
+    assert_eq!(std::fs::read(clip.join("manifest.json")).expect("manifest"), manifest);
+    // The command line says so and fails.
+    let run = Command::new(env!("CARGO_BIN_EXE_rocc"))
+        .args(["compile", input[0].to_str().unwrap(), "-o", out.to_str().unwrap(), "--frames", "0..2"])
+        .args(["--stage", "bev", "--no-previews", "-q"])
+        .output()
+        .expect("run rocc");
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success() && err.contains("E0403") && err.contains("--force"), "{err}");
+    assert_eq!(tree(&clip), edited);
+    // `--force` recompiles from the scenario: the cutter is back and the history is gone.
+    let forced = batch::run(&input, &out, &Options { force: true, ..o.clone() }, true);
+    assert!(forced.failures.is_empty() && forced.clips.iter().all(|c| !c.resumed && c.manifest.edits.is_empty()));
+    let boxes = std::fs::read_to_string(clip.join("boxes.json")).expect("boxes");
+    assert!(boxes.contains("\"cutter\""));
+    assert!(batch::run(&input, &out, &o, true).clips.iter().all(|c| c.resumed));
+}
+
+#[test]
 fn a_failing_file_does_not_stop_the_batch() {
     let inputs = vec![
         root().join("tests/invalid/unknown_kind.scn"),

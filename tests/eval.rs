@@ -5,7 +5,7 @@ use ndarray_npy::{NpzWriter, WriteNpyExt};
 use rocc::backend::layout::{NX, NY, NZ};
 use rocc::check::scenario::Class;
 use rocc::edit::{ClipEdit, Edit, edit_clip, edit_scn, parse_edit, read_boxes_json, rerasterize};
-use rocc::eval::lidar::{bev_map, js_distance, jsd, mmd};
+use rocc::eval::lidar::{bev_map, js_distance, jsd, mmd, read_points};
 use rocc::eval::{OccScorer, read_occ, score_lidar_dirs, score_occ_dirs};
 use rocc::import::{Convention, import_boxes, map_class, reference_frames};
 use rocc::output::{bev_frame_path, read_npz};
@@ -180,6 +180,55 @@ fn identical_lidar_sets_give_mmd_and_jsd_zero() {
     assert_eq!((s.mmd, s.jsd), (0.0, 0.0));
     std::fs::write(d.join("pred/000001.bin"), [0u8; 7]).unwrap();
     assert_eq!(score_lidar_dirs(&d.join("pred"), &d.join("gt"), false).unwrap_err()[0].code, "E0704");
+}
+
+#[test]
+fn eval_lidar_reads_the_clouds_of_clip_directories_and_pcd_files() {
+    let compile = |out: &Path, stage: &str| {
+        let scn = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/replayed_cut_in.scn");
+        let st = std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
+            .args(["compile", scn.to_str().unwrap(), "-o", out.to_str().unwrap(), "--frames", "0..2", "-q"])
+            .args(["--no-previews", "--lidar-resolution", "2", "--stage", stage])
+            .status()
+            .unwrap();
+        assert!(st.success());
+        out.join("replayed_cut_in/ego")
+    };
+    let out = tmp_dir("lidar-clip");
+    let clip = compile(&out, "lidar");
+    // The clip, the whole output and the lidar folder hold the same two clouds: each frame's
+    // `.bin` and `.pcd` count once, and `occ/*.npy` is never read as a cloud.
+    for d in [&clip, &out, &clip.join("lidar")] {
+        let s = score_lidar_dirs(d, &clip, false).unwrap_or_else(|e| panic!("{}: {}", d.display(), e[0].message));
+        assert_eq!((s.pred_clouds, s.gt_clouds, s.mmd, s.jsd), (2, 2, 0.0, 0.0), "{}", d.display());
+    }
+    // PCD (binary, as rocc writes it) reads like the `.bin`; a plain directory of `.pcd` scores alike.
+    let plain = out.join("plain");
+    std::fs::create_dir_all(&plain).unwrap();
+    for f in 0..2 {
+        let (bin, pcd) = (clip.join(format!("lidar/{f:06}.bin")), clip.join(format!("lidar/{f:06}.pcd")));
+        let pts = read_points(&bin).unwrap();
+        assert!(pts.len() > 1000);
+        assert_eq!(read_points(&pcd).unwrap(), pts);
+        std::fs::copy(&pcd, plain.join(format!("{f:06}.pcd"))).unwrap();
+    }
+    let s = score_lidar_dirs(&plain, &clip, false).unwrap();
+    assert_eq!((s.pred_clouds, s.mmd, s.jsd), (2, 0.0, 0.0));
+    // ASCII PCD with extra fields and counts.
+    let ascii = "VERSION 0.7\nFIELDS ring x y z rgb\nSIZE 2 4 4 4 4\nTYPE U F F F F\nCOUNT 1 1 1 1 2\n\
+                 WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n3 1.5 -2 0.25 0 0\n4 10 20 -1 0 0\n";
+    assert_eq!(rocc::eval::lidar::read_pcd(ascii.as_bytes()).unwrap(), vec![[1.5, -2.0, 0.25], [10.0, 20.0, -1.0]]);
+    assert!(
+        rocc::eval::lidar::read_pcd(b"VERSION 0.7\nFIELDS a b\nSIZE 4 4\nTYPE F F\nPOINTS 0\nDATA ascii\n").is_err()
+    );
+    // A clip compiled without LiDAR, or a directory with no clouds: E0703 naming it, not an
+    // attempt to read `occ/*.npy` as points.
+    let occ_only = compile(&tmp_dir("lidar-none"), "occ");
+    let e = score_lidar_dirs(&occ_only, &clip, false).unwrap_err();
+    assert_eq!(e[0].code, "E0703");
+    assert!(e[0].message.contains("no LiDAR frames") && e[0].message.contains("replayed_cut_in"), "{}", e[0].message);
+    let empty = tmp_dir("lidar-empty");
+    assert_eq!(score_lidar_dirs(&clip, &empty, false).unwrap_err()[0].code, "E0703");
 }
 
 // ------------------------------------------------------------------ import
@@ -380,7 +429,13 @@ fn clip_edits_change_exactly_the_box_list_and_rerun_the_stages() {
         assert_eq!(b.boxes.len(), a.boxes.len() + 1);
         assert_eq!(&b.boxes[..a.boxes.len()], &a.boxes[..]);
         let new = b.boxes.last().unwrap();
-        assert_eq!((new.agent.as_str(), new.class, new.x, new.y), ("inserted_sedan_1", Class::Vehicle, 20.0, 0.0));
+        assert_eq!((new.agent.as_str(), new.class, new.y), ("inserted_sedan_1", Class::Vehicle, 0.0));
+        // Given in frame 0's ego frame and fixed in the world: the ego drives east towards it.
+        if b.frame == 0 {
+            assert_eq!(new.x, 20.0);
+        } else {
+            assert!(new.x < 20.0 - 1.0, "frame {}: {}", b.frame, new.x);
+        }
     }
     let bev1 = read_npz(&bev_frame_path(&dir, 0)).unwrap();
     for ch in rocc::raster::STATIC_CHANNELS {
@@ -407,6 +462,91 @@ fn clip_edits_change_exactly_the_box_list_and_rerun_the_stages() {
     edit_clip(&dir, &[Edit::Delete { agent: "cutter".into() }], &o).unwrap();
     let deleted = read_boxes_json(&dir.join("boxes.json")).unwrap();
     assert!(deleted.iter().all(|f| f.boxes.iter().all(|b| b.agent != "cutter") && f.boxes.len() == 1));
+}
+
+/// An ego driving east at exactly 10 m/s (1 m per frame at 10 Hz) past a static cone.
+const DRIVE_BY: &str = "scenario drive_by {
+    seed 1
+    duration 1 s
+    rate 10 Hz
+    egos [ego]
+    road straight { lanes 2; lane_width 3.5 m; speed_limit 60 km/h; length 240 m }
+    agent ego: sedan {
+        at west.in[1], 60 m before center
+        speed 36 km/h
+        goal { speed 36 km/h }
+    }
+    agent cone: traffic_cone { at (-40 m, 6 m) heading 0 deg }
+}
+";
+
+fn drive_by_clip(name: &str, stage: &str) -> (PathBuf, PathBuf) {
+    let out = tmp_dir(name);
+    let scn = out.join("drive_by.scn");
+    std::fs::write(&scn, DRIVE_BY).unwrap();
+    let st = std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
+        .args(["compile", scn.to_str().unwrap(), "-o", out.to_str().unwrap(), "--frames", "0..4", "-q"])
+        .args(["--no-previews", "--stage", stage])
+        .status()
+        .unwrap();
+    assert!(st.success());
+    (out.join("drive_by/ego"), scn)
+}
+
+#[test]
+fn clip_edits_are_fixed_in_the_world_while_the_ego_moves() {
+    let (dir, scn) = drive_by_clip("world-fixed", "bev");
+    let before = read_boxes_json(&dir.join("boxes.json")).unwrap();
+    // The recorded static cone, hand-checked: the ego (yaw 0) gains 1 m per frame on it.
+    let cone =
+        |fs: &[rocc::output::FrameBoxes], f: usize| fs[f].boxes.iter().find(|b| b.agent == "cone").cloned().unwrap();
+    for f in 0..4 {
+        let c = cone(&before, f);
+        assert!((c.x - (20.0 - f as f64)).abs() < 1e-9 && (c.y - 7.75).abs() < 1e-9, "frame {f}: {c:?}");
+    }
+    let o = ClipEdit { scenario: Some(scn.clone()), ..Default::default() };
+    let ins = |w: &str| parse_edit("insert", &w.split(' ').map(String::from).collect::<Vec<_>>()).unwrap();
+    edit_clip(&dir, &[ins("traffic_cone at 12,-6 yaw 30")], &o).unwrap();
+    let after = read_boxes_json(&dir.join("boxes.json")).unwrap();
+    for f in 0..4 {
+        let b = after[f].boxes.iter().find(|b| b.agent == "inserted_traffic_cone_1").unwrap();
+        // The inverse of the ego's motion: -1 m in x per frame, y and yaw unchanged.
+        let want = (12.0 - f as f64, -6.0, 30f64.to_radians());
+        assert!(
+            (b.x - want.0).abs() < 1e-9 && (b.y - want.1).abs() < 1e-9 && (b.yaw - want.2).abs() < 1e-9,
+            "frame {f}: {b:?}"
+        );
+        // Exactly like the compiled static cone.
+        let c = cone(&after, f);
+        assert!(((b.x - c.x) - (12.0 - 20.0)).abs() < 1e-9, "frame {f}");
+    }
+    // A move is a world displacement too: the cone shifts 2 m right in every frame.
+    edit_clip(&dir, &[Edit::Move { agent: "cone".into(), dx: 0.5, dy: -2.0 }], &o).unwrap();
+    let moved = read_boxes_json(&dir.join("boxes.json")).unwrap();
+    for f in 0..4 {
+        let (a, b) = (cone(&after, f), cone(&moved, f));
+        assert!((b.x - a.x - 0.5).abs() < 1e-9 && (b.y - a.y + 2.0).abs() < 1e-9, "frame {f}");
+    }
+    // Free in frames 0 and 1, under the ego from frame 2 on (4 - 2 - 0.2 < the ego's half length):
+    // refused, naming the frame; nothing written.
+    let manifest = std::fs::read(dir.join("manifest.json")).unwrap();
+    let e = edit_clip(&dir, &[ins("traffic_cone at 4,0 yaw 0")], &o).unwrap_err();
+    assert_eq!(e[0].code, "E0711");
+    assert!(e[0].message.contains("in frame 2,") && e[0].message.contains("the ego"), "{}", e[0].message);
+    assert_eq!(std::fs::read(dir.join("manifest.json")).unwrap(), manifest);
+    // With `--frames 0..2` it fits; the history records the frame the position was given in.
+    let first = ClipEdit { frames: Some("0..2".into()), ..o.clone() };
+    edit_clip(&dir, &[ins("traffic_cone at 4,0 yaw 0")], &first).unwrap();
+    let m: rocc::output::Manifest =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("manifest.json")).unwrap()).unwrap();
+    assert_eq!(
+        m.edits,
+        [
+            "insert traffic_cone at 12,-6 yaw 30deg (ego frame of frame 0)",
+            "move cone by 0.5,-2 (ego frame of frame 0)",
+            "insert traffic_cone at 4,0 yaw 0deg (ego frame of frame 0; frames 0..2)",
+        ]
+    );
 }
 
 #[test]

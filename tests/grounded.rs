@@ -425,6 +425,78 @@ fn checkpoints_round_trip_and_bad_weights_are_diagnosed() {
 }
 
 #[test]
+fn rocc_edit_reruns_the_learned_backend_of_a_grounded_clip() {
+    use rocc::compile::{OccBackend, Options, Stage, batch};
+    use rocc::edit::{ClipEdit, Edit, edit_clip, read_boxes_json};
+    let cfg = tiny();
+    let device = cpu();
+    device.seed(11);
+    let dir = tempdir("edit");
+    let bpk = dir.join("generator.bpk");
+    Generator::new(&cfg, &device).save_file(&bpk).unwrap();
+    std::fs::write(dir.join("generator.ron"), cfg.to_ron()).unwrap();
+    let g = std::sync::Arc::new(Grounded::load(&bpk, None).unwrap());
+    let scn = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/replayed_cut_in.scn");
+    let out = dir.join("out");
+    let o = Options {
+        stage: Stage::Occ,
+        frames: Some("0".into()),
+        previews: false,
+        backend: OccBackend::Grounded(g.clone()),
+        ..Options::default()
+    };
+    assert!(batch::run(std::slice::from_ref(&scn), &out, &o, true).failures.is_empty());
+    let clip = out.join("replayed_cut_in/ego");
+    let manifest = || -> rocc::output::Manifest {
+        serde_json::from_str(&std::fs::read_to_string(clip.join("manifest.json")).unwrap()).unwrap()
+    };
+    let m = manifest();
+    assert!(m.backend.starts_with("grounded-tiny-"), "{}", m.backend);
+    assert_eq!(m.weights.as_deref(), Some(bpk.to_str().unwrap()));
+    assert_eq!(m.grounded_config.as_deref(), Some(dir.join("generator.ron").to_str().unwrap()));
+    let occ = || rocc::eval::occ::read_occ(&clip.join("occ/000000.npy")).unwrap();
+    let before = occ();
+
+    // The edit reruns the same model on the edited boxes and the re-rasterised BEV.
+    let ce = ClipEdit { scenario: Some(scn.clone()), ..Default::default() };
+    let ins = Edit::Insert { kind: "sedan".into(), x: 20.0, y: 0.0, yaw: 0.0 };
+    edit_clip(&clip, std::slice::from_ref(&ins), &ce).expect("a grounded clip is editable");
+    let boxes = &read_boxes_json(&clip.join("boxes.json")).unwrap()[0].boxes;
+    assert!(boxes.iter().any(|b| b.agent == "inserted_sedan_1"));
+    let bev = rocc::output::read_npz(&rocc::output::bev_frame_path(&clip, 0)).unwrap();
+    let gboxes: Vec<GBox> = boxes.iter().map(GBox::from_ego).collect();
+    let after = occ();
+    assert_eq!(after, g.predict(&gboxes, &bev.masks, &bev.aux), "not the grounded model's output");
+    assert_ne!(after, before, "the inserted car changed nothing");
+    let m2 = manifest();
+    assert_eq!((m2.backend.as_str(), m2.weights.as_deref()), (m.backend.as_str(), m.weights.as_deref()));
+    assert_eq!(m2.edits.len(), 1);
+
+    // Weights gone: a coded error naming the path; nothing written.
+    let moved = dir.join("moved");
+    std::fs::create_dir_all(&moved).unwrap();
+    std::fs::rename(&bpk, moved.join("g.bpk")).unwrap();
+    let written = std::fs::read(clip.join("manifest.json")).unwrap();
+    let del = Edit::Delete { agent: "inserted_sedan_1".into() };
+    let e = edit_clip(&clip, std::slice::from_ref(&del), &ce).unwrap_err();
+    assert_eq!(e[0].code, "E0901");
+    assert!(e[0].message.contains(bpk.to_str().unwrap()), "{}", e[0].message);
+    assert_eq!(std::fs::read(clip.join("manifest.json")).unwrap(), written);
+    // Other weights (another seed) are refused: they would mix two models in one clip.
+    std::fs::write(moved.join("g.ron"), cfg.to_ron()).unwrap();
+    device.seed(12);
+    Generator::new(&cfg, &device).save_file(moved.join("other.bpk")).unwrap();
+    std::fs::write(moved.join("other.ron"), cfg.to_ron()).unwrap();
+    let other = ClipEdit { weights: Some(moved.join("other.bpk")), ..ce.clone() };
+    assert_eq!(edit_clip(&clip, std::slice::from_ref(&del), &other).unwrap_err()[0].code, "E0712");
+    // The same weights elsewhere, given with `--weights`: accepted, and the manifest follows them.
+    let same = ClipEdit { weights: Some(moved.join("g.bpk")), ..ce.clone() };
+    edit_clip(&clip, &[del], &same).unwrap();
+    assert_eq!(occ(), before, "deleting the insertion restores the model's output");
+    assert_eq!(manifest().weights.as_deref(), Some(moved.join("g.bpk").to_str().unwrap()));
+}
+
+#[test]
 fn bundled_configs_are_valid() {
     let paper = GroundedConfig::from_ron(include_str!("../configs/paper.ron")).unwrap();
     assert_eq!((paper.latents, paper.latent_dim, paper.max_foreground), (4096, 128, 512));

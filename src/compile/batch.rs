@@ -137,6 +137,32 @@ fn render(p: &Prepared, ego: usize, out: &Path, opts: &Options, progress: &Progr
         frames: &p.frames,
     };
     let dir = clip_dir(out, &p.front, ego);
+    if !opts.force
+        && let Some(m) = super::edited_clip(&dir)
+    {
+        for _ in &p.frames {
+            progress.inc(1);
+        }
+        progress.line(&format!("edited    {} (left alone)", dir.display()));
+        let n = m.edits.len();
+        return Err(Failure {
+            input: p.input.clone(),
+            diags: vec![
+                Diagnostic::error(
+                    "E0403",
+                    format!(
+                        "`{}` holds a clip changed by `rocc edit` ({n} edit{}: {}); recompiling would discard {}",
+                        dir.display(),
+                        if n == 1 { "" } else { "s" },
+                        m.edits.join("; "),
+                        if n == 1 { "it" } else { "them" }
+                    ),
+                )
+                .help("pass `--force` to recompile it (the edits are lost), or compile into another `-o` directory"),
+            ],
+            sources: SourceMap::default(),
+        });
+    }
     let r = compile_clip(&ci, opts, &dir, &|| progress.inc(1));
     match &r {
         Ok(c) if c.resumed => progress.line(&format!("complete  {} (kept)", dir.display())),

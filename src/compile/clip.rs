@@ -134,6 +134,13 @@ fn expected_manifest(ci: &ClipInput, opts: &Options, backend: &str) -> Manifest 
     m.stage = opts.stage.name().to_string();
     m.frames = ci.frames.to_vec();
     m.static_bev = opts.static_bev.as_ref().map(|b| b.source.clone());
+    if opts.stage >= Stage::Occ
+        && let super::OccBackend::Grounded(g) = &opts.backend
+        && let Some((w, c)) = g.files()
+    {
+        m.weights = Some(w.display().to_string());
+        m.grounded_config = Some(c.display().to_string());
+    }
     m.build_key = build_key(ci.sources, (opts.stage >= Stage::Lidar).then_some(&opts.rig));
     m
 }
@@ -180,6 +187,14 @@ fn complete(dir: &Path, want: &Manifest) -> Option<Manifest> {
         .iter()
         .all(|f| std::fs::metadata(dir.join(&f.path)).is_ok_and(|md| md.is_file() && md.len() == f.bytes));
     (same && files_ok).then_some(m)
+}
+
+/// The manifest of a clip in `dir` that `rocc edit` has changed since it was compiled, if any:
+/// `rocc compile` does not overwrite it without `--force`.
+pub fn edited_clip(dir: &Path) -> Option<Manifest> {
+    let text = std::fs::read_to_string(dir.join("manifest.json")).ok()?;
+    let m: Manifest = serde_json::from_str(&text).ok()?;
+    (!m.edits.is_empty()).then_some(m)
 }
 
 /// Every box of frame `f` in the ego's frame, the ego itself excluded (nuPlan's annotations never

@@ -12,7 +12,8 @@ pub mod batch;
 mod clip;
 
 pub use clip::{
-    ClipInput, ClipReport, FrameSource, Render, clip_dir, clip_seed, compile_clip, frame_boxes, render_clip,
+    ClipInput, ClipReport, FrameSource, Render, clip_dir, clip_seed, compile_clip, edited_clip, frame_boxes,
+    render_clip,
 };
 
 use crate::backend::Mode;

@@ -336,6 +336,20 @@ each other: job K compiles every N-th file starting at the K-th.\n
     $ rocc compile scenarios/ -o out --shard 3       // error: expected K/N",
     },
     Code {
+        code: "E0403",
+        title: "output directory holds an edited clip",
+        explanation: "`rocc edit` changed this clip after it was compiled (its manifest.json lists the edits).\n\
+Compiling the same scenario into the same directory would rewrite the clip from the scenario and\n\
+lose those edits, so `rocc compile` leaves it alone and reports this error; the other clips are\n\
+still compiled. Pass `--force` to recompile it anyway (the edits are discarded), compile into\n\
+another `-o` directory, or, to keep an edit for good, apply it to the `.scn` (`rocc edit\n\
+FILE.scn ... -o edited.scn`) and compile that.\n
+    $ rocc compile scenarios/replayed_cut_in.scn -o out
+    $ rocc edit out/replayed_cut_in/ego --delete cutter
+    $ rocc compile scenarios/replayed_cut_in.scn -o out           // error: the clip was edited
+    $ rocc compile scenarios/replayed_cut_in.scn -o out --force   // recompiles, edits discarded",
+    },
+    Code {
         code: "E0701",
         title: "unreadable occupancy frame",
         explanation: "`rocc eval occ` reads occupancy frames as a dense `.npy` of shape (400, 400, 32) (rocc's\n\
@@ -348,15 +362,17 @@ is (N, 4) rows of [i, j, k, label] (unlisted voxels are free). Labels are 0..=8 
         title: "prediction and ground-truth sets do not match",
         explanation: "`--pred` and `--gt` must be directories. Occupancy frames are paired by relative path\n\
 (`.npy` and `.npz` may stand in for each other); every ground-truth frame needs a prediction.\n\
-LiDAR sets are compared as sets and need at least one cloud each.\n
+LiDAR sets are compared as sets and need at least one cloud each: a clip compiled with\n\
+`--stage occ` has none (its `occ/*.npy` are not clouds).\n
     $ rocc eval occ --pred pred/ --gt gt/    // error if gt/scene/0007.npy has no pred/scene/0007.np[yz]
     $ rocc eval occ --pred pred.npy --gt gt/  // error: --pred must be a directory",
     },
     Code {
         code: "E0704",
         title: "unreadable point cloud",
-        explanation: "`rocc eval lidar` reads KITTI-style `.bin` (float32 x, y, z, intensity per point) or a\n\
-`.npy` of shape (N, >= 3), float32 or float64.\n
+        explanation: "`rocc eval lidar` reads KITTI-style `.bin` (float32 x, y, z, intensity per point), PCD v0.7\n\
+(`DATA ascii` or `binary`, float fields x, y, z) or a `.npy` of shape (N, >= 3), float32 or\n\
+float64. In a compiled clip directory only `lidar/` is read.\n
     $ rocc eval lidar --pred pred/ --gt gt/  // error if a .bin length is not a multiple of 16 bytes",
     },
     Code {
@@ -425,7 +441,9 @@ crosswalks, pedestrians on walkways, crosswalks or the shoulder; static objects 
         explanation: "`rocc edit DIR` needs a directory written by `rocc compile` (manifest.json, boxes.json,\n\
 bev/). The later stages need the scene the clip came from (ego poses, background), so the\n\
 scenario named in the manifest must be readable and unchanged (same hash); pass `--scenario\n\
-FILE` when it moved. A clip compiled with a custom rig needs the same `--rig`.\n
+FILE` when it moved. A clip compiled with a custom rig needs the same `--rig`. A clip of the\n\
+learned backend is rerun with the weights its manifest records (or `--weights FILE`), which must\n\
+be the same weights (the hash in the manifest's `backend`).\n
     $ rocc edit out/cut_in/ego/bev --delete cutter   // error: no manifest.json in bev/",
     },
     Code {
@@ -469,8 +487,9 @@ boxes in one frame (the second dropped). That frame's BEV footprint differs from
     --insert KIND at X,Y [yaw A]    A in degrees, or with `rad`
     --delete AGENT
     --move AGENT by DX,DY\n\n\
-Coordinates are metres: in each edited frame's ego frame (x forward, y left) for a compiled\n\
-clip, in the world frame for a `.scn`.",
+Coordinates are metres: for a compiled clip, in the ego frame (x forward, y left) of the first\n\
+edited frame, and the edit then stays fixed in the world in every other frame; for a `.scn`, in\n\
+the scenario's world frame.",
     },
     Code {
         code: "E0718",
@@ -807,7 +826,9 @@ exist, or `--backend grounded` was given without `--weights`. Train weights firs
     rocc train autoencoder --data corpus --config configs/cpu-small.ron --out model
     rocc train generator   --data corpus --config configs/cpu-small.ron --out model
     rocc compile FILE -o out --backend grounded --weights model/generator.bpk\n\n\
-`rocc train` writes `OUT/<stage>.bpk` and the config beside it as `OUT/<stage>.ron`.",
+`rocc train` writes `OUT/<stage>.bpk` and the config beside it as `OUT/<stage>.ron`. `rocc edit`\n\
+on a clip of the learned backend reruns it with the weights its manifest records; if they moved,\n\
+pass the same file with `--weights`.",
     },
     Code {
         code: "E0902",

@@ -186,7 +186,7 @@ pub fn validate_box(
         return Err(Diagnostic::error(
             "E0710",
             format!(
-                "{what}: a {} must stand on {need}, but ({:.2}, {:.2}) in frame {frame} is {}",
+                "{what}: a {} must stand on {need}, but ({:.2}, {:.2}) in frame {frame}'s ego frame is {}",
                 b.class.name(),
                 b.x,
                 b.y,
@@ -195,11 +195,22 @@ pub fn validate_box(
         )
         .help("pick a point on a valid surface; the BEV preview (preview/bev.png) shows the map layers"));
     }
+    no_overlap(b, others, ego_size, frame, what)
+}
+
+/// The overlap half of `validate_box`: E0711 when `b` interpenetrates another box or the ego.
+pub fn no_overlap(
+    b: &EgoBox,
+    others: &[EgoBox],
+    ego_size: [f64; 3],
+    frame: usize,
+    what: &str,
+) -> Result<(), Diagnostic> {
     if let Some(who) = overlap(b, others, ego_size) {
         return Err(Diagnostic::error(
             "E0711",
             format!(
-                "{what}: the {:.1} x {:.1} m box at ({:.2}, {:.2}) in frame {frame} overlaps {who}",
+                "{what}: in frame {frame}, the {:.1} x {:.1} m box at ({:.2}, {:.2}) (that frame's ego frame) overlaps {who}",
                 b.l, b.w, b.x, b.y
             ),
         )

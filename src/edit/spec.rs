@@ -2,8 +2,8 @@
 
 use crate::diag::Diagnostic;
 
-/// One box edit. Coordinates are metres; for a compiled clip they are in each edited frame's ego
-/// frame, for a `.scn` in its world frame.
+/// One box edit. Coordinates are metres; for a compiled clip they are in the ego frame of the
+/// first edited frame and fixed in the world from there, for a `.scn` in its world frame.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Edit {
     Insert { kind: String, x: f64, y: f64, yaw: f64 },
@@ -15,7 +15,10 @@ impl Edit {
     /// As recorded in the manifest.
     pub fn describe(&self) -> String {
         match self {
-            Edit::Insert { kind, x, y, yaw } => format!("insert {kind} at {x},{y} yaw {}deg", yaw.to_degrees()),
+            // Degrees read back from radians: rounded so `yaw 30` is recorded as 30, not 29.999999999999996.
+            Edit::Insert { kind, x, y, yaw } => {
+                format!("insert {kind} at {x},{y} yaw {}deg", (yaw.to_degrees() * 1e9).round() / 1e9)
+            }
             Edit::Delete { agent } => format!("delete {agent}"),
             Edit::Move { agent, dx, dy } => format!("move {agent} by {dx},{dy}"),
         }

@@ -130,8 +130,8 @@ pub fn mmd(pred: &[Vec<f64>], gt: &[Vec<f64>]) -> f64 {
     (mean(&x, &x) + mean(&y, &y) - 2.0 * mean(&x, &y)).max(0.0)
 }
 
-/// Read the xyz of a KITTI-style `.bin` (float32 x, y, z, intensity per point) or a `.npy` of
-/// shape (N, >= 3) (float32 or float64).
+/// Read the xyz of a KITTI-style `.bin` (float32 x, y, z, intensity per point), a `.pcd` (see
+/// `read_pcd`) or a `.npy` of shape (N, >= 3) (float32 or float64).
 pub fn read_points(path: &Path) -> Result<Vec<[f32; 3]>, String> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     match ext.as_str() {
@@ -161,7 +161,101 @@ pub fn read_points(path: &Path) -> Result<Vec<[f32; 3]>, String> {
             }
             Ok(a.outer_iter().map(|r| [r[0] as f32, r[1] as f32, r[2] as f32]).collect())
         }
-        _ => Err("not a point cloud file (expected .bin or .npy)".into()),
+        "pcd" => read_pcd(&std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?),
+        _ => Err("not a point cloud file (expected .bin, .pcd or .npy)".into()),
+    }
+}
+
+/// The xyz of a PCD v0.7 file (`DATA ascii` or `binary`; `binary_compressed` is refused) whose
+/// fields include float x, y and z.
+pub fn read_pcd(bytes: &[u8]) -> Result<Vec<[f32; 3]>, String> {
+    let mut fields: Vec<String> = Vec::new();
+    let (mut size, mut kind, mut count): (Vec<usize>, Vec<char>, Vec<usize>) = (vec![], vec![], vec![]);
+    let mut points: Option<usize> = None;
+    let mut at = 0;
+    let data = loop {
+        let end =
+            bytes[at..].iter().position(|&b| b == b'\n').map(|i| at + i).ok_or("PCD header has no `DATA` line")?;
+        let line = std::str::from_utf8(&bytes[at..end]).map_err(|_| "PCD header is not text")?.trim();
+        at = end + 1;
+        let mut w = line.split_whitespace();
+        let key = w.next().unwrap_or("");
+        let rest: Vec<&str> = w.collect();
+        let nums = |v: &[&str]| -> Result<Vec<usize>, String> {
+            v.iter().map(|x| x.parse::<usize>().map_err(|_| format!("PCD `{line}`"))).collect()
+        };
+        match key.to_ascii_uppercase().as_str() {
+            "FIELDS" => fields = rest.iter().map(|s| s.to_string()).collect(),
+            "SIZE" => size = nums(&rest)?,
+            "TYPE" => kind = rest.iter().map(|s| s.chars().next().unwrap_or('?')).collect(),
+            "COUNT" => count = nums(&rest)?,
+            "POINTS" => points = rest.first().and_then(|p| p.parse().ok()),
+            "DATA" => break rest.first().map(|s| s.to_ascii_lowercase()).unwrap_or_default(),
+            _ => {}
+        }
+    };
+    let n = fields.len();
+    if count.is_empty() {
+        count = vec![1; n];
+    }
+    if size.len() != n || kind.len() != n || count.len() != n {
+        return Err("PCD header: FIELDS, SIZE, TYPE and COUNT disagree in length".into());
+    }
+    let col = |name: &str| -> Result<usize, String> {
+        let i = fields.iter().position(|f| f == name).ok_or(format!("PCD has no `{name}` field"))?;
+        if kind[i] != 'F' || !(size[i] == 4 || size[i] == 8) {
+            return Err(format!("PCD field `{name}` is not float32 or float64"));
+        }
+        Ok(i)
+    };
+    let xyz = [col("x")?, col("y")?, col("z")?];
+    let points = points.ok_or("PCD header has no `POINTS`")?;
+    match data.as_str() {
+        "ascii" => {
+            // One value per (field, count) slot on each line.
+            let offs: Vec<usize> = (0..n).scan(0, |o, i| Some(std::mem::replace(o, *o + count[i]))).collect();
+            let text = std::str::from_utf8(&bytes[at..]).map_err(|_| "PCD ascii data is not text")?;
+            let mut out = Vec::with_capacity(points);
+            for line in text.lines().filter(|l| !l.trim().is_empty()).take(points) {
+                let v: Vec<&str> = line.split_whitespace().collect();
+                let get = |i: usize| -> Result<f32, String> {
+                    v.get(offs[i]).and_then(|s| s.parse::<f32>().ok()).ok_or(format!("PCD ascii line `{line}`"))
+                };
+                out.push([get(xyz[0])?, get(xyz[1])?, get(xyz[2])?]);
+            }
+            if out.len() != points {
+                return Err(format!("PCD says {points} points, the data holds {}", out.len()));
+            }
+            Ok(out)
+        }
+        "binary" => {
+            let offs: Vec<usize> = (0..n).scan(0, |o, i| Some(std::mem::replace(o, *o + size[i] * count[i]))).collect();
+            let stride: usize = (0..n).map(|i| size[i] * count[i]).sum();
+            let body = &bytes[at..];
+            if stride == 0 || body.len() < points * stride {
+                return Err(format!(
+                    "PCD binary data is {} bytes, {points} points need {}",
+                    body.len(),
+                    points * stride
+                ));
+            }
+            let get = |rec: &[u8], i: usize| -> f32 {
+                let o = offs[i];
+                if size[i] == 4 {
+                    f32::from_le_bytes([rec[o], rec[o + 1], rec[o + 2], rec[o + 3]])
+                } else {
+                    let mut b = [0u8; 8];
+                    b.copy_from_slice(&rec[o..o + 8]);
+                    f64::from_le_bytes(b) as f32
+                }
+            };
+            Ok(body
+                .chunks_exact(stride)
+                .take(points)
+                .map(|r| [get(r, xyz[0]), get(r, xyz[1]), get(r, xyz[2])])
+                .collect())
+        }
+        other => Err(format!("PCD `DATA {other}` is not supported (ascii or binary)")),
     }
 }
 

@@ -104,32 +104,71 @@ pub fn score_occ_dirs(pred: &Path, gt: &Path) -> Result<OccScores, Vec<Diagnosti
     if errs.is_empty() { Ok(scorer.scores()) } else { Err(errs) }
 }
 
-/// MMD and JSD between the LiDAR sets under `pred` and `gt` (`.bin` or `.npy` clouds).
+/// The point clouds under `dir`, as paths relative to it: in a compiled clip (a directory with a
+/// `manifest.json`, at any depth) only its `lidar/` folder counts, so `occ/*.npy` and `bev/*.npz`
+/// are never read as clouds; elsewhere `.bin`, `.pcd` and `.npy` files. A frame written as both
+/// `.bin` and `.pcd` (as `rocc compile` writes it) counts once, from the `.bin`. E0703 when none.
+pub fn lidar_files(dir: &Path) -> Result<Vec<PathBuf>, Diagnostic> {
+    let files = list_files(dir, &["bin", "pcd", "npy"])?;
+    let rank = |p: &Path| match p.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("bin") => 0,
+        Some("pcd") => 1,
+        _ => 2,
+    };
+    let mut best: std::collections::BTreeMap<PathBuf, PathBuf> = std::collections::BTreeMap::new();
+    let mut clips = 0;
+    for rel in files {
+        // The innermost clip directory above the file, if any.
+        let clip = rel.ancestors().skip(1).find(|a| dir.join(a).join("manifest.json").is_file());
+        if let Some(c) = clip {
+            clips += 1;
+            if !rel.strip_prefix(c).is_ok_and(|r| r.starts_with("lidar")) {
+                continue;
+            }
+        }
+        let stem = rel.with_extension("");
+        match best.get(&stem) {
+            Some(have) if rank(have) <= rank(&rel) => {}
+            _ => {
+                best.insert(stem, rel);
+            }
+        }
+    }
+    if best.is_empty() {
+        let what = if clips > 0 || dir.join("manifest.json").is_file() {
+            "no LiDAR frames in the compiled clip(s) under"
+        } else {
+            "no `.bin`, `.pcd` or `.npy` point clouds under"
+        };
+        return Err(Diagnostic::error("E0703", format!("{what} `{}`", dir.display())).help(
+            "compile the clip with `--stage lidar` (the default), or point at a directory of `.bin` / `.pcd` / \
+             (N, >= 3) `.npy` clouds",
+        ));
+    }
+    Ok(best.into_values().collect())
+}
+
+/// MMD and JSD between the LiDAR sets under `pred` and `gt` (clip directories, or directories
+/// of `.bin`, `.pcd` or `.npy` clouds; see `lidar_files`).
 pub fn score_lidar_dirs(pred: &Path, gt: &Path, range_filter: bool) -> Result<LidarScores, Vec<Diagnostic>> {
     let mut errs = Vec::new();
     let mut maps = |dir: &Path| -> Vec<Vec<f64>> {
-        let files = match list_files(dir, &["bin", "npy"]) {
+        let files = match lidar_files(dir) {
             Ok(f) => f,
             Err(d) => {
                 errs.push(d);
                 return vec![];
             }
         };
-        if files.is_empty() {
-            errs.push(
-                Diagnostic::error("E0703", format!("no `.bin` or `.npy` point clouds under `{}`", dir.display()))
-                    .help("point at a directory of clouds, e.g. OUT/<scenario>/<ego>/lidar"),
-            );
-        }
         let mut out = Vec::new();
         for rel in files {
             let p = dir.join(&rel);
             match lidar::read_points(&p) {
                 Ok(pts) => out.push(lidar::bev_map(&pts, range_filter)),
-                Err(m) => errs.push(
-                    Diagnostic::error("E0704", format!("`{}`: {m}", p.display()))
-                        .help("clouds are KITTI `.bin` (float32 x, y, z, intensity) or (N, >= 3) float `.npy`"),
-                ),
+                Err(m) => errs.push(Diagnostic::error("E0704", format!("`{}`: {m}", p.display())).help(
+                    "clouds are KITTI `.bin` (float32 x, y, z, intensity), PCD (fields x y z; ascii or binary) \
+                     or (N, >= 3) float `.npy`",
+                )),
             }
         }
         out

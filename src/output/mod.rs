@@ -242,6 +242,12 @@ pub struct Manifest {
     /// The recorded BEV whose static layers replaced the map's (`--static-bev`), if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub static_bev: Option<String>,
+    /// With `--backend grounded`: the weights and config files as given, so `rocc edit` can
+    /// rerun the same model (the weights' hash is in `backend`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weights: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grounded_config: Option<String>,
     /// Box edits applied by `rocc edit` after compilation, in order (`insert sedan at 10,-3.5 yaw 0`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub edits: Vec<String>,
@@ -267,6 +273,8 @@ impl Manifest {
             timings: Vec::new(),
             files: Vec::new(),
             static_bev: None,
+            weights: None,
+            grounded_config: None,
             edits: Vec::new(),
         }
     }

@@ -133,6 +133,9 @@ pub struct Grounded {
     pub config: GroundedConfig,
     pub model: Generator,
     name: String,
+    /// The files it was loaded from (`None` for a model built in memory), recorded in the
+    /// manifest so `rocc edit` can rerun the same model.
+    files: Option<(PathBuf, PathBuf)>,
 }
 
 impl Grounded {
@@ -141,7 +144,8 @@ impl Grounded {
         if !weights.is_file() {
             return Err(missing_weights(weights));
         }
-        let cfg = load_config(&config_path(weights, config))?;
+        let cfg_path = config_path(weights, config);
+        let cfg = load_config(&cfg_path)?;
         let model = load_weights(Generator::new(&cfg, &cpu()), weights)?;
         let bytes = std::fs::read(weights).map_err(|e| {
             Diagnostic::error("E0901", format!("cannot read weights `{}`: {e}", weights.display()))
@@ -149,12 +153,22 @@ impl Grounded {
         })?;
         let hash = crate::output::input_hash(&bytes);
         let short = hash.rsplit(':').next().unwrap_or(&hash);
-        Ok(Grounded { name: format!("grounded-{}-{}", cfg.name, &short[..short.len().min(12)]), config: cfg, model })
+        Ok(Grounded {
+            name: format!("grounded-{}-{}", cfg.name, &short[..short.len().min(12)]),
+            config: cfg,
+            model,
+            files: Some((weights.to_path_buf(), cfg_path)),
+        })
     }
 
     /// Wrap a model in memory (tests, benchmarks).
     pub fn from_model(config: GroundedConfig, model: Generator, name: &str) -> Self {
-        Grounded { config, model, name: name.to_string() }
+        Grounded { config, model, name: name.to_string(), files: None }
+    }
+
+    /// The weights and config files it was loaded from (as given), if loaded from files.
+    pub fn files(&self) -> Option<(&Path, &Path)> {
+        self.files.as_ref().map(|(w, c)| (w.as_path(), c.as_path()))
     }
 
     /// Labels (400, 400, 32) for one frame.
