@@ -259,3 +259,44 @@ fn import_through_a_symlink_out_of_the_root_is_refused() {
     let all = render_all(&diags, &sources);
     assert!(!all.contains("secret-line"), "outside file leaked into a diagnostic: {all}");
 }
+
+/// Every (impact, point) pair: E0120 exactly for the pairs outside `points_for`, and the table
+/// `rocc explain E0120` prints lists the same points.
+#[test]
+fn impact_point_table_is_enforced_and_explained() {
+    use rocc::check::scenario::{IMPACTS, POINTS};
+    let explanation = rocc::diag::codes::lookup("E0120").expect("E0120").explanation;
+    let mut rejected = 0;
+    for (iname, imp) in IMPACTS {
+        let fits = rocc::check::points_for(imp);
+        let row = explanation
+            .lines()
+            .find(|l| l.trim_start().starts_with(&format!("impact {iname} ")))
+            .unwrap_or_else(|| panic!("no row for {iname} in E0120's table"));
+        for (pname, pt) in POINTS {
+            let listed = row.contains("any point") || row.split(['|', ' ']).any(|w| w == pname);
+            assert_eq!(listed, fits.contains(&pt), "E0120 table row `{row}` vs points_for for {pname}");
+            // The struck agent fits the impact type (a pedestrian, a static object, a car).
+            let struck = match imp {
+                rocc::check::scenario::Impact::Pedestrian => "pedestrian",
+                rocc::check::scenario::Impact::Object => "barrier",
+                _ => "sedan",
+            };
+            let text = format!(
+                "scenario t {{ duration 6 s; road straight {{ lanes 1; sidewalks on }}
+                  agent a: sedan {{ at west.in[1], 40 m before center; speed 30 km/h; goal {{ speed 30 km/h }} }}
+                  agent b: {struck} {{ at west.in[1], 10 m before center }}
+                  conflict {{ at_fault a; struck b; impact {iname}; point {pname} }} }}"
+            );
+            let mut sources = SourceMap::default();
+            let r = check::check_text("t.scn", &text, &root(), &mut sources);
+            let codes: Vec<&str> = r.as_ref().err().map(|d| d.iter().map(|d| d.code).collect()).unwrap_or_default();
+            assert_eq!(codes.contains(&"E0120"), !fits.contains(&pt), "{iname} / {pname}: {codes:?}");
+            rejected += usize::from(!fits.contains(&pt));
+            if fits.contains(&pt) {
+                assert!(r.is_ok(), "{iname} / {pname}: {codes:?}");
+            }
+        }
+    }
+    assert_eq!(rejected, 5 + 5 + 2 + 2, "rear_end and head_on reject five points, angle and sideswipe two");
+}

@@ -597,7 +597,9 @@ fn map(cx: &mut Ctx, root: &Value, path: &Path) -> Result<Crash, Vec<Diagnostic>
             let msg = format!("point_of_impact \"{poi_raw}\" names no striking part; v{af}'s front is assumed");
             cx.warn("point_of_impact", msg.clone());
             conflict_notes.push(format!("Ambiguous: {msg}."));
-            let imp = if pb == Point::Front && impact_said == Impact::HeadOn {
+            // Front to (assumed) front is a head-on whatever impact_type says: an angle crash
+            // reaches a side or a corner (E0120), and the mismatch is reported below.
+            let imp = if pb == Point::Front {
                 Impact::HeadOn
             } else if is_rear(pb) {
                 Impact::RearEnd

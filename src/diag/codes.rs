@@ -232,6 +232,34 @@ motion so that the rest of the agent (its goal, its placement) stays valid whate
     agent a: one_of [sedan, suv, van] { ... }     // fine: all vehicles",
     },
     Code {
+        code: "E0120",
+        title: "impact type and point contradict each other",
+        explanation: "`point` is the side of the struck agent that the crash hits, and the impact type says\n\
+how the two meet, so not every pair fits. The at-fault agent strikes with its front in a rear-end,\n\
+a head-on and an angle crash, and with its side in a sideswipe. The table (struck agent's sides\n\
+as DSL.md names them):\n
+    impact rear_end     point rear | rear_left | rear_right
+    impact head_on      point front | front_left | front_right
+    impact angle        point left | right | front_left | front_right | rear_left | rear_right
+    impact sideswipe    point left | right | front_left | front_right | rear_left | rear_right
+    impact pedestrian   any point
+    impact object       any point\n
+A front-to-front contact is a head-on, a front-to-rear one a rear-end; an angle or a sideswipe\n\
+reaches a side or a corner, never the middle of the front or rear face.\n
+    conflict { at_fault a; struck b; impact rear_end; point front }   // error: a rear-end hits the rear
+    conflict { at_fault a; struck b; impact rear_end; point rear }    // fine",
+    },
+    Code {
+        code: "E0121",
+        title: "agent in two conflicts",
+        explanation: "A conflict latches its pair at the frame of deepest overlap: from then on both hold their\n\
+post-impact poses. An agent can therefore take part in one conflict only, as `at_fault` or as\n\
+`struck`; a second block naming it is rejected, and both blocks are shown.\n
+    conflict { at_fault a; struck b; impact rear_end; point rear }
+    conflict { at_fault c; struck b; impact angle; point left }      // error: `b` is already struck\n\n\
+Keep one conflict per agent, or stage the second crash with another agent.",
+    },
+    Code {
         code: "E0201",
         title: "placement off a valid surface",
         explanation: "Each class has surfaces it may start on: vehicles on lanes or shoulders; pedestrians\n\
