@@ -300,3 +300,39 @@ fn impact_point_table_is_enforced_and_explained() {
     }
     assert_eq!(rejected, 5 + 5 + 2 + 2, "rear_end and head_on reject five points, angle and sideswipe two");
 }
+
+/// `rocc explain | head -1` and friends: a reader that closes its end of the pipe before rocc
+/// writes ends the command quietly (exit 0, nothing on stderr) instead of a panic about a broken
+/// pipe. The read end is closed before the spawn, so the first stdout write meets EPIPE whatever
+/// the scheduling (closing it after the spawn races a fast command that fits the pipe buffer).
+#[test]
+fn stdout_commands_exit_quietly_when_the_reader_goes_away() {
+    use std::process::{Command, Stdio};
+    let dir = std::env::temp_dir().join(format!("rocc-pipe-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let messy = dir.join("messy.scn");
+    std::fs::write(&messy, "scenario m { duration 4 s\nroad straight { lanes 1 } }\n").expect("write");
+    let bad = root().join("../shared/examples/invalid/unknown_agent.scn");
+    let cases: Vec<Vec<String>> = vec![
+        vec!["explain".into()],
+        vec!["explain".into(), "E0120".into()],
+        vec!["grammar".into()],
+        vec!["check".into(), "--message-format".into(), "json".into(), bad.display().to_string()],
+        vec!["fmt".into(), "--check".into(), messy.display().to_string()],
+    ];
+    for args in cases {
+        let (reader, writer) = std::io::pipe().expect("pipe");
+        drop(reader);
+        let out = Command::new(env!("CARGO_BIN_EXE_rocc"))
+            .args(&args)
+            .stdout(writer)
+            .stderr(Stdio::piped())
+            .output()
+            .expect("run rocc");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!stderr.contains("panicked"), "rocc {args:?} panicked: {stderr}");
+        assert_eq!(out.status.code(), Some(0), "rocc {args:?}: {stderr}");
+        assert!(stderr.is_empty(), "rocc {args:?} wrote to stderr: {stderr}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
