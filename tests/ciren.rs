@@ -345,6 +345,31 @@ fn the_batch_goes_on_past_bad_cases_and_writes_nothing_for_them() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// A CIREN case and the SAFE extraction of the same case go to one directory as two files with
+/// two scenario names (`117021.scn`: `ciren_117021`, `safe_117021.scn`: `safe_117021`).
+#[test]
+fn a_case_and_its_safe_extraction_import_side_by_side() {
+    let out = tmp("both");
+    for (sub, input) in [("import", "../shared/ciren/117021"), ("import-safe", "../shared/safe/117021.json")] {
+        let st = std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
+            .args(["ciren", sub, input, "-o"])
+            .arg(&out)
+            .output()
+            .expect("run rocc");
+        assert!(st.status.success(), "{sub}: {}", String::from_utf8_lossy(&st.stderr));
+    }
+    let mut names: Vec<String> =
+        std::fs::read_dir(&out).expect("out").filter_map(|e| e.ok()?.file_name().into_string().ok()).collect();
+    names.sort();
+    assert_eq!(names, ["117021.scn", "safe_117021.scn"]);
+    let record = std::fs::read_to_string(out.join("117021.scn")).expect("record");
+    let safe = std::fs::read_to_string(out.join("safe_117021.scn")).expect("safe");
+    assert!(record.contains("scenario ciren_117021 {"), "{record}");
+    assert!(safe.contains("scenario safe_117021 {"), "{safe}");
+    assert!(record.contains("rocc ciren import`") && safe.contains("rocc ciren import-safe`"));
+    let _ = std::fs::remove_dir_all(&out);
+}
+
 #[test]
 fn generated_files_check_format_and_are_deterministic() {
     let out = tmp("det");
@@ -356,10 +381,10 @@ fn generated_files_check_format_and_are_deterministic() {
             .expect("run rocc")
     };
     assert!(run().success());
-    let first = std::fs::read_to_string(out.join("117330.scn")).expect("written");
+    let first = std::fs::read_to_string(out.join("safe_117330.scn")).expect("written");
     assert!(run().success());
-    assert_eq!(first, std::fs::read_to_string(out.join("117330.scn")).expect("written"));
-    let files = [out.join("117330.scn"), out.join("121520.scn")];
+    assert_eq!(first, std::fs::read_to_string(out.join("safe_117330.scn")).expect("written"));
+    let files = [out.join("safe_117330.scn"), out.join("safe_121520.scn")];
     let check =
         std::process::Command::new(env!("CARGO_BIN_EXE_rocc")).arg("check").args(&files).status().expect("check");
     assert!(check.success());

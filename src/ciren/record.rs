@@ -827,6 +827,7 @@ fn two_vehicles(
     };
     Ok(Crash {
         id: cx.case.id.clone(),
+        source: super::crash::Source::Record,
         header,
         road: RoadDesc {
             template,
@@ -963,6 +964,7 @@ fn single_vehicle(
     };
     Ok(Crash {
         id: cx.case.id.clone(),
+        source: super::crash::Source::Record,
         header,
         road: RoadDesc {
             template,

@@ -815,6 +815,7 @@ fn map(cx: &mut Ctx, root: &Value, path: &Path) -> Result<Crash, Vec<Diagnostic>
     road_notes.push(limit_note);
     Ok(Crash {
         id: cx.id.clone(),
+        source: super::crash::Source::Safe,
         header,
         road: RoadDesc {
             template,
