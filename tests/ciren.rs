@@ -4,10 +4,12 @@
 //! (malformed, missing, unknown, non-UTF-8, huge) give diagnostics and write nothing while the
 //! rest of the batch goes on.
 
-use glam::DVec2;
+#[path = "support/contact.rs"]
+mod contact;
+
+use contact::{measured_contact, sector};
 use rocc::check::scenario::Point;
 use rocc::ciren::{self, Imported};
-use rocc::geom::Obb;
 use rocc::rollout::Tracks;
 use rocc::source::SourceMap;
 use std::path::{Path, PathBuf};
@@ -85,62 +87,6 @@ fn every_shared_safe_extraction_imports_as_snapshotted() {
 }
 
 // ------------------------------------------------------------------ contact sides
-
-fn obb(t: &Tracks, a: usize, f: usize) -> Obb {
-    let p = t.poses[a][f];
-    let s = t.agents[a].size;
-    Obb { center: DVec2::new(p.x, p.y), yaw: p.yaw, length: s[0], width: s[1] }
-}
-
-/// The contact measured by sampling, as tests/rollout.rs does: the mean of at-fault box points
-/// inside the struck box, in the struck frame and in the at-fault frame.
-fn measured_contact(t: &Tracks, af: usize, st: usize, f: usize) -> (DVec2, DVec2) {
-    let (a, b) = (obb(t, af, f), obb(t, st, f));
-    let (mut sum, mut n) = (DVec2::ZERO, 0);
-    for i in 0..=80 {
-        for j in 0..=40 {
-            let q = DVec2::new((i as f64 / 80.0 - 0.5) * a.length, (j as f64 / 40.0 - 0.5) * a.width);
-            let w = a.center + q.rotate(DVec2::from_angle(a.yaw));
-            let l = (w - b.center).rotate(DVec2::from_angle(-b.yaw));
-            if l.x.abs() < b.length / 2.0 && l.y.abs() < b.width / 2.0 {
-                sum += w;
-                n += 1;
-            }
-        }
-    }
-    assert!(n > 0, "no contact at frame {f}");
-    let w = sum / n as f64;
-    ((w - b.center).rotate(DVec2::from_angle(-b.yaw)), (w - a.center).rotate(DVec2::from_angle(-a.yaw)))
-}
-
-/// Thirds of each face, as in the language reference: outer thirds are corners.
-fn sector(p: DVec2, l: f64, w: f64) -> Point {
-    let (u, v) = (p.x / (l / 2.0), p.y / (w / 2.0));
-    let lon = if u > 1.0 / 3.0 {
-        1
-    } else if u < -1.0 / 3.0 {
-        -1
-    } else {
-        0
-    };
-    let lat = if v > 1.0 / 3.0 {
-        1
-    } else if v < -1.0 / 3.0 {
-        -1
-    } else {
-        0
-    };
-    match (lon, lat) {
-        (1, 1) => Point::FrontLeft,
-        (1, -1) => Point::FrontRight,
-        (-1, 1) => Point::RearLeft,
-        (-1, -1) => Point::RearRight,
-        (1, _) => Point::Front,
-        (-1, _) => Point::Rear,
-        (_, 1) => Point::Left,
-        _ => Point::Right,
-    }
-}
 
 /// The damaged part of a vehicle as the source states it.
 #[derive(Clone, Copy, Debug, PartialEq)]

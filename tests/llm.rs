@@ -482,7 +482,11 @@ fn cli_api_key_comes_from_the_flag_then_the_environment() {
     let dir = std::env::temp_dir().join(format!("rocc-llm-key-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let cases: [(&[&str], &[(&str, &str)], Option<&str>); 5] = [
-        (&["--api-key", "sk-flag"], &[("ROCC_LLM_API_KEY", "sk-rocc"), ("OPENAI_API_KEY", "sk-openai")], Some("sk-flag")),
+        (
+            &["--api-key", "sk-flag"],
+            &[("ROCC_LLM_API_KEY", "sk-rocc"), ("OPENAI_API_KEY", "sk-openai")],
+            Some("sk-flag"),
+        ),
         (&[], &[("ROCC_LLM_API_KEY", "sk-rocc"), ("OPENAI_API_KEY", "sk-openai")], Some("sk-rocc")),
         (&[], &[("OPENAI_API_KEY", "sk-openai")], Some("sk-openai")),
         (&[], &[("ROCC_LLM_API_KEY", ""), ("OPENAI_API_KEY", "")], None),

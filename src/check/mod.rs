@@ -1422,8 +1422,7 @@ impl Checker {
         if let (Some(imp), Some(pt), Some(ii), Some(pi)) = (impact, point, impact_i, point_i) {
             let fits = points_for(imp);
             if !fits.contains(&pt) {
-                let names: Vec<&str> =
-                    POINTS.iter().filter(|(_, p)| fits.contains(p)).map(|(n, _)| *n).collect();
+                let names: Vec<&str> = POINTS.iter().filter(|(_, p)| fits.contains(p)).map(|(n, _)| *n).collect();
                 let why = match imp {
                     Impact::RearEnd => "a rear-end strikes the struck agent's rear",
                     Impact::HeadOn => "a head-on meets the struck agent's front",

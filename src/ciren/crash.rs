@@ -117,6 +117,29 @@ pub enum Manoeuvre {
     Stopped,
 }
 
+/// The manoeuvre as the comments of both importers name it.
+pub fn man_word(m: Manoeuvre) -> &'static str {
+    match m {
+        Manoeuvre::Straight => "straight on",
+        Manoeuvre::TurnLeft => "turn left",
+        Manoeuvre::TurnRight => "turn right",
+        Manoeuvre::ChangeLaneLeft => "change lane left",
+        Manoeuvre::ChangeLaneRight => "change lane right",
+        Manoeuvre::Merge => "merge from the ramp",
+        Manoeuvre::Stopped => "stopped",
+    }
+}
+
+/// A T-junction's stem (rotated to `south`) has no straight on: a vehicle going straight there
+/// turns right, said in its notes.
+pub fn stem_turn(template: Template, arm: &str, man: Manoeuvre, notes: &mut Vec<String>) -> Manoeuvre {
+    if template == Template::TJunction && arm == "south" && man == Manoeuvre::Straight {
+        notes.push("no straight on from a T's stem: turns right".into());
+        return Manoeuvre::TurnRight;
+    }
+    man
+}
+
 /// Where a vehicle starts, in rocc's arms: `arm.in[lane]`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct VehicleDesc {
