@@ -336,3 +336,64 @@ fn stdout_commands_exit_quietly_when_the_reader_goes_away() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `stop behind NAME` (E0206): leaders that are ahead, or that enter the route ahead, pass;
+/// leaders behind, beside or across do not. Judged by the place pass on the placed poses.
+#[test]
+fn stop_behind_needs_a_leader_ahead_on_the_route() {
+    let front_codes = |body: &str| -> Vec<&'static str> {
+        let text = format!("scenario t {{ duration 4 s\n{body}\n}}");
+        let mut sources = SourceMap::default();
+        let s = check::check_text("t.scn", &text, &root(), &mut sources)
+            .unwrap_or_else(|d| panic!("{body}: {}", render_all(&d, &sources)));
+        rocc::compile::front(s, None).err().map(|d| d.iter().map(|d| d.code).collect()).unwrap_or_default()
+    };
+    let ok = [
+        // Ahead in the lane, at the lane edge (a cyclist with an offset), ahead past the junction.
+        "road straight { lanes 1 }
+         agent a: sedan { at west.in[1], 30 m before center; speed 20 km/h; goal { stop behind b } }
+         agent b: bicycle { at west.in[1], 10 m before center offset 1.2 m right; speed 10 km/h }",
+        "road four_way { lanes 1 }
+         agent a: sedan { at south.in[1], 20 m before stop_line; speed 20 km/h; goal { turn straight; stop behind b } }
+         agent b: sedan { at north.out[1], 10 m after junction; speed 10 km/h }",
+        // Joins ahead: a left turn from the west into a's exit lane; a merge from the ramp; a
+        // lane change into a's lane; a pedestrian crossing in front.
+        "road four_way { lanes 1 }
+         agent a: sedan { at south.in[1], 30 m before stop_line; speed 20 km/h; goal { turn straight; stop behind b } }
+         agent b: sedan { at west.in[1], 5 m before stop_line; speed 15 km/h; goal { turn left } }",
+        "road merge { lanes 2 }
+         agent a: sedan { at main.in[2], 60 m before center; speed 20 km/h; goal { stop behind b } }
+         agent b: sedan { at ramp.in[1], 20 m before center; speed 20 km/h }",
+        "road straight { lanes 2 }
+         agent a: sedan { at west.in[1], 40 m before center; speed 20 km/h; goal { stop behind b } }
+         agent b: sedan { at west.in[2], 20 m before center; speed 15 km/h; goal { lateral change_lane left } }",
+        "road straight { lanes 1; sidewalks on }
+         agent a: sedan { at west.in[1], 40 m before center; speed 20 km/h; goal { stop behind p } }
+         agent p: pedestrian { at sidewalk(west.in), 10 m before center; goal { speed 1.4 m/s; lateral cross } }",
+    ];
+    for body in ok {
+        assert_eq!(front_codes(body), Vec::<&str>::new(), "{body}");
+    }
+    let bad = [
+        // Behind; in the next lane; the other direction; crossing the junction; a static cone
+        // on the shoulder beside the lane.
+        "road straight { lanes 1 }
+         agent a: sedan { at west.in[1], 10 m before center; speed 20 km/h; goal { stop behind b } }
+         agent b: sedan { at west.in[1], 30 m before center; speed 20 km/h }",
+        "road straight { lanes 2 }
+         agent a: sedan { at west.in[1], 40 m before center; speed 20 km/h; goal { stop behind b } }
+         agent b: sedan { at west.in[2], 20 m before center; speed 15 km/h }",
+        "road straight { lanes 1 }
+         agent a: sedan { at west.in[1], 40 m before center; speed 20 km/h; goal { stop behind b } }
+         agent b: sedan { at east.in[1], 20 m before center; speed 15 km/h }",
+        "road four_way { lanes 1 }
+         agent a: sedan { at south.in[1], 20 m before stop_line; speed 20 km/h; goal { turn straight; stop behind b } }
+         agent b: sedan { at east.in[1], 5 m before stop_line; speed 15 km/h; goal { turn straight } }",
+        "road straight { lanes 1; shoulder 3 m }
+         agent a: sedan { at west.in[1], 40 m before center; speed 20 km/h; goal { stop behind c } }
+         object c: traffic_cone { at west.in[1], 20 m before center offset 3 m right }",
+    ];
+    for body in bad {
+        assert_eq!(front_codes(body), ["E0206"], "{body}");
+    }
+}

@@ -139,7 +139,14 @@ struct Spec {
 const CAR: [f64; 3] = [4.6, 1.85, 1.5];
 
 fn goal() -> Goal<f64> {
-    Goal { speed: None, lateral: Lateral::HoldLane, stop: None, turn: None, start_after: 0.0 }
+    Goal {
+        speed: None,
+        lateral: Lateral::HoldLane,
+        stop: None,
+        turn: None,
+        start_after: 0.0,
+        stop_span: Default::default(),
+    }
 }
 
 fn car(name: &'static str, pose: Pose, speed: f64, g: Option<Goal<f64>>) -> Spec {

@@ -1066,7 +1066,14 @@ impl Checker {
         order: &[&str],
         me: &ast::Ident,
     ) -> Option<Option<Goal>> {
-        let mut out = Goal { speed: None, lateral: Lateral::HoldLane, stop: None, turn: None, start_after: 0.0 };
+        let mut out = Goal {
+            speed: None,
+            lateral: Lateral::HoldLane,
+            stop: None,
+            turn: None,
+            start_after: 0.0,
+            stop_span: Span::default(),
+        };
         let mut ok = true;
         let mut seen: BTreeMap<&str, Span> = BTreeMap::new();
         let walker = motion == Motion::Holonomic;
@@ -1237,7 +1244,10 @@ impl Checker {
                         }
                     };
                     match s {
-                        Some(s) => out.stop = Some(s),
+                        Some(s) => {
+                            out.stop = Some(s);
+                            out.stop_span = *span;
+                        }
                         None => ok = false,
                     }
                 }

@@ -311,6 +311,23 @@ from the clip; instead `rocc check` and `rocc compile` report it at the conflict
 Start the pair closer, give them speeds that bring them together by then, or move `at` later.",
     },
     Code {
+        code: "E0206",
+        title: "`stop behind` names an agent that is not ahead",
+        explanation: "`stop behind NAME` queues behind a leader, so NAME must be ahead of the agent on its route\n\
+(its lane, continued through the junction by its `turn`, or straight on; an agent off the lanes\n\
+goes along its heading). Judged on the placed poses, NAME qualifies when its centre is further\n\
+along that route and either inside the route's corridor (half the lane width plus half its own\n\
+width: a cyclist at the lane edge counts, a car in the next lane does not), or it will enter the\n\
+corridor ahead: a walker or animal with `lateral cross`, a vehicle with `change_lane` toward it,\n\
+or a vehicle whose own route merges into it heading the same way (a ramp, a turn into the exit\n\
+lane). A leader behind the agent, or on another road or lane with no such relation, would be\n\
+ignored by the controller, so it is an error. A replayed track is not judged.\n
+    agent a: sedan { at west.in[1], 30 m before center; goal { stop behind b } }
+    agent b: sedan { at west.in[1], 50 m before center }     // error: b is behind a
+    agent b: sedan { at east.in[1], 10 m before center }     // error: the other direction
+    agent b: sedan { at west.in[1], 10 m before center }     // fine: ahead on a's lane",
+    },
+    Code {
         code: "E0301",
         title: "unknown ego",
         explanation: "`rocc compile --ego NAME` names an agent the scenario does not declare, or one that cannot\n\
