@@ -481,7 +481,9 @@ fn the_api_key_header_is_sent_only_when_a_key_is_given() {
 fn cli_api_key_comes_from_the_flag_then_the_environment() {
     let dir = std::env::temp_dir().join(format!("rocc-llm-key-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let cases: [(&[&str], &[(&str, &str)], Option<&str>); 5] = [
+    // (flags, environment, the key the header must carry)
+    type Case<'a> = (&'a [&'a str], &'a [(&'a str, &'a str)], Option<&'a str>);
+    let cases: [Case; 5] = [
         (
             &["--api-key", "sk-flag"],
             &[("ROCC_LLM_API_KEY", "sk-rocc"), ("OPENAI_API_KEY", "sk-openai")],
