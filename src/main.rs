@@ -9,6 +9,33 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+/// Write to stdout through a locked handle. A reader that has gone away (`rocc explain | head`)
+/// ends the command quietly with success, as `cat` would; any other write failure is reported
+/// and ends it with failure. `println!` would panic on either.
+macro_rules! out {
+    ($($arg:tt)*) => {
+        stdout_write(format_args!($($arg)*))
+    };
+}
+
+macro_rules! outln {
+    ($($arg:tt)*) => {
+        stdout_write(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
+fn stdout_write(args: std::fmt::Arguments) {
+    use std::io::Write;
+    let mut lock = std::io::stdout().lock();
+    if let Err(e) = lock.write_fmt(args).and_then(|()| lock.flush()) {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        eprintln!("error[E0401]: cannot write to stdout: {e}");
+        std::process::exit(1);
+    }
+}
+
 #[derive(Parser)]
 #[command(name = "rocc", version, about = "Compile driving-scenario files (.scn) to BEV, occupancy and LiDAR")]
 struct Cli {
@@ -563,7 +590,7 @@ fn main() -> ExitCode {
             text(&sentence, &out, args)
         }
         Cmd::Grammar { format } => {
-            print!(
+            out!(
                 "{}",
                 rocc::grammar::export(match format {
                     GrammarFormat::Gbnf => rocc::grammar::Format::Gbnf,
@@ -582,7 +609,7 @@ fn print_diags(diags: &[Diagnostic], sources: &SourceMap, format: MessageFormat)
             MessageFormat::Json => {
                 let mut v = d.to_json(sources);
                 v["type"] = "diagnostic".into();
-                println!("{v}");
+                outln!("{v}");
             }
             MessageFormat::Human if std::io::stderr().is_terminal() => eprintln!("{:?}", d.to_report(sources)),
             MessageFormat::Human => eprint!("{}", d.render_plain(sources)),
@@ -604,13 +631,13 @@ fn check(files: &[PathBuf], format: MessageFormat) -> ExitCode {
                     .count();
                 let egos: Vec<&str> = s.egos.iter().map(|i| s.agents[*i].name.as_str()).collect();
                 match format {
-                    MessageFormat::Json => println!(
+                    MessageFormat::Json => outln!(
                         "{}",
                         serde_json::json!({"type": "summary", "file": f.display().to_string(), "ok": true,
                             "scenario": s.name, "road": s.road.template.name(), "agents": s.agents.len(),
                             "movers": movers, "egos": egos, "frames": s.frame_count()})
                     ),
-                    MessageFormat::Human => println!(
+                    MessageFormat::Human => outln!(
                         "ok  {}: scenario `{}` on {} road, {} agents ({} moving), egos [{}], {} frames",
                         f.display(),
                         s.name,
@@ -667,13 +694,13 @@ fn fmt(files: &[PathBuf], check_only: bool) -> ExitCode {
             continue;
         }
         if check_only {
-            println!("would reformat {}", f.display());
+            outln!("would reformat {}", f.display());
             bad += 1;
         } else if let Err(e) = write_atomic(f, formatted.as_bytes()) {
             eprintln!("error[E0401]: cannot write {}: {e}", f.display());
             bad += 1;
         } else {
-            println!("formatted {}", f.display());
+            outln!("formatted {}", f.display());
         }
     }
     if bad > 0 { ExitCode::FAILURE } else { ExitCode::SUCCESS }
@@ -1187,13 +1214,13 @@ fn explain(code: Option<&str>) -> ExitCode {
     match code {
         None => {
             for c in codes::CODES {
-                println!("{}  {}", c.code, c.title);
+                outln!("{}  {}", c.code, c.title);
             }
             ExitCode::SUCCESS
         }
         Some(code) => match codes::lookup(code) {
             Some(c) => {
-                println!("{}: {}\n\n{}", c.code, c.title, c.explanation);
+                outln!("{}: {}\n\n{}", c.code, c.title, c.explanation);
                 ExitCode::SUCCESS
             }
             None => {
@@ -1405,11 +1432,11 @@ fn eval(what: EvalCmd) -> ExitCode {
     match what {
         EvalCmd::Occ { pred, gt, json } => match rocc::eval::score_occ_dirs(&pred, &gt) {
             Ok(s) if json => {
-                println!("{}", serde_json::to_string_pretty(&s).expect("scores are plain numbers"));
+                outln!("{}", serde_json::to_string_pretty(&s).expect("scores are plain numbers"));
                 ExitCode::SUCCESS
             }
             Ok(s) => {
-                print!("{}", s.table());
+                out!("{}", s.table());
                 ExitCode::SUCCESS
             }
             Err(d) => fail(d),
@@ -1417,11 +1444,11 @@ fn eval(what: EvalCmd) -> ExitCode {
         EvalCmd::Lidar { pred, gt, range_filter, json } => match rocc::eval::score_lidar_dirs(&pred, &gt, range_filter)
         {
             Ok(s) if json => {
-                println!("{}", serde_json::to_string_pretty(&s).expect("scores are plain numbers"));
+                outln!("{}", serde_json::to_string_pretty(&s).expect("scores are plain numbers"));
                 ExitCode::SUCCESS
             }
             Ok(s) => {
-                println!(
+                outln!(
                     "MMD {:.4e} ({:.3} x 1e-5)   JSD {:.4}   ({} predicted vs {} ground-truth clouds{})",
                     s.mmd,
                     s.mmd * 1e5,
@@ -1437,11 +1464,11 @@ fn eval(what: EvalCmd) -> ExitCode {
         EvalCmd::Edits { scenes, seed, scenarios, json } => {
             match rocc::eval::run_edit_protocol(&scenarios, scenes, seed) {
                 Ok(s) if json => {
-                    println!("{}", serde_json::to_string_pretty(&s).expect("scores are plain numbers"));
+                    outln!("{}", serde_json::to_string_pretty(&s).expect("scores are plain numbers"));
                     ExitCode::SUCCESS
                 }
                 Ok(s) => {
-                    print!("{}", s.table());
+                    out!("{}", s.table());
                     ExitCode::SUCCESS
                 }
                 Err(d) => fail(d),

@@ -4,10 +4,12 @@
 //! (malformed, missing, unknown, non-UTF-8, huge) give diagnostics and write nothing while the
 //! rest of the batch goes on.
 
-use glam::DVec2;
+#[path = "support/contact.rs"]
+mod contact;
+
+use contact::{measured_contact, sector};
 use rocc::check::scenario::Point;
 use rocc::ciren::{self, Imported};
-use rocc::geom::Obb;
 use rocc::rollout::Tracks;
 use rocc::source::SourceMap;
 use std::path::{Path, PathBuf};
@@ -85,62 +87,6 @@ fn every_shared_safe_extraction_imports_as_snapshotted() {
 }
 
 // ------------------------------------------------------------------ contact sides
-
-fn obb(t: &Tracks, a: usize, f: usize) -> Obb {
-    let p = t.poses[a][f];
-    let s = t.agents[a].size;
-    Obb { center: DVec2::new(p.x, p.y), yaw: p.yaw, length: s[0], width: s[1] }
-}
-
-/// The contact measured by sampling, as tests/rollout.rs does: the mean of at-fault box points
-/// inside the struck box, in the struck frame and in the at-fault frame.
-fn measured_contact(t: &Tracks, af: usize, st: usize, f: usize) -> (DVec2, DVec2) {
-    let (a, b) = (obb(t, af, f), obb(t, st, f));
-    let (mut sum, mut n) = (DVec2::ZERO, 0);
-    for i in 0..=80 {
-        for j in 0..=40 {
-            let q = DVec2::new((i as f64 / 80.0 - 0.5) * a.length, (j as f64 / 40.0 - 0.5) * a.width);
-            let w = a.center + q.rotate(DVec2::from_angle(a.yaw));
-            let l = (w - b.center).rotate(DVec2::from_angle(-b.yaw));
-            if l.x.abs() < b.length / 2.0 && l.y.abs() < b.width / 2.0 {
-                sum += w;
-                n += 1;
-            }
-        }
-    }
-    assert!(n > 0, "no contact at frame {f}");
-    let w = sum / n as f64;
-    ((w - b.center).rotate(DVec2::from_angle(-b.yaw)), (w - a.center).rotate(DVec2::from_angle(-a.yaw)))
-}
-
-/// Thirds of each face, as in the language reference: outer thirds are corners.
-fn sector(p: DVec2, l: f64, w: f64) -> Point {
-    let (u, v) = (p.x / (l / 2.0), p.y / (w / 2.0));
-    let lon = if u > 1.0 / 3.0 {
-        1
-    } else if u < -1.0 / 3.0 {
-        -1
-    } else {
-        0
-    };
-    let lat = if v > 1.0 / 3.0 {
-        1
-    } else if v < -1.0 / 3.0 {
-        -1
-    } else {
-        0
-    };
-    match (lon, lat) {
-        (1, 1) => Point::FrontLeft,
-        (1, -1) => Point::FrontRight,
-        (-1, 1) => Point::RearLeft,
-        (-1, -1) => Point::RearRight,
-        (1, _) => Point::Front,
-        (-1, _) => Point::Rear,
-        (_, 1) => Point::Left,
-        _ => Point::Right,
-    }
-}
 
 /// The damaged part of a vehicle as the source states it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -345,6 +291,31 @@ fn the_batch_goes_on_past_bad_cases_and_writes_nothing_for_them() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// A CIREN case and the SAFE extraction of the same case go to one directory as two files with
+/// two scenario names (`117021.scn`: `ciren_117021`, `safe_117021.scn`: `safe_117021`).
+#[test]
+fn a_case_and_its_safe_extraction_import_side_by_side() {
+    let out = tmp("both");
+    for (sub, input) in [("import", "../shared/ciren/117021"), ("import-safe", "../shared/safe/117021.json")] {
+        let st = std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
+            .args(["ciren", sub, input, "-o"])
+            .arg(&out)
+            .output()
+            .expect("run rocc");
+        assert!(st.status.success(), "{sub}: {}", String::from_utf8_lossy(&st.stderr));
+    }
+    let mut names: Vec<String> =
+        std::fs::read_dir(&out).expect("out").filter_map(|e| e.ok()?.file_name().into_string().ok()).collect();
+    names.sort();
+    assert_eq!(names, ["117021.scn", "safe_117021.scn"]);
+    let record = std::fs::read_to_string(out.join("117021.scn")).expect("record");
+    let safe = std::fs::read_to_string(out.join("safe_117021.scn")).expect("safe");
+    assert!(record.contains("scenario ciren_117021 {"), "{record}");
+    assert!(safe.contains("scenario safe_117021 {"), "{safe}");
+    assert!(record.contains("rocc ciren import`") && safe.contains("rocc ciren import-safe`"));
+    let _ = std::fs::remove_dir_all(&out);
+}
+
 #[test]
 fn generated_files_check_format_and_are_deterministic() {
     let out = tmp("det");
@@ -356,10 +327,10 @@ fn generated_files_check_format_and_are_deterministic() {
             .expect("run rocc")
     };
     assert!(run().success());
-    let first = std::fs::read_to_string(out.join("117330.scn")).expect("written");
+    let first = std::fs::read_to_string(out.join("safe_117330.scn")).expect("written");
     assert!(run().success());
-    assert_eq!(first, std::fs::read_to_string(out.join("117330.scn")).expect("written"));
-    let files = [out.join("117330.scn"), out.join("121520.scn")];
+    assert_eq!(first, std::fs::read_to_string(out.join("safe_117330.scn")).expect("written"));
+    let files = [out.join("safe_117330.scn"), out.join("safe_121520.scn")];
     let check =
         std::process::Command::new(env!("CARGO_BIN_EXE_rocc")).arg("check").args(&files).status().expect("check");
     assert!(check.success());

@@ -259,3 +259,141 @@ fn import_through_a_symlink_out_of_the_root_is_refused() {
     let all = render_all(&diags, &sources);
     assert!(!all.contains("secret-line"), "outside file leaked into a diagnostic: {all}");
 }
+
+/// Every (impact, point) pair: E0120 exactly for the pairs outside `points_for`, and the table
+/// `rocc explain E0120` prints lists the same points.
+#[test]
+fn impact_point_table_is_enforced_and_explained() {
+    use rocc::check::scenario::{IMPACTS, POINTS};
+    let explanation = rocc::diag::codes::lookup("E0120").expect("E0120").explanation;
+    let mut rejected = 0;
+    for (iname, imp) in IMPACTS {
+        let fits = rocc::check::points_for(imp);
+        let row = explanation
+            .lines()
+            .find(|l| l.trim_start().starts_with(&format!("impact {iname} ")))
+            .unwrap_or_else(|| panic!("no row for {iname} in E0120's table"));
+        for (pname, pt) in POINTS {
+            let listed = row.contains("any point") || row.split(['|', ' ']).any(|w| w == pname);
+            assert_eq!(listed, fits.contains(&pt), "E0120 table row `{row}` vs points_for for {pname}");
+            // The struck agent fits the impact type (a pedestrian, a static object, a car).
+            let struck = match imp {
+                rocc::check::scenario::Impact::Pedestrian => "pedestrian",
+                rocc::check::scenario::Impact::Object => "barrier",
+                _ => "sedan",
+            };
+            let text = format!(
+                "scenario t {{ duration 6 s; road straight {{ lanes 1; sidewalks on }}
+                  agent a: sedan {{ at west.in[1], 40 m before center; speed 30 km/h; goal {{ speed 30 km/h }} }}
+                  agent b: {struck} {{ at west.in[1], 10 m before center }}
+                  conflict {{ at_fault a; struck b; impact {iname}; point {pname} }} }}"
+            );
+            let mut sources = SourceMap::default();
+            let r = check::check_text("t.scn", &text, &root(), &mut sources);
+            let codes: Vec<&str> = r.as_ref().err().map(|d| d.iter().map(|d| d.code).collect()).unwrap_or_default();
+            assert_eq!(codes.contains(&"E0120"), !fits.contains(&pt), "{iname} / {pname}: {codes:?}");
+            rejected += usize::from(!fits.contains(&pt));
+            if fits.contains(&pt) {
+                assert!(r.is_ok(), "{iname} / {pname}: {codes:?}");
+            }
+        }
+    }
+    assert_eq!(rejected, 5 + 5 + 2 + 2, "rear_end and head_on reject five points, angle and sideswipe two");
+}
+
+/// `rocc explain | head -1` and friends: a reader that closes its end of the pipe before rocc
+/// writes ends the command quietly (exit 0, nothing on stderr) instead of a panic about a broken
+/// pipe. The read end is closed before the spawn, so the first stdout write meets EPIPE whatever
+/// the scheduling (closing it after the spawn races a fast command that fits the pipe buffer).
+#[test]
+fn stdout_commands_exit_quietly_when_the_reader_goes_away() {
+    use std::process::{Command, Stdio};
+    let dir = std::env::temp_dir().join(format!("rocc-pipe-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let messy = dir.join("messy.scn");
+    std::fs::write(&messy, "scenario m { duration 4 s\nroad straight { lanes 1 } }\n").expect("write");
+    let bad = root().join("../shared/examples/invalid/unknown_agent.scn");
+    let cases: Vec<Vec<String>> = vec![
+        vec!["explain".into()],
+        vec!["explain".into(), "E0120".into()],
+        vec!["grammar".into()],
+        vec!["check".into(), "--message-format".into(), "json".into(), bad.display().to_string()],
+        vec!["fmt".into(), "--check".into(), messy.display().to_string()],
+    ];
+    for args in cases {
+        let (reader, writer) = std::io::pipe().expect("pipe");
+        drop(reader);
+        let out = Command::new(env!("CARGO_BIN_EXE_rocc"))
+            .args(&args)
+            .stdout(writer)
+            .stderr(Stdio::piped())
+            .output()
+            .expect("run rocc");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!stderr.contains("panicked"), "rocc {args:?} panicked: {stderr}");
+        assert_eq!(out.status.code(), Some(0), "rocc {args:?}: {stderr}");
+        assert!(stderr.is_empty(), "rocc {args:?} wrote to stderr: {stderr}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `stop behind NAME` (E0206): leaders that are ahead, or that enter the route ahead, pass;
+/// leaders behind, beside or across do not. Judged by the place pass on the placed poses.
+#[test]
+fn stop_behind_needs_a_leader_ahead_on_the_route() {
+    let front_codes = |body: &str| -> Vec<&'static str> {
+        let text = format!("scenario t {{ duration 4 s\n{body}\n}}");
+        let mut sources = SourceMap::default();
+        let s = check::check_text("t.scn", &text, &root(), &mut sources)
+            .unwrap_or_else(|d| panic!("{body}: {}", render_all(&d, &sources)));
+        rocc::compile::front(s, None).err().map(|d| d.iter().map(|d| d.code).collect()).unwrap_or_default()
+    };
+    let ok = [
+        // Ahead in the lane, at the lane edge (a cyclist with an offset), ahead past the junction.
+        "road straight { lanes 1 }
+         agent a: sedan { at west.in[1], 30 m before center; speed 20 km/h; goal { stop behind b } }
+         agent b: bicycle { at west.in[1], 10 m before center offset 1.2 m right; speed 10 km/h }",
+        "road four_way { lanes 1 }
+         agent a: sedan { at south.in[1], 20 m before stop_line; speed 20 km/h; goal { turn straight; stop behind b } }
+         agent b: sedan { at north.out[1], 10 m after junction; speed 10 km/h }",
+        // Joins ahead: a left turn from the west into a's exit lane; a merge from the ramp; a
+        // lane change into a's lane; a pedestrian crossing in front.
+        "road four_way { lanes 1 }
+         agent a: sedan { at south.in[1], 30 m before stop_line; speed 20 km/h; goal { turn straight; stop behind b } }
+         agent b: sedan { at west.in[1], 5 m before stop_line; speed 15 km/h; goal { turn left } }",
+        "road merge { lanes 2 }
+         agent a: sedan { at main.in[2], 60 m before center; speed 20 km/h; goal { stop behind b } }
+         agent b: sedan { at ramp.in[1], 20 m before center; speed 20 km/h }",
+        "road straight { lanes 2 }
+         agent a: sedan { at west.in[1], 40 m before center; speed 20 km/h; goal { stop behind b } }
+         agent b: sedan { at west.in[2], 20 m before center; speed 15 km/h; goal { lateral change_lane left } }",
+        "road straight { lanes 1; sidewalks on }
+         agent a: sedan { at west.in[1], 40 m before center; speed 20 km/h; goal { stop behind p } }
+         agent p: pedestrian { at sidewalk(west.in), 10 m before center; goal { speed 1.4 m/s; lateral cross } }",
+    ];
+    for body in ok {
+        assert_eq!(front_codes(body), Vec::<&str>::new(), "{body}");
+    }
+    let bad = [
+        // Behind; in the next lane; the other direction; crossing the junction; a static cone
+        // on the shoulder beside the lane.
+        "road straight { lanes 1 }
+         agent a: sedan { at west.in[1], 10 m before center; speed 20 km/h; goal { stop behind b } }
+         agent b: sedan { at west.in[1], 30 m before center; speed 20 km/h }",
+        "road straight { lanes 2 }
+         agent a: sedan { at west.in[1], 40 m before center; speed 20 km/h; goal { stop behind b } }
+         agent b: sedan { at west.in[2], 20 m before center; speed 15 km/h }",
+        "road straight { lanes 1 }
+         agent a: sedan { at west.in[1], 40 m before center; speed 20 km/h; goal { stop behind b } }
+         agent b: sedan { at east.in[1], 20 m before center; speed 15 km/h }",
+        "road four_way { lanes 1 }
+         agent a: sedan { at south.in[1], 20 m before stop_line; speed 20 km/h; goal { turn straight; stop behind b } }
+         agent b: sedan { at east.in[1], 5 m before stop_line; speed 15 km/h; goal { turn straight } }",
+        "road straight { lanes 1; shoulder 3 m }
+         agent a: sedan { at west.in[1], 40 m before center; speed 20 km/h; goal { stop behind c } }
+         object c: traffic_cone { at west.in[1], 20 m before center offset 3 m right }",
+    ];
+    for body in bad {
+        assert_eq!(front_codes(body), ["E0206"], "{body}");
+    }
+}

@@ -457,6 +457,72 @@ fn the_api_key_is_sent_as_a_header_and_never_logged() {
 }
 
 #[test]
+fn the_api_key_header_is_sent_only_when_a_key_is_given() {
+    let fake = serve(vec![chat(&schema("center")), chat(GOALS)]);
+    let (out, _) = run(&opts(&fake.url, Server::Openai));
+    assert!(matches!(out, Outcome::Accepted { .. }), "{out:?}");
+    let heads = fake.heads();
+    assert_eq!(heads.len(), 2);
+    assert!(heads.iter().all(|h| h.contains("\r\nauthorization: bearer sk-test\r\n")), "{heads:?}");
+
+    let fake = serve(vec![chat(&schema("center")), chat(GOALS)]);
+    let mut o = opts(&fake.url, Server::Openai);
+    o.client.api_key = None;
+    let (out, _) = run(&o);
+    assert!(matches!(out, Outcome::Accepted { .. }), "{out:?}");
+    let heads = fake.heads();
+    assert_eq!(heads.len(), 2);
+    assert!(heads.iter().all(|h| !h.contains("authorization")), "{heads:?}");
+}
+
+/// The key reaches the header from the command line: `--api-key`, else `ROCC_LLM_API_KEY`, else
+/// `OPENAI_API_KEY` (`llm_connection`), and no header at all without one.
+#[test]
+fn cli_api_key_comes_from_the_flag_then_the_environment() {
+    let dir = std::env::temp_dir().join(format!("rocc-llm-key-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // (flags, environment, the key the header must carry)
+    type Case<'a> = (&'a [&'a str], &'a [(&'a str, &'a str)], Option<&'a str>);
+    let cases: [Case; 5] = [
+        (
+            &["--api-key", "sk-flag"],
+            &[("ROCC_LLM_API_KEY", "sk-rocc"), ("OPENAI_API_KEY", "sk-openai")],
+            Some("sk-flag"),
+        ),
+        (&[], &[("ROCC_LLM_API_KEY", "sk-rocc"), ("OPENAI_API_KEY", "sk-openai")], Some("sk-rocc")),
+        (&[], &[("OPENAI_API_KEY", "sk-openai")], Some("sk-openai")),
+        (&[], &[("ROCC_LLM_API_KEY", ""), ("OPENAI_API_KEY", "")], None),
+        (&[], &[], None),
+    ];
+    for (i, (flags, env, want)) in cases.iter().enumerate() {
+        let fake = serve(vec![chat(&schema("center")), chat(GOALS)]);
+        let out = dir.join(format!("key{i}.scn"));
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_rocc"));
+        cmd.args(["text", "two cars", "-o", out.to_str().unwrap(), "--endpoint", &fake.url, "--server", "openai"])
+            .args(["--model", "test-model"])
+            .args(*flags)
+            .env_remove("ROCC_LLM_API_KEY")
+            .env_remove("OPENAI_API_KEY");
+        for (k, v) in *env {
+            cmd.env(k, v);
+        }
+        let st = cmd.output().unwrap();
+        assert!(st.status.success(), "case {i}: {}", String::from_utf8_lossy(&st.stderr));
+        let heads = fake.heads();
+        assert_eq!(heads.len(), 2, "case {i}");
+        for h in &heads {
+            match want {
+                Some(k) => assert!(h.contains(&format!("\r\nauthorization: bearer {k}\r\n")), "case {i}: {h}"),
+                None => assert!(!h.contains("authorization"), "case {i}: {h}"),
+            }
+        }
+        let stderr = String::from_utf8_lossy(&st.stderr);
+        assert!(!stderr.contains("sk-"), "case {i}: the key is never printed: {stderr}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn non_json_reply_is_e0604() {
     let (out, _) = first_request_fails(Reply::Http(200, b"<html>hello</html>".to_vec(), vec![]));
     assert_eq!(code(&out), "E0604");

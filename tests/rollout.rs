@@ -2,10 +2,14 @@
 //! requested side at the requested time, turns and lateral goals, background traffic, and
 //! property tests (no overlaps, class limits, determinism) over generated scenes.
 
+#[path = "support/contact.rs"]
+mod contact;
+
+use contact::{measured_contact, obb, sector};
 use glam::DVec2;
 use proptest::prelude::*;
 use rocc::check::scenario::*;
-use rocc::geom::{Obb, Polyline, wrap_angle};
+use rocc::geom::{Polyline, wrap_angle};
 use rocc::place::{Placed, PlacedAgent, Pose};
 use rocc::road::Map;
 use rocc::road::map::{Connector, Lane};
@@ -135,7 +139,14 @@ struct Spec {
 const CAR: [f64; 3] = [4.6, 1.85, 1.5];
 
 fn goal() -> Goal<f64> {
-    Goal { speed: None, lateral: Lateral::HoldLane, stop: None, turn: None, start_after: 0.0 }
+    Goal {
+        speed: None,
+        lateral: Lateral::HoldLane,
+        stop: None,
+        turn: None,
+        start_after: 0.0,
+        stop_span: Default::default(),
+    }
 }
 
 fn car(name: &'static str, pose: Pose, speed: f64, g: Option<Goal<f64>>) -> Spec {
@@ -223,11 +234,6 @@ fn scene(specs: Vec<Spec>, conflicts: Vec<Conflict>, traffic: Option<Traffic>, d
         kinds: Default::default(),
     };
     (c, placed)
-}
-
-fn obb(t: &Tracks, i: usize, f: usize) -> Obb {
-    let p = t.poses[i][f];
-    Obb { center: DVec2::new(p.x, p.y), yaw: p.yaw, length: t.agents[i].size[0], width: t.agents[i].size[1] }
 }
 
 /// Pairs whose boxes overlap in some frame, other than the listed conflict pairs.
@@ -325,56 +331,6 @@ fn start_after_holds_the_initial_state() {
 }
 
 // ------------------------------------------------------------------ conflicts
-
-/// The contact, measured on the boxes by sampling: the mean of at-fault box points inside the
-/// struck box, in the struck frame and in the at-fault frame.
-fn measured_contact(t: &Tracks, af: usize, st: usize, f: usize) -> (DVec2, DVec2) {
-    let (a, b) = (obb(t, af, f), obb(t, st, f));
-    let (mut sum, mut n) = (DVec2::ZERO, 0);
-    for i in 0..=80 {
-        for j in 0..=40 {
-            let q = DVec2::new((i as f64 / 80.0 - 0.5) * a.length, (j as f64 / 40.0 - 0.5) * a.width);
-            let w = a.center + q.rotate(DVec2::from_angle(a.yaw));
-            let l = (w - b.center).rotate(DVec2::from_angle(-b.yaw));
-            if l.x.abs() < b.length / 2.0 && l.y.abs() < b.width / 2.0 {
-                sum += w;
-                n += 1;
-            }
-        }
-    }
-    assert!(n > 0, "no contact at frame {f}");
-    let w = sum / n as f64;
-    ((w - b.center).rotate(DVec2::from_angle(-b.yaw)), (w - a.center).rotate(DVec2::from_angle(-a.yaw)))
-}
-
-/// Thirds of each face, as in the language reference: outer thirds are corners.
-fn sector(p: DVec2, l: f64, w: f64) -> Point {
-    let (u, v) = (p.x / (l / 2.0), p.y / (w / 2.0));
-    let lon = if u > 1.0 / 3.0 {
-        1
-    } else if u < -1.0 / 3.0 {
-        -1
-    } else {
-        0
-    };
-    let lat = if v > 1.0 / 3.0 {
-        1
-    } else if v < -1.0 / 3.0 {
-        -1
-    } else {
-        0
-    };
-    match (lon, lat) {
-        (1, 1) => Point::FrontLeft,
-        (1, -1) => Point::FrontRight,
-        (-1, 1) => Point::RearLeft,
-        (-1, -1) => Point::RearRight,
-        (1, _) => Point::Front,
-        (-1, _) => Point::Rear,
-        (_, 1) => Point::Left,
-        _ => Point::Right,
-    }
-}
 
 fn conflict(at_fault: usize, struck: usize, impact: Impact, point: Point, at: Option<f64>) -> Conflict {
     Conflict { at_fault, struck, impact, point, at, span: Default::default() }

@@ -373,6 +373,7 @@ impl Checker {
 
         let conflicts: Vec<Option<Conflict>> =
             conflicts_ast.iter().map(|c| self.conflict(c, &order, &agents, duration_s)).collect();
+        self.one_conflict_each(&conflicts, &conflicts_ast, &order);
         let egos = self.egos(egos_stmt, &order, &agents, header);
 
         if self.diags.iter().any(Diagnostic::is_error) {
@@ -1065,7 +1066,14 @@ impl Checker {
         order: &[&str],
         me: &ast::Ident,
     ) -> Option<Option<Goal>> {
-        let mut out = Goal { speed: None, lateral: Lateral::HoldLane, stop: None, turn: None, start_after: 0.0 };
+        let mut out = Goal {
+            speed: None,
+            lateral: Lateral::HoldLane,
+            stop: None,
+            turn: None,
+            start_after: 0.0,
+            stop_span: Span::default(),
+        };
         let mut ok = true;
         let mut seen: BTreeMap<&str, Span> = BTreeMap::new();
         let walker = motion == Motion::Holonomic;
@@ -1236,7 +1244,10 @@ impl Checker {
                         }
                     };
                     match s {
-                        Some(s) => out.stop = Some(s),
+                        Some(s) => {
+                            out.stop = Some(s);
+                            out.stop_span = *span;
+                        }
                         None => ok = false,
                     }
                 }
@@ -1332,6 +1343,35 @@ impl Checker {
         Some(Row { kinds: kind.0, class: kind.1, from, to, every, span: r.span })
     }
 
+    /// A crash latches its pair from the impact on, so an agent takes part in one conflict only:
+    /// a second block naming it (as at_fault or struck) is rejected, pointing at both.
+    fn one_conflict_each(&mut self, conflicts: &[Option<Conflict>], asts: &[&ast::Conflict], order: &[&str]) {
+        // Agent index -> the block of its first conflict.
+        let mut first: BTreeMap<usize, Span> = BTreeMap::new();
+        for (c, ca) in conflicts.iter().zip(asts) {
+            let Some(c) = c else { continue };
+            for (who, key) in [(c.at_fault, "at_fault"), (c.struck, "struck")] {
+                let field = ca.fields.iter().find(|f| f.key == key).map_or(ca.span, |f| f.span);
+                match first.get(&who) {
+                    None => {
+                        first.insert(who, ca.span);
+                    }
+                    Some(&block) => {
+                        let name = order[who];
+                        self.err(
+                            Diagnostic::error("E0121", format!("`{name}` is in two conflicts"))
+                                .label(field, format!("`{name}` named again here, as {key}"))
+                                .label(block, format!("first conflict of `{name}`"))
+                                .help(format!(
+                                    "a crash holds its pair from the impact on; keep one conflict for `{name}`, or stage the second crash with another agent"
+                                )),
+                        );
+                    }
+                }
+            }
+        }
+    }
+
     fn conflict(
         &mut self,
         c: &ast::Conflict,
@@ -1385,8 +1425,40 @@ impl Checker {
         }
         let at_fault = ident(self, "at_fault").and_then(|i| self.resolve(i, order).map(|x| (x, i.span)));
         let struck = ident(self, "struck").and_then(|i| self.resolve(i, order).map(|x| (x, i.span)));
-        let impact = ident(self, "impact").and_then(|i| word(self, i, &IMPACTS, "impact type"));
-        let point = ident(self, "point").and_then(|i| word(self, i, &POINTS, "impact point"));
+        let impact_i = ident(self, "impact");
+        let point_i = ident(self, "point");
+        let impact = impact_i.and_then(|i| word(self, i, &IMPACTS, "impact type"));
+        let point = point_i.and_then(|i| word(self, i, &POINTS, "impact point"));
+        if let (Some(imp), Some(pt), Some(ii), Some(pi)) = (impact, point, impact_i, point_i) {
+            let fits = points_for(imp);
+            if !fits.contains(&pt) {
+                let names: Vec<&str> = POINTS.iter().filter(|(_, p)| fits.contains(p)).map(|(n, _)| *n).collect();
+                let why = match imp {
+                    Impact::RearEnd => "a rear-end strikes the struck agent's rear",
+                    Impact::HeadOn => "a head-on meets the struck agent's front",
+                    _ => "an angle or sideswipe strikes the struck agent's side or a corner",
+                };
+                self.err(
+                    Diagnostic::error("E0120", format!("`impact {}` cannot have `point {}`: {why}", ii.name, pi.name))
+                        .label(pi.span, format!("not a side a {} strikes", ii.name.replace('_', "-")))
+                        .label(ii.span, "impact type")
+                        .help(format!(
+                            "with `impact {}` use `point {}`; `point {}` fits `impact {}`",
+                            ii.name,
+                            names.join("`, `"),
+                            pi.name,
+                            IMPACTS
+                                .iter()
+                                .filter(|(_, i)| !matches!(i, Impact::Pedestrian | Impact::Object))
+                                .filter(|(_, i)| points_for(*i).contains(&pt))
+                                .map(|(n, _)| *n)
+                                .collect::<Vec<_>>()
+                                .join("` or `impact ")
+                        )),
+                );
+                ok = false;
+            }
+        }
         let at = match fields.get("at").map(|f| &f.value) {
             None => Some(None),
             Some(ast::FieldValue::Value(v)) => {
@@ -1434,6 +1506,20 @@ impl Checker {
             }
         }
         ok.then_some(Conflict { at_fault: at_fault.0, struck: struck.0, impact, point, at, span: c.span })
+    }
+}
+
+/// The points (sides of the struck agent) an impact type can hit: a rear-end strikes the rear
+/// face or a rear corner, a head-on the front face or a front corner, an angle (front into side)
+/// or a sideswipe (side along side) a side or a corner. A pedestrian or an object may be hit
+/// anywhere. `rocc explain E0120` prints this table; keep the two in step.
+pub fn points_for(impact: Impact) -> &'static [Point] {
+    use Point::*;
+    match impact {
+        Impact::RearEnd => &[Rear, RearLeft, RearRight],
+        Impact::HeadOn => &[Front, FrontLeft, FrontRight],
+        Impact::Angle | Impact::Sideswipe => &[Left, Right, FrontLeft, FrontRight, RearLeft, RearRight],
+        Impact::Pedestrian | Impact::Object => &[Front, Rear, Left, Right, FrontLeft, FrontRight, RearLeft, RearRight],
     }
 }
 

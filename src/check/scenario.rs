@@ -318,6 +318,10 @@ pub struct Goal<V = Dist> {
     pub turn: Option<Turn>,
     /// Delay before the goal starts, s.
     pub start_after: f64,
+    /// The `stop ...` statement, for the place pass's E0206 (`stop behind` a leader that is not
+    /// ahead); default when there is none.
+    #[serde(skip)]
+    pub stop_span: Span,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

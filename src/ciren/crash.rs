@@ -117,6 +117,29 @@ pub enum Manoeuvre {
     Stopped,
 }
 
+/// The manoeuvre as the comments of both importers name it.
+pub fn man_word(m: Manoeuvre) -> &'static str {
+    match m {
+        Manoeuvre::Straight => "straight on",
+        Manoeuvre::TurnLeft => "turn left",
+        Manoeuvre::TurnRight => "turn right",
+        Manoeuvre::ChangeLaneLeft => "change lane left",
+        Manoeuvre::ChangeLaneRight => "change lane right",
+        Manoeuvre::Merge => "merge from the ramp",
+        Manoeuvre::Stopped => "stopped",
+    }
+}
+
+/// A T-junction's stem (rotated to `south`) has no straight on: a vehicle going straight there
+/// turns right, said in its notes.
+pub fn stem_turn(template: Template, arm: &str, man: Manoeuvre, notes: &mut Vec<String>) -> Manoeuvre {
+    if template == Template::TJunction && arm == "south" && man == Manoeuvre::Straight {
+        notes.push("no straight on from a T's stem: turns right".into());
+        return Manoeuvre::TurnRight;
+    }
+    man
+}
+
 /// Where a vehicle starts, in rocc's arms: `arm.in[lane]`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct VehicleDesc {
@@ -179,11 +202,23 @@ pub struct ConflictDesc {
     pub notes: Vec<String>,
 }
 
+/// Where a crash was read from. A CIREN case and the SAFE extraction of the same case share the
+/// case number, so the source is part of the file and scenario names: both land in one
+/// directory side by side.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Source {
+    /// A coded CIREN record (`rocc ciren import`): `<id>.scn`, scenario `ciren_<id>`.
+    Record,
+    /// A SAFE-format extraction (`rocc ciren import-safe`): `safe_<id>.scn`, scenario `safe_<id>`.
+    Safe,
+}
+
 /// A crash ready to emit.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Crash {
-    /// Case id: the file stem (`100237.scn`) and the scenario name (`ciren_100237`).
+    /// Case id (the CIREN case number); with `source` it gives the file stem and scenario name.
     pub id: String,
+    pub source: Source,
     /// Header comment lines (what the case is, where it came from).
     pub header: Vec<String>,
     pub road: RoadDesc,
@@ -194,7 +229,18 @@ pub struct Crash {
 
 impl Crash {
     pub fn scenario_name(&self) -> String {
-        format!("ciren_{}", self.id.replace('-', "_"))
+        let prefix = match self.source {
+            Source::Record => "ciren",
+            Source::Safe => "safe",
+        };
+        format!("{prefix}_{}", self.id.replace('-', "_"))
+    }
+    /// The output file's stem: `100237` for a record, `safe_100237` for a SAFE extraction.
+    pub fn file_stem(&self) -> String {
+        match self.source {
+            Source::Record => self.id.clone(),
+            Source::Safe => format!("safe_{}", self.id),
+        }
     }
     pub fn vehicle(&self, name: &str) -> Option<&VehicleDesc> {
         self.vehicles.iter().find(|v| v.name == name)

@@ -264,6 +264,18 @@ fn validate(raw: Raw, r: &Roster) -> Result<Descriptor, String> {
         let all: Vec<&str> = POINTS.iter().map(|x| x.0).collect();
         return Err(format!("`point` `{p}` is not one of {}", all.join(", ")));
     }
+    if let (Some(&(_, imp)), Some(&(_, pt))) =
+        (IMPACTS.iter().find(|x| x.0 == impact), POINTS.iter().find(|x| x.0 == point))
+    {
+        let fits = crate::check::points_for(imp);
+        if !fits.contains(&pt) {
+            let ok: Vec<&str> = POINTS.iter().filter(|x| fits.contains(&x.1)).map(|x| x.0).collect();
+            return Err(format!(
+                "`impact` {impact} cannot hit `point` {point} (E0120); with {impact} the point is one of {}",
+                ok.join(", ")
+            ));
+        }
+    }
     let at_s = match raw.at {
         None => None,
         Some(Err(e)) => return Err(e),

@@ -255,7 +255,7 @@ pub fn stage(c: &Crash) -> Result<Staged, Vec<Diagnostic>> {
         let st = Staging { t_impact: t, lag };
         let text = emit(c, st);
         let mut sources = SourceMap::default();
-        let name = format!("{}.scn", c.id);
+        let name = format!("{}.scn", c.file_stem());
         let scen = match crate::check::check_text(&name, &text, Path::new("."), &mut sources) {
             Ok(s) => s,
             Err(d) => {

@@ -37,9 +37,9 @@ pub struct Imported {
 }
 
 impl Imported {
-    /// `<id>.scn`.
+    /// `<id>.scn` for a CIREN record, `safe_<id>.scn` for a SAFE extraction.
     pub fn file_name(&self) -> String {
-        format!("{}.scn", self.crash.id)
+        format!("{}.scn", self.crash.file_stem())
     }
 }
 
@@ -101,7 +101,7 @@ pub fn case_inputs(inputs: &[PathBuf]) -> (Vec<PathBuf>, Vec<Diagnostic>) {
     (out, errs)
 }
 
-/// Write `DIR/<id>.scn` atomically (a temporary name, then a rename: never a partial file).
+/// Write `DIR/<id>.scn` (`DIR/safe_<id>.scn`) atomically (a temporary name, then a rename: never a partial file).
 pub fn write_scenario(dir: &Path, imp: &Imported) -> Result<PathBuf, Diagnostic> {
     let path = dir.join(imp.file_name());
     crate::output::write_atomic(&path, |w| std::io::Write::write_all(w, imp.staged.text.as_bytes())).map_err(|e| {

@@ -10,6 +10,7 @@
 use super::case::{CaseVehicle, CirenCase, Coded, Event};
 use super::crash::{
     Compass, ConflictDesc, Crash, Face, Manoeuvre, ObjectDesc, RoadDesc, Side, Template, VehicleDesc, approach_arm,
+    man_word, stem_turn,
 };
 use super::narrative::{self, Junction, LanePos, Move, Narrative, Side2};
 use crate::check::scenario::{Impact, Point};
@@ -796,10 +797,7 @@ fn two_vehicles(
             Manoeuvre::Merge if template != Template::Merge => Manoeuvre::Straight,
             m => m,
         };
-        if template == Template::TJunction && arm == "south" && man == Manoeuvre::Straight {
-            notes.push("no straight on from a T's stem: turns right".into());
-            man = Manoeuvre::TurnRight;
-        }
+        man = stem_turn(template, arm, man, &mut notes);
         notes.push(format!("manoeuvre {}: {man_cite}", man_word(man)));
         let (speed, speed_cite) = speed_of(cx, v, limit, man);
         notes.push(format!("speed: {speed_cite}"));
@@ -827,6 +825,7 @@ fn two_vehicles(
     };
     Ok(Crash {
         id: cx.case.id.clone(),
+        source: super::crash::Source::Record,
         header,
         road: RoadDesc {
             template,
@@ -851,18 +850,6 @@ fn cx_class(case: &CirenCase, n: u32) -> Option<Coded> {
             .find(|e| e.contacted.as_ref().is_some_and(|c| c.text.ends_with(&format!("#{n}"))))
             .and_then(|e| e.contacted_class.clone())
     })
-}
-
-fn man_word(m: Manoeuvre) -> &'static str {
-    match m {
-        Manoeuvre::Straight => "straight on",
-        Manoeuvre::TurnLeft => "turn left",
-        Manoeuvre::TurnRight => "turn right",
-        Manoeuvre::ChangeLaneLeft => "change lane left",
-        Manoeuvre::ChangeLaneRight => "change lane right",
-        Manoeuvre::Merge => "merge from the ramp",
-        Manoeuvre::Stopped => "stopped",
-    }
 }
 
 fn single_vehicle(
@@ -963,6 +950,7 @@ fn single_vehicle(
     };
     Ok(Crash {
         id: cx.case.id.clone(),
+        source: super::crash::Source::Record,
         header,
         road: RoadDesc {
             template,

@@ -12,7 +12,8 @@
 
 use super::case::read_capped;
 use super::crash::{
-    Compass, ConflictDesc, Crash, Face, Manoeuvre, RoadDesc, Template, VehicleDesc, approach_arm, point_name,
+    Compass, ConflictDesc, Crash, Face, Manoeuvre, RoadDesc, Template, VehicleDesc, approach_arm, man_word, point_name,
+    stem_turn,
 };
 use super::record::{TURN_KMH, kind_for};
 use crate::check::scenario::{Impact, Point};
@@ -597,7 +598,9 @@ fn map(cx: &mut Ctx, root: &Value, path: &Path) -> Result<Crash, Vec<Diagnostic>
             let msg = format!("point_of_impact \"{poi_raw}\" names no striking part; v{af}'s front is assumed");
             cx.warn("point_of_impact", msg.clone());
             conflict_notes.push(format!("Ambiguous: {msg}."));
-            let imp = if pb == Point::Front && impact_said == Impact::HeadOn {
+            // Front to (assumed) front is a head-on whatever impact_type says: an angle crash
+            // reaches a side or a corner (E0120), and the mismatch is reported below.
+            let imp = if pb == Point::Front {
                 Impact::HeadOn
             } else if is_rear(pb) {
                 Impact::RearEnd
@@ -754,10 +757,7 @@ fn map(cx: &mut Ctx, root: &Value, path: &Path) -> Result<Crash, Vec<Diagnostic>
             notes.push(format!("Actions \"{}\": no junction to turn at on this road: straight on", a.action));
             man = Manoeuvre::Straight;
         }
-        if template == Template::TJunction && arm == "south" && man == Manoeuvre::Straight {
-            notes.push("no straight on from a T's stem: turns right".into());
-            man = Manoeuvre::TurnRight;
-        }
+        man = stem_turn(template, arm, man, &mut notes);
         // A stopped car stays stopped: 0 mph, or an action that says so.
         let stopped = man == Manoeuvre::Stopped || sp.kmh == Some(0.0);
         if stopped {
@@ -813,6 +813,7 @@ fn map(cx: &mut Ctx, root: &Value, path: &Path) -> Result<Crash, Vec<Diagnostic>
     road_notes.push(limit_note);
     Ok(Crash {
         id: cx.id.clone(),
+        source: super::crash::Source::Safe,
         header,
         road: RoadDesc {
             template,
@@ -852,18 +853,6 @@ fn separate_lanes(vs: &mut [VehicleDesc], lanes: u32) {
                 vs[k].notes.push(note);
             }
         }
-    }
-}
-
-fn man_word(m: Manoeuvre) -> &'static str {
-    match m {
-        Manoeuvre::Straight => "straight on",
-        Manoeuvre::TurnLeft => "turn left",
-        Manoeuvre::TurnRight => "turn right",
-        Manoeuvre::ChangeLaneLeft => "change lane left",
-        Manoeuvre::ChangeLaneRight => "change lane right",
-        Manoeuvre::Merge => "merge from the ramp",
-        Manoeuvre::Stopped => "stopped",
     }
 }
 

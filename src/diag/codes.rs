@@ -232,6 +232,34 @@ motion so that the rest of the agent (its goal, its placement) stays valid whate
     agent a: one_of [sedan, suv, van] { ... }     // fine: all vehicles",
     },
     Code {
+        code: "E0120",
+        title: "impact type and point contradict each other",
+        explanation: "`point` is the side of the struck agent that the crash hits, and the impact type says\n\
+how the two meet, so not every pair fits. The at-fault agent strikes with its front in a rear-end,\n\
+a head-on and an angle crash, and with its side in a sideswipe. The table (struck agent's sides\n\
+as DSL.md names them):\n
+    impact rear_end     point rear | rear_left | rear_right
+    impact head_on      point front | front_left | front_right
+    impact angle        point left | right | front_left | front_right | rear_left | rear_right
+    impact sideswipe    point left | right | front_left | front_right | rear_left | rear_right
+    impact pedestrian   any point
+    impact object       any point\n
+A front-to-front contact is a head-on, a front-to-rear one a rear-end; an angle or a sideswipe\n\
+reaches a side or a corner, never the middle of the front or rear face.\n
+    conflict { at_fault a; struck b; impact rear_end; point front }   // error: a rear-end hits the rear
+    conflict { at_fault a; struck b; impact rear_end; point rear }    // fine",
+    },
+    Code {
+        code: "E0121",
+        title: "agent in two conflicts",
+        explanation: "A conflict latches its pair at the frame of deepest overlap: from then on both hold their\n\
+post-impact poses. An agent can therefore take part in one conflict only, as `at_fault` or as\n\
+`struck`; a second block naming it is rejected, and both blocks are shown.\n
+    conflict { at_fault a; struck b; impact rear_end; point rear }
+    conflict { at_fault c; struck b; impact angle; point left }      // error: `b` is already struck\n\n\
+Keep one conflict per agent, or stage the second crash with another agent.",
+    },
+    Code {
         code: "E0201",
         title: "placement off a valid surface",
         explanation: "Each class has surfaces it may start on: vehicles on lanes or shoulders; pedestrians\n\
@@ -281,6 +309,23 @@ from the clip; instead `rocc check` and `rocc compile` report it at the conflict
     agent b: sedan { at west.in[1], 50 m after center; speed 30 km/h }
     conflict { at_fault a; struck b; impact rear_end; point rear; at 0.5 s }   // error: 100 m apart\n\n\
 Start the pair closer, give them speeds that bring them together by then, or move `at` later.",
+    },
+    Code {
+        code: "E0206",
+        title: "`stop behind` names an agent that is not ahead",
+        explanation: "`stop behind NAME` queues behind a leader, so NAME must be ahead of the agent on its route\n\
+(its lane, continued through the junction by its `turn`, or straight on; an agent off the lanes\n\
+goes along its heading). Judged on the placed poses, NAME qualifies when its centre is further\n\
+along that route and either inside the route's corridor (half the lane width plus half its own\n\
+width: a cyclist at the lane edge counts, a car in the next lane does not), or it will enter the\n\
+corridor ahead: a walker or animal with `lateral cross`, a vehicle with `change_lane` toward it,\n\
+or a vehicle whose own route merges into it heading the same way (a ramp, a turn into the exit\n\
+lane). A leader behind the agent, or on another road or lane with no such relation, would be\n\
+ignored by the controller, so it is an error. A replayed track is not judged.\n
+    agent a: sedan { at west.in[1], 30 m before center; goal { stop behind b } }
+    agent b: sedan { at west.in[1], 50 m before center }     // error: b is behind a
+    agent b: sedan { at east.in[1], 10 m before center }     // error: the other direction
+    agent b: sedan { at west.in[1], 10 m before center }     // fine: ahead on a's lane",
     },
     Code {
         code: "E0301",

@@ -1,7 +1,8 @@
 //! Place pass. In: a `Concrete` scenario and its `Map`. Out: `Placed` — every agent, object and
 //! row element with a world pose and box — or E02xx diagnostics (off the road, off a valid
-//! surface, overlap).
+//! surface, overlap, a `stop behind` leader that is not ahead: `leader.rs`).
 
+mod leader;
 mod resolve;
 mod surface;
 
@@ -149,6 +150,10 @@ pub fn place(c: &Concrete, map: &Map) -> Result<Placed, Vec<Diagnostic>> {
         }
     }
 
+    // Leaders are judged on the poses only once every pose is right.
+    if errs.is_empty() {
+        errs = leader::check(c, map, &out);
+    }
     if errs.is_empty() { Ok(Placed { agents: out }) } else { Err(errs) }
 }
 

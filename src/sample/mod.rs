@@ -97,6 +97,7 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
                     stop: g.stop,
                     turn: g.turn,
                     start_after: g.start_after,
+                    stop_span: g.stop_span,
                 }),
                 track: a.track.clone(),
                 span: a.span,
