@@ -6,7 +6,7 @@ use super::path::{Hermite, Path};
 use super::stage::{self, Plan};
 use super::traffic;
 use super::{ImpactRecord, Limits, TrackAgent, Tracks, limits};
-use crate::check::scenario::{Class, Keyframe, LaneId, Lateral, Motion, Side, Stop, Turn};
+use crate::check::scenario::{Class, EMERGENCY_KINDS, Keyframe, LaneId, Lateral, Motion, Side, Stop, Turn};
 use crate::diag::Diagnostic;
 use crate::geom::{Obb, wrap_angle};
 use crate::place::{Placed, Pose};
@@ -61,6 +61,8 @@ pub(super) struct Actor {
     pub hl: f64,
     pub hw: f64,
     pub radius: f64,
+    /// Smallest turning radius of the box centre, m (`super::min_turn_radius`); vehicles only.
+    pub r_min: f64,
     pub lim: Limits,
     pub path: Path,
     pub init: Pose,
@@ -73,7 +75,8 @@ pub(super) struct Actor {
     pub lateral: Lat,
     pub stop: StopGoal,
     pub info: TrackAgent,
-    /// An emergency vehicle (see `EMERGENCY_KINDS`): cross traffic holds for it.
+    /// An emergency vehicle (a kind in or derived from `EMERGENCY_KINDS`): cross traffic holds
+    /// for it.
     pub emergency: bool,
     /// The first junction on the route, if any.
     pub junction: Option<Junction>,
@@ -93,8 +96,6 @@ pub(super) struct Junction {
     pub conn: usize,
 }
 
-/// Kinds that drive with lights and siren: everyone else gives them the junction.
-const EMERGENCY_KINDS: [&str; 3] = ["ambulance", "fire_truck", "police_car"];
 /// How far ahead of an emergency vehicle the junction is cleared: this many seconds at its
 /// speed, and at least `EMERGENCY_NEAR_M`.
 const EMERGENCY_NEAR_S: f64 = 8.0;
@@ -114,8 +115,12 @@ pub(super) struct State {
     pub pos: DVec2,
     pub yaw: f64,
     pub v: f64,
+    /// Arc length along the route (of the box centre's projection, for vehicles).
     pub s: f64,
+    /// Lateral offset the lateral goal asks for now (m, left of the route).
     pub d: f64,
+    /// Lateral offset the agent is actually at; a vehicle steers toward `d` and lags it.
+    pub off: f64,
     pub phase: f64,
     pub triggered: bool,
     pub stopped: bool,
@@ -257,6 +262,7 @@ fn initial(a: &Actor) -> State {
         v,
         s: a.s0,
         d: a.d0,
+        off: a.d0,
         phase: 0.0,
         triggered: false,
         stopped: false,
@@ -274,6 +280,7 @@ fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Class, drive:
         hl: l / 2.0,
         hw: w / 2.0,
         radius: 0.5 * (l * l + w * w).sqrt(),
+        r_min: super::min_turn_radius(class, l),
         lim: limits(class, motion),
         path: Path::default(),
         init: pose,
@@ -285,7 +292,7 @@ fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Class, drive:
         start: 0.0,
         lateral: Lat::Hold,
         stop: StopGoal::None,
-        emergency: EMERGENCY_KINDS.contains(&info.kind.as_str()) && motion == Motion::Vehicle,
+        emergency: false,
         junction: None,
         yield_to: vec![],
         info,
@@ -317,6 +324,7 @@ fn build_actor(
         return base_actor(info, p.pose, p.motion, p.class, Drive::Static);
     };
     let mut a = base_actor(info, p.pose, p.motion, p.class, Drive::Mover);
+    a.emergency = a.vehicle && is_emergency(c, &p.kind);
     let pos = DVec2::new(p.pose.x, p.pose.y);
     let goal = ca.goal.as_ref();
     let fail = |errs: &mut Vec<Diagnostic>, msg: String, help: &str| {
@@ -439,6 +447,13 @@ fn build_actor(
         Some(Stop::After(dist)) => StopGoal::Centre(a.s0 + dist.max(0.0)),
     };
     a
+}
+
+/// Whether a kind drives with lights and siren: the checker resolved it through the kind's
+/// ancestry (`kind my_amb: ambulance`); the stdlib names count even where the scenario's kind
+/// table lacks them (a hand-built `Concrete`).
+fn is_emergency(c: &Concrete, kind: &str) -> bool {
+    EMERGENCY_KINDS.contains(&kind) || c.kinds.get(kind).is_some_and(|k| k.emergency)
 }
 
 fn background_actor(map: &Map, s: traffic::Spawn) -> Actor {
@@ -805,7 +820,9 @@ impl<'a> Sim<'a> {
         }
         let margin = if a.vehicle { 0.25 } else { 0.1 };
         let goal_d = target.filter(|_| st.phase < 1.0).or(pass_target).unwrap_or(st.d);
-        let (lo, hi) = (st.d.min(goal_d) - a.hw - margin, st.d.max(goal_d) + a.hw + margin);
+        // The band the box occupies now: a steering vehicle lags its reference offset.
+        let (cur_lo, cur_hi) = (st.d.min(st.off) - a.hw, st.d.max(st.off) + a.hw);
+        let (lo, hi) = (cur_lo.min(goal_d - a.hw) - margin, cur_hi.max(goal_d + a.hw) + margin);
 
         let fwd = DVec2::from_angle(st.yaw);
         let look = st.v * st.v / (2.0 * lim.brake) + 2.5 * st.v + 15.0;
@@ -844,7 +861,7 @@ impl<'a> Sim<'a> {
             if d_next != st.d && ds.abs() < a.hl + ext_lon + 0.5 {
                 let (nlo, nhi) = (st.d.min(d_next) - a.hw - 0.1, st.d.max(d_next) + a.hw + 0.1);
                 let (jlo, jhi) = (lj - ext_lat, lj + ext_lat);
-                let now = jlo < st.d + a.hw && jhi > st.d - a.hw;
+                let now = jlo < cur_hi && jhi > cur_lo;
                 if jlo < nhi && jhi > nlo && !now {
                     side_blocked = true;
                 }
@@ -854,7 +871,7 @@ impl<'a> Sim<'a> {
             if d_next != st.d && st.phase < 0.5 {
                 let (jlo, jhi) = (lj - ext_lat, lj + ext_lat);
                 let in_target = jlo < goal_d + a.hw + 0.1 && jhi > goal_d - a.hw - 0.1;
-                let in_current = jlo < st.d + a.hw && jhi > st.d - a.hw;
+                let in_current = jlo < cur_hi && jhi > cur_lo;
                 if in_target && !in_current {
                     let v_j = o.v * cr;
                     let g = ds.abs() - a.hl - ext_lon;
@@ -874,7 +891,7 @@ impl<'a> Sim<'a> {
             let (v_lon, v_lat) = (o.v * cr, o.v * sr);
             // In the lane we are in now; or in the band we are moving into, and then only when
             // ahead of our front (alongside is the gap acceptance's business).
-            let in_cur = lj - ext_lat < st.d + a.hw + margin && lj + ext_lat > st.d - a.hw - margin;
+            let in_cur = lj - ext_lat < cur_hi + margin && lj + ext_lat > cur_lo - margin;
             let in_now = in_cur || (gap > 0.0 && lj - ext_lat < hi && lj + ext_lat > lo);
             let mut obstacle = in_now || is_named;
             // Someone about to cut across our corridor (a crossing pedestrian, a car in the
@@ -940,22 +957,47 @@ impl<'a> Sim<'a> {
             phase = st.phase;
             d_next = st.d;
         }
-        let s = st.s + adv;
-        let (pos, h) = a.path.point(s, d_next);
-        let d_rate = (d_next - st.d) / dt;
-        let yaw = if a.vehicle || adv > 1e-4 || d_rate.abs() > 1e-4 { h + d_rate.atan2(v.max(1.0)) } else { st.yaw };
         let stopped = stop_rem.is_some_and(|r| r - adv < 0.3) && v < 0.05;
-        State {
-            pos,
-            yaw: turn_toward(st.yaw, yaw, a, 0.5 * (st.v + v), dt, 1.0),
-            v,
-            s,
-            d: d_next,
-            phase,
-            triggered,
-            stopped,
-            frozen: false,
+        let next = State { v, d: d_next, phase, triggered, stopped, frozen: false, ..st };
+        if !a.vehicle {
+            // Holonomic: walkers and animals step onto the reference and face where they go.
+            let s = st.s + adv;
+            let (pos, h) = a.path.point(s, d_next);
+            let d_rate = (d_next - st.d) / dt;
+            let yaw = if adv > 1e-4 || d_rate.abs() > 1e-4 { h + d_rate.atan2(v.max(1.0)) } else { st.yaw };
+            return State { pos, yaw: turn_toward(st.yaw, yaw, lim.yaw_rate, dt), s, off: d_next, ..next };
         }
+        // Kinematic bicycle: pure pursuit of the reference (the route shifted by the lateral
+        // goal's offset, taken where the profile will be when the car gets there), curvature
+        // bounded by the turning radius and the yaw rate, position integrated along the heading.
+        let l_d = (0.8 * v).max(3.0 + 0.5 * a.r_min).min(20.0);
+        let horizon = l_d / v.max(1.0);
+        let d_look = if side_blocked {
+            st.d
+        } else if let Some(tg) = target {
+            a.d0 + (tg - a.d0) * quintic((phase + horizon / dur).min(1.0))
+        } else if let Some(tg) = pass_target {
+            d_next + (tg - d_next).clamp(-PASS_LAT_RATE * horizon, PASS_LAT_RATE * horizon)
+        } else {
+            d_next
+        };
+        let slip = v.max(3.0) * MAX_SLIP.tan() * horizon;
+        let d_look = d_next + (d_look - d_next).clamp(-slip, slip);
+        let (aim, _) = a.path.point(st.s + l_d, d_look);
+        let k = pursuit(st.pos, st.yaw, aim);
+        let (pos, yaw) = self.advance(a, &st, k, adv, 1.0);
+        let (s, off, _, _) = a.path.frenet(pos, st.s + adv);
+        State { pos, yaw, s, off, ..next }
+    }
+
+    /// Move vehicle `a` from `st` by `dist` along a circular arc of curvature `k`, bounded by its
+    /// turning radius and by `yaw_scale` times its class yaw rate at the step's mean speed.
+    fn advance(&self, a: &Actor, st: &State, k: f64, dist: f64, yaw_scale: f64) -> (DVec2, f64) {
+        if dist <= 0.0 {
+            return (st.pos, st.yaw);
+        }
+        let k_max = (1.0 / a.r_min).min(yaw_scale * a.lim.yaw_rate * self.dt / dist);
+        arc(st.pos, st.yaw, k.clamp(-k_max, k_max), dist)
     }
 
     /// How agent `i` gives the junction to an emergency vehicle on a crossing path: short of the
@@ -1056,8 +1098,11 @@ impl<'a> Sim<'a> {
         // Keep rolling: an intercept that stalls never makes contact.
         let v = (st.v + acc * dt).max(1.0);
         let adv = 0.5 * (st.v + v) * dt;
-        let (pos, h) = curve.at(adv, gyaw);
-        State { pos, yaw: turn_toward(st.yaw, h, a, 0.5 * (st.v + v), dt, stage::STRIKE_YAW), v, ..st }
+        // The arc from here through the curve's point `adv` ahead: the curve itself wherever the
+        // car can follow it; a wider arc where the curve turns tighter than the car can.
+        let (aim, _) = curve.at(adv, gyaw);
+        let (pos, yaw) = self.advance(a, &st, pursuit(st.pos, st.yaw, aim), adv, stage::STRIKE_YAW);
+        State { pos, yaw, v, ..st }
     }
 
     /// Undo moves until no two boxes overlap (conflict pairs excepted). Undoing every move
@@ -1142,15 +1187,26 @@ fn quintic(x: f64) -> f64 {
     x * x * x * (10.0 - 15.0 * x + 6.0 * x * x)
 }
 
-/// Rotate `from` toward `to`, bounded by the class yaw rate and, for vehicles, by a 3 m turning
-/// radius at the distance travelled (a vehicle does not turn on the spot).
-fn turn_toward(from: f64, to: f64, a: &Actor, v: f64, dt: f64, scale: f64) -> f64 {
-    let mut rate = a.lim.yaw_rate * scale;
-    if a.vehicle {
-        rate = rate.min(v / 3.0);
-    }
+/// Rotate `from` toward `to`, bounded by a yaw rate (holonomic agents turn on the spot).
+fn turn_toward(from: f64, to: f64, rate: f64, dt: f64) -> f64 {
     let step = wrap_angle(to - from).clamp(-rate * dt, rate * dt);
     wrap_angle(from + step)
+}
+
+/// Pure pursuit: the curvature of the circle through `p`, tangent to `yaw` there, and through
+/// `aim` (0 when `aim` is on the heading line or at `p`).
+fn pursuit(p: DVec2, yaw: f64, aim: DVec2) -> f64 {
+    let rel = (aim - p).rotate(DVec2::from_angle(-yaw));
+    let l2 = rel.length_squared();
+    if l2 < 1e-12 { 0.0 } else { 2.0 * rel.y / l2 }
+}
+
+/// Exact integration of the kinematic bicycle over a step of length `dist` at curvature `k`:
+/// the box moves along a circular arc tangent to its heading (no sideways slip).
+fn arc(p: DVec2, yaw: f64, k: f64, dist: f64) -> (DVec2, f64) {
+    let dyaw = k * dist;
+    let chord = if dyaw.abs() < 1e-9 { dist } else { 2.0 * (0.5 * dyaw).sin() / k };
+    (p + DVec2::from_angle(yaw + 0.5 * dyaw) * chord, wrap_angle(yaw + dyaw))
 }
 
 fn idm_free(v: f64, v0: f64, lim: Limits, dt: f64) -> f64 {
