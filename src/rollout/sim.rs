@@ -224,14 +224,16 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
 
 /// A tree or a pole has no front: its yaw is whatever the placement gave it (the lane's heading),
 /// so a requested `point front` in that frame could send the striker around the trunk to hit
-/// its far face. Turn such a struck object (a static, roughly square structure) to face the
+/// its far face. Turn such a struck object (a static structure, roughly square or under 2 m) to face the
 /// striker's start, so the requested side reads from the striker's approach: `front` is the face
 /// it drives into, `left` the one on the striker's right as it comes. Walls and buildings keep
 /// their yaw: their faces are real.
 fn face_the_striker(actors: &mut [Actor], k: &Conf) {
     let (af, st) = (actors[k.af].init, &actors[k.st]);
-    let square = st.hl.max(st.hw) <= 1.5 * st.hl.min(st.hw);
-    if !matches!(st.drive, Drive::Static) || st.info.class != Class::Structure || !square {
+    // A trunk or a pole: roughly square, or small whatever its sampled aspect (a 0.75 x 0.45 m
+    // tree box is still a trunk; a car could not drive around it to a far face in any case).
+    let trunk = st.hl.max(st.hw) <= 1.5 * st.hl.min(st.hw) || st.hl.max(st.hw) < 1.0;
+    if !matches!(st.drive, Drive::Static) || st.info.class != Class::Structure || !trunk {
         return;
     }
     let to_striker = DVec2::new(af.x - st.init.x, af.y - st.init.y);
@@ -1100,7 +1102,9 @@ impl<'a> Sim<'a> {
         let adv = 0.5 * (st.v + v) * dt;
         // The arc from here through the curve's point `adv` ahead: the curve itself wherever the
         // car can follow it; a wider arc where the curve turns tighter than the car can.
-        let (aim, _) = curve.at(adv, gyaw);
+        // In the last metres the contact point itself: the curve's end heading matters less than
+        // reaching its end, and a short re-planned curve can bend tighter than the car.
+        let aim = if len <= 3.0 * adv { g } else { curve.at(adv, gyaw).0 };
         let (pos, yaw) = self.advance(a, &st, pursuit(st.pos, st.yaw, aim), adv, stage::STRIKE_YAW);
         State { pos, yaw, v, ..st }
     }
