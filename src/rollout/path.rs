@@ -22,6 +22,12 @@ pub struct Path {
 impl Path {
     /// Resample a chain of points (consecutive duplicates allowed) at `STEP`.
     pub fn new(points: &[DVec2]) -> Path {
+        Path::new_until(points, f64::INFINITY)
+    }
+
+    /// `new`, keeping only the first `until` metres: a route is chained far beyond what an agent
+    /// can reach within a clip, and resampling all of it dominated the rollout's set-up.
+    pub fn new_until(points: &[DVec2], until: f64) -> Path {
         let mut cum = Vec::with_capacity(points.len());
         let mut pts_in: Vec<DVec2> = Vec::with_capacity(points.len());
         let mut acc = 0.0;
@@ -46,6 +52,7 @@ impl Path {
                 cap: vec![f64::INFINITY; 2],
             };
         }
+        let acc = acc.min(until.max(2.0 * STEP));
         let n = (acc / STEP).floor() as usize + 1;
         let mut pts = Vec::with_capacity(n + 1);
         let mut seg = 0;

@@ -2,6 +2,7 @@
 //! then computes each agent's next state from everyone's current state (a Jacobi update, so the
 //! result does not depend on agent order), undoes moves that would overlap, and latches crashes.
 
+use super::grid::Grid;
 use super::path::{Hermite, Path};
 use super::stage::{self, Plan};
 use super::traffic;
@@ -163,7 +164,7 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
     if let Some(t) = c.traffic {
         let boxes: Vec<(Obb, f64)> = actors.iter().map(|a| (a.obb(&initial(a)), initial(a).v)).collect();
         for s in traffic::spawn(map, &boxes, t, c.seed) {
-            actors.push(background_actor(map, s));
+            actors.push(background_actor(map, s, c.duration));
         }
     }
     let mut confs = vec![];
@@ -377,9 +378,10 @@ fn build_actor(
                         "place the agent on an in-lane of a junction that offers this turn",
                     );
                 }
-                a.path = Path::new(&pts);
                 let (s, d) = lane.centre.project(pos);
                 (a.s0, a.d0) = (s, d);
+                let v_top = a.v0.max(goal.and_then(|g| g.speed).unwrap_or(0.0)).max(lane.speed_limit);
+                a.path = Path::new_until(&pts, s.max(0.0) + reach(v_top, c.duration));
                 limit = lane.speed_limit;
                 stop_line = lane.stop_line_s.filter(|&sl| sl > a.s0);
                 lane_here = Some(l);
@@ -458,7 +460,15 @@ fn is_emergency(c: &Concrete, kind: &str) -> bool {
     EMERGENCY_KINDS.contains(&kind) || c.kinds.get(kind).is_some_and(|k| k.emergency)
 }
 
-fn background_actor(map: &Map, s: traffic::Spawn) -> Actor {
+/// How much of its route an agent can use within a clip of `duration` s: driving at up to 1.25
+/// times `v` (at least 15 m/s) all the way, plus the longest look-ahead of the car-following
+/// law at that speed and a margin. Nothing beyond can affect the clip.
+fn reach(v: f64, duration: f64) -> f64 {
+    let v = if v.is_finite() { v.max(15.0) * 1.25 } else { 40.0 };
+    v * duration + v * v / (2.0 * 2.0) + 2.5 * v + 60.0
+}
+
+fn background_actor(map: &Map, s: traffic::Spawn, duration: f64) -> Actor {
     let lane = &map.lanes[s.lane];
     let (p, yaw) = lane.centre.pose_at(s.s);
     let info = TrackAgent {
@@ -472,7 +482,7 @@ fn background_actor(map: &Map, s: traffic::Spawn) -> Actor {
     let mut a = base_actor(info, Pose { x: p.x, y: p.y, yaw }, Motion::Vehicle, Class::Vehicle, Drive::Mover);
     let (pts, _, junction) = chain(map, s.lane, None);
     a.junction = junction;
-    a.path = Path::new(&pts);
+    a.path = Path::new_until(&pts, s.s.max(0.0) + reach(s.speed.max(s.target), duration));
     a.path.set_caps(a.lim.lat_acc, a.lim.yaw_rate, a.lim.brake);
     a.s0 = s.s;
     a.v0 = s.speed;
@@ -684,6 +694,14 @@ struct Sim<'a> {
     dirs: Vec<DVec2>,
     /// Per agent, this frame: `yield_state`.
     yielding: Vec<(Option<f64>, bool)>,
+    /// Positions bucketed for the pair checks (`cur` while stepping, `next` while resolving).
+    grid: Grid,
+    /// Largest bounding radius of any agent, m: widens every grid query.
+    max_radius: f64,
+    /// This frame: agents easing aside (`away_from`, triggered), for `pass_offset`.
+    easing: Vec<usize>,
+    /// Scratch for `resolve_overlaps`.
+    scratch: Vec<usize>,
 }
 
 impl<'a> Sim<'a> {
@@ -713,6 +731,10 @@ impl<'a> Sim<'a> {
             next: cur.clone(),
             dirs: cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect(),
             yielding: vec![(None, false); actors.len()],
+            grid: Grid::default(),
+            max_radius: actors.iter().map(|a| a.radius).fold(0.0, f64::max),
+            easing: Vec::with_capacity(actors.len()),
+            scratch: Vec::with_capacity(actors.len()),
             cur,
         }
     }
@@ -726,6 +748,13 @@ impl<'a> Sim<'a> {
             let t = (f - 1) as f64 * self.dt;
             self.dirs.clear();
             self.dirs.extend(self.cur.iter().map(|s| DVec2::from_angle(s.yaw)));
+            self.grid.rebuild(self.cur.iter().map(|s| s.pos));
+            self.easing.clear();
+            for (j, (o, b)) in self.cur.iter().zip(self.actors.iter()).enumerate() {
+                if o.triggered && matches!(b.lateral, Lat::Away { .. }) {
+                    self.easing.push(j);
+                }
+            }
             for i in 0..self.actors.len() {
                 self.yielding[i] = self.yield_state(i);
             }
@@ -836,7 +865,11 @@ impl<'a> Sim<'a> {
             _ => None,
         };
         let (yield_rem, clearing) = self.yielding[i];
-        for (j, (o, b)) in self.cur.iter().zip(self.actors.iter()).enumerate() {
+        // Everyone near enough to matter, and the agent queued behind wherever it is (seen twice
+        // when near: every effect below is a min or an or, so that is harmless).
+        let reach = look + a.radius + self.max_radius;
+        for j in self.grid.near(st.pos, reach).chain(named) {
+            let (o, b) = (&self.cur[j], &self.actors[j]);
             if j == i || self.exempt(i, j) {
                 continue;
             }
@@ -1044,8 +1077,9 @@ impl<'a> Sim<'a> {
         let (a, st) = (&self.actors[i], &self.cur[i]);
         let fwd = DVec2::from_angle(st.yaw);
         let mut best: Option<f64> = None;
-        for (j, (o, b)) in self.cur.iter().zip(self.actors.iter()).enumerate() {
-            if j == i || !o.triggered || !matches!(b.lateral, Lat::Away { who, .. } if who == i) {
+        for &j in &self.easing {
+            let (o, b) = (&self.cur[j], &self.actors[j]);
+            if j == i || !matches!(b.lateral, Lat::Away { who, .. } if who == i) {
                 continue;
             }
             let ahead = (o.pos - st.pos).dot(fwd);
@@ -1113,10 +1147,21 @@ impl<'a> Sim<'a> {
     /// restores the previous frame, which had no overlap, so this always ends.
     fn resolve_overlaps(&mut self) {
         let n = self.actors.len();
+        let mut near = std::mem::take(&mut self.scratch);
+        // An undone move puts an agent back at most this far from where the grid has it: queries
+        // widened by it find every pair a full scan would see within the same sweep.
+        let moved = self.cur.iter().zip(&self.next).map(|(c, x)| c.pos.distance(x.pos)).fold(0.0, f64::max);
         for _ in 0..=n {
             let mut changed = false;
+            self.grid.rebuild(self.next.iter().map(|s| s.pos));
             for i in 0..n {
-                for j in i + 1..n {
+                // The pairs (i, j > i) within reach, in index order as a full scan would take
+                // them (undoing a move changes later pairs' outcome).
+                near.clear();
+                let r = self.actors[i].radius + self.max_radius + 2.0 * moved;
+                near.extend(self.grid.near(self.next[i].pos, r).filter(|&j| j > i));
+                near.sort_unstable();
+                for &j in &near {
                     let (ai, aj) = (&self.actors[i], &self.actors[j]);
                     let (si, sj) = (&self.next[i], &self.next[j]);
                     let r = ai.radius + aj.radius;
@@ -1139,6 +1184,7 @@ impl<'a> Sim<'a> {
                 break;
             }
         }
+        self.scratch = near;
     }
 
     /// Latch each staged conflict at its deepest overlap: once the boxes meet, the frame where
