@@ -868,7 +868,7 @@ impl<'a> Sim<'a> {
         // Everyone near enough to matter, and the agent queued behind wherever it is (seen twice
         // when near: every effect below is a min or an or, so that is harmless).
         let reach = look + a.radius + self.max_radius;
-        for j in self.grid.near(st.pos, reach).chain(named) {
+        for j in self.grid.cands(st.pos, reach).chain(named) {
             let (o, b) = (&self.cur[j], &self.actors[j]);
             if j == i || self.exempt(i, j) {
                 continue;
@@ -1159,7 +1159,7 @@ impl<'a> Sim<'a> {
                 // them (undoing a move changes later pairs' outcome).
                 near.clear();
                 let r = self.actors[i].radius + self.max_radius + 2.0 * moved;
-                near.extend(self.grid.near(self.next[i].pos, r).filter(|&j| j > i));
+                near.extend(self.grid.cands(self.next[i].pos, r).filter(|&j| j > i));
                 near.sort_unstable();
                 for &j in &near {
                     let (ai, aj) = (&self.actors[i], &self.actors[j]);
