@@ -9,7 +9,7 @@ use rocc::geom::{Obb, Polyline, wrap_angle};
 use rocc::place::{Placed, PlacedAgent, Pose};
 use rocc::road::Map;
 use rocc::road::map::{Connector, Lane};
-use rocc::rollout::{Tracks, contact_centroid, limits, rollout};
+use rocc::rollout::{Tracks, contact_centroid, limits, min_turn_radius, rollout};
 use rocc::sample::{Concrete, ConcreteAgent};
 use std::f64::consts::{FRAC_PI_2, PI};
 
@@ -812,4 +812,206 @@ proptest! {
         check_limits(&t);
         prop_assert_eq!(&t, &rollout(&c, &m, &p).expect("rollout"));
     }
+}
+
+// ------------------------------------------------------------------ kinematics of every vehicle
+
+/// Kinematic bicycle checks on consecutive poses of every vehicle: heading change per metre
+/// travelled within its kind's turning radius, displacement along the step's mean heading (no
+/// sideways slip) while moving over 0.5 m/s, and speed within `v_max` (m/s, per agent). Agents
+/// listed in `strikers` may use the staging's harder acceleration and yaw rate (1.6 x, 1.5 x);
+/// a crash's pair is checked up to its latched frame (the crash stops them dead).
+fn check_kinematics(t: &Tracks, v_max: &[f64], strikers: &[usize]) {
+    let dt = 1.0 / t.rate;
+    for (i, a) in t.agents.iter().enumerate() {
+        let last = t.impacts.iter().filter(|r| r.at_fault == i || r.struck == i).map(|r| r.frame).min();
+        let lim = limits(a.class, a.motion);
+        let (fa, fy) = if strikers.contains(&i) { (1.6, 1.5) } else { (1.0, 1.0) };
+        let r_min = min_turn_radius(a.class, a.size[0]);
+        for f in 1..last.unwrap_or(t.frames) {
+            let v = t.speeds[i][f];
+            assert!(v >= 0.0 && v <= v_max[i] + 0.5, "{}: speed {v:.2} at {f} (max {:.2})", a.name, v_max[i]);
+            let acc = (v - t.speeds[i][f - 1]) / dt;
+            assert!(acc <= fa * lim.accel + 1e-6 && acc >= -lim.brake_max - 1e-6, "{}: accel {acc} at {f}", a.name);
+            let (p, q) = (t.poses[i][f - 1], t.poses[i][f]);
+            let dyaw = wrap_angle(q.yaw - p.yaw);
+            assert!(dyaw.abs() / dt <= fy * lim.yaw_rate + 1e-6, "{}: yaw rate {} at {f}", a.name, dyaw.abs() / dt);
+            if a.motion != Motion::Vehicle {
+                continue;
+            }
+            let step = DVec2::new(q.x - p.x, q.y - p.y);
+            let ds = step.length();
+            if ds > 1e-3 {
+                let k = dyaw.abs() / ds;
+                assert!(k <= 1.0 / r_min + 1e-3, "{}: curvature {k:.4} > 1/{r_min:.2} at {f}", a.name);
+            }
+            if ds > 0.5 * dt {
+                let mean = p.yaw + 0.5 * dyaw;
+                let slip = wrap_angle(step.y.atan2(step.x) - mean).abs();
+                assert!(slip < 0.02, "{}: slip {slip:.4} rad at {f}", a.name);
+            }
+        }
+    }
+}
+
+#[test]
+fn turning_radius_grows_with_the_kind() {
+    let car = min_turn_radius(Class::Vehicle, 4.65);
+    let bus = min_turn_radius(Class::Vehicle, 12.0);
+    assert!((3.5..4.5).contains(&car), "sedan {car}");
+    assert!(bus > 2.0 * car && (9.0..12.0).contains(&bus), "bus {bus}");
+    assert!(min_turn_radius(Class::Bicycle, 1.8) < 1.5);
+}
+
+/// A stopped car asked to change lane stays where it is: it cannot slide sideways.
+#[test]
+fn a_stopped_car_does_not_slide_sideways() {
+    let m = straight(2);
+    let g = Some(Goal { speed: Some(0.0), lateral: Lateral::ChangeLane(Side::Left), ..goal() });
+    let t = run(vec![car("ego", on(&m, id(Arm::West, Dir::In, 2), 40.0, 0.0), 0.0, g)], vec![], &m, 4.0);
+    assert!(t.poses[0].iter().all(|p| *p == t.poses[0][0]), "moved: {:?}", t.poses[0].last());
+    // Rolling slowly, the same request moves it forward as much as sideways at most.
+    let g = Some(Goal { speed: Some(2.0), lateral: Lateral::ChangeLane(Side::Left), ..goal() });
+    let t = run(vec![car("ego", on(&m, id(Arm::West, Dir::In, 2), 40.0, 0.0), 2.0, g)], vec![], &m, 6.0);
+    check_kinematics(&t, &[2.0], &[]);
+    let (a, b) = (t.poses[0][0], t.poses[0][t.frames - 1]);
+    assert!((b.y - a.y).abs() > 1.0, "no lane change at walking pace: {}", b.y - a.y);
+}
+
+/// A bus cannot take a right turn a car takes on its own radius: it swings wider, the car stays
+/// within a few decimetres of the connector.
+#[test]
+fn a_bus_turns_wider_than_a_car() {
+    let m = four_way();
+    let g = Some(Goal { speed: Some(5.0), turn: Some(Turn::Right), ..goal() });
+    let widest = |size: [f64; 3]| {
+        let mut s = car("v", on(&m, id(Arm::South, Dir::In, 1), 30.0, 0.0), 5.0, g.clone());
+        s.size = size;
+        let t = run(vec![s], vec![], &m, 12.0);
+        check_kinematics(&t, &[5.0], &[]);
+        let conn = m.connectors.iter().find(|c| c.turn == Turn::Right && m.lanes[c.from].id.arm == Arm::South);
+        let conn = conn.expect("right-turn connector");
+        t.poses[0].iter().map(|p| conn.path.project(DVec2::new(p.x, p.y))).filter(|(s, _)| *s > 0.0 && *s < conn.path.length()).map(|(_, d)| d.abs()).fold(0.0, f64::max)
+    };
+    let (c, b) = (widest(CAR), widest([12.0, 2.5, 3.2]));
+    assert!(c < 0.5, "car off its connector by {c:.2} m");
+    assert!(b > c + 0.5, "bus {b:.2} m vs car {c:.2} m");
+}
+
+// ------------------------------------------------------------------ conflicts on every side
+
+/// All eight `point` sides, each with an impact type that reaches it (rear sides by rear_end,
+/// front ones by head_on, the sides by angle in a junction), measured on the boxes.
+#[test]
+fn every_point_side_is_hit() {
+    for (name, point) in POINTS {
+        let (lon, lat) = match point {
+            Point::Front => (1, 0),
+            Point::Rear => (-1, 0),
+            Point::Left => (0, 1),
+            Point::Right => (0, -1),
+            Point::FrontLeft => (1, 1),
+            Point::FrontRight => (1, -1),
+            Point::RearLeft => (-1, 1),
+            Point::RearRight => (-1, -1),
+        };
+        let t = match (lon, lat) {
+            (-1, _) => {
+                let m = straight(2);
+                let l = id(Arm::West, Dir::In, 1);
+                let striker = car("striker", on(&m, l, 30.0, 0.0), 14.0, None);
+                let victim = car("victim", on(&m, l, 80.0, 0.0), 6.0, None);
+                check_conflict(vec![striker, victim], &m, Impact::RearEnd, point, 3.0)
+            }
+            (1, _) => {
+                let m = straight(1);
+                let victim = car("victim", on(&m, id(Arm::West, Dir::In, 1), 100.0, 0.0), 9.0, None);
+                let striker = car("striker", on(&m, id(Arm::East, Dir::In, 1), 120.0, 0.0), 9.0, None);
+                check_conflict(vec![striker, victim], &m, Impact::HeadOn, point, 3.0)
+            }
+            _ => {
+                let m = four_way();
+                let straight_on = Some(Goal { turn: Some(Turn::Straight), ..goal() });
+                let arm = if lat > 0 { Arm::West } else { Arm::East };
+                let victim = car("victim", on(&m, id(Arm::South, Dir::In, 1), 30.0, 0.0), 8.0, straight_on.clone());
+                let striker = car("striker", on(&m, id(arm, Dir::In, 1), 28.0, 0.0), 8.0, straight_on);
+                check_conflict(vec![striker, victim], &m, Impact::Angle, point, 4.0)
+            }
+        };
+        assert_eq!(t.impacts[0].struck_side, point, "{name}");
+        check_kinematics(&t, &[30.0, 20.0], &[0]);
+    }
+}
+
+/// A car strikes a walker crossing the road: contact on the walker's side that faces the car
+/// (its left as it walks north and the car comes from the west; its right for a car from the
+/// east), at the requested time; the car moves as a bicycle throughout.
+#[test]
+fn impact_on_a_crossing_pedestrian() {
+    let m = straight(1);
+    for (arm, s, point, at) in [(Arm::West, 154.0, Point::Left, 3.0), (Arm::East, 50.0, Point::Right, 5.0)] {
+        let ped = Spec {
+            name: "walker",
+            class: Class::Pedestrian,
+            motion: Motion::Holonomic,
+            size: [0.6, 0.6, 1.7],
+            pose: Pose { x: 40.0, y: -W - 1.5, yaw: FRAC_PI_2 },
+            speed: 0.0,
+            goal: Some(Goal { speed: Some(1.4), lateral: Lateral::Cross, ..goal() }),
+            object: false,
+            track: None,
+        };
+        let striker = car("striker", on(&m, id(arm, Dir::In, 1), s, 0.0), 12.0, None);
+        let t = check_conflict(vec![striker, ped], &m, Impact::Pedestrian, point, at);
+        check_kinematics(&t, &[20.0, 1.4], &[0]);
+    }
+}
+
+// ------------------------------------------------------------------ emergency kinds
+
+/// The checked, sampled, placed scene of `.scn` text (through the whole front end).
+fn front_of(text: &str) -> rocc::compile::Front {
+    let mut sources = rocc::source::SourceMap::default();
+    let s = rocc::check::check_text("t.scn", text, std::path::Path::new("."), &mut sources)
+        .unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| d.message.clone()).collect::<Vec<_>>()));
+    rocc::compile::front(s, None).unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| d.message.clone()).collect::<Vec<_>>()))
+}
+
+fn crossing_scene(kind_decl: &str, kind: &str) -> String {
+    format!(
+        "{kind_decl}\nscenario t {{\n    seed 1\n    duration 10 s\n    rate 10 Hz\n    egos [car]\n\n    \
+         road four_way {{ lanes 1; lane_width 3.5 m; speed_limit 50 km/h }}\n\n    \
+         agent car: sedan {{\n        at south.in[1], 17 m before stop_line\n        speed 8 m/s\n        \
+         goal {{ speed 8 m/s; turn straight }}\n    }}\n    \
+         agent other: {kind} {{\n        at west.in[1], 38 m before stop_line\n        speed 11 m/s\n        \
+         goal {{ speed 11 m/s; turn straight }}\n    }}\n}}\n"
+    )
+}
+
+/// The car's lowest speed before the other vehicle has crossed its path.
+fn lowest_speed_before_the_other_crosses(f: &rocc::compile::Front) -> f64 {
+    let t = &f.tracks;
+    let (car, other) = (0, 1);
+    let x_car = t.poses[car][0].x;
+    let crossed = (0..t.frames).find(|&k| t.poses[other][k].x - t.agents[other].size[0] / 2.0 > x_car + 2.0);
+    let end = crossed.unwrap_or(t.frames - 1);
+    t.speeds[car][..=end].iter().copied().fold(f64::INFINITY, f64::min)
+}
+
+/// A kind derived from `ambulance` is an emergency vehicle (the car holds for it); a kind of the
+/// same box declared from the `vehicle` class is not (the car goes first).
+#[test]
+fn a_kind_derived_from_ambulance_is_an_emergency_vehicle() {
+    let derived = front_of(&crossing_scene("kind my_amb: ambulance { length 7.0 m }", "my_amb"));
+    assert_eq!(derived.concrete.agents[1].size[0], 7.0);
+    assert!(derived.scenario.kinds["my_amb"].emergency);
+    let held = lowest_speed_before_the_other_crosses(&derived);
+    assert!(held < 0.5, "the car did not hold for the derived ambulance: {held:.2} m/s");
+    let plain = front_of(&crossing_scene(
+        "kind my_van: vehicle { length 7.0 m; width 2.3 m; height 2.7 m }",
+        "my_van",
+    ));
+    assert!(!plain.scenario.kinds["my_van"].emergency);
+    let went = lowest_speed_before_the_other_crosses(&plain);
+    assert!(went > 2.0, "the car held for an ordinary van: {went:.2} m/s");
 }

@@ -1005,7 +1005,7 @@ impl<'a> Sim<'a> {
         // Kinematic bicycle: pure pursuit of the reference (the route shifted by the lateral
         // goal's offset, taken where the profile will be when the car gets there), curvature
         // bounded by the turning radius and the yaw rate, position integrated along the heading.
-        let l_d = (0.8 * v).max(3.0 + 0.5 * a.r_min).min(20.0);
+        let l_d = (0.8 * v).max(2.0 + 0.25 * a.r_min).min(20.0);
         let horizon = l_d / v.max(1.0);
         let d_look = if side_blocked {
             st.d
