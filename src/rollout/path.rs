@@ -131,7 +131,6 @@ impl Path {
         self.cap[i].min(self.cap[i + 1])
     }
 
-    #[cfg(test)]
     pub fn curvature(&self, s: f64) -> f64 {
         let (i, t) = self.locate(s);
         self.curvature[i] * (1.0 - t) + self.curvature[i + 1] * t

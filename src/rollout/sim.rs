@@ -20,6 +20,11 @@ use glam::DVec2;
 const RUN_OUT: f64 = 300.0;
 /// Pace of a `cross` goal given no speed at all, m/s.
 const WALK_SPEED: f64 = 1.4;
+/// How much tighter than a vehicle's turning radius a junction path may turn before the turn is
+/// refused (E0204). Up to it the vehicle swings wider across the junction area (a sedan's U-turn
+/// on a four_way without median: its path turns on 1.7 m, the sedan on 4.0 m); beyond it (a bus
+/// on 10.3 m) the arc leaves the road, as the template property test checks.
+const TURN_SLACK: f64 = 3.0;
 /// Lateral manoeuvre durations, s.
 const LANE_CHANGE_S: f64 = 4.0;
 const ASIDE_S: f64 = 2.5;
@@ -382,6 +387,29 @@ fn build_actor(
                 (a.s0, a.d0) = (s, d);
                 let v_top = a.v0.max(goal.and_then(|g| g.speed).unwrap_or(0.0)).max(lane.speed_limit);
                 a.path = Path::new_until(&pts, s.max(0.0) + reach(v_top, c.duration));
+                // A turn tighter than the kind can steer (a bus's U-turn on a narrow junction)
+                // would leave the road: refused, not driven wide.
+                if let (Some(t), Some(j)) = (turn, a.junction) {
+                    let entry = j.exit - map.connectors[j.conn].path.length();
+                    let n = ((j.exit - entry) / 0.5).ceil().max(1.0) as usize;
+                    let k = (0..=n).map(|i| a.path.curvature(entry + (j.exit - entry) * i as f64 / n as f64).abs());
+                    let k = k.fold(0.0, f64::max);
+                    if k * a.r_min > TURN_SLACK {
+                        fail(
+                            errs,
+                            format!(
+                                "`{}` ({}, turning radius {:.1} m) cannot turn {} here: the junction's path turns on {:.1} m",
+                                ca.name,
+                                p.kind,
+                                a.r_min,
+                                turn_name(t),
+                                1.0 / k
+                            ),
+                            "a wider road (lane_width, median) or a smaller kind; rocc derives the turning radius \
+                             from the kind's length (see README, Rollout)",
+                        );
+                    }
+                }
                 limit = lane.speed_limit;
                 stop_line = lane.stop_line_s.filter(|&sl| sl > a.s0);
                 lane_here = Some(l);
@@ -978,8 +1006,10 @@ impl<'a> Sim<'a> {
             let shortest = (st.v * dt - 0.5 * lim.brake_max * dt * dt).max(0.0);
             hard = hard.min(rem.max(shortest));
         }
-        // Do not run off the end of the path.
-        hard = hard.min(a.path.length() - st.s);
+        // Do not run off the end of the path (a walker's crossing ends there): slow down onto it.
+        let to_end = a.path.length() - st.s;
+        acc = acc.min(stop_law(st.v, to_end, lim, dt));
+        hard = hard.min(to_end);
 
         let acc = acc.clamp(-lim.brake_max, lim.accel);
         let mut v = (st.v + acc * dt).max(0.0);
@@ -1131,8 +1161,9 @@ impl<'a> Sim<'a> {
         let curve = Hermite::new(st.pos, st.yaw, g, gyaw);
         let len = curve.length();
         let acc = (2.0 * (len - st.v * tau) / (tau * tau)).clamp(-lim.brake_max, stage::STRIKE_ACCEL * lim.accel);
-        // Keep rolling: an intercept that stalls never makes contact.
-        let v = (st.v + acc * dt).max(1.0);
+        // Keep rolling (an intercept that stalls never makes contact), within the strike's
+        // acceleration.
+        let v = (st.v + acc * dt).max(1.0f64.min(st.v + stage::STRIKE_ACCEL * lim.accel * dt));
         let adv = 0.5 * (st.v + v) * dt;
         // The arc from here through the curve's point `adv` ahead: the curve itself wherever the
         // car can follow it; a wider arc where the curve turns tighter than the car can.
