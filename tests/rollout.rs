@@ -908,7 +908,12 @@ fn a_truck_turns_wider_than_a_car_and_a_bus_is_refused() {
         check_kinematics(&t, &[5.0], &[]);
         let conn = m.connectors.iter().find(|c| c.turn == Turn::Right && m.lanes[c.from].id.arm == Arm::South);
         let conn = conn.expect("right-turn connector");
-        t.poses[0].iter().map(|p| conn.path.project(DVec2::new(p.x, p.y))).filter(|(s, _)| *s > 0.0 && *s < conn.path.length()).map(|(_, d)| d.abs()).fold(0.0, f64::max)
+        t.poses[0]
+            .iter()
+            .map(|p| conn.path.project(DVec2::new(p.x, p.y)))
+            .filter(|(s, _)| *s > 0.0 && *s < conn.path.length())
+            .map(|(_, d)| d.abs())
+            .fold(0.0, f64::max)
     };
     let (c, b) = (widest(CAR), widest([8.0, 2.5, 3.4]));
     assert!(c < 0.5, "car off its connector by {c:.2} m");
@@ -997,7 +1002,8 @@ fn front_of(text: &str) -> rocc::compile::Front {
     let mut sources = rocc::source::SourceMap::default();
     let s = rocc::check::check_text("t.scn", text, std::path::Path::new("."), &mut sources)
         .unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| d.message.clone()).collect::<Vec<_>>()));
-    rocc::compile::front(s, None).unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| d.message.clone()).collect::<Vec<_>>()))
+    rocc::compile::front(s, None)
+        .unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| d.message.clone()).collect::<Vec<_>>()))
 }
 
 fn crossing_scene(kind_decl: &str, kind: &str) -> String {
@@ -1030,10 +1036,7 @@ fn a_kind_derived_from_ambulance_is_an_emergency_vehicle() {
     assert!(derived.scenario.kinds["my_amb"].emergency);
     let held = lowest_speed_before_the_other_crosses(&derived);
     assert!(held < 0.5, "the car did not hold for the derived ambulance: {held:.2} m/s");
-    let plain = front_of(&crossing_scene(
-        "kind my_van: vehicle { length 7.0 m; width 2.3 m; height 2.7 m }",
-        "my_van",
-    ));
+    let plain = front_of(&crossing_scene("kind my_van: vehicle { length 7.0 m; width 2.3 m; height 2.7 m }", "my_van"));
     assert!(!plain.scenario.kinds["my_van"].emergency);
     let went = lowest_speed_before_the_other_crosses(&plain);
     assert!(went > 2.0, "the car held for an ordinary van: {went:.2} m/s");
@@ -1106,8 +1109,12 @@ fn scene_text(g: &GenScene) -> String {
     let junction = g.template <= 2;
     let lanes = if g.template == 2 { 1 } else { g.lanes };
     let road = match TEMPLATES[g.template] {
-        "roundabout" => "road roundabout { lanes 1; lane_width 4.0 m; radius 20 m; speed_limit 30 km/h; sidewalks on }".to_string(),
-        "curve" => format!("road curve {{ lanes {lanes}; lane_width 3.5 m; radius 60 m; angle 60 deg; speed_limit 50 km/h; sidewalks on }}"),
+        "roundabout" => {
+            "road roundabout { lanes 1; lane_width 4.0 m; radius 20 m; speed_limit 30 km/h; sidewalks on }".to_string()
+        }
+        "curve" => format!(
+            "road curve {{ lanes {lanes}; lane_width 3.5 m; radius 60 m; angle 60 deg; speed_limit 50 km/h; sidewalks on }}"
+        ),
         t => format!("road {t} {{ lanes {lanes}; lane_width 3.5 m; speed_limit 40 km/h; sidewalks on }}"),
     };
     let arms = arms(g.template);
@@ -1165,8 +1172,7 @@ fn scene_text(g: &GenScene) -> String {
     {
         s += &format!(
             "    conflict {{ at_fault v0; struck v1; impact {}; point {}; at {at:.1} s }}\n",
-            GEN_IMPACTS[impact],
-            POINTS[point].0
+            GEN_IMPACTS[impact], POINTS[point].0
         );
     }
     if g.traffic {

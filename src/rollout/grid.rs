@@ -31,11 +31,7 @@ impl Grid {
     /// Every agent near `p` (`near`), or simply every agent when there are fewer than
     /// `MIN_AGENTS`; the caller filters by distance either way.
     pub fn cands(&self, p: DVec2, r: f64) -> Cands<'_> {
-        if self.entries.len() < MIN_AGENTS {
-            Cands::All(0..self.entries.len())
-        } else {
-            Cands::Grid(self.near(p, r))
-        }
+        if self.entries.len() < MIN_AGENTS { Cands::All(0..self.entries.len()) } else { Cands::Grid(self.near(p, r)) }
     }
 
     pub fn rebuild(&mut self, positions: impl Iterator<Item = DVec2>) {

@@ -9,7 +9,9 @@
 //!   along its path — now, or predicted to cut into it within a few seconds — plus a stopping law
 //!   that lands exactly on stop targets (stop line, queue gap, distance);
 //! - lateral: offsets from the route's centre line, moved along quintic profiles that pause while
-//!   the target side is occupied;
+//!   the target side is occupied; vehicles steer toward that reference by pure pursuit and move
+//!   as kinematic bicycles (along their heading, curvature bounded by `min_turn_radius` and the
+//!   yaw rate); walkers and animals step onto it holonomically;
 //! - junctions: vehicles whose junction path crosses an approaching emergency vehicle's hold at
 //!   their stop line, and those already committed clear the junction first;
 //! - a last safety net: a move that would make two boxes overlap is undone (the agent holds its
