@@ -143,6 +143,13 @@ impl Path {
         (p + DVec2::from_angle(h).perp() * d, h)
     }
 
+    /// `point` without the heading, and without trigonometry (interpolated unit tangents).
+    #[inline]
+    pub fn point_fast(&self, s: f64, d: f64) -> DVec2 {
+        let (p, t) = self.at_vec(s);
+        p + t.normalize_or(DVec2::X).perp() * d
+    }
+
     /// Arc length and left offset of `p`, searched from `guess` by Newton steps along the
     /// tangent (O(1), good near the guess), how far beyond either end `p` lies, and the path
     /// heading there.

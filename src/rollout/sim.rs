@@ -883,7 +883,7 @@ impl<'a> Sim<'a> {
         let (cur_lo, cur_hi) = (st.d.min(st.off) - a.hw, st.d.max(st.off) + a.hw);
         let (lo, hi) = (cur_lo.min(goal_d - a.hw) - margin, cur_hi.max(goal_d + a.hw) + margin);
 
-        let fwd = DVec2::from_angle(st.yaw);
+        let fwd = self.dirs[i];
         let look = st.v * st.v / (2.0 * lim.brake) + 2.5 * st.v + 15.0;
         let mut acc = idm_free(st.v, v_des, lim, dt);
         let mut hard = f64::INFINITY;
@@ -1048,10 +1048,10 @@ impl<'a> Sim<'a> {
         };
         let slip = v.max(3.0) * MAX_SLIP.tan() * horizon;
         let d_look = d_next + (d_look - d_next).clamp(-slip, slip);
-        let (aim, _) = a.path.point(st.s + l_d, d_look);
-        let k = pursuit(st.pos, st.yaw, aim);
+        let aim = a.path.point_fast(st.s + l_d, d_look);
+        let k = pursuit(st.pos, self.dirs[i], aim);
         let (pos, yaw) = self.advance(a, &st, k, adv, 1.0);
-        let (s, off, _, _) = a.path.frenet(pos, st.s + adv);
+        let (s, off, _, _) = a.path.frenet_dir(pos, st.s + adv);
         State { pos, yaw, s, off, ..next }
     }
 
@@ -1105,7 +1105,7 @@ impl<'a> Sim<'a> {
     /// is none, or when passing would take more than `PASS_MAX_SHIFT` out of the lane.
     fn pass_offset(&self, i: usize, look: f64) -> Option<f64> {
         let (a, st) = (&self.actors[i], &self.cur[i]);
-        let fwd = DVec2::from_angle(st.yaw);
+        let fwd = self.dirs[i];
         let mut best: Option<f64> = None;
         for &j in &self.easing {
             let (o, b) = (&self.cur[j], &self.actors[j]);
@@ -1170,7 +1170,7 @@ impl<'a> Sim<'a> {
         // In the last metres the contact point itself: the curve's end heading matters less than
         // reaching its end, and a short re-planned curve can bend tighter than the car.
         let aim = if len <= 3.0 * adv { g } else { curve.at(adv, gyaw).0 };
-        let (pos, yaw) = self.advance(a, &st, pursuit(st.pos, st.yaw, aim), adv, stage::STRIKE_YAW);
+        let (pos, yaw) = self.advance(a, &st, pursuit(st.pos, self.dirs[i], aim), adv, stage::STRIKE_YAW);
         State { pos, yaw, v, ..st }
     }
 
@@ -1274,12 +1274,12 @@ fn turn_toward(from: f64, to: f64, rate: f64, dt: f64) -> f64 {
     wrap_angle(from + step)
 }
 
-/// Pure pursuit: the curvature of the circle through `p`, tangent to `yaw` there, and through
-/// `aim` (0 when `aim` is on the heading line or at `p`).
-fn pursuit(p: DVec2, yaw: f64, aim: DVec2) -> f64 {
-    let rel = (aim - p).rotate(DVec2::from_angle(-yaw));
+/// Pure pursuit: the curvature of the circle through `p`, tangent to the unit heading `fwd`
+/// there, and through `aim` (0 when `aim` is on the heading line or at `p`).
+fn pursuit(p: DVec2, fwd: DVec2, aim: DVec2) -> f64 {
+    let rel = aim - p;
     let l2 = rel.length_squared();
-    if l2 < 1e-12 { 0.0 } else { 2.0 * rel.y / l2 }
+    if l2 < 1e-12 { 0.0 } else { 2.0 * fwd.perp_dot(rel) / l2 }
 }
 
 /// Exact integration of the kinematic bicycle over a step of length `dist` at curvature `k`:
