@@ -3,7 +3,7 @@
 //! `stages`, `e2e` (default: all).
 //!
 //! - front: parse + check per library file, and generated files of 10/100/1000 agents;
-//! - rollout: cost per agent-frame over the library, and on a generated 50-agent scene;
+//! - rollout: cost per agent-frame over the library, and on generated 50- and 200-agent scenes;
 //! - stages: frames/s of BEV, occupancy, LiDAR (+ rays/s) and of each writer, on the
 //!   ambulance example (background traffic included), one core and every core;
 //! - e2e: `rocc compile` of the whole library at full stage into a temporary directory
@@ -116,16 +116,21 @@ fn bench_rollout() {
         );
     }
     println!("  library total: {:.3} us/agent-frame", total.0 * 1e6 / total.1.max(1) as f64);
-    let mut sources = SourceMap::default();
-    if let Some(f) = rocc::check::check_text("gen.scn", &generated(50), Path::new("."), &mut sources)
-        .ok()
-        .and_then(|s| front(s, None).ok())
-    {
+    // 50 agents: below the grid's threshold (a scan of all agents); 200: bucketed.
+    for n in [50, 200] {
+        let mut sources = SourceMap::default();
+        let Some(f) = rocc::check::check_text("gen.scn", &generated(n), Path::new("."), &mut sources)
+            .ok()
+            .and_then(|s| front(s, None).ok())
+        else {
+            println!("  generated {n} agents: does not compile");
+            continue;
+        };
         let t = median(10, || {
             std::hint::black_box(rocc::rollout::rollout(&f.concrete, &f.map, &f.placed).is_ok());
         });
         let af = f.tracks.agents.len() * f.tracks.frames;
-        println!("  generated 50 agents x {} frames: {:.3} us/agent-frame", f.tracks.frames, t * 1e6 / af as f64);
+        println!("  generated {n} agents x {} frames: {:.3} us/agent-frame", f.tracks.frames, t * 1e6 / af as f64);
     }
 }
 

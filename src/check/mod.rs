@@ -181,9 +181,21 @@ impl Checker {
                 self.dup(&format!("kind `{}`", k.name.name), first, k.name.span);
                 continue;
             }
-            let Some(class) = word(self, &k.class, &Class::ALL, "class") else { continue };
-            let mut motion = class.default_motion();
-            let mut size: [Option<Dist>; 3] = [None; 3];
+            // After the colon, a class; else an earlier kind, whose class, motion, box priors and
+            // emergency status the new kind inherits (its own statements override them).
+            let is_class = Class::ALL.iter().any(|(n, _)| *n == k.class.name);
+            let parent = self.kinds.get(&k.class.name).filter(|_| !is_class).map(|(p, _)| p.clone());
+            let class = match &parent {
+                Some(p) => p.class,
+                None => {
+                    let Some(class) = word(self, &k.class, &Class::ALL, "class") else { continue };
+                    class
+                }
+            };
+            let mut motion = parent.as_ref().map_or(class.default_motion(), |p| p.motion);
+            let mut size: [Option<Dist>; 3] =
+                parent.as_ref().map_or([None; 3], |p| [Some(p.length), Some(p.width), Some(p.height)]);
+            let emergency = EMERGENCY_KINDS.contains(&k.name.name.as_str()) || parent.is_some_and(|p| p.emergency);
             for s in &k.stmts {
                 match s {
                     ast::KindStmt::Motion { motion: m, .. } => {
@@ -214,7 +226,7 @@ impl Checker {
             let [length, width, height] = size.map(|s| s.expect("checked above"));
             self.kinds.insert(
                 k.name.name.clone(),
-                (Kind { name: k.name.name.clone(), class, motion, length, width, height }, k.name.span),
+                (Kind { name: k.name.name.clone(), class, motion, length, width, height, emergency }, k.name.span),
             );
         }
     }

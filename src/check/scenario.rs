@@ -219,7 +219,15 @@ pub struct Kind {
     pub length: Dist,
     pub width: Dist,
     pub height: Dist,
+    /// Drives with lights and siren: one of `EMERGENCY_KINDS` or derived from one
+    /// (`kind my_amb: ambulance { ... }`). Derived by the checker, so not serialised.
+    #[serde(skip)]
+    pub emergency: bool,
 }
+
+/// The stdlib kinds that drive with lights and siren (cross traffic gives them the junction);
+/// kinds derived from them inherit it.
+pub const EMERGENCY_KINDS: [&str; 3] = ["ambulance", "fire_truck", "police_car"];
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Agent {

@@ -9,7 +9,9 @@
 //!   along its path — now, or predicted to cut into it within a few seconds — plus a stopping law
 //!   that lands exactly on stop targets (stop line, queue gap, distance);
 //! - lateral: offsets from the route's centre line, moved along quintic profiles that pause while
-//!   the target side is occupied;
+//!   the target side is occupied; vehicles steer toward that reference by pure pursuit and move
+//!   as kinematic bicycles (along their heading, curvature bounded by `min_turn_radius` and the
+//!   yaw rate); walkers and animals step onto it holonomically;
 //! - junctions: vehicles whose junction path crosses an approaching emergency vehicle's hold at
 //!   their stop line, and those already committed clear the junction first;
 //! - a last safety net: a move that would make two boxes overlap is undone (the agent holds its
@@ -20,6 +22,7 @@
 //! following a Hermite intercept, re-planned each frame, to a pose that puts its striking face
 //! on the requested side of the struck box at the impact frame.
 
+mod grid;
 mod path;
 mod sim;
 mod stage;
@@ -110,6 +113,16 @@ pub fn limits(class: Class, motion: Motion) -> Limits {
         }
         _ => Limits { accel: 1.5, brake: 2.0, brake_max: 4.0, yaw_rate: 3.0, lat_acc: 4.0, headway: 0.8, min_gap: 0.8 },
     }
+}
+
+/// Smallest turning radius of a vehicle's box centre, m, from its kind's box length (the stdlib
+/// priors carry no wheelbase): a kinematic bicycle with wheelbase `0.6 * length` (a sedan's
+/// 2.8 m at 4.65 m, a city bus's 7.2 m at 12 m) and a largest steering angle of 35 degrees
+/// (45 for bicycles), referenced at the box centre so that the box moves along its heading.
+/// A sedan turns on 4.0 m, an ambulance on 5.6 m, a bus on 10.3 m; at least 1 m for anything.
+pub fn min_turn_radius(class: Class, length: f64) -> f64 {
+    let steer: f64 = if class == Class::Bicycle { 45.0 } else { 35.0 };
+    (0.6 * length / steer.to_radians().tan()).max(1.0)
 }
 
 /// Roll the placed scenario out over its frames.

@@ -22,6 +22,12 @@ pub struct Path {
 impl Path {
     /// Resample a chain of points (consecutive duplicates allowed) at `STEP`.
     pub fn new(points: &[DVec2]) -> Path {
+        Path::new_until(points, f64::INFINITY)
+    }
+
+    /// `new`, keeping only the first `until` metres: a route is chained far beyond what an agent
+    /// can reach within a clip, and resampling all of it dominated the rollout's set-up.
+    pub fn new_until(points: &[DVec2], until: f64) -> Path {
         let mut cum = Vec::with_capacity(points.len());
         let mut pts_in: Vec<DVec2> = Vec::with_capacity(points.len());
         let mut acc = 0.0;
@@ -46,6 +52,7 @@ impl Path {
                 cap: vec![f64::INFINITY; 2],
             };
         }
+        let acc = acc.min(until.max(2.0 * STEP));
         let n = (acc / STEP).floor() as usize + 1;
         let mut pts = Vec::with_capacity(n + 1);
         let mut seg = 0;
@@ -124,7 +131,6 @@ impl Path {
         self.cap[i].min(self.cap[i + 1])
     }
 
-    #[cfg(test)]
     pub fn curvature(&self, s: f64) -> f64 {
         let (i, t) = self.locate(s);
         self.curvature[i] * (1.0 - t) + self.curvature[i + 1] * t
@@ -135,6 +141,13 @@ impl Path {
     pub fn point(&self, s: f64, d: f64) -> (DVec2, f64) {
         let (p, h) = self.at(s);
         (p + DVec2::from_angle(h).perp() * d, h)
+    }
+
+    /// `point` without the heading, and without trigonometry (interpolated unit tangents).
+    #[inline]
+    pub fn point_fast(&self, s: f64, d: f64) -> DVec2 {
+        let (p, t) = self.at_vec(s);
+        p + t.normalize_or(DVec2::X).perp() * d
     }
 
     /// Arc length and left offset of `p`, searched from `guess` by Newton steps along the

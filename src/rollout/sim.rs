@@ -2,11 +2,12 @@
 //! then computes each agent's next state from everyone's current state (a Jacobi update, so the
 //! result does not depend on agent order), undoes moves that would overlap, and latches crashes.
 
+use super::grid::Grid;
 use super::path::{Hermite, Path};
 use super::stage::{self, Plan};
 use super::traffic;
 use super::{ImpactRecord, Limits, TrackAgent, Tracks, limits};
-use crate::check::scenario::{Class, Keyframe, LaneId, Lateral, Motion, Side, Stop, Turn};
+use crate::check::scenario::{Class, EMERGENCY_KINDS, Keyframe, LaneId, Lateral, Motion, Side, Stop, Turn};
 use crate::diag::Diagnostic;
 use crate::geom::{Obb, wrap_angle};
 use crate::place::{Placed, Pose};
@@ -19,6 +20,11 @@ use glam::DVec2;
 const RUN_OUT: f64 = 300.0;
 /// Pace of a `cross` goal given no speed at all, m/s.
 const WALK_SPEED: f64 = 1.4;
+/// How much tighter than a vehicle's turning radius a junction path may turn before the turn is
+/// refused (E0204). Up to it the vehicle swings wider across the junction area (a sedan's U-turn
+/// on a four_way without median: its path turns on 1.7 m, the sedan on 4.0 m); beyond it (a bus
+/// on 10.3 m) the arc leaves the road, as the template property test checks.
+const TURN_SLACK: f64 = 3.0;
 /// Lateral manoeuvre durations, s.
 const LANE_CHANGE_S: f64 = 4.0;
 const ASIDE_S: f64 = 2.5;
@@ -61,6 +67,8 @@ pub(super) struct Actor {
     pub hl: f64,
     pub hw: f64,
     pub radius: f64,
+    /// Smallest turning radius of the box centre, m (`super::min_turn_radius`); vehicles only.
+    pub r_min: f64,
     pub lim: Limits,
     pub path: Path,
     pub init: Pose,
@@ -73,7 +81,8 @@ pub(super) struct Actor {
     pub lateral: Lat,
     pub stop: StopGoal,
     pub info: TrackAgent,
-    /// An emergency vehicle (see `EMERGENCY_KINDS`): cross traffic holds for it.
+    /// An emergency vehicle (a kind in or derived from `EMERGENCY_KINDS`): cross traffic holds
+    /// for it.
     pub emergency: bool,
     /// The first junction on the route, if any.
     pub junction: Option<Junction>,
@@ -93,8 +102,6 @@ pub(super) struct Junction {
     pub conn: usize,
 }
 
-/// Kinds that drive with lights and siren: everyone else gives them the junction.
-const EMERGENCY_KINDS: [&str; 3] = ["ambulance", "fire_truck", "police_car"];
 /// How far ahead of an emergency vehicle the junction is cleared: this many seconds at its
 /// speed, and at least `EMERGENCY_NEAR_M`.
 const EMERGENCY_NEAR_S: f64 = 8.0;
@@ -114,8 +121,12 @@ pub(super) struct State {
     pub pos: DVec2,
     pub yaw: f64,
     pub v: f64,
+    /// Arc length along the route (of the box centre's projection, for vehicles).
     pub s: f64,
+    /// Lateral offset the lateral goal asks for now (m, left of the route).
     pub d: f64,
+    /// Lateral offset the agent is actually at; a vehicle steers toward `d` and lags it.
+    pub off: f64,
     pub phase: f64,
     pub triggered: bool,
     pub stopped: bool,
@@ -158,7 +169,7 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
     if let Some(t) = c.traffic {
         let boxes: Vec<(Obb, f64)> = actors.iter().map(|a| (a.obb(&initial(a)), initial(a).v)).collect();
         for s in traffic::spawn(map, &boxes, t, c.seed) {
-            actors.push(background_actor(map, s));
+            actors.push(background_actor(map, s, c.duration));
         }
     }
     let mut confs = vec![];
@@ -219,14 +230,16 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
 
 /// A tree or a pole has no front: its yaw is whatever the placement gave it (the lane's heading),
 /// so a requested `point front` in that frame could send the striker around the trunk to hit
-/// its far face. Turn such a struck object (a static, roughly square structure) to face the
+/// its far face. Turn such a struck object (a static structure, roughly square or under 2 m) to face the
 /// striker's start, so the requested side reads from the striker's approach: `front` is the face
 /// it drives into, `left` the one on the striker's right as it comes. Walls and buildings keep
 /// their yaw: their faces are real.
 fn face_the_striker(actors: &mut [Actor], k: &Conf) {
     let (af, st) = (actors[k.af].init, &actors[k.st]);
-    let square = st.hl.max(st.hw) <= 1.5 * st.hl.min(st.hw);
-    if !matches!(st.drive, Drive::Static) || st.info.class != Class::Structure || !square {
+    // A trunk or a pole: roughly square, or small whatever its sampled aspect (a 0.75 x 0.45 m
+    // tree box is still a trunk; a car could not drive around it to a far face in any case).
+    let trunk = st.hl.max(st.hw) <= 1.5 * st.hl.min(st.hw) || st.hl.max(st.hw) < 1.0;
+    if !matches!(st.drive, Drive::Static) || st.info.class != Class::Structure || !trunk {
         return;
     }
     let to_striker = DVec2::new(af.x - st.init.x, af.y - st.init.y);
@@ -257,6 +270,7 @@ fn initial(a: &Actor) -> State {
         v,
         s: a.s0,
         d: a.d0,
+        off: a.d0,
         phase: 0.0,
         triggered: false,
         stopped: false,
@@ -274,6 +288,7 @@ fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Class, drive:
         hl: l / 2.0,
         hw: w / 2.0,
         radius: 0.5 * (l * l + w * w).sqrt(),
+        r_min: super::min_turn_radius(class, l),
         lim: limits(class, motion),
         path: Path::default(),
         init: pose,
@@ -285,7 +300,7 @@ fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Class, drive:
         start: 0.0,
         lateral: Lat::Hold,
         stop: StopGoal::None,
-        emergency: EMERGENCY_KINDS.contains(&info.kind.as_str()) && motion == Motion::Vehicle,
+        emergency: false,
         junction: None,
         yield_to: vec![],
         info,
@@ -317,6 +332,7 @@ fn build_actor(
         return base_actor(info, p.pose, p.motion, p.class, Drive::Static);
     };
     let mut a = base_actor(info, p.pose, p.motion, p.class, Drive::Mover);
+    a.emergency = a.vehicle && is_emergency(c, &p.kind);
     let pos = DVec2::new(p.pose.x, p.pose.y);
     let goal = ca.goal.as_ref();
     let fail = |errs: &mut Vec<Diagnostic>, msg: String, help: &str| {
@@ -367,9 +383,33 @@ fn build_actor(
                         "place the agent on an in-lane of a junction that offers this turn",
                     );
                 }
-                a.path = Path::new(&pts);
                 let (s, d) = lane.centre.project(pos);
                 (a.s0, a.d0) = (s, d);
+                let v_top = a.v0.max(goal.and_then(|g| g.speed).unwrap_or(0.0)).max(lane.speed_limit);
+                a.path = Path::new_until(&pts, s.max(0.0) + reach(v_top, c.duration));
+                // A turn tighter than the kind can steer (a bus's U-turn on a narrow junction)
+                // would leave the road: refused, not driven wide.
+                if let (Some(t), Some(j)) = (turn, a.junction) {
+                    let entry = j.exit - map.connectors[j.conn].path.length();
+                    let n = ((j.exit - entry) / 0.5).ceil().max(1.0) as usize;
+                    let k = (0..=n).map(|i| a.path.curvature(entry + (j.exit - entry) * i as f64 / n as f64).abs());
+                    let k = k.fold(0.0, f64::max);
+                    if k * a.r_min > TURN_SLACK {
+                        fail(
+                            errs,
+                            format!(
+                                "`{}` ({}, turning radius {:.1} m) cannot turn {} here: the junction's path turns on {:.1} m",
+                                ca.name,
+                                p.kind,
+                                a.r_min,
+                                turn_name(t),
+                                1.0 / k
+                            ),
+                            "a wider road (lane_width, median) or a smaller kind; rocc derives the turning radius \
+                             from the kind's length (see README, Rollout)",
+                        );
+                    }
+                }
                 limit = lane.speed_limit;
                 stop_line = lane.stop_line_s.filter(|&sl| sl > a.s0);
                 lane_here = Some(l);
@@ -441,7 +481,22 @@ fn build_actor(
     a
 }
 
-fn background_actor(map: &Map, s: traffic::Spawn) -> Actor {
+/// Whether a kind drives with lights and siren: the checker resolved it through the kind's
+/// ancestry (`kind my_amb: ambulance`); the stdlib names count even where the scenario's kind
+/// table lacks them (a hand-built `Concrete`).
+fn is_emergency(c: &Concrete, kind: &str) -> bool {
+    EMERGENCY_KINDS.contains(&kind) || c.kinds.get(kind).is_some_and(|k| k.emergency)
+}
+
+/// How much of its route an agent can use within a clip of `duration` s: driving at up to 1.25
+/// times `v` (at least 15 m/s) all the way, plus the longest look-ahead of the car-following
+/// law at that speed and a margin. Nothing beyond can affect the clip.
+fn reach(v: f64, duration: f64) -> f64 {
+    let v = if v.is_finite() { v.max(15.0) * 1.25 } else { 40.0 };
+    v * duration + v * v / (2.0 * 2.0) + 2.5 * v + 60.0
+}
+
+fn background_actor(map: &Map, s: traffic::Spawn, duration: f64) -> Actor {
     let lane = &map.lanes[s.lane];
     let (p, yaw) = lane.centre.pose_at(s.s);
     let info = TrackAgent {
@@ -455,7 +510,7 @@ fn background_actor(map: &Map, s: traffic::Spawn) -> Actor {
     let mut a = base_actor(info, Pose { x: p.x, y: p.y, yaw }, Motion::Vehicle, Class::Vehicle, Drive::Mover);
     let (pts, _, junction) = chain(map, s.lane, None);
     a.junction = junction;
-    a.path = Path::new(&pts);
+    a.path = Path::new_until(&pts, s.s.max(0.0) + reach(s.speed.max(s.target), duration));
     a.path.set_caps(a.lim.lat_acc, a.lim.yaw_rate, a.lim.brake);
     a.s0 = s.s;
     a.v0 = s.speed;
@@ -667,6 +722,14 @@ struct Sim<'a> {
     dirs: Vec<DVec2>,
     /// Per agent, this frame: `yield_state`.
     yielding: Vec<(Option<f64>, bool)>,
+    /// Positions bucketed for the pair checks (`cur` while stepping, `next` while resolving).
+    grid: Grid,
+    /// Largest bounding radius of any agent, m: widens every grid query.
+    max_radius: f64,
+    /// This frame: agents easing aside (`away_from`, triggered), for `pass_offset`.
+    easing: Vec<usize>,
+    /// Scratch for `resolve_overlaps`.
+    scratch: Vec<usize>,
 }
 
 impl<'a> Sim<'a> {
@@ -696,6 +759,10 @@ impl<'a> Sim<'a> {
             next: cur.clone(),
             dirs: cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect(),
             yielding: vec![(None, false); actors.len()],
+            grid: Grid::default(),
+            max_radius: actors.iter().map(|a| a.radius).fold(0.0, f64::max),
+            easing: Vec::with_capacity(actors.len()),
+            scratch: Vec::with_capacity(actors.len()),
             cur,
         }
     }
@@ -709,6 +776,13 @@ impl<'a> Sim<'a> {
             let t = (f - 1) as f64 * self.dt;
             self.dirs.clear();
             self.dirs.extend(self.cur.iter().map(|s| DVec2::from_angle(s.yaw)));
+            self.grid.rebuild(self.cur.iter().map(|s| s.pos));
+            self.easing.clear();
+            for (j, (o, b)) in self.cur.iter().zip(self.actors.iter()).enumerate() {
+                if o.triggered && matches!(b.lateral, Lat::Away { .. }) {
+                    self.easing.push(j);
+                }
+            }
             for i in 0..self.actors.len() {
                 self.yielding[i] = self.yield_state(i);
             }
@@ -805,9 +879,11 @@ impl<'a> Sim<'a> {
         }
         let margin = if a.vehicle { 0.25 } else { 0.1 };
         let goal_d = target.filter(|_| st.phase < 1.0).or(pass_target).unwrap_or(st.d);
-        let (lo, hi) = (st.d.min(goal_d) - a.hw - margin, st.d.max(goal_d) + a.hw + margin);
+        // The band the box occupies now: a steering vehicle lags its reference offset.
+        let (cur_lo, cur_hi) = (st.d.min(st.off) - a.hw, st.d.max(st.off) + a.hw);
+        let (lo, hi) = (cur_lo.min(goal_d - a.hw) - margin, cur_hi.max(goal_d + a.hw) + margin);
 
-        let fwd = DVec2::from_angle(st.yaw);
+        let fwd = self.dirs[i];
         let look = st.v * st.v / (2.0 * lim.brake) + 2.5 * st.v + 15.0;
         let mut acc = idm_free(st.v, v_des, lim, dt);
         let mut hard = f64::INFINITY;
@@ -817,7 +893,11 @@ impl<'a> Sim<'a> {
             _ => None,
         };
         let (yield_rem, clearing) = self.yielding[i];
-        for (j, (o, b)) in self.cur.iter().zip(self.actors.iter()).enumerate() {
+        // Everyone near enough to matter, and the agent queued behind wherever it is (seen twice
+        // when near: every effect below is a min or an or, so that is harmless).
+        let reach = look + a.radius + self.max_radius;
+        for j in self.grid.cands(st.pos, reach).chain(named) {
+            let (o, b) = (&self.cur[j], &self.actors[j]);
             if j == i || self.exempt(i, j) {
                 continue;
             }
@@ -844,7 +924,7 @@ impl<'a> Sim<'a> {
             if d_next != st.d && ds.abs() < a.hl + ext_lon + 0.5 {
                 let (nlo, nhi) = (st.d.min(d_next) - a.hw - 0.1, st.d.max(d_next) + a.hw + 0.1);
                 let (jlo, jhi) = (lj - ext_lat, lj + ext_lat);
-                let now = jlo < st.d + a.hw && jhi > st.d - a.hw;
+                let now = jlo < cur_hi && jhi > cur_lo;
                 if jlo < nhi && jhi > nlo && !now {
                     side_blocked = true;
                 }
@@ -854,7 +934,7 @@ impl<'a> Sim<'a> {
             if d_next != st.d && st.phase < 0.5 {
                 let (jlo, jhi) = (lj - ext_lat, lj + ext_lat);
                 let in_target = jlo < goal_d + a.hw + 0.1 && jhi > goal_d - a.hw - 0.1;
-                let in_current = jlo < st.d + a.hw && jhi > st.d - a.hw;
+                let in_current = jlo < cur_hi && jhi > cur_lo;
                 if in_target && !in_current {
                     let v_j = o.v * cr;
                     let g = ds.abs() - a.hl - ext_lon;
@@ -874,7 +954,7 @@ impl<'a> Sim<'a> {
             let (v_lon, v_lat) = (o.v * cr, o.v * sr);
             // In the lane we are in now; or in the band we are moving into, and then only when
             // ahead of our front (alongside is the gap acceptance's business).
-            let in_cur = lj - ext_lat < st.d + a.hw + margin && lj + ext_lat > st.d - a.hw - margin;
+            let in_cur = lj - ext_lat < cur_hi + margin && lj + ext_lat > cur_lo - margin;
             let in_now = in_cur || (gap > 0.0 && lj - ext_lat < hi && lj + ext_lat > lo);
             let mut obstacle = in_now || is_named;
             // Someone about to cut across our corridor (a crossing pedestrian, a car in the
@@ -926,8 +1006,10 @@ impl<'a> Sim<'a> {
             let shortest = (st.v * dt - 0.5 * lim.brake_max * dt * dt).max(0.0);
             hard = hard.min(rem.max(shortest));
         }
-        // Do not run off the end of the path.
-        hard = hard.min(a.path.length() - st.s);
+        // Do not run off the end of the path (a walker's crossing ends there): slow down onto it.
+        let to_end = a.path.length() - st.s;
+        acc = acc.min(stop_law(st.v, to_end, lim, dt));
+        hard = hard.min(to_end);
 
         let acc = acc.clamp(-lim.brake_max, lim.accel);
         let mut v = (st.v + acc * dt).max(0.0);
@@ -940,22 +1022,47 @@ impl<'a> Sim<'a> {
             phase = st.phase;
             d_next = st.d;
         }
-        let s = st.s + adv;
-        let (pos, h) = a.path.point(s, d_next);
-        let d_rate = (d_next - st.d) / dt;
-        let yaw = if a.vehicle || adv > 1e-4 || d_rate.abs() > 1e-4 { h + d_rate.atan2(v.max(1.0)) } else { st.yaw };
         let stopped = stop_rem.is_some_and(|r| r - adv < 0.3) && v < 0.05;
-        State {
-            pos,
-            yaw: turn_toward(st.yaw, yaw, a, 0.5 * (st.v + v), dt, 1.0),
-            v,
-            s,
-            d: d_next,
-            phase,
-            triggered,
-            stopped,
-            frozen: false,
+        let next = State { v, d: d_next, phase, triggered, stopped, frozen: false, ..st };
+        if !a.vehicle {
+            // Holonomic: walkers and animals step onto the reference and face where they go.
+            let s = st.s + adv;
+            let (pos, h) = a.path.point(s, d_next);
+            let d_rate = (d_next - st.d) / dt;
+            let yaw = if adv > 1e-4 || d_rate.abs() > 1e-4 { h + d_rate.atan2(v.max(1.0)) } else { st.yaw };
+            return State { pos, yaw: turn_toward(st.yaw, yaw, lim.yaw_rate, dt), s, off: d_next, ..next };
         }
+        // Kinematic bicycle: pure pursuit of the reference (the route shifted by the lateral
+        // goal's offset, taken where the profile will be when the car gets there), curvature
+        // bounded by the turning radius and the yaw rate, position integrated along the heading.
+        let l_d = (0.8 * v).max(2.0 + 0.25 * a.r_min).min(20.0);
+        let horizon = l_d / v.max(1.0);
+        let d_look = if side_blocked {
+            st.d
+        } else if let Some(tg) = target {
+            a.d0 + (tg - a.d0) * quintic((phase + horizon / dur).min(1.0))
+        } else if let Some(tg) = pass_target {
+            d_next + (tg - d_next).clamp(-PASS_LAT_RATE * horizon, PASS_LAT_RATE * horizon)
+        } else {
+            d_next
+        };
+        let slip = v.max(3.0) * MAX_SLIP.tan() * horizon;
+        let d_look = d_next + (d_look - d_next).clamp(-slip, slip);
+        let aim = a.path.point_fast(st.s + l_d, d_look);
+        let k = pursuit(st.pos, self.dirs[i], aim);
+        let (pos, yaw) = self.advance(a, &st, k, adv, 1.0);
+        let (s, off, _, _) = a.path.frenet_dir(pos, st.s + adv);
+        State { pos, yaw, s, off, ..next }
+    }
+
+    /// Move vehicle `a` from `st` by `dist` along a circular arc of curvature `k`, bounded by its
+    /// turning radius and by `yaw_scale` times its class yaw rate at the step's mean speed.
+    fn advance(&self, a: &Actor, st: &State, k: f64, dist: f64, yaw_scale: f64) -> (DVec2, f64) {
+        if dist <= 0.0 {
+            return (st.pos, st.yaw);
+        }
+        let k_max = (1.0 / a.r_min).min(yaw_scale * a.lim.yaw_rate * self.dt / dist);
+        arc(st.pos, st.yaw, k.clamp(-k_max, k_max), dist)
     }
 
     /// How agent `i` gives the junction to an emergency vehicle on a crossing path: short of the
@@ -998,10 +1105,11 @@ impl<'a> Sim<'a> {
     /// is none, or when passing would take more than `PASS_MAX_SHIFT` out of the lane.
     fn pass_offset(&self, i: usize, look: f64) -> Option<f64> {
         let (a, st) = (&self.actors[i], &self.cur[i]);
-        let fwd = DVec2::from_angle(st.yaw);
+        let fwd = self.dirs[i];
         let mut best: Option<f64> = None;
-        for (j, (o, b)) in self.cur.iter().zip(self.actors.iter()).enumerate() {
-            if j == i || !o.triggered || !matches!(b.lateral, Lat::Away { who, .. } if who == i) {
+        for &j in &self.easing {
+            let (o, b) = (&self.cur[j], &self.actors[j]);
+            if j == i || !matches!(b.lateral, Lat::Away { who, .. } if who == i) {
                 continue;
             }
             let ahead = (o.pos - st.pos).dot(fwd);
@@ -1053,21 +1161,38 @@ impl<'a> Sim<'a> {
         let curve = Hermite::new(st.pos, st.yaw, g, gyaw);
         let len = curve.length();
         let acc = (2.0 * (len - st.v * tau) / (tau * tau)).clamp(-lim.brake_max, stage::STRIKE_ACCEL * lim.accel);
-        // Keep rolling: an intercept that stalls never makes contact.
-        let v = (st.v + acc * dt).max(1.0);
+        // Keep rolling (an intercept that stalls never makes contact), within the strike's
+        // acceleration.
+        let v = (st.v + acc * dt).max(1.0f64.min(st.v + stage::STRIKE_ACCEL * lim.accel * dt));
         let adv = 0.5 * (st.v + v) * dt;
-        let (pos, h) = curve.at(adv, gyaw);
-        State { pos, yaw: turn_toward(st.yaw, h, a, 0.5 * (st.v + v), dt, stage::STRIKE_YAW), v, ..st }
+        // The arc from here through the curve's point `adv` ahead: the curve itself wherever the
+        // car can follow it; a wider arc where the curve turns tighter than the car can.
+        // In the last metres the contact point itself: the curve's end heading matters less than
+        // reaching its end, and a short re-planned curve can bend tighter than the car.
+        let aim = if len <= 3.0 * adv { g } else { curve.at(adv, gyaw).0 };
+        let (pos, yaw) = self.advance(a, &st, pursuit(st.pos, self.dirs[i], aim), adv, stage::STRIKE_YAW);
+        State { pos, yaw, v, ..st }
     }
 
     /// Undo moves until no two boxes overlap (conflict pairs excepted). Undoing every move
     /// restores the previous frame, which had no overlap, so this always ends.
     fn resolve_overlaps(&mut self) {
         let n = self.actors.len();
+        let mut near = std::mem::take(&mut self.scratch);
+        // An undone move puts an agent back at most this far from where the grid has it: queries
+        // widened by it find every pair a full scan would see within the same sweep.
+        let moved = self.cur.iter().zip(&self.next).map(|(c, x)| c.pos.distance(x.pos)).fold(0.0, f64::max);
         for _ in 0..=n {
             let mut changed = false;
+            self.grid.rebuild(self.next.iter().map(|s| s.pos));
             for i in 0..n {
-                for j in i + 1..n {
+                // The pairs (i, j > i) within reach, in index order as a full scan would take
+                // them (undoing a move changes later pairs' outcome).
+                near.clear();
+                let r = self.actors[i].radius + self.max_radius + 2.0 * moved;
+                near.extend(self.grid.cands(self.next[i].pos, r).filter(|&j| j > i));
+                near.sort_unstable();
+                for &j in &near {
                     let (ai, aj) = (&self.actors[i], &self.actors[j]);
                     let (si, sj) = (&self.next[i], &self.next[j]);
                     let r = ai.radius + aj.radius;
@@ -1090,6 +1215,7 @@ impl<'a> Sim<'a> {
                 break;
             }
         }
+        self.scratch = near;
     }
 
     /// Latch each staged conflict at its deepest overlap: once the boxes meet, the frame where
@@ -1142,15 +1268,26 @@ fn quintic(x: f64) -> f64 {
     x * x * x * (10.0 - 15.0 * x + 6.0 * x * x)
 }
 
-/// Rotate `from` toward `to`, bounded by the class yaw rate and, for vehicles, by a 3 m turning
-/// radius at the distance travelled (a vehicle does not turn on the spot).
-fn turn_toward(from: f64, to: f64, a: &Actor, v: f64, dt: f64, scale: f64) -> f64 {
-    let mut rate = a.lim.yaw_rate * scale;
-    if a.vehicle {
-        rate = rate.min(v / 3.0);
-    }
+/// Rotate `from` toward `to`, bounded by a yaw rate (holonomic agents turn on the spot).
+fn turn_toward(from: f64, to: f64, rate: f64, dt: f64) -> f64 {
     let step = wrap_angle(to - from).clamp(-rate * dt, rate * dt);
     wrap_angle(from + step)
+}
+
+/// Pure pursuit: the curvature of the circle through `p`, tangent to the unit heading `fwd`
+/// there, and through `aim` (0 when `aim` is on the heading line or at `p`).
+fn pursuit(p: DVec2, fwd: DVec2, aim: DVec2) -> f64 {
+    let rel = aim - p;
+    let l2 = rel.length_squared();
+    if l2 < 1e-12 { 0.0 } else { 2.0 * fwd.perp_dot(rel) / l2 }
+}
+
+/// Exact integration of the kinematic bicycle over a step of length `dist` at curvature `k`:
+/// the box moves along a circular arc tangent to its heading (no sideways slip).
+fn arc(p: DVec2, yaw: f64, k: f64, dist: f64) -> (DVec2, f64) {
+    let dyaw = k * dist;
+    let chord = if dyaw.abs() < 1e-9 { dist } else { 2.0 * (0.5 * dyaw).sin() / k };
+    (p + DVec2::from_angle(yaw + 0.5 * dyaw) * chord, wrap_angle(yaw + dyaw))
 }
 
 fn idm_free(v: f64, v0: f64, lim: Limits, dt: f64) -> f64 {

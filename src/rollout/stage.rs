@@ -18,6 +18,10 @@ pub const STRIKE_YAW: f64 = 1.5;
 const SWIPE_ANGLE: f64 = 0.15;
 /// Largest angle off a struck object's face normal that an at-fault agent approaches at, rad.
 const OBLIQUE: f64 = 0.6;
+/// The same for an `angle` strike: a vehicle at speed that starts alongside its target (a lane
+/// change, a merge) cannot turn square onto its side within its turning radius; it meets it at
+/// 30 degrees or more, leading with a front corner.
+const ANGLE_OBLIQUE: f64 = 1.05;
 
 pub(super) struct Plan {
     pub struck: usize,
@@ -113,8 +117,9 @@ pub(super) fn relative(
         (DVec2::new(px, 0.0), sy, sx, DVec2::Y, 0.0)
     };
     let normal_yaw = (-n).y.atan2((-n).x);
-    let beta = wrap_angle(af_rel.1 - normal_yaw).clamp(-OBLIQUE, OBLIQUE);
-    if matches!(impact, Impact::Object | Impact::Pedestrian) && beta.abs() > 0.05 {
+    let oblique = if impact == Impact::Angle { ANGLE_OBLIQUE } else { OBLIQUE };
+    let beta = wrap_angle(af_rel.1 - normal_yaw).clamp(-oblique, oblique);
+    if matches!(impact, Impact::Object | Impact::Pedestrian | Impact::Angle) && beta.abs() > 0.05 {
         // A driver who runs into a thing keeps roughly its own course: approach up to 35 deg off
         // the face normal, leading with the front corner nearest the face.
         let phi = normal_yaw + beta;
@@ -209,6 +214,13 @@ pub(super) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
             }
             if v_end < 1.0 {
                 cost += 20.0;
+            }
+            // A curve tighter than the car can steer (turning radius, yaw rate) is followed on a
+            // wider arc and misses: prefer departures that leave room to turn.
+            let k_max = (1.0 / af.r_min).min(STRIKE_YAW * lim.yaw_rate / v.max(v_end).max(1.0));
+            let k_curve = curve.max_curvature();
+            if k_curve > k_max {
+                cost += 15.0 + 10.0 * (k_curve / k_max - 1.0);
             }
             if closing < 0.5 {
                 cost += 10.0;
