@@ -14,6 +14,7 @@ use crate::output::{
     write_boxes_json, write_gif, write_manifest, write_preview_png, write_sheet,
 };
 use crate::place::Pose;
+use crate::raster::layout::{HALF_EXTENT_M, box_reaches_patch};
 use crate::raster::{Bev, Rasterizer};
 use crate::sample::Rng;
 use crate::source::SourceMap;
@@ -28,8 +29,6 @@ use std::time::Instant;
 const GIF_FRAMES: usize = 60;
 /// Columns of the contact sheet.
 const SHEET_FRAMES: usize = 4;
-/// Half the BEV's side (m): boxes whose footprint cannot reach the grid are left out.
-const HALF_EXTENT: f64 = 50.0;
 
 /// What one clip is made of.
 pub struct ClipInput<'a> {
@@ -205,7 +204,7 @@ pub fn frame_boxes(front: &Front, ego: usize, f: usize) -> Vec<EgoBox> {
     let near = |i: usize| {
         let p = t.poses[i][f];
         let a = &t.agents[i];
-        let r = 0.5 * a.size[0].hypot(a.size[1]) + HALF_EXTENT;
+        let r = 0.5 * a.size[0].hypot(a.size[1]) + HALF_EXTENT_M;
         // Chebyshev distance bounds the ego-frame coordinates whatever the ego's heading.
         (p.x - ego_pose.x).abs().max((p.y - ego_pose.y).abs()) <= r * std::f64::consts::SQRT_2
     };
@@ -221,10 +220,7 @@ pub fn frame_boxes(front: &Front, ego: usize, f: usize) -> Vec<EgoBox> {
             }
         });
     let mut boxes = to_ego(ego_pose, states);
-    boxes.retain(|b| {
-        let r = 0.5 * b.l.hypot(b.w);
-        b.x.abs() <= HALF_EXTENT + r && b.y.abs() <= HALF_EXTENT + r
-    });
+    boxes.retain(|b| box_reaches_patch(b.x, b.y, b.l, b.w));
     boxes
 }
 

@@ -14,15 +14,13 @@ use crate::diag::{Diagnostic, did_you_mean};
 use crate::lidar::Rig;
 use crate::output::{FrameBoxes, Manifest, bev_frame_path, read_npz};
 use crate::place::Pose;
+use crate::raster::layout::{HALF_EXTENT_M, box_reaches_patch};
 use crate::raster::{Bev, Rasterizer, keep_static};
 use crate::road::Map;
 use crate::view::{EgoBox, EgoFrame};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-
-/// Half the BEV's side (m).
-const HALF_EXTENT: f64 = 50.0;
 
 /// What `rocc edit` on a clip is told besides the edits.
 #[derive(Clone, Debug, Default)]
@@ -153,7 +151,7 @@ pub fn apply_edits(
         match e {
             Edit::Insert { kind, x, y, yaw } => {
                 let k = kind_info(kind).map_err(|d| vec![d])?;
-                if x.abs() >= HALF_EXTENT || y.abs() >= HALF_EXTENT {
+                if x.abs() >= HALF_EXTENT_M || y.abs() >= HALF_EXTENT_M {
                     return Err(vec![in_ref(&what)]);
                 }
                 let mut idx = 1;
@@ -183,7 +181,7 @@ pub fn apply_edits(
                 for f in frames.iter_mut().filter(|f| selected.contains(&f.frame)) {
                     let p = EgoFrame::new(ego_pose(f.frame)).pose(world);
                     let b = EgoBox { x: p.x, y: p.y, yaw: p.yaw, ..template.clone() };
-                    if !reaches_grid(&b) {
+                    if !box_reaches_patch(b.x, b.y, b.l, b.w) {
                         continue;
                     }
                     validate_in_frame(&bev_of(f.frame).map_err(|d| vec![d])?, &b, &f.boxes, ego_size, f.frame, &what)
@@ -214,7 +212,7 @@ pub fn apply_edits(
                     let mut b = f.boxes[i].clone();
                     b.x += c * wx + s * wy;
                     b.y += -s * wx + c * wy;
-                    if !reaches_grid(&b) {
+                    if !box_reaches_patch(b.x, b.y, b.l, b.w) {
                         f.boxes.remove(i);
                         continue;
                     }
@@ -244,12 +242,6 @@ pub fn apply_edits(
     Ok(())
 }
 
-/// Whether any part of a box can reach the 100 m grid (the compiler's rule for `boxes.json`).
-fn reaches_grid(b: &EgoBox) -> bool {
-    let r = 0.5 * b.l.hypot(b.w);
-    b.x.abs() <= HALF_EXTENT + r && b.y.abs() <= HALF_EXTENT + r
-}
-
 /// `validate_box`, except that a box whose centre lies off this frame's grid (its footprint
 /// still reaches it) is checked for overlap only: the BEV does not show the surface under it.
 fn validate_in_frame(
@@ -260,7 +252,7 @@ fn validate_in_frame(
     frame: usize,
     what: &str,
 ) -> Result<(), Diagnostic> {
-    if b.x.abs() < HALF_EXTENT && b.y.abs() < HALF_EXTENT {
+    if b.x.abs() < HALF_EXTENT_M && b.y.abs() < HALF_EXTENT_M {
         return validate_box(bev, b, others, ego_size, frame, what);
     }
     no_overlap(b, others, ego_size, frame, what)

@@ -13,6 +13,12 @@ pub const RES: f64 = 0.25;
 pub const PX_PER_M: f64 = 4.0;
 /// Half the side of the square patch around the ego (SPEC: x, y in [-50, 50)).
 pub const HALF_EXTENT_M: f64 = 50.0;
+/// Whether any part of a box can reach the patch: its centre within half its diagonal of the
+/// square. `boxes.json` lists exactly these boxes, so `rocc edit` applies the same rule.
+pub fn box_reaches_patch(x: f64, y: f64, length: f64, width: f64) -> bool {
+    let r = 0.5 * length.hypot(width);
+    x.abs() <= HALF_EXTENT_M + r && y.abs() <= HALF_EXTENT_M + r
+}
 /// Canvas coordinate of the ego origin: u = 4 x + 200 (SPEC).
 pub const CANVAS_ORIGIN: f64 = 200.0;
 
