@@ -7,7 +7,9 @@
 //! arms' mouths stay 2 m clear of the island). Arms north/east/south/west start at the outer kerb
 //! (`J = sqrt(R_out^2 - half_width^2)` from the origin, where an arm's corners touch the ring) with
 //! a yield line 1 m out (behind the crosswalk when crosswalks are on). The junction area is the
-//! ring (an annulus, as 16 sector polygons); the island is not drivable.
+//! ring (an annulus, as 16 sector polygons); the island is not drivable. With sidewalks, each
+//! corner between two arms is one walkway along the flares' outer kerbs and the ring's
+//! (`corner_walkways`), never on paving.
 //!
 //! Connectors: `ARM.in[k]` enters ring lane k (k = 1 innermost), circulates, and leaves to the
 //! out-lane k of the exit arm: `right` = first exit, `straight` = second, `left` = third,
