@@ -195,6 +195,7 @@ fn corner_walkways(
     let n = DVec2::new(-d.y, d.x).normalize();
     let band = [b, a_exit, a_exit + n * SIDEWALK, b + n * SIDEWALK];
     let theta = a_exit.y.atan2(a_exit.x);
+    let bevel = [a_exit, a_exit + n * SIDEWALK, a_exit * ((r_out + SIDEWALK) / a_exit.length())];
     let mirror = |p: DVec2| DVec2::new(p.y, p.x);
     // The arms' own paving too: a slip's band starts on its arm.
     let arms = map.road_segments.clone();
@@ -205,7 +206,13 @@ fn corner_walkways(
     for &(_, u) in &ARMS {
         let v = u.perp();
         let world = |p: DVec2| u * p.x + v * p.y;
-        let bands = vec![band.map(world).to_vec(), band.map(|p| world(mirror(p))).to_vec()];
+        let mut bands = vec![band.map(world).to_vec(), band.map(|p| world(mirror(p))).to_vec()];
+        if theta < FRAC_PI_4 {
+            // Bevel the notch between a band's end and the ring's sidewalk: both leave `A*`
+            // outward (the band along `n`, the ring radially), and so does every direction between.
+            bands.push(bevel.map(world).to_vec());
+            bands.push(bevel.map(|p| world(mirror(p))).to_vec());
+        }
         map.walkways.extend(minus(bands, &paving));
         if theta < FRAC_PI_4 {
             let phi = u.to_angle();
