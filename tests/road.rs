@@ -1,8 +1,8 @@
 //! Road and place passes. In: random template parameters and the shared example scenarios. Out:
 //! pass/fail on the map invariants (lanes on drivable paving, crosswalks inside it, lane counts,
-//! dividers clear of lane centres, four-way symmetry) and on placement (examples place, every
-//! placement form lands on its hand-computed pose, each class starts only on its surfaces,
-//! overlaps and off-road placements are reported).
+//! dividers clear of lane centres, four-way symmetry, walkways off paving on the map and in the
+//! BEV) and on placement (examples place, every placement form lands on its hand-computed pose,
+//! each class starts only on its surfaces, overlaps and off-road placements are reported).
 
 use glam::DVec2;
 use proptest::prelude::*;
@@ -647,10 +647,10 @@ fn walkway_components(b: &rocc::raster::Bev) -> usize {
 }
 
 /// Walkways on every template over its whole parameter range, checked on the map polygons (no
-/// walkway more than 2 cm inside a drivable polygon or the other way round: the sampling tolerance
-/// of curved edges) and on the BEV (walkway and drivable pixels share only the kerb, a band at most 2 px thick), and at
-/// a roundabout whose ring fits the patch, each of the four corners between two arms is one
-/// walkway (arm sidewalk, flare, ring, flare, next arm's sidewalk).
+/// walkway more than 2 cm inside a drivable polygon or the other way round: the sampling
+/// tolerance of curved edges) and on the BEV (walkway and drivable pixels share only the kerb, a
+/// band at most 2 px thick); at a roundabout whose junction fits the patch, each of the four
+/// corners between two arms is one walkway (arm sidewalk, flare, ring, flare, next arm's).
 fn check_walkways(r: &Road, yaw: f64) -> Result<(), TestCaseError> {
     let m = road::build(r);
     let (deepest, area) = walkway_on_paving(&m, 0.02);
@@ -701,9 +701,9 @@ proptest! {
     }
 }
 
-/// Roundabouts the walkway property failed on before walkways followed the flares (the old
-/// short walkway at the arm's kerb lay 2.2 to 3.9 m deep on the flare paving, 94 to 218 m2 per
-/// map), and the one whose right-turn slips reach beyond the ring's kerb in the corners.
+/// Roundabouts the walkway property failed on before walkways followed the flares (on the first
+/// five, the old short walkway at the arm's kerb lay 2.2 to 3.9 m deep on the flare paving, 105 to
+/// 218 m2 per map), and one whose right-turn slips reach beyond the ring's kerb in the corners.
 #[test]
 fn roundabout_walkways_follow_the_flares_and_slips() {
     let base = Road { sidewalks: true, ..road(Template::Roundabout) };
