@@ -7,7 +7,9 @@
 //! arms' mouths stay 2 m clear of the island). Arms north/east/south/west start at the outer kerb
 //! (`J = sqrt(R_out^2 - half_width^2)` from the origin, where an arm's corners touch the ring) with
 //! a yield line 1 m out (behind the crosswalk when crosswalks are on). The junction area is the
-//! ring (an annulus, as 16 sector polygons); the island is not drivable.
+//! ring (an annulus, as 16 sector polygons); the island is not drivable. With sidewalks, each
+//! corner between two arms is one walkway along the flares' outer kerbs and the ring's
+//! (`corner_walkways`), never on paving.
 //!
 //! Connectors: `ARM.in[k]` enters ring lane k (k = 1 innermost), circulates, and leaves to the
 //! out-lane k of the exit arm: `right` = first exit, `straight` = second, `left` = third,
@@ -16,11 +18,11 @@
 use super::arm::{ArmSpec, CROSSWALK, SIDEWALK, add_arm};
 use super::junction::ARMS;
 use super::map::{Connector, Map};
-use super::shape::{arc, cubic, dashes, turn};
+use super::shape::{arc, cubic, dashes, overlaps_convex, subtract_convex, turn};
 use crate::check::scenario::{Road, Turn};
 use crate::geom::{Polygon, Polyline};
 use glam::DVec2;
-use std::f64::consts::{FRAC_PI_2, TAU};
+use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, TAU};
 
 const SECTORS: usize = 16;
 /// Extra angle past the point where a lane meets the ring before a connector joins its ring lane,
@@ -78,18 +80,14 @@ pub(crate) fn build(road: &Road) -> Map {
         hw = (hw - 0.25).max(h);
     }
     let j_wide = (r_out * r_out - hw * hw).sqrt();
+    let mut flares = Vec::new();
     for &(_, u) in &ARMS {
         let v = u.perp();
         let flare: Polygon = vec![u * j_wide - v * hw, u * j - v * h, u * j + v * h, u * j_wide + v * hw];
         map.intersections.push(flare.clone());
         map.drivable.push(flare.clone());
-        map.lane_group_connectors.push(flare);
-        if road.sidewalks {
-            for side in [-1.0, 1.0] {
-                let (a, b) = (v * side * h, v * side * (h + SIDEWALK));
-                map.walkways.push(vec![u * j0 + a, u * j + a, u * j + b, u * j0 + b]);
-            }
-        }
+        map.lane_group_connectors.push(flare.clone());
+        flares.push(flare);
     }
     for i in 0..SECTORS {
         let (a0, a1) = (TAU * i as f64 / SECTORS as f64, TAU * (i + 1) as f64 / SECTORS as f64);
@@ -112,15 +110,9 @@ pub(crate) fn build(road: &Road) -> Map {
             let line = Polyline::new(arc(DVec2::ZERO, r, a0, a1));
             map.dividers.extend(dashes(&line, 0.0, line.length(), 0.0));
         }
-        if road.sidewalks {
-            let g = ((h + SIDEWALK) / (r_out + SIDEWALK)).min(1.0).asin();
-            let (b0, b1) = (q as f64 * FRAC_PI_2 + g.min(gap), (q + 1) as f64 * FRAC_PI_2 - g.min(gap));
-            let mut walk = arc(DVec2::ZERO, r_out + SIDEWALK, b0, b1);
-            walk.extend(arc(DVec2::ZERO, r_out, b1, b0));
-            map.walkways.push(walk);
-        }
     }
 
+    let mut slips = Vec::new();
     let ease = EASE.min(EASE_M / (r_out - n * w / 2.0));
     for (q, (u, from)) in built.iter().enumerate() {
         let phi = u.to_angle();
@@ -141,7 +133,8 @@ pub(crate) fn build(road: &Road) -> Map {
                     // the whole curve.
                     map.intersections.push(hull.clone());
                     map.drivable.push(hull.clone());
-                    map.lane_group_connectors.push(hull);
+                    map.lane_group_connectors.push(hull.clone());
+                    slips.push(hull);
                     cubic(p0, p0 - *u * k, p3 - *v * k, p3)
                 } else {
                     let (q_in, q_out) = (DVec2::from_angle(th_in) * r, DVec2::from_angle(th_out) * r);
@@ -160,5 +153,98 @@ pub(crate) fn build(road: &Road) -> Map {
             }
         }
     }
+    if road.sidewalks {
+        corner_walkways(&mut map, &flares, &slips, r_out, (j_wide, hw), (j, h));
+    }
     map
+}
+
+/// The walkway round each corner between two neighbouring arms, from one arm's sidewalk to the
+/// next one's: along the outer kerb of the first arm's flare, round the ring's outer kerb, and
+/// back along the second arm's flare. A walkway at the arm's kerb would lie on the flare, which
+/// widens toward the ring beneath it.
+///
+/// Each flare kerb runs from the arm's kerb corner `B` (station `j`, half width `h`) to the ring
+/// at `A` (station `j_wide`, half width `hw`); its walkway is the band `SIDEWALK` wide beyond it,
+/// from `B` to `A*`, the last point where the kerb leaves the ring's disk. A band beyond a line
+/// that leaves a disk never reaches into the disk, and the bends at `B` (into the arm's kerb) and
+/// at `A*` (onto the ring) turn away from the walkway side, so neighbouring bands overlap
+/// there and leave no gap. The ring's sidewalk covers the angles between the two `A*`, where no
+/// flare reaches (a flare's polar angles peak at `A*`). On a ring too small for that range the
+/// two flares meet beyond the ring, and each band loses what lies on the other flare.
+///
+/// A paved right-turn slip (`slips`: its Bezier hull, whose last edge is the chord facing away
+/// from the ring) can reach beyond the ring's kerb in the corner: the walkway then also runs in a
+/// band beyond that chord, and every band and the ring's sidewalk lose what lies on paving
+/// (flares, slips, the arms' roads).
+fn corner_walkways(
+    map: &mut Map,
+    flares: &[Polygon],
+    slips: &[Polygon],
+    r_out: f64,
+    (j_wide, hw): (f64, f64),
+    (j, h): (f64, f64),
+) {
+    // In a corner's own frame: the first arm along x, the next along y.
+    let (a, b) = (DVec2::new(j_wide, hw), DVec2::new(j, h));
+    let d = b - a;
+    // The larger root of |a + t d| = r_out (t = 0 is `a` itself, on the ring).
+    let t_exit = (-2.0 * a.dot(d) / d.length_squared()).clamp(0.0, 1.0);
+    let a_exit = a + d * t_exit;
+    // Away from the first arm's axis.
+    let n = DVec2::new(-d.y, d.x).normalize();
+    let band = [b, a_exit, a_exit + n * SIDEWALK, b + n * SIDEWALK];
+    let theta = a_exit.y.atan2(a_exit.x);
+    let bevel = [a_exit, a_exit + n * SIDEWALK, a_exit * ((r_out + SIDEWALK) / a_exit.length())];
+    let mirror = |p: DVec2| DVec2::new(p.y, p.x);
+    // The arms' own paving too: a slip's band starts on its arm.
+    let arms = map.road_segments.clone();
+    let paving: Vec<&Polygon> = flares.iter().chain(slips).chain(&arms).collect();
+    let minus = |pieces: Vec<Polygon>, holes: &[&Polygon]| {
+        holes.iter().fold(pieces, |pieces, hole| pieces.iter().flat_map(|p| subtract_convex(p, hole)).collect())
+    };
+    for &(_, u) in &ARMS {
+        let v = u.perp();
+        let world = |p: DVec2| u * p.x + v * p.y;
+        let mut bands = vec![band.map(world).to_vec(), band.map(|p| world(mirror(p))).to_vec()];
+        if theta < FRAC_PI_4 {
+            // Bevel the notch between a band's end and the ring's sidewalk: both leave `A*`
+            // outward (the band along `n`, the ring radially), and so does every direction between.
+            bands.push(bevel.map(world).to_vec());
+            bands.push(bevel.map(|p| world(mirror(p))).to_vec());
+        }
+        map.walkways.extend(minus(bands, &paving));
+        if theta < FRAC_PI_4 {
+            let phi = u.to_angle();
+            let (a0, a1) = (phi + theta, phi + FRAC_PI_2 - theta);
+            let mut ring = arc(DVec2::ZERO, r_out + SIDEWALK, a0, a1);
+            ring.extend(arc(DVec2::ZERO, r_out, a1, a0));
+            if !slips.iter().any(|s| overlaps_convex(&ring, s)) {
+                map.walkways.push(ring);
+            } else {
+                // Convex pieces, so that a slip can be cut out of them.
+                let outer = arc(DVec2::ZERO, r_out + SIDEWALK, a0, a1);
+                let inner = |p: DVec2| p * (r_out / (r_out + SIDEWALK));
+                let quads = outer.windows(2).map(|w| vec![inner(w[0]), inner(w[1]), w[1], w[0]]).collect();
+                map.walkways.extend(minus(quads, &paving));
+            }
+        }
+    }
+    if slips.is_empty() {
+        return;
+    }
+    // The ring's disk as a circumscribed polygon (it may shave a centimetre off a band).
+    const SIDES: usize = 128;
+    let step = TAU / SIDES as f64;
+    let disk: Polygon = (0..SIDES).map(|i| DVec2::from_angle(step * i as f64) * (r_out / (step / 2.0).cos())).collect();
+    let mut holes = paving.clone();
+    holes.push(&disk);
+    for slip in slips {
+        let (p3, p0) = (slip[3], slip[0]);
+        let mut n = (p0 - p3).perp().normalize();
+        if n.dot(p0 + p3) < 0.0 {
+            n = -n;
+        }
+        map.walkways.extend(minus(vec![vec![p3, p0, p0 + n * SIDEWALK, p3 + n * SIDEWALK]], &holes));
+    }
 }

@@ -115,3 +115,105 @@ pub(crate) fn grow(b: &mut (DVec2, DVec2), pts: &[DVec2]) {
         b.1 = b.1.max(*p);
     }
 }
+
+/// Twice the signed area of `poly` (positive counter-clockwise).
+fn area2(poly: &[DVec2]) -> f64 {
+    let n = poly.len();
+    (0..n).map(|i| poly[i].perp_dot(poly[(i + 1) % n])).sum()
+}
+
+/// The part of `poly` on the side of the line `a -> b` where `side * cross(b - a, p - a) >= 0`
+/// (Sutherland-Hodgman against one half-plane; a convex polygon stays convex).
+fn clip_half_plane(poly: &[DVec2], a: DVec2, b: DVec2, side: f64) -> Polygon {
+    let d = b - a;
+    let f = |p: DVec2| side * d.perp_dot(p - a);
+    let mut out = Vec::with_capacity(poly.len() + 2);
+    let n = poly.len();
+    for i in 0..n {
+        let (p, q) = (poly[(i + n - 1) % n], poly[i]);
+        let (fp, fq) = (f(p), f(q));
+        if (fp >= 0.0) != (fq >= 0.0) {
+            out.push(p + (q - p) * (fp / (fp - fq)));
+        }
+        if fq >= 0.0 {
+            out.push(q);
+        }
+    }
+    out
+}
+
+/// Whether `poly` and the convex polygon `convex` share more than an edge (S-H output keeps the
+/// area of the intersection even for a concave `poly`).
+pub(crate) fn overlaps_convex(poly: &[DVec2], convex: &[DVec2]) -> bool {
+    const EPS: f64 = 1e-9;
+    let orient = area2(convex).signum();
+    if area2(convex).abs() <= EPS {
+        return false;
+    }
+    let n = convex.len();
+    let mut rest: Polygon = poly.to_vec();
+    for i in 0..n {
+        if rest.len() < 3 {
+            return false;
+        }
+        rest = clip_half_plane(&rest, convex[i], convex[(i + 1) % n], orient);
+    }
+    rest.len() >= 3 && area2(&rest).abs() > EPS
+}
+
+/// `poly` minus the convex polygon `hole`, as disjoint pieces: the part beyond the hole's first
+/// edge, then the part within the first and beyond the second, and so on. With a convex `poly`
+/// every piece is convex. Pieces thinner than rounding are dropped, and `poly` comes back whole
+/// when the two only touch.
+pub(crate) fn subtract_convex(poly: &[DVec2], hole: &[DVec2]) -> Vec<Polygon> {
+    const EPS: f64 = 1e-9;
+    if !overlaps_convex(poly, hole) {
+        return vec![poly.to_vec()];
+    }
+    let orient = area2(hole).signum();
+    let mut rest: Polygon = poly.to_vec();
+    let mut pieces = Vec::new();
+    let n = hole.len();
+    for i in 0..n {
+        let (a, b) = (hole[i], hole[(i + 1) % n]);
+        let beyond = clip_half_plane(&rest, a, b, -orient);
+        if beyond.len() >= 3 && area2(&beyond).abs() > EPS {
+            pieces.push(beyond);
+        }
+        rest = clip_half_plane(&rest, a, b, orient);
+        if rest.len() < 3 {
+            break;
+        }
+    }
+    pieces
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square(lo: f64, hi: f64) -> Polygon {
+        vec![DVec2::new(lo, lo), DVec2::new(hi, lo), DVec2::new(hi, hi), DVec2::new(lo, hi)]
+    }
+
+    #[test]
+    fn subtracting_a_convex_hole_keeps_exactly_the_rest() {
+        let area = |ps: &[Polygon]| ps.iter().map(|p| area2(p).abs() / 2.0).sum::<f64>();
+        // A hole inside: the 16 m2 square loses 4 m2, in pieces that avoid the hole.
+        let pieces = subtract_convex(&square(0.0, 4.0), &square(1.0, 3.0));
+        assert!((area(&pieces) - 12.0).abs() < 1e-9, "{}", area(&pieces));
+        for p in &pieces {
+            let c = p.iter().copied().sum::<DVec2>() / p.len() as f64;
+            assert!(!(c.x > 1.0 && c.x < 3.0 && c.y > 1.0 && c.y < 3.0), "piece centred in the hole: {p:?}");
+        }
+        // Clockwise hole over a corner: 1 m2 of 16 goes.
+        let mut hole = square(3.0, 5.0);
+        hole.reverse();
+        assert!((area(&subtract_convex(&square(0.0, 4.0), &hole)) - 15.0).abs() < 1e-9);
+        // Touching along an edge only, or apart: unchanged, in one piece.
+        assert_eq!(subtract_convex(&square(0.0, 4.0), &square(4.0, 6.0)), vec![square(0.0, 4.0)]);
+        assert_eq!(subtract_convex(&square(0.0, 4.0), &square(5.0, 6.0)), vec![square(0.0, 4.0)]);
+        // Covered entirely: nothing left.
+        assert!(subtract_convex(&square(1.0, 2.0), &square(0.0, 4.0)).is_empty());
+    }
+}
