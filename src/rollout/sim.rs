@@ -896,6 +896,12 @@ impl<'a> Sim<'a> {
         // Everyone near enough to matter, and the agent queued behind wherever it is (seen twice
         // when near: every effect below is a min or an or, so that is harmless).
         let reach = look + a.radius + self.max_radius;
+        // On a straight stretch of our route, an agent's route coordinates are its coordinates
+        // along the line: those that provably change nothing below are passed over without the
+        // projection (the pair loop's main cost). Only when holding our offset: lateral moves
+        // look at everyone alongside.
+        let line = if d_next == st.d { a.path.straight_run(st.s) } else { None };
+        let lateral_free = |j: usize| self.yielding[j].0.is_some() || clearing;
         for j in self.grid.cands(st.pos, reach).chain(named) {
             let (o, b) = (&self.cur[j], &self.actors[j]);
             if j == i || self.exempt(i, j) {
@@ -911,6 +917,31 @@ impl<'a> Sim<'a> {
             // Well behind us and not beside a lateral move: cannot be in our way.
             if ahead < -(a.hl + b.radius + 1.0) && !is_named && d_next == st.d {
                 continue;
+            }
+            if let Some(ln) = line
+                && !is_named
+            {
+                let guess = st.s + ahead;
+                let rel = o.pos - ln.origin;
+                let s_line = ln.s0 + rel.dot(ln.dir);
+                if guess > ln.lo && guess < ln.hi && s_line > ln.lo && s_line < ln.hi {
+                    // `frenet_dir` would give s_line, this offset and this tangent to float
+                    // noise (1 mm is far above it), hence the extents below too.
+                    const EPS: f64 = 1e-3;
+                    let l_line = ln.dir.perp_dot(rel);
+                    let (cr, sr) = (self.dirs[j].dot(ln.dir), ln.dir.perp_dot(self.dirs[j]));
+                    let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
+                    let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
+                    let behind = s_line - st.s < -EPS;
+                    let too_far = s_line - st.s - a.hl - ext_lon > look + EPS;
+                    let aside = l_line - ext_lat > hi + EPS || l_line + ext_lat < lo - EPS;
+                    // Nor would it be predicted to cut across (see `obstacle` below).
+                    let v_lat = o.v * sr;
+                    let steady = !a.vehicle || v_lat.abs() < 0.3 - EPS || lateral_free(j);
+                    if behind || too_far || (aside && steady) {
+                        continue;
+                    }
+                }
             }
             let (sj, lj, beyond, th) = a.path.frenet_dir(o.pos, st.s + ahead);
             if beyond > 0.5 && !is_named {
