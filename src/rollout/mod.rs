@@ -24,6 +24,7 @@
 
 mod grid;
 mod path;
+pub mod route;
 mod sim;
 mod stage;
 mod traffic;

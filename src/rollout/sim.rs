@@ -4,6 +4,7 @@
 
 use super::grid::Grid;
 use super::path::{Hermite, Path};
+use super::route::{Junction, RUN_OUT, chain, find_lane};
 use super::stage::{self, Plan};
 use super::traffic;
 use super::{ImpactRecord, Limits, TrackAgent, Tracks, limits};
@@ -15,9 +16,6 @@ use crate::road::Map;
 use crate::sample::Concrete;
 use glam::DVec2;
 
-/// Length of the straight run appended after a route's last lane, m: agents that reach the end
-/// of the map keep going instead of piling up at the edge.
-const RUN_OUT: f64 = 300.0;
 /// Pace of a `cross` goal given no speed at all, m/s.
 const WALK_SPEED: f64 = 1.4;
 /// How much tighter than a vehicle's turning radius a junction path may turn before the turn is
@@ -89,17 +87,6 @@ pub(super) struct Actor {
     /// Emergency vehicles (track indices) whose junction path crosses this agent's: while one
     /// approaches or is inside the junction, this agent holds at its stop line.
     pub yield_to: Vec<usize>,
-}
-
-/// Where a route passes its first junction.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Junction {
-    /// Arc length where a yielding front bumper halts (the stop line, else the junction entry).
-    pub stop: f64,
-    /// Arc length where the route leaves the junction.
-    pub exit: f64,
-    /// Index into `Map::connectors`.
-    pub conn: usize,
 }
 
 /// How far ahead of an emergency vehicle the junction is cleared: this many seconds at its
@@ -533,96 +520,6 @@ fn turn_name(t: Turn) -> &'static str {
         Turn::Straight => "straight",
         Turn::UTurn => "u_turn",
     }
-}
-
-/// The lane a vehicle at `p` heading `yaw` is driving in: nearest centre line among lanes whose
-/// direction agrees, within the lane (and its shoulder).
-pub(super) fn find_lane(map: &Map, p: DVec2, yaw: f64) -> Option<(usize, f64, f64)> {
-    let mut best: Option<(usize, f64, f64)> = None;
-    for (i, l) in map.lanes.iter().enumerate() {
-        if l.centre.points.len() < 2 {
-            continue;
-        }
-        let (s, d) = l.centre.project(p);
-        if s < -0.5 || s > l.centre.length() + 0.5 {
-            continue;
-        }
-        let (_, h) = l.centre.pose_at(s);
-        if wrap_angle(yaw - h).abs() > 1.0 {
-            continue;
-        }
-        let reach = l.width / 2.0 + if d < 0.0 { l.shoulder_right } else { 0.0 } + 0.5;
-        if d.abs() > reach {
-            continue;
-        }
-        if best.is_none_or(|b| d.abs() < b.2.abs()) {
-            best = Some((i, s, d));
-        }
-    }
-    best
-}
-
-/// Points of the route starting with lane `l`: its centre, then at each lane end the connector
-/// of the requested turn (consumed at the first junction) or else straight on, then the next
-/// lane. `false` when a requested turn finds no connector before the route runs out. Also where
-/// the route passes its first junction.
-pub(super) fn chain(map: &Map, l: usize, turn: Option<Turn>) -> (Vec<DVec2>, bool, Option<Junction>) {
-    let mut pts: Vec<DVec2> = map.lanes[l].centre.points.clone();
-    let mut cur = l;
-    let mut pending = turn;
-    let mut ok = true;
-    let mut junction = None;
-    let mut total = map.lanes[l].centre.length();
-    for _ in 0..6 {
-        if total > 800.0 {
-            break;
-        }
-        let mut from_here = map.connectors.iter().enumerate().filter(|(_, c)| c.from == cur && c.to < map.lanes.len());
-        let pick = match pending {
-            Some(t) => match from_here.clone().find(|(_, c)| c.turn == t) {
-                Some(cn) => Some(cn),
-                None if map.lanes[cur].next.is_some() => None,
-                None => {
-                    ok = false;
-                    break;
-                }
-            },
-            None => from_here
-                .clone()
-                .find(|(_, c)| c.turn == Turn::Straight)
-                .or_else(|| if map.lanes[cur].next.is_some() { None } else { from_here.next() }),
-        };
-        let nxt = match pick {
-            Some((ci, cn)) => {
-                if junction.is_none() {
-                    // The stop line counts only on the lane the route starts in.
-                    let stop = if cur == l { map.lanes[l].stop_line_s } else { None };
-                    let (entry, len) = (total, cn.path.length());
-                    junction = Some(Junction { stop: stop.unwrap_or(entry), exit: entry + len, conn: ci });
-                }
-                pts.extend_from_slice(&cn.path.points);
-                total += cn.path.length();
-                pending = None;
-                cn.to
-            }
-            None => match map.lanes[cur].next {
-                Some(n) if n < map.lanes.len() => n,
-                _ => break,
-            },
-        };
-        pts.extend_from_slice(&map.lanes[nxt].centre.points);
-        total += map.lanes[nxt].centre.length();
-        cur = nxt;
-    }
-    if pending.is_some() {
-        ok = false;
-    }
-    let n = pts.len();
-    if n >= 2 {
-        let dir = (pts[n - 1] - pts[n - 2]).normalize_or_zero();
-        pts.push(pts[n - 1] + dir * RUN_OUT);
-    }
-    (pts, ok, junction)
 }
 
 /// Whether two junction paths cross or merge: some point of one lies within `gap` of the other,
