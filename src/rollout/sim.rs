@@ -87,6 +87,9 @@ pub(super) struct Actor {
     /// Emergency vehicles (track indices) whose junction path crosses this agent's: while one
     /// approaches or is inside the junction, this agent holds at its stop line.
     pub yield_to: Vec<usize>,
+    /// A vehicle's `turn` goal and its span: `check_turns` refuses a turn whose swept box leaves
+    /// the road.
+    pub turn_goal: Option<(Turn, crate::source::Span)>,
 }
 
 /// How far ahead of an emergency vehicle the junction is cleared: this many seconds at its
@@ -209,10 +212,94 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
             }
         }
     }
+    check_turns(map, &actors, &confs, &out, &mut errs);
     if !errs.is_empty() {
         return Err(errs);
     }
     Ok(out)
+}
+
+/// How far a turning vehicle's wheels may stray off the drivable surface in its junction, m:
+/// one BEV pixel (0.25 m), the resolution at which the surface is drawn.
+const TURN_OFF_ROAD_M: f64 = 0.25;
+
+/// E0204 for a turn the vehicle drives but cannot make on this road: the junction path is within
+/// `TURN_SLACK` of its turning radius, yet its wheels leave the drivable surface by more than
+/// `TURN_OFF_ROAD_M` while in the junction. The wheels span the box's width and its wheelbase
+/// (`WHEELBASE_SHARE` of its length): the overhangs beyond the axles sweep over the kerb in a
+/// tight turn, as real ones do, but tyres on the pavement are a turn the road does not offer.
+/// Conflict agents are exempt: their crash may take them anywhere.
+fn check_turns(map: &Map, actors: &[Actor], confs: &[Conf], out: &Tracks, errs: &mut Vec<Diagnostic>) {
+    // A map drawn without a surface (a hand-built one) has nothing to check against.
+    if map.drivable.is_empty() {
+        return;
+    }
+    let boxes: Vec<(DVec2, DVec2)> = map
+        .drivable
+        .iter()
+        .map(|poly| poly.iter().fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p))))
+        .collect();
+    let off_road = |q: DVec2| -> f64 {
+        let near = || map.drivable.iter().zip(&boxes).filter(|(_, (lo, hi))| q.cmpge(*lo).all() && q.cmple(*hi).all());
+        if near().any(|(poly, _)| crate::geom::point_in_polygon(q, poly)) {
+            return 0.0;
+        }
+        map.drivable
+            .iter()
+            .flat_map(|poly| (0..poly.len()).map(move |k| (poly[k], poly[(k + 1) % poly.len()])))
+            .map(|(a, b)| {
+                let d = b - a;
+                let t =
+                    if d.length_squared() > 0.0 { ((q - a).dot(d) / d.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+                q.distance(a + d * t)
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    for (i, a) in actors.iter().enumerate() {
+        let (Some((turn, span)), Some(j)) = (a.turn_goal, a.junction) else { continue };
+        if confs.iter().any(|k| k.af == i || k.st == i) {
+            continue;
+        }
+        let Some(conn) = map.connectors.get(j.conn) else { continue };
+        let (lo, hi) =
+            conn.path.points.iter().fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        let (lo, hi) = (lo - DVec2::splat(a.radius + 1.0), hi + DVec2::splat(a.radius + 1.0));
+        let mut worst = (0.0, 0);
+        for (f, p) in out.poses[i].iter().enumerate() {
+            let c = DVec2::new(p.x, p.y);
+            if !(c.cmpge(lo).all() && c.cmple(hi).all()) {
+                continue;
+            }
+            let obb = Obb { center: c, yaw: p.yaw, length: super::WHEELBASE_SHARE * 2.0 * a.hl, width: 2.0 * a.hw };
+            for q in obb.corners() {
+                let d = off_road(q);
+                if d > worst.0 {
+                    worst = (d, f);
+                }
+            }
+        }
+        if worst.0 > TURN_OFF_ROAD_M {
+            let t = worst.1 as f64 / out.rate.max(1e-9);
+            errs.push(
+                Diagnostic::error(
+                    "E0204",
+                    format!(
+                        "`{}` ({}, turning radius {:.1} m) cannot turn {} here: its box leaves the road by {:.1} m at {t:.1} s",
+                        a.info.name,
+                        a.info.kind,
+                        a.r_min,
+                        turn_name(turn),
+                        worst.0
+                    ),
+                )
+                .label(span, "this goal")
+                .help(
+                    "a wider road (lanes, lane_width, median) or a smaller kind; long vehicles need room to swing \
+                     through a turn (see README, Rollout)",
+                ),
+            );
+        }
+    }
 }
 
 /// A tree or a pole has no front: its yaw is whatever the placement gave it (the lane's heading),
@@ -290,6 +377,7 @@ fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Class, drive:
         emergency: false,
         junction: None,
         yield_to: vec![],
+        turn_goal: None,
         info,
     }
 }
@@ -377,6 +465,7 @@ fn build_actor(
                 // A turn tighter than the kind can steer (a bus's U-turn on a narrow junction)
                 // would leave the road: refused, not driven wide.
                 if let (Some(t), Some(j)) = (turn, a.junction) {
+                    a.turn_goal = Some((t, ca.span));
                     let entry = j.exit - map.connectors[j.conn].path.length();
                     let n = ((j.exit - entry) / 0.5).ceil().max(1.0) as usize;
                     let k = (0..=n).map(|i| a.path.curvature(entry + (j.exit - entry) * i as f64 / n as f64).abs());
