@@ -900,7 +900,7 @@ fn a_turn_that_puts_the_wheels_off_the_road_is_refused() {
         let s = rocc::check::check_text("t.scn", t, std::path::Path::new("."), &mut sources).expect("checks");
         rocc::compile::front(s, None)
     };
-    let errs = front(&text("four_way", 1, "sedan", "south", "u_turn")).err().expect("refused");
+    let Err(errs) = front(&text("four_way", 1, "sedan", "south", "u_turn")) else { panic!("not refused") };
     assert_eq!(errs.iter().map(|d| d.code).collect::<Vec<_>>(), ["E0204"]);
     assert!(errs[0].message.contains("leaves the road by"), "{}", errs[0].message);
     assert!(front(&text("four_way", 2, "sedan", "south", "u_turn")).is_ok(), "two lanes leave room for the U-turn");
