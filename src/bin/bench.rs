@@ -50,23 +50,18 @@ fn thread_cpu() -> Option<f64> {
     s.split_whitespace().next()?.parse::<f64>().ok().map(|ns| ns * 1e-9)
 }
 
-/// Median wall seconds and median CPU seconds (`thread_cpu`; NaN where unavailable) of `f` over
-/// `reps` runs.
+/// Median wall seconds of `f` over `reps` runs, and its mean CPU seconds (`thread_cpu` over all
+/// runs together, as the kernel may count CPU time in whole scheduler ticks; NaN where
+/// unavailable).
 fn median_cpu(reps: usize, mut f: impl FnMut()) -> (f64, f64) {
-    let mut wall = vec![];
-    let mut cpu = vec![];
-    for _ in 0..reps.max(1) {
-        let (t0, c0) = (Instant::now(), thread_cpu());
-        f();
-        wall.push(t0.elapsed().as_secs_f64());
-        cpu.push(match (c0, thread_cpu()) {
-            (Some(a), Some(b)) => b - a,
-            _ => f64::NAN,
-        });
-    }
-    wall.sort_by(f64::total_cmp);
-    cpu.sort_by(f64::total_cmp);
-    (wall[wall.len() / 2], cpu[cpu.len() / 2])
+    let reps = reps.max(1);
+    let c0 = thread_cpu();
+    let t = median(reps, &mut f);
+    let cpu = match (c0, thread_cpu()) {
+        (Some(a), Some(b)) => (b - a) / reps as f64,
+        _ => f64::NAN,
+    };
+    (t, cpu)
 }
 
 /// A valid scenario with `n` agents spread over a long six-lane straight road.
@@ -144,7 +139,7 @@ fn digest(h: &mut u64, t: &rocc::rollout::Tracks) {
 }
 
 fn bench_rollout() {
-    println!("== rollout: cost per agent-frame (median of 20 runs, one core; wall time, then CPU time)");
+    println!("== rollout: cost per agent-frame (one core; median wall time of 20 runs, then mean CPU time)");
     let mut total = (0.0, 0usize, 0.0);
     let mut h = 0xcbf2_9ce4_8422_2325u64;
     let shared = batch::collect_inputs(&[root().join("../shared/examples")]).unwrap_or_default();

@@ -22,7 +22,6 @@
 //! following a Hermite intercept, re-planned each frame, to a pose that puts its striking face
 //! on the requested side of the struck box at the impact frame.
 
-mod grid;
 mod path;
 pub mod route;
 mod sim;

@@ -2,7 +2,6 @@
 //! then computes each agent's next state from everyone's current state (a Jacobi update, so the
 //! result does not depend on agent order), undoes moves that would overlap, and latches crashes.
 
-use super::grid::Grid;
 use super::path::{Hermite, Path};
 use super::route::{Junction, RUN_OUT, chain, find_lane};
 use super::stage::{self, Plan};
@@ -708,14 +707,8 @@ struct Sim<'a> {
     dirs: Vec<DVec2>,
     /// Per agent, this frame: `yield_state`.
     yielding: Vec<(Option<f64>, bool)>,
-    /// Positions bucketed for the pair checks (`cur` while stepping, `next` while resolving).
-    grid: Grid,
-    /// Largest bounding radius of any agent, m: widens every grid query.
-    max_radius: f64,
     /// This frame: agents easing aside (`away_from`, triggered), for `pass_offset`.
     easing: Vec<usize>,
-    /// Scratch for `resolve_overlaps`.
-    scratch: Vec<usize>,
 }
 
 impl<'a> Sim<'a> {
@@ -745,10 +738,7 @@ impl<'a> Sim<'a> {
             next: cur.clone(),
             dirs: cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect(),
             yielding: vec![(None, false); actors.len()],
-            grid: Grid::default(),
-            max_radius: actors.iter().map(|a| a.radius).fold(0.0, f64::max),
             easing: Vec::with_capacity(actors.len()),
-            scratch: Vec::with_capacity(actors.len()),
             cur,
         }
     }
@@ -762,7 +752,6 @@ impl<'a> Sim<'a> {
             let t = (f - 1) as f64 * self.dt;
             self.dirs.clear();
             self.dirs.extend(self.cur.iter().map(|s| DVec2::from_angle(s.yaw)));
-            self.grid.rebuild(self.cur.iter().map(|s| s.pos));
             self.easing.clear();
             for (j, (o, b)) in self.cur.iter().zip(self.actors.iter()).enumerate() {
                 if o.triggered && matches!(b.lateral, Lat::Away { .. }) {
@@ -879,16 +868,17 @@ impl<'a> Sim<'a> {
             _ => None,
         };
         let (yield_rem, clearing) = self.yielding[i];
-        // Everyone near enough to matter, and the agent queued behind wherever it is (seen twice
-        // when near: every effect below is a min or an or, so that is harmless).
-        let reach = look + a.radius + self.max_radius;
         // On a straight stretch of our route, an agent's route coordinates are its coordinates
         // along the line: those that provably change nothing below are passed over without the
         // projection (the pair loop's main cost). Only when holding our offset: lateral moves
         // look at everyone alongside.
         let line = if d_next == st.d { a.path.straight_run(st.s) } else { None };
         let lateral_free = |j: usize| self.yielding[j].0.is_some() || clearing;
-        for j in self.grid.cands(st.pos, reach).chain(named) {
+        // Everyone, and the agent queued behind once more (every effect below is a min or an or,
+        // so seeing it twice is harmless). No spatial index: the look-ahead (up to ~240 m at
+        // highway speed) spans whole maps, so a grid found nearly everyone anyway and cost more
+        // than the distance test below (`bench rollout`, 200 agents).
+        for j in (0..self.actors.len()).chain(named) {
             let (o, b) = (&self.cur[j], &self.actors[j]);
             if j == i || self.exempt(i, j) {
                 continue;
@@ -1195,21 +1185,12 @@ impl<'a> Sim<'a> {
     /// restores the previous frame, which had no overlap, so this always ends.
     fn resolve_overlaps(&mut self) {
         let n = self.actors.len();
-        let mut near = std::mem::take(&mut self.scratch);
-        // An undone move puts an agent back at most this far from where the grid has it: queries
-        // widened by it find every pair a full scan would see within the same sweep.
-        let moved = self.cur.iter().zip(&self.next).map(|(c, x)| c.pos.distance(x.pos)).fold(0.0, f64::max);
         for _ in 0..=n {
             let mut changed = false;
-            self.grid.rebuild(self.next.iter().map(|s| s.pos));
             for i in 0..n {
-                // The pairs (i, j > i) within reach, in index order as a full scan would take
-                // them (undoing a move changes later pairs' outcome).
-                near.clear();
-                let r = self.actors[i].radius + self.max_radius + 2.0 * moved;
-                near.extend(self.grid.cands(self.next[i].pos, r).filter(|&j| j > i));
-                near.sort_unstable();
-                for &j in &near {
+                // The pairs (i, j > i) in index order (undoing a move changes later pairs'
+                // outcome), bounding circles first.
+                for j in i + 1..n {
                     let (ai, aj) = (&self.actors[i], &self.actors[j]);
                     let (si, sj) = (&self.next[i], &self.next[j]);
                     let r = ai.radius + aj.radius;
@@ -1232,7 +1213,6 @@ impl<'a> Sim<'a> {
                 break;
             }
         }
-        self.scratch = near;
     }
 
     /// Latch each staged conflict at its deepest overlap: once the boxes meet, the frame where
