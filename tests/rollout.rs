@@ -907,6 +907,27 @@ fn a_turn_that_puts_the_wheels_off_the_road_is_refused() {
     assert!(front(&text("t_junction", 1, "bus", "east", "left")).is_ok(), "overhang over the kerb is no refusal");
 }
 
+/// Two walkers placed 0.6 m apart with 0.61 m long boxes interpenetrate by a centimetre: the
+/// place pass refuses it (E0202) instead of starting the tracks with an overlap (the template
+/// property test found such a pair at frame 0); 0.59 m long ones pass.
+#[test]
+fn walkers_a_centimetre_into_each_other_are_refused() {
+    let text = |len: &str| {
+        format!(
+            "scenario t {{ duration 2 s\n road straight {{ lanes 1; sidewalks on }}\n \
+             agent w0: pedestrian {{ at sidewalk(west.out), 7.4 m after center; length {len}; width 0.5 m }}\n \
+             agent w1: pedestrian {{ at sidewalk(west.out), 6.8 m after center; length {len}; width 0.5 m }}\n}}"
+        )
+    };
+    let codes = |t: &str| {
+        let mut sources = rocc::source::SourceMap::default();
+        let s = rocc::check::check_text("t.scn", t, std::path::Path::new("."), &mut sources).expect("checks");
+        rocc::compile::front(s, None).err().map(|d| d.iter().map(|d| d.code).collect::<Vec<_>>()).unwrap_or_default()
+    };
+    assert_eq!(codes(&text("0.61 m")), ["E0202"]);
+    assert_eq!(codes(&text("0.59 m")), Vec::<&str>::new());
+}
+
 // ------------------------------------------------------------------ conflicts on every side
 
 /// All eight `point` sides, each with an impact type that reaches it (rear sides by rear_end,
