@@ -370,6 +370,12 @@ fn stop_behind_needs_a_leader_ahead_on_the_route() {
         "road straight { lanes 1; sidewalks on }
          agent a: sedan { at west.in[1], 40 m before center; speed 20 km/h; goal { stop behind p } }
          agent p: pedestrian { at sidewalk(west.in), 10 m before center; goal { speed 1.4 m/s; lateral cross } }",
+        // Placed by coordinates in west.in[1] at the apex of a U-shaped curve: its route is still
+        // the lane's (the rollout's route function), so a leader 60 m on round the bend is ahead
+        // (a straight ray from its pose passes 30 m from it).
+        "road curve { lanes 1; radius 40 m; angle 180 deg }
+         agent a: sedan { at (0 m, -1.75 m) heading 0 deg; speed 20 km/h; goal { stop behind b } }
+         agent b: sedan { at east.out[1], 60 m after center; speed 10 km/h }",
     ];
     for body in ok {
         assert_eq!(front_codes(body), Vec::<&str>::new(), "{body}");
@@ -392,6 +398,11 @@ fn stop_behind_needs_a_leader_ahead_on_the_route() {
         "road straight { lanes 1; shoulder 3 m }
          agent a: sedan { at west.in[1], 40 m before center; speed 20 km/h; goal { stop behind c } }
          object c: traffic_cone { at west.in[1], 20 m before center offset 3 m right }",
+        // The same car: a cone 30 m straight ahead of it, off the road where its lane has bent
+        // 11 m away, is not on its route (a straight ray from its pose would meet it).
+        "road curve { lanes 1; radius 40 m; angle 180 deg }
+         agent a: sedan { at (0 m, -1.75 m) heading 0 deg; speed 20 km/h; goal { stop behind c } }
+         object c: traffic_cone { at (30 m, -1.75 m) }",
     ];
     for body in bad {
         assert_eq!(front_codes(body), ["E0206"], "{body}");

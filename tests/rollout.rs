@@ -882,6 +882,52 @@ fn a_truck_turns_wider_than_a_car_and_a_bus_is_refused() {
     assert!(errs[0].message.contains("turning radius 10.3 m"), "{}", errs[0].message);
 }
 
+/// A sedan's U-turn on a one-lane four_way is within `TURN_SLACK` of its turning radius, so the
+/// path check lets it through, but its arc puts its wheels 3 m beyond the kerb: refused with
+/// E0204, which names the excursion (before the wheel check it drove there). With two lanes it
+/// fits; and a bus's left turn on a one-lane T, whose overhang sweeps 0.76 m over the kerb with
+/// its wheels on the road, is accepted.
+#[test]
+fn a_turn_that_puts_the_wheels_off_the_road_is_refused() {
+    let text = |road: &str, lanes: u32, kind: &str, arm: &str, turn: &str| {
+        format!(
+            "scenario t {{ duration 10 s\n road {road} {{ lanes {lanes}; lane_width 3.5 m; speed_limit 40 km/h; sidewalks on }}\n \
+             agent v0: {kind} {{ at {arm}.in[1], 6 m before stop_line; speed 0 m/s; goal {{ turn {turn} }} }}\n}}"
+        )
+    };
+    let front = |t: &str| {
+        let mut sources = rocc::source::SourceMap::default();
+        let s = rocc::check::check_text("t.scn", t, std::path::Path::new("."), &mut sources).expect("checks");
+        rocc::compile::front(s, None)
+    };
+    let Err(errs) = front(&text("four_way", 1, "sedan", "south", "u_turn")) else { panic!("not refused") };
+    assert_eq!(errs.iter().map(|d| d.code).collect::<Vec<_>>(), ["E0204"]);
+    assert!(errs[0].message.contains("leaves the road by"), "{}", errs[0].message);
+    assert!(front(&text("four_way", 2, "sedan", "south", "u_turn")).is_ok(), "two lanes leave room for the U-turn");
+    assert!(front(&text("t_junction", 1, "bus", "east", "left")).is_ok(), "overhang over the kerb is no refusal");
+}
+
+/// Two walkers placed 0.6 m apart with 0.61 m long boxes interpenetrate by a centimetre: the
+/// place pass refuses it (E0202) instead of starting the tracks with an overlap (the template
+/// property test found such a pair at frame 0); 0.59 m long ones pass.
+#[test]
+fn walkers_a_centimetre_into_each_other_are_refused() {
+    let text = |len: &str| {
+        format!(
+            "scenario t {{ duration 2 s\n road straight {{ lanes 1; sidewalks on }}\n \
+             agent w0: pedestrian {{ at sidewalk(west.out), 7.4 m after center; length {len}; width 0.5 m }}\n \
+             agent w1: pedestrian {{ at sidewalk(west.out), 6.8 m after center; length {len}; width 0.5 m }}\n}}"
+        )
+    };
+    let codes = |t: &str| {
+        let mut sources = rocc::source::SourceMap::default();
+        let s = rocc::check::check_text("t.scn", t, std::path::Path::new("."), &mut sources).expect("checks");
+        rocc::compile::front(s, None).err().map(|d| d.iter().map(|d| d.code).collect::<Vec<_>>()).unwrap_or_default()
+    };
+    assert_eq!(codes(&text("0.61 m")), ["E0202"]);
+    assert_eq!(codes(&text("0.59 m")), Vec::<&str>::new());
+}
+
 // ------------------------------------------------------------------ conflicts on every side
 
 /// All eight `point` sides, each with an impact type that reaches it (rear sides by rear_end,
@@ -1148,12 +1194,37 @@ fn on_drivable(m: &Map, p: DVec2) -> bool {
     past_an_end || m.drivable.iter().any(|poly| rocc::geom::point_in_polygon(p, poly))
 }
 
+/// How far `p` lies outside the drivable surface (0 on it, or past a lane end as in
+/// `on_drivable`), m.
+fn off_drivable_by(m: &Map, p: DVec2) -> f64 {
+    if on_drivable(m, p) {
+        return 0.0;
+    }
+    let seg = |a: DVec2, b: DVec2| {
+        let d = b - a;
+        let t = if d.length_squared() > 0.0 { ((p - a).dot(d) / d.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+        p.distance(a + d * t)
+    };
+    m.drivable
+        .iter()
+        .flat_map(|poly| (0..poly.len()).map(move |k| (poly[k], poly[(k + 1) % poly.len()])))
+        .map(|(a, b)| seg(a, b))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// How far a corner of a vehicle's wheel footprint (its box's width by its wheelbase,
+/// `rocc::rollout::WHEELBASE_SHARE` of its length, about the centre) may stray off the drivable
+/// surface, m: one BEV pixel (0.25 m), the resolution at which the surface is drawn. The
+/// overhangs beyond the axles may sweep over a kerb in a tight turn, as real ones do; the
+/// rollout refuses a turn that puts the wheels off the road (E0204).
+const CORNER_TOL_M: f64 = 0.25;
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 96, max_global_rejects: 4096, ..ProptestConfig::default() })]
 
     /// Over generated scenes on every template: no overlap but the conflict pair's from about
     /// its impact on; bicycle kinematics and class limits; vehicles on the drivable surface
-    /// (their centre and front axle region) unless in a crash; the same tracks on a second run.
+    /// (the four corners of their wheel footprint, within `CORNER_TOL_M`) unless in a crash; the same tracks on a second run.
     #[test]
     fn generated_scenes_on_every_template(g in gen_scene()) {
         let text = scene_text(&g);
@@ -1207,10 +1278,13 @@ proptest! {
                 continue;
             }
             for (fr, p) in t.poses[i].iter().enumerate() {
-                let c = DVec2::new(p.x, p.y);
-                let front = c + DVec2::from_angle(p.yaw) * (0.3 * a.size[0]);
-                prop_assert!(on_drivable(&f.map, c) && on_drivable(&f.map, front),
-                    "{text}\n{} off the drivable surface at frame {fr}: ({:.1}, {:.1})", a.name, p.x, p.y);
+                let mut wheels = obb(t, i, fr);
+                wheels.length *= rocc::rollout::WHEELBASE_SHARE;
+                let corners = wheels.corners();
+                let worst = corners.iter().map(|&q| off_drivable_by(&f.map, q)).fold(0.0, f64::max);
+                prop_assert!(worst <= CORNER_TOL_M,
+                    "{text}\n{} has a wheel {worst:.2} m off the drivable surface at frame {fr}: ({:.1}, {:.1}) yaw {:.1} deg",
+                    a.name, p.x, p.y, p.yaw.to_degrees());
             }
         }
         let again = rocc::compile::front(s, None).expect("front again");

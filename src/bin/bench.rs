@@ -46,6 +46,27 @@ fn median(reps: usize, mut f: impl FnMut()) -> f64 {
     t[t.len() / 2]
 }
 
+/// CPU time of this thread, s (Linux `/proc/thread-self/schedstat`, nanoseconds), or `None`
+/// elsewhere: on a shared machine it is the steadier figure, as waiting for a core does not count.
+fn thread_cpu() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    s.split_whitespace().next()?.parse::<f64>().ok().map(|ns| ns * 1e-9)
+}
+
+/// Median wall seconds of `f` over `reps` runs, and its mean CPU seconds (`thread_cpu` over all
+/// runs together, as the kernel may count CPU time in whole scheduler ticks; NaN where
+/// unavailable).
+fn median_cpu(reps: usize, mut f: impl FnMut()) -> (f64, f64) {
+    let reps = reps.max(1);
+    let c0 = thread_cpu();
+    let t = median(reps, &mut f);
+    let cpu = match (c0, thread_cpu()) {
+        (Some(a), Some(b)) => (b - a) / reps as f64,
+        _ => f64::NAN,
+    };
+    (t, cpu)
+}
+
 /// A valid scenario with `n` agents spread over a long six-lane straight road.
 fn generated(n: usize) -> String {
     let mut s = String::from(
@@ -98,27 +119,60 @@ fn bench_front() {
     }
 }
 
+/// FNV-1a over every pose, speed and impact of a rollout, bit for bit: a speed-up must leave it
+/// unchanged (`bench rollout` prints one digest over all the scenes it times and the shared
+/// examples).
+fn digest(h: &mut u64, t: &rocc::rollout::Tracks) {
+    let mut eat = |x: u64| {
+        for b in x.to_le_bytes() {
+            *h = (*h ^ b as u64).wrapping_mul(0x100_0000_01b3);
+        }
+    };
+    for (poses, speeds) in t.poses.iter().zip(&t.speeds) {
+        for (p, v) in poses.iter().zip(speeds) {
+            for x in [p.x, p.y, p.yaw, *v] {
+                eat(x.to_bits());
+            }
+        }
+    }
+    for r in &t.impacts {
+        eat(r.frame as u64);
+        eat(r.depth.to_bits());
+    }
+}
+
 fn bench_rollout() {
-    println!("== rollout: cost per agent-frame (median of 20 runs, one core)");
-    let mut total = (0.0, 0usize);
+    println!("== rollout: cost per agent-frame (one core; median wall time of 20 runs, then mean CPU time)");
+    let mut total = (0.0, 0usize, 0.0);
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    let shared = batch::collect_inputs(&[root().join("../shared/examples")]).unwrap_or_default();
+    for p in &shared {
+        if let Some(f) = load(p) {
+            digest(&mut h, &f.tracks);
+        }
+    }
     for p in library() {
         let Some(f) = load(&p) else { continue };
-        let t = median(20, || {
+        digest(&mut h, &f.tracks);
+        let (t, c) = median_cpu(20, || {
             std::hint::black_box(rocc::rollout::rollout(&f.concrete, &f.map, &f.placed).is_ok());
         });
         let af = f.tracks.agents.len() * f.tracks.frames;
         total.0 += t;
         total.1 += af;
+        total.2 += c;
         let name = p.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         println!(
-            "  {name:<32} {:>3} agents x {:>3} frames  {:>7.2} ms  {:>6.3} us/agent-frame",
+            "  {name:<32} {:>3} agents x {:>3} frames  {:>7.2} ms  {:>6.3} us/agent-frame  cpu {:>6.3}",
             f.tracks.agents.len(),
             f.tracks.frames,
             t * 1e3,
-            t * 1e6 / af as f64
+            t * 1e6 / af as f64,
+            c * 1e6 / af as f64
         );
     }
-    println!("  library total: {:.3} us/agent-frame", total.0 * 1e6 / total.1.max(1) as f64);
+    let af = total.1.max(1) as f64;
+    println!("  library total: {:.3} us/agent-frame  cpu {:.3}", total.0 * 1e6 / af, total.2 * 1e6 / af);
     // 50 agents: below the grid's threshold (a scan of all agents); 200: bucketed.
     for n in [50, 200] {
         let mut sources = SourceMap::default();
@@ -129,12 +183,19 @@ fn bench_rollout() {
             println!("  generated {n} agents: does not compile");
             continue;
         };
-        let t = median(10, || {
+        let (t, c) = median_cpu(10, || {
             std::hint::black_box(rocc::rollout::rollout(&f.concrete, &f.map, &f.placed).is_ok());
         });
-        let af = f.tracks.agents.len() * f.tracks.frames;
-        println!("  generated {n} agents x {} frames: {:.3} us/agent-frame", f.tracks.frames, t * 1e6 / af as f64);
+        let af = (f.tracks.agents.len() * f.tracks.frames) as f64;
+        digest(&mut h, &f.tracks);
+        println!(
+            "  generated {n} agents x {} frames: {:.3} us/agent-frame  cpu {:.3}",
+            f.tracks.frames,
+            t * 1e6 / af,
+            c * 1e6 / af
+        );
     }
+    println!("  digest of every track above and of {} shared examples: {h:016x}", shared.len());
 }
 
 fn pool(threads: usize) -> rayon::ThreadPool {

@@ -294,8 +294,10 @@ exist because `crosswalks`/`sidewalks` is off.\n
         explanation: "An agent's goal asks for something the road does not offer from where the agent starts:\n\
 a `turn` where its lane has no junction connector of that kind, a `change_lane` toward a lane\n\
 that does not exist, `stop at stop_line` on a lane with no stop line ahead, `cross` with no\n\
-road nearby to cross, or a turn whose junction path is more than 3 times tighter than the\n\
-kind's turning radius (derived from its length: a bus turns on about 10 m).\n
+road nearby to cross, a turn whose junction path is more than 3 times tighter than the\n\
+kind's turning radius (derived from its length: a bus turns on about 10 m), or a turn that,\n\
+driven on that radius, puts a wheel more than 0.25 m off the drivable surface (a sedan's\n\
+U-turn on a one-lane four_way; overhangs beyond the axles may sweep over the kerb).\n
     road straight { lanes 1 }\n    agent ego: sedan { at west.in[1], 20 m before center; goal { turn left } }   // error\n\n\
 Place the agent on a lane that reaches a junction offering the turn, or change the goal.",
     },

@@ -151,7 +151,11 @@ pub fn point_in_polygon(p: DVec2, poly: &[DVec2]) -> bool {
 /// Wrap an angle to (-pi, pi].
 pub fn wrap_angle(a: f64) -> f64 {
     let t = std::f64::consts::TAU;
-    let mut x = (a + std::f64::consts::PI).rem_euclid(t) - std::f64::consts::PI;
+    let y = a + std::f64::consts::PI;
+    // `rem_euclid` returns its argument unchanged on [0, TAU) (fmod is exact): skip the libm call
+    // there, the common case, with a bit-identical result.
+    let r = if (0.0..t).contains(&y) { y } else { y.rem_euclid(t) };
+    let mut x = r - std::f64::consts::PI;
     if x <= -std::f64::consts::PI {
         x += t;
     }
@@ -161,6 +165,26 @@ pub fn wrap_angle(a: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The fast path of `wrap_angle` is bit-identical to the plain `rem_euclid` formula.
+    #[test]
+    fn wrap_angle_fast_path_is_exact() {
+        let slow = |a: f64| {
+            let t = std::f64::consts::TAU;
+            let mut x = (a + std::f64::consts::PI).rem_euclid(t) - std::f64::consts::PI;
+            if x <= -std::f64::consts::PI {
+                x += t;
+            }
+            x
+        };
+        let pi = std::f64::consts::PI;
+        let mut cases = vec![0.0, -0.0, pi, -pi, 2.0 * pi, -2.0 * pi, 1e-300, -1e-300, 7.5, -7.5, 1e6, f64::NAN];
+        cases.extend((0..20000).map(|i| (i as f64 - 10000.0) * 0.00123 * pi));
+        cases.extend([pi.next_up(), (-pi).next_down(), (-pi).next_up(), pi.next_down()]);
+        for a in cases {
+            assert_eq!(wrap_angle(a).to_bits(), slow(a).to_bits(), "{a}");
+        }
+    }
 
     #[test]
     fn polyline_pose_and_projection_agree() {

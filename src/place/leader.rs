@@ -2,9 +2,10 @@
 //! joining it (E0206). In: the `Concrete` scenario, its `Map`, the placed poses. Out: one
 //! diagnostic per goal whose leader can never be ahead (the controller would silently ignore it).
 //!
-//! The route is the agent's lane continued the way the rollout drives it (its `turn` connector,
-//! else the straight one, else the lane's continuation); an agent off the lanes goes straight
-//! along its heading. The leader qualifies when its centre is ahead of the agent's centre along
+//! The route is the one the rollout drives (`rollout::route`, one function for both): the lane a
+//! vehicle is found in from its pose, continued by its `turn` connector, else the straight one,
+//! else the lane's continuation; a walker, an animal or a vehicle off the lanes goes straight
+//! along its heading. (A `change_lane` agent is judged on the lane it starts in.) The leader qualifies when its centre is ahead of the agent's centre along
 //! that route and
 //! - within the route's corridor (half the lane width plus half its own width: a cyclist at the
 //!   lane edge counts, a car in the next lane does not), or
@@ -17,6 +18,7 @@ use crate::check::scenario::{Dir, Lateral, Motion, Place, Stop, Turn};
 use crate::diag::Diagnostic;
 use crate::geom::Polyline;
 use crate::road::Map;
+use crate::rollout::route::{chain, find_lane};
 use crate::sample::{Concrete, ConcreteAgent};
 use glam::DVec2;
 
@@ -33,53 +35,27 @@ struct Route {
     half: f64,
 }
 
-/// The lane a lane-placed agent starts on.
-fn lane_of(map: &Map, a: &ConcreteAgent) -> Option<usize> {
-    match &a.place {
-        Place::Lane { lane, .. } => map.lanes.iter().position(|l| l.id == *lane),
-        _ => None,
+/// The lane a vehicle drives from, as the rollout finds it (`rollout::route::find_lane`: the
+/// nearest lane heading its way that holds it); walkers and animals have none.
+fn lane_of(map: &Map, a: &ConcreteAgent, p: &PlacedAgent) -> Option<usize> {
+    if a.motion != Motion::Vehicle {
+        return None;
     }
+    find_lane(map, centre(p), p.pose.yaw).map(|(l, _, _)| l)
 }
 
-/// The lane's centre line continued the way the rollout picks: the `turn` connector, else the
-/// straight one, else `next`, else any connector (a bounded number of hops).
-fn chain(map: &Map, l: usize, turn: Option<Turn>) -> Vec<DVec2> {
-    let mut pts = map.lanes[l].centre.points.clone();
-    let mut cur = l;
-    let mut pending = turn;
-    for _ in 0..6 {
-        let from_here = || map.connectors.iter().filter(move |c| c.from == cur && c.to < map.lanes.len());
-        let pick = match pending {
-            Some(t) => from_here().find(|c| c.turn == t),
-            None => from_here()
-                .find(|c| c.turn == Turn::Straight)
-                .or_else(|| if map.lanes[cur].next.is_some() { None } else { from_here().next() }),
-        };
-        let nxt = match pick {
-            Some(c) => {
-                pts.extend_from_slice(&c.path.points);
-                pending = None;
-                c.to
-            }
-            None => match map.lanes[cur].next {
-                Some(n) if n < map.lanes.len() => n,
-                _ => break,
-            },
-        };
-        pts.extend_from_slice(&map.lanes[nxt].centre.points);
-        cur = nxt;
-    }
-    // Consecutive pieces share their end points; a zero-length segment has no direction.
+/// The rollout's route from lane `l` (`rollout::route::chain`, the same function that builds the
+/// path the agent drives), without its repeated points: a zero-length segment has no direction.
+fn chain_of(map: &Map, l: usize, turn: Option<Turn>) -> Vec<DVec2> {
+    let (mut pts, _, _) = chain(map, l, turn);
     pts.dedup_by(|a, b| a.distance(*b) < 1e-6);
     pts
 }
 
 fn route(map: &Map, a: &ConcreteAgent, p: &PlacedAgent) -> Route {
     let turn = a.goal.as_ref().and_then(|g| g.turn);
-    match lane_of(map, a) {
-        Some(l) if a.motion == Motion::Vehicle => {
-            Route { line: Polyline::new(chain(map, l, turn)), half: map.lanes[l].width / 2.0 }
-        }
+    match lane_of(map, a, p) {
+        Some(l) => Route { line: Polyline::new(chain_of(map, l, turn)), half: map.lanes[l].width / 2.0 },
         _ => {
             let c = DVec2::new(p.pose.x, p.pose.y);
             let d = DVec2::from_angle(p.pose.yaw);
@@ -112,10 +88,10 @@ fn not_ahead(map: &Map, me: (&ConcreteAgent, &PlacedAgent), leader: (&ConcreteAg
             Some(Lateral::ChangeLane(_)) if d_x.abs() <= corridor + 2.0 * r.half => return None,
             _ => {}
         }
-        if let Some(l) = lane_of(map, leader.0).filter(|_| leader.0.motion == Motion::Vehicle) {
+        if let Some(l) = lane_of(map, leader.0, leader.1) {
             // Its own route, from where it stands: a point of it inside our corridor, ahead of us
             // and heading our way is where it joins in front.
-            let own = Polyline::new(chain(map, l, goal.and_then(|g| g.turn)));
+            let own = Polyline::new(chain_of(map, l, goal.and_then(|g| g.turn)));
             let (from, _) = own.project(centre(leader.1));
             let joins = own.points.windows(2).zip(own.s.windows(2)).any(|(w, s)| {
                 let (sa, d) = r.line.project(w[1]);

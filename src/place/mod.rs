@@ -50,8 +50,6 @@ pub struct Placed {
     pub agents: Vec<PlacedAgent>,
 }
 
-/// Boxes may touch; they overlap only past this much interpenetration (m, per side).
-const TOUCH: f64 = 0.01;
 /// Holonomic movers that are not pedestrians (animals, strollers) may start this far outside the
 /// map's bounds (m): a deer steps out of the woods.
 const NEAR_MAP: f64 = 10.0;
@@ -108,14 +106,12 @@ pub fn place(c: &Concrete, map: &Map) -> Result<Placed, Vec<Diagnostic>> {
         }
     }
 
+    // Boxes may touch (`Obb::overlaps` ignores contact) but not interpenetrate at all: the
+    // rollout's tracks start from these poses and hold no overlap but a conflict's from frame 0
+    // (a 1 cm per side allowance here once let two walkers start 1 cm into each other).
     let boxes: Vec<Obb> = out
         .iter()
-        .map(|a| Obb {
-            center: DVec2::new(a.pose.x, a.pose.y),
-            yaw: a.pose.yaw,
-            length: (a.size[0] - 2.0 * TOUCH).max(0.0),
-            width: (a.size[1] - 2.0 * TOUCH).max(0.0),
-        })
+        .map(|a| Obb { center: DVec2::new(a.pose.x, a.pose.y), yaw: a.pose.yaw, length: a.size[0], width: a.size[1] })
         .collect();
     for i in 0..boxes.len() {
         for j in i + 1..boxes.len() {

@@ -22,8 +22,8 @@
 //! following a Hermite intercept, re-planned each frame, to a pose that puts its striking face
 //! on the requested side of the struck box at the impact frame.
 
-mod grid;
 mod path;
+pub mod route;
 mod sim;
 mod stage;
 mod traffic;
@@ -122,8 +122,12 @@ pub fn limits(class: Class, motion: Motion) -> Limits {
 /// A sedan turns on 4.0 m, an ambulance on 5.6 m, a bus on 10.3 m; at least 1 m for anything.
 pub fn min_turn_radius(class: Class, length: f64) -> f64 {
     let steer: f64 = if class == Class::Bicycle { 45.0 } else { 35.0 };
-    (0.6 * length / steer.to_radians().tan()).max(1.0)
+    (WHEELBASE_SHARE * length / steer.to_radians().tan()).max(1.0)
 }
+
+/// A vehicle's wheelbase as a share of its box length, axles placed symmetrically about the box
+/// centre (see `min_turn_radius`).
+pub const WHEELBASE_SHARE: f64 = 0.6;
 
 /// Roll the placed scenario out over its frames.
 pub fn rollout(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Vec<Diagnostic>> {

@@ -17,6 +17,50 @@ pub struct Path {
     curvature: Vec<f64>,
     /// Highest speed at each sample that still lets the agent slow for the curves ahead.
     cap: Vec<f64>,
+    /// Per sample: the first and last sample of the straight run holding it (samples on one
+    /// line with one tangent, split greedily from the start), for `Path::straight_run`.
+    run: Vec<(u32, u32)>,
+}
+
+/// A straight stretch of a path: on it, `Path::frenet_dir` from a guess inside the stretch ends
+/// (to float noise) at the point's projection onto the line, so pair checks can bound an agent's
+/// path coordinates without running it.
+#[derive(Clone, Copy, Debug)]
+pub struct Line {
+    /// The point of the line at arc length `s0`.
+    pub origin: DVec2,
+    pub s0: f64,
+    /// Unit tangent.
+    pub dir: DVec2,
+    /// Arc lengths strictly between which the stretch is straight (kept 0.1 m inside its end
+    /// samples, so every interpolation there reads samples of the stretch).
+    pub lo: f64,
+    pub hi: f64,
+}
+
+/// How far a sample may lie off its run's line, m, and its tangent differ from the run's, for
+/// the run to count as straight: far below the pair checks' 1 mm safety margin.
+const RUN_TOL: f64 = 1e-9;
+
+fn straight_runs(pts: &[DVec2], tangent: &[DVec2]) -> Vec<(u32, u32)> {
+    let m = pts.len();
+    let mut run = vec![(0u32, 0u32); m];
+    let mut start = 0;
+    while start < m {
+        let (p0, t0) = (pts[start], tangent[start]);
+        let mut end = start;
+        while end + 1 < m
+            && (tangent[end + 1] - t0).abs().max_element() < RUN_TOL
+            && t0.perp_dot(pts[end + 1] - p0).abs() < RUN_TOL * (1.0 + (pts[end + 1] - p0).length())
+        {
+            end += 1;
+        }
+        for r in &mut run[start..=end] {
+            *r = (start as u32, end as u32);
+        }
+        start = end + 1;
+    }
+    run
 }
 
 impl Path {
@@ -50,6 +94,7 @@ impl Path {
                 tangent: vec![DVec2::X; 2],
                 curvature: vec![0.0; 2],
                 cap: vec![f64::INFINITY; 2],
+                run: vec![(0, 1); 2],
             };
         }
         let acc = acc.min(until.max(2.0 * STEP));
@@ -82,8 +127,17 @@ impl Path {
                 if b > a { wrap_angle(heading[b] - heading[a]) / ((b - a) as f64 * STEP) } else { 0.0 }
             })
             .collect();
-        let tangent = heading.iter().map(|&h| DVec2::from_angle(h)).collect();
-        Path { pts, heading, tangent, curvature, cap: vec![f64::INFINITY; m] }
+        // Straight stretches repeat a heading bit for bit: reuse its sine and cosine.
+        let mut tangent: Vec<DVec2> = Vec::with_capacity(m);
+        let mut last = (f64::NAN, DVec2::X);
+        for &h in &heading {
+            if h.to_bits() != last.0.to_bits() {
+                last = (h, DVec2::from_angle(h));
+            }
+            tangent.push(last.1);
+        }
+        let run = straight_runs(&pts, &tangent);
+        Path { pts, heading, tangent, curvature, cap: vec![f64::INFINITY; m], run }
     }
 
     /// A straight path from `p` along `yaw`.
@@ -183,6 +237,22 @@ impl Path {
         (s, off.dot(t.perp()), beyond, t.normalize_or(DVec2::X))
     }
 
+    /// The straight run of the path around arc length `s`, if `s` lies inside one at least a metre
+    /// long.
+    pub fn straight_run(&self, s: f64) -> Option<Line> {
+        if self.run.len() < 2 {
+            return None;
+        }
+        let (i, _) = self.locate(s);
+        let (a, b) = self.run[i];
+        let (lo, hi) = (a as f64 * STEP + 0.1, b as f64 * STEP - 0.1);
+        if hi - lo < 1.0 || s <= lo || s >= hi {
+            return None;
+        }
+        let a = a as usize;
+        Some(Line { origin: self.pts[a], s0: a as f64 * STEP, dir: self.tangent[a], lo, hi })
+    }
+
     #[inline]
     fn at_vec(&self, s: f64) -> (DVec2, DVec2) {
         let (i, u) = self.locate(s);
@@ -265,6 +335,35 @@ mod tests {
         assert!((p.curvature(10.0) - 1.0 / r).abs() < 0.005);
         let (s, d, beyond, _) = p.frenet(q + DVec2::from_angle(h).perp() * 1.5, 6.0);
         assert!((s - 10.0).abs() < 0.05 && (d - 1.5).abs() < 0.05 && beyond == 0.0, "{s} {d}");
+    }
+
+    /// On a straight run, `frenet_dir` from any guess inside the run lands on the point's
+    /// projection onto the run's line (what the pair loop's early reject relies on, 1 mm margin);
+    /// a bend ends the run.
+    #[test]
+    fn straight_runs_agree_with_frenet() {
+        let (a, b) = (DVec2::new(3.0, -7.0), DVec2::new(3.0, -7.0) + DVec2::from_angle(0.7) * 80.0);
+        let c = b + DVec2::from_angle(1.9) * 40.0;
+        let p = Path::new(&[a, b, c]);
+        let ln = p.straight_run(10.0).expect("straight start");
+        assert!(ln.hi > 70.0 && ln.hi < 80.0, "run ends before the bend: {}", ln.hi);
+        assert!(p.straight_run(80.0).is_none(), "no run across the bend");
+        let mut worst: f64 = 0.0;
+        for k in 0..400 {
+            let q = a
+                + DVec2::from_angle(0.7) * (1.0 + (k % 70) as f64)
+                + DVec2::from_angle(0.7).perp() * (k as f64 * 0.37 - 70.0);
+            let guess = 1.0 + ((k * 7) % 68) as f64;
+            let rel = q - ln.origin;
+            let (s_line, l_line) = (ln.s0 + rel.dot(ln.dir), ln.dir.perp_dot(rel));
+            if s_line <= ln.lo || s_line >= ln.hi {
+                continue;
+            }
+            let (s, l, beyond, t) = p.frenet_dir(q, guess);
+            assert_eq!(beyond, 0.0);
+            worst = worst.max((s - s_line).abs()).max((l - l_line).abs()).max((t - ln.dir).length());
+        }
+        assert!(worst < 1e-6, "{worst}");
     }
 
     #[test]

@@ -2,8 +2,8 @@
 //! then computes each agent's next state from everyone's current state (a Jacobi update, so the
 //! result does not depend on agent order), undoes moves that would overlap, and latches crashes.
 
-use super::grid::Grid;
 use super::path::{Hermite, Path};
+use super::route::{Junction, RUN_OUT, chain, find_lane};
 use super::stage::{self, Plan};
 use super::traffic;
 use super::{ImpactRecord, Limits, TrackAgent, Tracks, limits};
@@ -15,9 +15,6 @@ use crate::road::Map;
 use crate::sample::Concrete;
 use glam::DVec2;
 
-/// Length of the straight run appended after a route's last lane, m: agents that reach the end
-/// of the map keep going instead of piling up at the edge.
-const RUN_OUT: f64 = 300.0;
 /// Pace of a `cross` goal given no speed at all, m/s.
 const WALK_SPEED: f64 = 1.4;
 /// How much tighter than a vehicle's turning radius a junction path may turn before the turn is
@@ -89,17 +86,9 @@ pub(super) struct Actor {
     /// Emergency vehicles (track indices) whose junction path crosses this agent's: while one
     /// approaches or is inside the junction, this agent holds at its stop line.
     pub yield_to: Vec<usize>,
-}
-
-/// Where a route passes its first junction.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Junction {
-    /// Arc length where a yielding front bumper halts (the stop line, else the junction entry).
-    pub stop: f64,
-    /// Arc length where the route leaves the junction.
-    pub exit: f64,
-    /// Index into `Map::connectors`.
-    pub conn: usize,
+    /// A vehicle's `turn` goal and its span: `check_turns` refuses a turn whose swept box leaves
+    /// the road.
+    pub turn_goal: Option<(Turn, crate::source::Span)>,
 }
 
 /// How far ahead of an emergency vehicle the junction is cleared: this many seconds at its
@@ -222,10 +211,94 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
             }
         }
     }
+    check_turns(map, &actors, &confs, &out, &mut errs);
     if !errs.is_empty() {
         return Err(errs);
     }
     Ok(out)
+}
+
+/// How far a turning vehicle's wheels may stray off the drivable surface in its junction, m:
+/// one BEV pixel (0.25 m), the resolution at which the surface is drawn.
+const TURN_OFF_ROAD_M: f64 = 0.25;
+
+/// E0204 for a turn the vehicle drives but cannot make on this road: the junction path is within
+/// `TURN_SLACK` of its turning radius, yet its wheels leave the drivable surface by more than
+/// `TURN_OFF_ROAD_M` while in the junction. The wheels span the box's width and its wheelbase
+/// (`WHEELBASE_SHARE` of its length): the overhangs beyond the axles sweep over the kerb in a
+/// tight turn, as real ones do, but tyres on the pavement are a turn the road does not offer.
+/// Conflict agents are exempt: their crash may take them anywhere.
+fn check_turns(map: &Map, actors: &[Actor], confs: &[Conf], out: &Tracks, errs: &mut Vec<Diagnostic>) {
+    // A map drawn without a surface (a hand-built one) has nothing to check against.
+    if map.drivable.is_empty() {
+        return;
+    }
+    let boxes: Vec<(DVec2, DVec2)> = map
+        .drivable
+        .iter()
+        .map(|poly| poly.iter().fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p))))
+        .collect();
+    let off_road = |q: DVec2| -> f64 {
+        let near = || map.drivable.iter().zip(&boxes).filter(|(_, (lo, hi))| q.cmpge(*lo).all() && q.cmple(*hi).all());
+        if near().any(|(poly, _)| crate::geom::point_in_polygon(q, poly)) {
+            return 0.0;
+        }
+        map.drivable
+            .iter()
+            .flat_map(|poly| (0..poly.len()).map(move |k| (poly[k], poly[(k + 1) % poly.len()])))
+            .map(|(a, b)| {
+                let d = b - a;
+                let t =
+                    if d.length_squared() > 0.0 { ((q - a).dot(d) / d.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+                q.distance(a + d * t)
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    for (i, a) in actors.iter().enumerate() {
+        let (Some((turn, span)), Some(j)) = (a.turn_goal, a.junction) else { continue };
+        if confs.iter().any(|k| k.af == i || k.st == i) {
+            continue;
+        }
+        let Some(conn) = map.connectors.get(j.conn) else { continue };
+        let (lo, hi) =
+            conn.path.points.iter().fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        let (lo, hi) = (lo - DVec2::splat(a.radius + 1.0), hi + DVec2::splat(a.radius + 1.0));
+        let mut worst = (0.0, 0);
+        for (f, p) in out.poses[i].iter().enumerate() {
+            let c = DVec2::new(p.x, p.y);
+            if !(c.cmpge(lo).all() && c.cmple(hi).all()) {
+                continue;
+            }
+            let obb = Obb { center: c, yaw: p.yaw, length: super::WHEELBASE_SHARE * 2.0 * a.hl, width: 2.0 * a.hw };
+            for q in obb.corners() {
+                let d = off_road(q);
+                if d > worst.0 {
+                    worst = (d, f);
+                }
+            }
+        }
+        if worst.0 > TURN_OFF_ROAD_M {
+            let t = worst.1 as f64 / out.rate.max(1e-9);
+            errs.push(
+                Diagnostic::error(
+                    "E0204",
+                    format!(
+                        "`{}` ({}, turning radius {:.1} m) cannot turn {} here: its box leaves the road by {:.1} m at {t:.1} s",
+                        a.info.name,
+                        a.info.kind,
+                        a.r_min,
+                        turn_name(turn),
+                        worst.0
+                    ),
+                )
+                .label(span, "this goal")
+                .help(
+                    "a wider road (lanes, lane_width, median) or a smaller kind; long vehicles need room to swing \
+                     through a turn (see README, Rollout)",
+                ),
+            );
+        }
+    }
 }
 
 /// A tree or a pole has no front: its yaw is whatever the placement gave it (the lane's heading),
@@ -303,6 +376,7 @@ fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Class, drive:
         emergency: false,
         junction: None,
         yield_to: vec![],
+        turn_goal: None,
         info,
     }
 }
@@ -390,6 +464,7 @@ fn build_actor(
                 // A turn tighter than the kind can steer (a bus's U-turn on a narrow junction)
                 // would leave the road: refused, not driven wide.
                 if let (Some(t), Some(j)) = (turn, a.junction) {
+                    a.turn_goal = Some((t, ca.span));
                     let entry = j.exit - map.connectors[j.conn].path.length();
                     let n = ((j.exit - entry) / 0.5).ceil().max(1.0) as usize;
                     let k = (0..=n).map(|i| a.path.curvature(entry + (j.exit - entry) * i as f64 / n as f64).abs());
@@ -535,96 +610,6 @@ fn turn_name(t: Turn) -> &'static str {
     }
 }
 
-/// The lane a vehicle at `p` heading `yaw` is driving in: nearest centre line among lanes whose
-/// direction agrees, within the lane (and its shoulder).
-pub(super) fn find_lane(map: &Map, p: DVec2, yaw: f64) -> Option<(usize, f64, f64)> {
-    let mut best: Option<(usize, f64, f64)> = None;
-    for (i, l) in map.lanes.iter().enumerate() {
-        if l.centre.points.len() < 2 {
-            continue;
-        }
-        let (s, d) = l.centre.project(p);
-        if s < -0.5 || s > l.centre.length() + 0.5 {
-            continue;
-        }
-        let (_, h) = l.centre.pose_at(s);
-        if wrap_angle(yaw - h).abs() > 1.0 {
-            continue;
-        }
-        let reach = l.width / 2.0 + if d < 0.0 { l.shoulder_right } else { 0.0 } + 0.5;
-        if d.abs() > reach {
-            continue;
-        }
-        if best.is_none_or(|b| d.abs() < b.2.abs()) {
-            best = Some((i, s, d));
-        }
-    }
-    best
-}
-
-/// Points of the route starting with lane `l`: its centre, then at each lane end the connector
-/// of the requested turn (consumed at the first junction) or else straight on, then the next
-/// lane. `false` when a requested turn finds no connector before the route runs out. Also where
-/// the route passes its first junction.
-pub(super) fn chain(map: &Map, l: usize, turn: Option<Turn>) -> (Vec<DVec2>, bool, Option<Junction>) {
-    let mut pts: Vec<DVec2> = map.lanes[l].centre.points.clone();
-    let mut cur = l;
-    let mut pending = turn;
-    let mut ok = true;
-    let mut junction = None;
-    let mut total = map.lanes[l].centre.length();
-    for _ in 0..6 {
-        if total > 800.0 {
-            break;
-        }
-        let mut from_here = map.connectors.iter().enumerate().filter(|(_, c)| c.from == cur && c.to < map.lanes.len());
-        let pick = match pending {
-            Some(t) => match from_here.clone().find(|(_, c)| c.turn == t) {
-                Some(cn) => Some(cn),
-                None if map.lanes[cur].next.is_some() => None,
-                None => {
-                    ok = false;
-                    break;
-                }
-            },
-            None => from_here
-                .clone()
-                .find(|(_, c)| c.turn == Turn::Straight)
-                .or_else(|| if map.lanes[cur].next.is_some() { None } else { from_here.next() }),
-        };
-        let nxt = match pick {
-            Some((ci, cn)) => {
-                if junction.is_none() {
-                    // The stop line counts only on the lane the route starts in.
-                    let stop = if cur == l { map.lanes[l].stop_line_s } else { None };
-                    let (entry, len) = (total, cn.path.length());
-                    junction = Some(Junction { stop: stop.unwrap_or(entry), exit: entry + len, conn: ci });
-                }
-                pts.extend_from_slice(&cn.path.points);
-                total += cn.path.length();
-                pending = None;
-                cn.to
-            }
-            None => match map.lanes[cur].next {
-                Some(n) if n < map.lanes.len() => n,
-                _ => break,
-            },
-        };
-        pts.extend_from_slice(&map.lanes[nxt].centre.points);
-        total += map.lanes[nxt].centre.length();
-        cur = nxt;
-    }
-    if pending.is_some() {
-        ok = false;
-    }
-    let n = pts.len();
-    if n >= 2 {
-        let dir = (pts[n - 1] - pts[n - 2]).normalize_or_zero();
-        pts.push(pts[n - 1] + dir * RUN_OUT);
-    }
-    (pts, ok, junction)
-}
-
 /// Whether two junction paths cross or merge: some point of one lies within `gap` of the other,
 /// away from their shared start (two paths from the same lane diverge; they do not cross).
 fn paths_cross(map: &Map, a: usize, b: usize, gap: f64) -> bool {
@@ -722,14 +707,8 @@ struct Sim<'a> {
     dirs: Vec<DVec2>,
     /// Per agent, this frame: `yield_state`.
     yielding: Vec<(Option<f64>, bool)>,
-    /// Positions bucketed for the pair checks (`cur` while stepping, `next` while resolving).
-    grid: Grid,
-    /// Largest bounding radius of any agent, m: widens every grid query.
-    max_radius: f64,
     /// This frame: agents easing aside (`away_from`, triggered), for `pass_offset`.
     easing: Vec<usize>,
-    /// Scratch for `resolve_overlaps`.
-    scratch: Vec<usize>,
 }
 
 impl<'a> Sim<'a> {
@@ -759,10 +738,7 @@ impl<'a> Sim<'a> {
             next: cur.clone(),
             dirs: cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect(),
             yielding: vec![(None, false); actors.len()],
-            grid: Grid::default(),
-            max_radius: actors.iter().map(|a| a.radius).fold(0.0, f64::max),
             easing: Vec::with_capacity(actors.len()),
-            scratch: Vec::with_capacity(actors.len()),
             cur,
         }
     }
@@ -776,7 +752,6 @@ impl<'a> Sim<'a> {
             let t = (f - 1) as f64 * self.dt;
             self.dirs.clear();
             self.dirs.extend(self.cur.iter().map(|s| DVec2::from_angle(s.yaw)));
-            self.grid.rebuild(self.cur.iter().map(|s| s.pos));
             self.easing.clear();
             for (j, (o, b)) in self.cur.iter().zip(self.actors.iter()).enumerate() {
                 if o.triggered && matches!(b.lateral, Lat::Away { .. }) {
@@ -893,10 +868,17 @@ impl<'a> Sim<'a> {
             _ => None,
         };
         let (yield_rem, clearing) = self.yielding[i];
-        // Everyone near enough to matter, and the agent queued behind wherever it is (seen twice
-        // when near: every effect below is a min or an or, so that is harmless).
-        let reach = look + a.radius + self.max_radius;
-        for j in self.grid.cands(st.pos, reach).chain(named) {
+        // On a straight stretch of our route, an agent's route coordinates are its coordinates
+        // along the line: those that provably change nothing below are passed over without the
+        // projection (the pair loop's main cost). Only when holding our offset: lateral moves
+        // look at everyone alongside.
+        let line = if d_next == st.d { a.path.straight_run(st.s) } else { None };
+        let lateral_free = |j: usize| self.yielding[j].0.is_some() || clearing;
+        // Everyone, and the agent queued behind once more (every effect below is a min or an or,
+        // so seeing it twice is harmless). No spatial index: the look-ahead (up to ~240 m at
+        // highway speed) spans whole maps, so a grid found nearly everyone anyway and cost more
+        // than the distance test below (`bench rollout`, 200 agents).
+        for j in (0..self.actors.len()).chain(named) {
             let (o, b) = (&self.cur[j], &self.actors[j]);
             if j == i || self.exempt(i, j) {
                 continue;
@@ -911,6 +893,31 @@ impl<'a> Sim<'a> {
             // Well behind us and not beside a lateral move: cannot be in our way.
             if ahead < -(a.hl + b.radius + 1.0) && !is_named && d_next == st.d {
                 continue;
+            }
+            if let Some(ln) = line
+                && !is_named
+            {
+                let guess = st.s + ahead;
+                let rel = o.pos - ln.origin;
+                let s_line = ln.s0 + rel.dot(ln.dir);
+                if guess > ln.lo && guess < ln.hi && s_line > ln.lo && s_line < ln.hi {
+                    // `frenet_dir` would give s_line, this offset and this tangent to float
+                    // noise (1 mm is far above it), hence the extents below too.
+                    const EPS: f64 = 1e-3;
+                    let l_line = ln.dir.perp_dot(rel);
+                    let (cr, sr) = (self.dirs[j].dot(ln.dir), ln.dir.perp_dot(self.dirs[j]));
+                    let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
+                    let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
+                    let behind = s_line - st.s < -EPS;
+                    let too_far = s_line - st.s - a.hl - ext_lon > look + EPS;
+                    let aside = l_line - ext_lat > hi + EPS || l_line + ext_lat < lo - EPS;
+                    // Nor would it be predicted to cut across (see `obstacle` below).
+                    let v_lat = o.v * sr;
+                    let steady = !a.vehicle || v_lat.abs() < 0.3 - EPS || lateral_free(j);
+                    if behind || too_far || (aside && steady) {
+                        continue;
+                    }
+                }
             }
             let (sj, lj, beyond, th) = a.path.frenet_dir(o.pos, st.s + ahead);
             if beyond > 0.5 && !is_named {
@@ -1178,21 +1185,12 @@ impl<'a> Sim<'a> {
     /// restores the previous frame, which had no overlap, so this always ends.
     fn resolve_overlaps(&mut self) {
         let n = self.actors.len();
-        let mut near = std::mem::take(&mut self.scratch);
-        // An undone move puts an agent back at most this far from where the grid has it: queries
-        // widened by it find every pair a full scan would see within the same sweep.
-        let moved = self.cur.iter().zip(&self.next).map(|(c, x)| c.pos.distance(x.pos)).fold(0.0, f64::max);
         for _ in 0..=n {
             let mut changed = false;
-            self.grid.rebuild(self.next.iter().map(|s| s.pos));
             for i in 0..n {
-                // The pairs (i, j > i) within reach, in index order as a full scan would take
-                // them (undoing a move changes later pairs' outcome).
-                near.clear();
-                let r = self.actors[i].radius + self.max_radius + 2.0 * moved;
-                near.extend(self.grid.cands(self.next[i].pos, r).filter(|&j| j > i));
-                near.sort_unstable();
-                for &j in &near {
+                // The pairs (i, j > i) in index order (undoing a move changes later pairs'
+                // outcome), bounding circles first.
+                for j in i + 1..n {
                     let (ai, aj) = (&self.actors[i], &self.actors[j]);
                     let (si, sj) = (&self.next[i], &self.next[j]);
                     let r = ai.radius + aj.radius;
@@ -1215,7 +1213,6 @@ impl<'a> Sim<'a> {
                 break;
             }
         }
-        self.scratch = near;
     }
 
     /// Latch each staged conflict at its deepest overlap: once the boxes meet, the frame where
