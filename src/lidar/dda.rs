@@ -75,6 +75,10 @@ pub struct Skip {
     /// Blocks whose only occupied voxels are the ground layer (k = K_GROUND) in every column:
     /// a descending ray's hit there is where it crosses z = 0, found without walking voxels.
     ground_only: Vec<bool>,
+    /// Per quadrant of travel (x step >= 0, y step >= 0: index 2 sx + sy), per block: the highest
+    /// `top` of every block a ray moving that way can still reach from it. A rising ray at or
+    /// above it has nothing left to hit (the level-ray test of `max_top`, made local).
+    ahead: [Vec<f64>; 4],
 }
 
 impl Skip {
@@ -105,7 +109,29 @@ impl Skip {
             }
         }
         let max_top = top.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        Skip { top, max_top, ground_only }
+        let ahead = [0, 1, 2, 3].map(|q| {
+            let (px, py) = (q >> 1 == 1, q & 1 == 1);
+            let mut m = vec![f64::NEG_INFINITY; NBX * NBY];
+            // Visit blocks from the far corner of the quadrant back towards its origin.
+            for a in 0..NBX {
+                let i = if px { NBX - 1 - a } else { a };
+                for b in 0..NBY {
+                    let j = if py { NBY - 1 - b } else { b };
+                    let mut v = top[i * NBY + j];
+                    let ni = if px { i + 1 } else { i.wrapping_sub(1) };
+                    let nj = if py { j + 1 } else { j.wrapping_sub(1) };
+                    if ni < NBX {
+                        v = v.max(m[ni * NBY + j]);
+                    }
+                    if nj < NBY {
+                        v = v.max(m[i * NBY + nj]);
+                    }
+                    m[i * NBY + j] = v;
+                }
+            }
+            m
+        });
+        Skip { top, max_top, ground_only, ahead }
     }
 
     /// Same result as `cast`, skipping blocks the ray passes above.
@@ -136,12 +162,19 @@ impl Skip {
         }
         let mut t = t_in;
         let mut axis = if t_in > 0.0 { entry_axis(o, d, t_in) } else { 3 };
+        // A rising ray only climbs: once it is above every block it can still reach, it is done.
+        let ahead = (d[2] >= 0.0).then(|| &self.ahead[2 * (d[0] >= 0.0) as usize + (d[1] >= 0.0) as usize]);
         loop {
             let a = if t_next[0] <= t_next[1] { 0 } else { 1 };
             let t_end = t_next[a].min(t_out);
-            let top = self.top[idx[0] as usize * NBY + idx[1] as usize];
-            let z_low = (o[2] + t * d[2]).min(o[2] + t_end * d[2]);
             let block = idx[0] as usize * NBY + idx[1] as usize;
+            let top = self.top[block];
+            if let Some(m) = ahead
+                && o[2] + t * d[2] >= m[block]
+            {
+                return None;
+            }
+            let z_low = (o[2] + t * d[2]).min(o[2] + t_end * d[2]);
             if z_low < top && self.ground_only[block] && d[2] < 0.0 && o[2] + t * d[2] >= GROUND_Z {
                 // Above the ground on entry and descending: the only thing to hit is the ground's
                 // top face, at the same distance the voxel walk computes for that boundary.
@@ -156,7 +189,7 @@ impl Skip {
                     return Some(h);
                 }
             }
-            if t_next[a] > t_out || (d[2] >= 0.0 && o[2] + t_next[a] * d[2] >= self.max_top) {
+            if t_next[a] > t_out {
                 return None;
             }
             t = t_next[a];
@@ -431,6 +464,18 @@ mod tests {
                 assert_eq!(skip.ground_only[bi * NBY + bj], ground_only);
                 assert_eq!(skip.top[bi * NBY + bj], top);
             }
+        }
+        // `ahead`: the highest top over every block a ray of each quadrant can still reach.
+        for _ in 0..300 {
+            let (bi, bj, q) = (rng.index(NBX), rng.index(NBY), rng.index(4));
+            let xs: Vec<usize> = if q >> 1 == 1 { (bi..NBX).collect() } else { (0..=bi).collect() };
+            let ys: Vec<usize> = if q & 1 == 1 { (bj..NBY).collect() } else { (0..=bj).collect() };
+            let want = xs
+                .iter()
+                .flat_map(|&i| ys.iter().map(move |&j| (i, j)))
+                .map(|(i, j)| skip.top[i * NBY + j])
+                .fold(f64::NEG_INFINITY, f64::max);
+            assert_eq!(skip.ahead[q][bi * NBY + bj], want, "block ({bi}, {bj}) quadrant {q}");
         }
     }
 
