@@ -257,30 +257,61 @@ fn walk(
             t_delta[a] = -VOXEL / d[a];
         }
     }
+    // The same additions and comparisons as one loop over [f64; 3] would make, on scalars the
+    // compiler keeps in registers (an array indexed by the stepping axis lives on the stack).
+    let (mut tx, mut ty, mut tz) = (t_next[0], t_next[1], t_next[2]);
+    let (mut i, mut j, mut k) = (idx[0], idx[1], idx[2]);
     let mut t = t_in;
     let mut axis = axis;
     loop {
-        let a = if t_next[0] <= t_next[1] && t_next[0] <= t_next[2] {
+        let a = if tx <= ty && tx <= tz {
             0
-        } else if t_next[1] <= t_next[2] {
+        } else if ty <= tz {
             1
         } else {
             2
         };
-        let label = labels[flat(idx[0] as usize, idx[1] as usize, idx[2] as usize)];
+        let label = labels[flat(i as usize, j as usize, k as usize)];
         if label != 0 {
-            let voxel = [idx[0] as usize, idx[1] as usize, idx[2] as usize];
-            return Some(Hit { t, t_exit: t_next[a].min(t_out.max(t)), voxel, label, axis });
+            let tn = [tx, ty, tz][a];
+            let voxel = [i as usize, j as usize, k as usize];
+            return Some(Hit { t, t_exit: tn.min(t_out.max(t)), voxel, label, axis });
         }
-        t = t_next[a];
-        if t > t_out {
-            return None;
+        match a {
+            0 => {
+                t = tx;
+                if t > t_out {
+                    return None;
+                }
+                i += step[0];
+                if i < lo[0] || i >= n[0] {
+                    return None;
+                }
+                tx += t_delta[0];
+            }
+            1 => {
+                t = ty;
+                if t > t_out {
+                    return None;
+                }
+                j += step[1];
+                if j < lo[1] || j >= n[1] {
+                    return None;
+                }
+                ty += t_delta[1];
+            }
+            _ => {
+                t = tz;
+                if t > t_out {
+                    return None;
+                }
+                k += step[2];
+                if k < lo[2] || k >= n[2] {
+                    return None;
+                }
+                tz += t_delta[2];
+            }
         }
-        idx[a] += step[a];
-        if idx[a] < lo[a] || idx[a] >= n[a] {
-            return None;
-        }
-        t_next[a] += t_delta[a];
         axis = a;
     }
 }
