@@ -7,7 +7,9 @@
 //! - stages: frames/s of BEV, occupancy, LiDAR (+ rays/s) and of each writer, on the
 //!   ambulance example (background traffic included), one core and every core;
 //! - e2e: `rocc compile` of the whole library at full stage into a temporary directory
-//!   (BEV + occupancy + LiDAR + compressed writes + previews), frames/s, and peak memory.
+//!   (BEV + occupancy + LiDAR + compressed writes + previews), frames/s, CPU time per frame and
+//!   peak memory; with and without previews at the default 0.4 deg, and at the sensor's native
+//!   0.2 deg without previews.
 //! - bev20: BEV frames/s on one core at exactly 20 boxes per frame (each frame's boxes, repeated
 //!   3.5 m further left until there are 20), on every map of the library (roundabout included);
 //!   opt in (`bench bev20`).
@@ -240,15 +242,19 @@ fn bench_stages() {
     };
     let occs: Vec<Occupancy> = frames.iter().map(|&i| backend.occupancy(&occ_input(i))).collect();
 
+    // Frames/s, and CPU ms per frame (the process's CPU time: on a shared machine it moves less
+    // than wall time does).
     let fps = |threads: usize, work: &(dyn Fn(usize) + Sync)| {
         let p = pool(threads);
-        let t0 = Instant::now();
+        let (t0, c0) = (Instant::now(), cpu_secs());
         p.install(|| frames.par_iter().for_each(|&i| work(i)));
-        frames.len() as f64 / t0.elapsed().as_secs_f64()
+        let n = frames.len() as f64;
+        (n / t0.elapsed().as_secs_f64(), cpu_secs().zip(c0).map(|(c1, c0)| 1e3 * (c1 - c0) / n))
     };
     let report = |name: &str, work: &(dyn Fn(usize) + Sync), extra: &dyn Fn(f64) -> String| {
-        let (one, all) = (fps(1, work), fps(cores, work));
-        println!("  {name:<26} {one:>8.1} fr/s  {all:>8.1} fr/s  {}", extra(all));
+        let ((one, cpu), (all, _)) = (fps(1, work), fps(cores, work));
+        let cpu = cpu.map_or(String::new(), |c| format!("{c:>6.1} ms CPU/frame"));
+        println!("  {name:<26} {one:>8.1} fr/s  {all:>8.1} fr/s  {cpu}  {}", extra(all));
     };
     let bev_work = |i: usize| {
         thread_local!(static S: std::cell::RefCell<(Rasterizer, Bev)> = std::cell::RefCell::new((Rasterizer::new(), Bev::zeros())));
@@ -272,11 +278,7 @@ fn bench_stages() {
             std::hint::black_box(scan(&occs[i], &r, 1, i).points.len());
         };
         report(&format!("lidar (nuPlan rig, {res} deg)"), &lidar_work, &|fps| {
-            format!(
-                "{rays} rays/frame, {:.2} M rays/s, {:.1} ms CPU/frame",
-                fps * rays as f64 / 1e6,
-                1e3 * cores as f64 / fps
-            )
+            format!("{rays} rays/frame, {:.2} M rays/s", fps * rays as f64 / 1e6)
         });
     }
     let dir = std::env::temp_dir().join(format!("rocc-bench-{}", std::process::id()));
@@ -300,6 +302,17 @@ fn bench_stages() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// User + system CPU seconds of this process so far (all threads), from /proc/self/stat.
+fn cpu_secs() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
+    let rest = &s[s.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    // USER_HZ: 100 on every Linux this runs on (`getconf CLK_TCK`).
+    Some(ticks / 100.0)
+}
+
 fn peak_rss_mb() -> Option<f64> {
     let s = std::fs::read_to_string("/proc/self/status").ok()?;
     let kb: f64 = s.lines().find(|l| l.starts_with("VmHWM:"))?.split_whitespace().nth(1)?.parse().ok()?;
@@ -309,13 +322,26 @@ fn peak_rss_mb() -> Option<f64> {
 fn bench_e2e() {
     let inputs = library();
     let out = std::env::temp_dir().join(format!("rocc-bench-e2e-{}", std::process::id()));
-    for (label, previews) in [("with previews", true), ("no previews", false)] {
+    let mut native = Rig::nuplan();
+    native.horizontal_resolution_deg = 0.2;
+    for s in &mut native.sensors {
+        s.horizontal_resolution_deg = None;
+    }
+    let runs = [
+        ("with previews", true, Rig::nuplan()),
+        ("no previews", false, Rig::nuplan()),
+        ("0.2 deg, no previews", false, native),
+    ];
+    for (label, previews, rig) in runs {
         let _ = std::fs::remove_dir_all(&out);
-        let opts = Options { previews, force: true, ..Options::default() };
-        let t0 = Instant::now();
+        let opts = Options { previews, force: true, rig, ..Options::default() };
+        let (t0, c0) = (Instant::now(), cpu_secs());
         let r = batch::run(&inputs, &out, &opts, true);
         let secs = t0.elapsed().as_secs_f64();
         let frames: usize = r.clips.iter().map(|c| c.frames).sum();
+        if let Some((c1, c0)) = cpu_secs().zip(c0) {
+            println!("  CPU time: {:.1} ms per frame", 1e3 * (c1 - c0) / frames.max(1) as f64);
+        }
         println!(
             "== e2e ({label}): {} clips, {frames} frames of BEV + occupancy + LiDAR + writes in {secs:.1} s on {} cores: {:.1} frames/s ({} failed)",
             r.clips.len(),
@@ -323,7 +349,7 @@ fn bench_e2e() {
             frames as f64 / secs,
             r.failures.len()
         );
-        if !previews {
+        if label == "no previews" {
             let per = secs / frames.max(1) as f64;
             println!("  a 65,518-frame corpus at this rate: {:.0} min on this machine", 65_518.0 * per / 60.0);
         }

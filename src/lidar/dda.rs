@@ -46,6 +46,14 @@ fn clip_to_grid(o: [f64; 3], d: [f64; 3], t_max: f64) -> Option<(f64, f64)> {
     (t0 <= t1).then_some((t0, t1))
 }
 
+/// `x.floor() as i64`, bit for bit (saturating at the ends, 0 for NaN), without the libm call
+/// that `f64::floor` compiles to on baseline x86-64: the walks take two or three per block.
+#[inline]
+fn floor_i64(x: f64) -> i64 {
+    let t = x as i64;
+    if (t as f64) > x { t.saturating_sub(1) } else { t }
+}
+
 /// Walk the ray through `labels` (standard-layout (400, 400, 32)) up to distance `t_max`.
 pub fn cast(labels: &[u8], o: [f64; 3], d: [f64; 3], t_max: f64) -> Option<Hit> {
     let (t_in, t_out) = clip_to_grid(o, d, t_max)?;
@@ -67,43 +75,63 @@ pub struct Skip {
     /// Blocks whose only occupied voxels are the ground layer (k = K_GROUND) in every column:
     /// a descending ray's hit there is where it crosses z = 0, found without walking voxels.
     ground_only: Vec<bool>,
+    /// Per quadrant of travel (x step >= 0, y step >= 0: index 2 sx + sy), per block: the highest
+    /// `top` of every block a ray moving that way can still reach from it. A rising ray at or
+    /// above it has nothing left to hit (the level-ray test of `max_top`, made local).
+    ahead: [Vec<f64>; 4],
 }
 
 impl Skip {
     pub fn new(labels: &[u8]) -> Self {
         let mut top = vec![f64::NEG_INFINITY; NBX * NBY];
         let mut ground_only = vec![true; NBX * NBY];
+        // The column as little-endian words, byte k of the column at bits 8 (k % 8) of word k / 8.
+        const W: usize = NZ / 8;
+        let ground_bit = 0xffu64 << (8 * (K_GROUND % 8));
         for (c, col) in labels.chunks_exact(NZ).enumerate() {
             let (i, j) = (c / NY, c % NY);
-            if col[K_GROUND] == 0 || col.iter().enumerate().any(|(k, &v)| k != K_GROUND && v != 0) {
+            let mut w = [0u64; W];
+            for (q, b) in col.chunks_exact(8).enumerate() {
+                w[q] = u64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]);
+            }
+            let ground = w[K_GROUND / 8] & ground_bit != 0;
+            let others =
+                w.iter().enumerate().any(|(q, &x)| if q == K_GROUND / 8 { x & !ground_bit != 0 } else { x != 0 });
+            if !ground || others {
                 ground_only[(i / B) * NBY + j / B] = false;
             }
-            // Highest non-zero byte of the column, 8 bytes at a time.
-            let mut k_top = None;
-            for q in (0..NZ / 8).rev() {
-                let w = u64::from_le_bytes([
-                    col[8 * q],
-                    col[8 * q + 1],
-                    col[8 * q + 2],
-                    col[8 * q + 3],
-                    col[8 * q + 4],
-                    col[8 * q + 5],
-                    col[8 * q + 6],
-                    col[8 * q + 7],
-                ]);
-                if w != 0 {
-                    k_top = Some(8 * q + 7 - (w.leading_zeros() / 8) as usize);
-                    break;
-                }
-            }
-            if let Some(k) = k_top {
+            // Highest non-zero byte of the column.
+            if let Some(q) = (0..W).rev().find(|&q| w[q] != 0) {
+                let k = 8 * q + 7 - (w[q].leading_zeros() / 8) as usize;
                 let z = ORIGIN[2] + VOXEL * (k + 1) as f64;
                 let b = &mut top[(i / B) * NBY + j / B];
                 *b = b.max(z);
             }
         }
         let max_top = top.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        Skip { top, max_top, ground_only }
+        let ahead = [0, 1, 2, 3].map(|q| {
+            let (px, py) = (q >> 1 == 1, q & 1 == 1);
+            let mut m = vec![f64::NEG_INFINITY; NBX * NBY];
+            // Visit blocks from the far corner of the quadrant back towards its origin.
+            for a in 0..NBX {
+                let i = if px { NBX - 1 - a } else { a };
+                for b in 0..NBY {
+                    let j = if py { NBY - 1 - b } else { b };
+                    let mut v = top[i * NBY + j];
+                    let ni = if px { i + 1 } else { i.wrapping_sub(1) };
+                    let nj = if py { j + 1 } else { j.wrapping_sub(1) };
+                    if ni < NBX {
+                        v = v.max(m[ni * NBY + j]);
+                    }
+                    if nj < NBY {
+                        v = v.max(m[i * NBY + nj]);
+                    }
+                    m[i * NBY + j] = v;
+                }
+            }
+            m
+        });
+        Skip { top, max_top, ground_only, ahead }
     }
 
     /// Same result as `cast`, skipping blocks the ray passes above.
@@ -121,7 +149,7 @@ impl Skip {
         let mut t_delta = [f64::INFINITY; 2];
         for a in 0..2 {
             let p = o[a] + t_in * d[a];
-            idx[a] = (((p - ORIGIN[a]) / bs).floor() as i64).clamp(0, nb[a] - 1);
+            idx[a] = floor_i64((p - ORIGIN[a]) / bs).clamp(0, nb[a] - 1);
             if d[a] > 0.0 {
                 step[a] = 1;
                 t_next[a] = (ORIGIN[a] + (idx[a] + 1) as f64 * bs - o[a]) / d[a];
@@ -134,12 +162,19 @@ impl Skip {
         }
         let mut t = t_in;
         let mut axis = if t_in > 0.0 { entry_axis(o, d, t_in) } else { 3 };
+        // A rising ray only climbs: once it is above every block it can still reach, it is done.
+        let ahead = (d[2] >= 0.0).then(|| &self.ahead[2 * (d[0] >= 0.0) as usize + (d[1] >= 0.0) as usize]);
         loop {
             let a = if t_next[0] <= t_next[1] { 0 } else { 1 };
             let t_end = t_next[a].min(t_out);
-            let top = self.top[idx[0] as usize * NBY + idx[1] as usize];
-            let z_low = (o[2] + t * d[2]).min(o[2] + t_end * d[2]);
             let block = idx[0] as usize * NBY + idx[1] as usize;
+            let top = self.top[block];
+            if let Some(m) = ahead
+                && o[2] + t * d[2] >= m[block]
+            {
+                return None;
+            }
+            let z_low = (o[2] + t * d[2]).min(o[2] + t_end * d[2]);
             if z_low < top && self.ground_only[block] && d[2] < 0.0 && o[2] + t * d[2] >= GROUND_Z {
                 // Above the ground on entry and descending: the only thing to hit is the ground's
                 // top face, at the same distance the voxel walk computes for that boundary.
@@ -154,7 +189,7 @@ impl Skip {
                     return Some(h);
                 }
             }
-            if t_next[a] > t_out || (d[2] >= 0.0 && o[2] + t_next[a] * d[2] >= self.max_top) {
+            if t_next[a] > t_out {
                 return None;
             }
             t = t_next[a];
@@ -178,7 +213,7 @@ fn ground_hit(labels: &[u8], o: [f64; 3], d: [f64; 3], tg: f64, t_out: f64) -> O
     let mut t_exit = (GROUND_Z - VOXEL - o[2]) / d[2];
     for a in 0..2 {
         let p = o[a] + tg * d[a];
-        let i = (((p - ORIGIN[a]) / VOXEL).floor() as i64).clamp(0, n[a] as i64 - 1) as usize;
+        let i = floor_i64((p - ORIGIN[a]) / VOXEL).clamp(0, n[a] as i64 - 1) as usize;
         voxel[a] = i;
         if d[a] > 0.0 {
             t_exit = t_exit.min((ORIGIN[a] + (i + 1) as f64 * VOXEL - o[a]) / d[a]);
@@ -211,7 +246,7 @@ fn walk(
     for a in 0..3 {
         // The voxel holding the entry point; clamped because the entry lies on the box's face.
         let p = o[a] + t_in * d[a];
-        idx[a] = (((p - ORIGIN[a]) / VOXEL).floor() as i64).clamp(lo[a], hi[a] - 1);
+        idx[a] = floor_i64((p - ORIGIN[a]) / VOXEL).clamp(lo[a], hi[a] - 1);
         if d[a] > 0.0 {
             step[a] = 1;
             t_next[a] = (ORIGIN[a] + (idx[a] + 1) as f64 * VOXEL - o[a]) / d[a];
@@ -222,30 +257,61 @@ fn walk(
             t_delta[a] = -VOXEL / d[a];
         }
     }
+    // The same additions and comparisons as one loop over [f64; 3] would make, on scalars the
+    // compiler keeps in registers (an array indexed by the stepping axis lives on the stack).
+    let (mut tx, mut ty, mut tz) = (t_next[0], t_next[1], t_next[2]);
+    let (mut i, mut j, mut k) = (idx[0], idx[1], idx[2]);
     let mut t = t_in;
     let mut axis = axis;
     loop {
-        let a = if t_next[0] <= t_next[1] && t_next[0] <= t_next[2] {
+        let a = if tx <= ty && tx <= tz {
             0
-        } else if t_next[1] <= t_next[2] {
+        } else if ty <= tz {
             1
         } else {
             2
         };
-        let label = labels[flat(idx[0] as usize, idx[1] as usize, idx[2] as usize)];
+        let label = labels[flat(i as usize, j as usize, k as usize)];
         if label != 0 {
-            let voxel = [idx[0] as usize, idx[1] as usize, idx[2] as usize];
-            return Some(Hit { t, t_exit: t_next[a].min(t_out.max(t)), voxel, label, axis });
+            let tn = [tx, ty, tz][a];
+            let voxel = [i as usize, j as usize, k as usize];
+            return Some(Hit { t, t_exit: tn.min(t_out.max(t)), voxel, label, axis });
         }
-        t = t_next[a];
-        if t > t_out {
-            return None;
+        match a {
+            0 => {
+                t = tx;
+                if t > t_out {
+                    return None;
+                }
+                i += step[0];
+                if i < lo[0] || i >= n[0] {
+                    return None;
+                }
+                tx += t_delta[0];
+            }
+            1 => {
+                t = ty;
+                if t > t_out {
+                    return None;
+                }
+                j += step[1];
+                if j < lo[1] || j >= n[1] {
+                    return None;
+                }
+                ty += t_delta[1];
+            }
+            _ => {
+                t = tz;
+                if t > t_out {
+                    return None;
+                }
+                k += step[2];
+                if k < lo[2] || k >= n[2] {
+                    return None;
+                }
+                tz += t_delta[2];
+            }
         }
-        idx[a] += step[a];
-        if idx[a] < lo[a] || idx[a] >= n[a] {
-            return None;
-        }
-        t_next[a] += t_delta[a];
         axis = a;
     }
 }
@@ -391,6 +457,57 @@ mod tests {
             }
         }
         assert!(hits > 5000);
+    }
+
+    #[test]
+    fn floor_i64_is_floor_then_cast() {
+        let mut rng = Rng::new(9);
+        let mut xs = vec![0.0, -0.0, 0.5, -0.5, 1.0, -1.0, -1e-300, 1e-300, f64::NAN, f64::INFINITY, f64::NEG_INFINITY];
+        xs.extend([1e300, -1e300, 9.3e18, -9.3e18, -9.223372036854775e18, 4503599627370495.5, -4503599627370495.5]);
+        xs.extend((0..10_000).map(|_| rng.range(-500.0, 500.0)));
+        xs.extend((0..1000).map(|n| n as f64 * 0.25 - 100.0));
+        for x in xs {
+            assert_eq!(floor_i64(x), x.floor() as i64, "{x}");
+        }
+    }
+
+    #[test]
+    fn skip_summary_matches_a_plain_column_scan() {
+        let mut g = vec![0u8; NX * NY * NZ];
+        let mut rng = Rng::new(21);
+        for c in g.chunks_exact_mut(NZ) {
+            if rng.unit() < 0.9 {
+                c[K_GROUND] = 1;
+            }
+            if rng.unit() < 0.01 {
+                c[rng.index(NZ)] = 2;
+            }
+        }
+        let skip = Skip::new(&g);
+        for bi in 0..NBX {
+            for bj in 0..NBY {
+                let cols = || (0..B).flat_map(move |di| (0..B).map(move |dj| (bi * B + di, bj * B + dj)));
+                let ground_only = cols().all(|(i, j)| (0..NZ).all(|k| (g[flat(i, j, k)] != 0) == (k == K_GROUND)));
+                let top = cols()
+                    .filter_map(|(i, j)| (0..NZ).rev().find(|&k| g[flat(i, j, k)] != 0))
+                    .map(|k| ORIGIN[2] + VOXEL * (k + 1) as f64)
+                    .fold(f64::NEG_INFINITY, f64::max);
+                assert_eq!(skip.ground_only[bi * NBY + bj], ground_only);
+                assert_eq!(skip.top[bi * NBY + bj], top);
+            }
+        }
+        // `ahead`: the highest top over every block a ray of each quadrant can still reach.
+        for _ in 0..300 {
+            let (bi, bj, q) = (rng.index(NBX), rng.index(NBY), rng.index(4));
+            let xs: Vec<usize> = if q >> 1 == 1 { (bi..NBX).collect() } else { (0..=bi).collect() };
+            let ys: Vec<usize> = if q & 1 == 1 { (bj..NBY).collect() } else { (0..=bj).collect() };
+            let want = xs
+                .iter()
+                .flat_map(|&i| ys.iter().map(move |&j| (i, j)))
+                .map(|(i, j)| skip.top[i * NBY + j])
+                .fold(f64::NEG_INFINITY, f64::max);
+            assert_eq!(skip.ahead[q][bi * NBY + bj], want, "block ({bi}, {bj}) quadrant {q}");
+        }
     }
 
     #[test]

@@ -81,8 +81,17 @@ pub fn scan(occ: &Occupancy, rig: &Rig, seed: u64, frame: usize) -> PointCloud {
         .flat_map(|(s, sen)| (0..sen.elevations_deg.len()).map(move |b| (s, b)))
         .collect();
     let skip = dda::Skip::new(labels);
-    let chunks: Vec<Vec<Point>> =
-        units.par_iter().map(|&(s, b)| fire_beam(labels, &skip, rig, &rig.sensors[s], b, seed, frame)).collect();
+    // Every beam of a sensor sweeps the same azimuths: their cosines and sines once per sensor,
+    // not once per ray (the same expressions, so the same bits).
+    let trig: Vec<Vec<(f64, f64)>> = rig
+        .sensors
+        .iter()
+        .map(|s| s.azimuths(rig.horizontal_resolution_deg).map(|az| (az.cos(), az.sin())).collect())
+        .collect();
+    let chunks: Vec<Vec<Point>> = units
+        .par_iter()
+        .map(|&(s, b)| fire_beam(labels, &skip, rig, &rig.sensors[s], &trig[s], b, seed, frame))
+        .collect();
     let mut points = Vec::with_capacity(chunks.iter().map(Vec::len).sum());
     for c in chunks {
         points.extend(c);
@@ -90,11 +99,13 @@ pub fn scan(occ: &Occupancy, rig: &Rig, seed: u64, frame: usize) -> PointCloud {
     PointCloud { points }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn fire_beam(
     labels: &[u8],
     skip: &dda::Skip,
     rig: &Rig,
     sensor: &Sensor,
+    trig: &[(f64, f64)],
     beam: usize,
     seed: u64,
     frame: usize,
@@ -105,8 +116,8 @@ fn fire_beam(
     let el = sensor.elevations_deg[beam].to_radians();
     let (ce, se) = (el.cos(), el.sin());
     let mut out = Vec::new();
-    for az in sensor.azimuths(rig.horizontal_resolution_deg) {
-        let l = [ce * az.cos(), ce * az.sin(), se];
+    for &(ca, sa) in trig {
+        let l = [ce * ca, ce * sa, se];
         let d = [
             rot[0][0] * l[0] + rot[0][1] * l[1] + rot[0][2] * l[2],
             rot[1][0] * l[0] + rot[1][1] * l[1] + rot[1][2] * l[2],

@@ -263,4 +263,31 @@ mod tests {
         assert_eq!(back.mount, Mount::default());
         assert_eq!(back.sensor_origin(&back.sensors[4]), [4.0223, -0.0238, 0.0084]);
     }
+
+    #[test]
+    fn readme_sensor_table_matches_the_rig() {
+        // README "Frames" lists each sensor's published pose and where rocc puts it.
+        let readme = include_str!("../../README.md");
+        let rig = Rig::nuplan();
+        let triple = |cell: &str| -> Vec<f64> {
+            cell.trim()
+                .trim_matches(|c| c == '(' || c == ')')
+                .split(',')
+                .map(|v| v.trim().parse().expect("number"))
+                .collect()
+        };
+        let mut rows = 0;
+        for line in readme.lines().filter(|l| l.starts_with("| ") && l.contains(") | (")) {
+            let cells: Vec<&str> = line.split('|').collect();
+            let id: usize = cells[1].split_whitespace().next().and_then(|v| v.parse().ok()).expect("sensor id");
+            let s = &rig.sensors[id];
+            assert_eq!(triple(cells[2]), vec![s.origin.0, s.origin.1, s.origin.2], "{line}");
+            let ego = rig.sensor_origin(s);
+            for (a, b) in triple(cells[3]).iter().zip(ego) {
+                assert!((a - b).abs() < 5e-5, "{line}: rig says {ego:?}");
+            }
+            rows += 1;
+        }
+        assert_eq!(rows, rig.sensors.len());
+    }
 }

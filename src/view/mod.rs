@@ -3,9 +3,13 @@
 //! geometry.
 //!
 //! Ego frame: x forward, y left, z up, metres; the origin is the ego box's centre projected to the
-//! ground. nuPlan puts the origin on the rear axle (SPEC.md, "Frames"); rocc's kinds carry no axle
-//! position, and the box centre keeps the ego's own footprint symmetric about pixel 200 in the
-//! BEV, so we use the centre for every kind.
+//! ground (z = 0 is the road surface, the top of the occupancy's ground layer). Every output is in
+//! this frame: boxes, BEV, occupancy and LiDAR points. nuPlan puts the origin on the rear axle
+//! (SPEC.md, "Frames"); rocc's kinds carry no axle position, and the box centre keeps the ego's
+//! own footprint symmetric about pixel 200 in the BEV, so we use the centre for every kind. The
+//! sensor poses of SPEC.md's LiDAR table (headed "origin in ego frame") are nuPlan's rear-axle
+//! values at axle height, not this frame: the rig file keeps them as published and its
+//! `mount.frame_origin` moves them here (`lidar::rig::Mount`; README "Frames").
 
 use crate::check::scenario::Class;
 use crate::geom::wrap_angle;
