@@ -2,7 +2,7 @@
 //! then computes each agent's next state from everyone's current state (a Jacobi update, so the
 //! result does not depend on agent order), undoes moves that would overlap, and latches crashes.
 
-use super::path::{Hermite, Path};
+use super::path::{Hermite, Path, Resampler};
 use super::route::{Junction, RUN_OUT, chain, find_lane};
 use super::stage::{self, Plan};
 use super::traffic;
@@ -151,14 +151,17 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         }
     }
     let mut errs = vec![];
-    let mut actors: Vec<Actor> = placed.agents.iter().map(|p| build_actor(c, map, p, &track_of, &mut errs)).collect();
+    // One resampling per distinct route (start lane, turn), shared by every agent on it.
+    let mut routes = Routes::new();
+    let mut actors: Vec<Actor> =
+        placed.agents.iter().map(|p| build_actor(c, map, p, &track_of, &mut routes, &mut errs)).collect();
     if !errs.is_empty() {
         return Err(errs);
     }
     if let Some(t) = c.traffic {
         let boxes: Vec<(Obb, f64)> = actors.iter().map(|a| (a.obb(&initial(a)), initial(a).v)).collect();
         for s in traffic::spawn(map, &boxes, t, c.seed) {
-            actors.push(background_actor(map, s, c.duration));
+            actors.push(background_actor(map, s, c.duration, &mut routes));
         }
     }
     let mut confs = vec![];
@@ -390,6 +393,7 @@ fn build_actor(
     map: &Map,
     p: &crate::place::PlacedAgent,
     track_of: &[Option<usize>],
+    routes: &mut Routes,
     errs: &mut Vec<Diagnostic>,
 ) -> Actor {
     let info = TrackAgent {
@@ -464,7 +468,7 @@ fn build_actor(
                 let (s, d) = lane.centre.project(pos);
                 (a.s0, a.d0) = (s, d);
                 let v_top = a.v0.max(goal.and_then(|g| g.speed).unwrap_or(0.0)).max(lane.speed_limit);
-                a.path = Path::new_until(&pts, s.max(0.0) + reach(v_top, c.duration));
+                a.path = route_path(routes, (l, turn), &pts, s.max(0.0) + reach(v_top, c.duration));
                 // A turn tighter than the kind can steer (a bus's U-turn on a narrow junction)
                 // would leave the road: refused, not driven wide.
                 if let (Some(t), Some(j)) = (turn, a.junction) {
@@ -560,6 +564,14 @@ fn build_actor(
     a
 }
 
+/// Resampled routes by start lane and turn (`chain`'s arguments, so one key is one chain).
+type Routes = std::collections::HashMap<(usize, Option<Turn>), Resampler>;
+
+/// `Path::new_until(pts, until)` for the chain `key`, reusing the resampling of agents before.
+fn route_path(routes: &mut Routes, key: (usize, Option<Turn>), pts: &[DVec2], until: f64) -> Path {
+    routes.entry(key).or_insert_with(|| Resampler::new(pts)).path(until)
+}
+
 /// Whether a kind drives with lights and siren: the checker resolved it through the kind's
 /// ancestry (`kind my_amb: ambulance`); the stdlib names count even where the scenario's kind
 /// table lacks them (a hand-built `Concrete`).
@@ -575,7 +587,7 @@ fn reach(v: f64, duration: f64) -> f64 {
     v * duration + v * v / (2.0 * 2.0) + 2.5 * v + 60.0
 }
 
-fn background_actor(map: &Map, s: traffic::Spawn, duration: f64) -> Actor {
+fn background_actor(map: &Map, s: traffic::Spawn, duration: f64, routes: &mut Routes) -> Actor {
     let lane = &map.lanes[s.lane];
     let (p, yaw) = lane.centre.pose_at(s.s);
     let info = TrackAgent {
@@ -589,7 +601,7 @@ fn background_actor(map: &Map, s: traffic::Spawn, duration: f64) -> Actor {
     let mut a = base_actor(info, Pose { x: p.x, y: p.y, yaw }, Motion::Vehicle, Class::Vehicle, Drive::Mover);
     let (pts, _, junction) = chain(map, s.lane, None);
     a.junction = junction;
-    a.path = Path::new_until(&pts, s.s.max(0.0) + reach(s.speed.max(s.target), duration));
+    a.path = route_path(routes, (s.lane, None), &pts, s.s.max(0.0) + reach(s.speed.max(s.target), duration));
     a.path.set_caps(a.lim.lat_acc, a.lim.yaw_rate, a.lim.brake);
     a.s0 = s.s;
     a.v0 = s.speed;
