@@ -249,6 +249,14 @@ impl Resampler {
 
     /// Grow the grid to `n` samples, with the headings and tangents that those determine.
     fn extend(&mut self, n: usize) {
+        if self.grid.capacity() < n {
+            // Later agents on the route may ask for more: room for the whole route (or twice this
+            // request on a long one) at once, not a copy per growth.
+            let cap = ((self.total / STEP) as usize + 2).min(2 * n).max(n);
+            self.grid.reserve_exact(cap - self.grid.len());
+            self.heading.reserve_exact(cap - self.heading.len());
+            self.tangent.reserve_exact(cap - self.tangent.len());
+        }
         while self.grid.len() < n {
             let s = self.grid.len() as f64 * STEP;
             while self.seg + 2 < self.cum.len() && self.cum[self.seg + 1] < s {
