@@ -406,6 +406,36 @@ mod tests {
         assert!((s - 10.0).abs() < 0.05 && (d - 1.5).abs() < 0.05 && beyond == 0.0, "{s} {d}");
     }
 
+    /// Every field of a path as bits, for exact comparison.
+    fn bits(p: &Path) -> Vec<u64> {
+        let v2 = |v: &[DVec2]| v.iter().flat_map(|q| [q.x.to_bits(), q.y.to_bits()]).collect::<Vec<_>>();
+        let f = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let runs = p.run.iter().flat_map(|&(a, b)| [a as u64, b as u64]);
+        [v2(&p.pts), f(&p.heading), v2(&p.tangent), f(&p.curvature), f(&p.cap)]
+            .concat()
+            .into_iter()
+            .chain(runs)
+            .collect()
+    }
+
+    /// A resampler shared by agents reaching different distances, asked in any order, gives each
+    /// the bits of a path resampled for it alone (what makes sharing invisible in the tracks).
+    #[test]
+    fn shared_resampling_is_bitwise_the_own_one() {
+        let mut pts = vec![DVec2::new(-40.0, 2.0), DVec2::new(0.0, 2.0)];
+        pts.extend((1..=30).map(|i| DVec2::new(0.0, 32.0) + DVec2::from_angle(-1.4 + i as f64 * 0.05) * 30.0));
+        pts.push(*pts.last().unwrap() + DVec2::new(-25.0, 60.0));
+        let untils = [55.3, 0.2, 12.0, 150.0, 1e9, 55.3, 3.7, 90.25, 1.0];
+        for order in [untils.to_vec(), untils.iter().rev().copied().collect()] {
+            let mut shared = Resampler::new(&pts);
+            for &u in &order {
+                let (a, b) = (shared.path(u), Resampler::new(&pts).path(u));
+                assert_eq!(bits(&a), bits(&b), "until {u}");
+                assert!(a.length() > 0.0);
+            }
+        }
+    }
+
     /// On a straight run, `frenet_dir` from any guess inside the run lands on the point's
     /// projection onto the run's line (what the pair loop's early reject relies on, 1 mm margin);
     /// a bend ends the run.
