@@ -72,72 +72,7 @@ impl Path {
     /// `new`, keeping only the first `until` metres: a route is chained far beyond what an agent
     /// can reach within a clip, and resampling all of it dominated the rollout's set-up.
     pub fn new_until(points: &[DVec2], until: f64) -> Path {
-        let mut cum = Vec::with_capacity(points.len());
-        let mut pts_in: Vec<DVec2> = Vec::with_capacity(points.len());
-        let mut acc = 0.0;
-        for &p in points {
-            if let Some(&last) = pts_in.last() {
-                let d = p.distance(last);
-                if d < 1e-6 {
-                    continue;
-                }
-                acc += d;
-            }
-            pts_in.push(p);
-            cum.push(acc);
-        }
-        if pts_in.len() < 2 {
-            let p = pts_in.first().copied().unwrap_or(DVec2::ZERO);
-            return Path {
-                pts: vec![p, p],
-                heading: vec![0.0; 2],
-                tangent: vec![DVec2::X; 2],
-                curvature: vec![0.0; 2],
-                cap: vec![f64::INFINITY; 2],
-                run: vec![(0, 1); 2],
-            };
-        }
-        let acc = acc.min(until.max(2.0 * STEP));
-        let n = (acc / STEP).floor() as usize + 1;
-        let mut pts = Vec::with_capacity(n + 1);
-        let mut seg = 0;
-        for k in 0..=n {
-            let s = (k as f64 * STEP).min(acc);
-            while seg + 2 < cum.len() && cum[seg + 1] < s {
-                seg += 1;
-            }
-            let (a, b) = (pts_in[seg], pts_in[seg + 1]);
-            let len = cum[seg + 1] - cum[seg];
-            let t = if len > 0.0 { ((s - cum[seg]) / len).clamp(0.0, 1.0) } else { 0.0 };
-            pts.push(a + (b - a) * t);
-        }
-        let m = pts.len();
-        // Headings from a 2 m wide central difference: polylines from templates have corners at
-        // their vertices, and an agent's yaw must not jump there.
-        let w = 2;
-        let heading: Vec<f64> = (0..m)
-            .map(|i| {
-                let d = pts[(i + w).min(m - 1)] - pts[i.saturating_sub(w)];
-                d.y.atan2(d.x)
-            })
-            .collect();
-        let curvature: Vec<f64> = (0..m)
-            .map(|i| {
-                let (a, b) = (i.saturating_sub(w), (i + w).min(m - 1));
-                if b > a { wrap_angle(heading[b] - heading[a]) / ((b - a) as f64 * STEP) } else { 0.0 }
-            })
-            .collect();
-        // Straight stretches repeat a heading bit for bit: reuse its sine and cosine.
-        let mut tangent: Vec<DVec2> = Vec::with_capacity(m);
-        let mut last = (f64::NAN, DVec2::X);
-        for &h in &heading {
-            if h.to_bits() != last.0.to_bits() {
-                last = (h, DVec2::from_angle(h));
-            }
-            tangent.push(last.1);
-        }
-        let run = straight_runs(&pts, &tangent);
-        Path { pts, heading, tangent, curvature, cap: vec![f64::INFINITY; m], run }
+        Resampler::new(points).path(until)
     }
 
     /// A straight path from `p` along `yaw`.
@@ -260,6 +195,140 @@ impl Path {
     }
 }
 
+/// The resampling of one chain of points, kept to share among every agent on that chain: the
+/// samples at multiples of `STEP`, with their headings and tangents (the trigonometry, most of a
+/// path's cost), are the same bits whatever length an agent keeps, so they are computed once,
+/// as far as the farthest-reaching agent needs; only each path's last samples, which depend on
+/// where it ends, are its own.
+#[derive(Clone, Debug, Default)]
+pub struct Resampler {
+    /// The chain without consecutive duplicates, and the arc length at each of its points.
+    pts_in: Vec<DVec2>,
+    cum: Vec<f64>,
+    total: f64,
+    /// Chain segment of the last grid sample (segments are searched forward from it).
+    seg: usize,
+    /// The sample at `k * STEP` for every `k` computed so far.
+    grid: Vec<DVec2>,
+    /// Heading and unit tangent at grid sample `i`, for every `i` whose central difference reads
+    /// grid samples only (`i + 2 < grid.len()`).
+    heading: Vec<f64>,
+    tangent: Vec<DVec2>,
+}
+
+/// Half-width of the central difference for headings, in samples: polylines from templates have
+/// corners at their vertices, and an agent's yaw must not jump there.
+const HEADING_W: usize = 2;
+
+impl Resampler {
+    pub fn new(points: &[DVec2]) -> Resampler {
+        let mut cum = Vec::with_capacity(points.len());
+        let mut pts_in: Vec<DVec2> = Vec::with_capacity(points.len());
+        let mut acc = 0.0;
+        for &p in points {
+            if let Some(&last) = pts_in.last() {
+                let d = p.distance(last);
+                if d < 1e-6 {
+                    continue;
+                }
+                acc += d;
+            }
+            pts_in.push(p);
+            cum.push(acc);
+        }
+        Resampler { pts_in, cum, total: acc, ..Resampler::default() }
+    }
+
+    /// The chain point at arc length `s` on segment `seg`.
+    fn point_on(&self, seg: usize, s: f64) -> DVec2 {
+        let (a, b) = (self.pts_in[seg], self.pts_in[seg + 1]);
+        let len = self.cum[seg + 1] - self.cum[seg];
+        let t = if len > 0.0 { ((s - self.cum[seg]) / len).clamp(0.0, 1.0) } else { 0.0 };
+        a + (b - a) * t
+    }
+
+    /// Grow the grid to `n` samples, with the headings and tangents that those determine.
+    fn extend(&mut self, n: usize) {
+        if self.grid.capacity() < n {
+            // Later agents on the route may ask for more: room for the whole route (or twice this
+            // request on a long one) at once, not a copy per growth.
+            let cap = ((self.total / STEP) as usize + 2).min(2 * n).max(n);
+            self.grid.reserve_exact(cap - self.grid.len());
+            self.heading.reserve_exact(cap - self.heading.len());
+            self.tangent.reserve_exact(cap - self.tangent.len());
+        }
+        while self.grid.len() < n {
+            let s = self.grid.len() as f64 * STEP;
+            while self.seg + 2 < self.cum.len() && self.cum[self.seg + 1] < s {
+                self.seg += 1;
+            }
+            self.grid.push(self.point_on(self.seg, s));
+        }
+        let g = self.grid.len();
+        while self.heading.len() + HEADING_W < g {
+            let i = self.heading.len();
+            let d = self.grid[i + HEADING_W] - self.grid[i.saturating_sub(HEADING_W)];
+            let h = d.y.atan2(d.x);
+            // Straight stretches repeat a heading bit for bit: reuse its sine and cosine.
+            let t = match (self.heading.last(), self.tangent.last()) {
+                (Some(&lh), Some(&lt)) if lh.to_bits() == h.to_bits() => lt,
+                _ => DVec2::from_angle(h),
+            };
+            self.heading.push(h);
+            self.tangent.push(t);
+        }
+    }
+
+    /// The path of the chain's first `until` metres (`Path::new_until`).
+    pub fn path(&mut self, until: f64) -> Path {
+        if self.pts_in.len() < 2 {
+            let p = self.pts_in.first().copied().unwrap_or(DVec2::ZERO);
+            return Path {
+                pts: vec![p, p],
+                heading: vec![0.0; 2],
+                tangent: vec![DVec2::X; 2],
+                curvature: vec![0.0; 2],
+                cap: vec![f64::INFINITY; 2],
+                run: vec![(0, 1); 2],
+            };
+        }
+        let acc = self.total.min(until.max(2.0 * STEP));
+        // Samples `..n` lie on the grid (k * STEP <= acc); the last one is the end, at `acc`.
+        let n = (acc / STEP).floor() as usize + 1;
+        self.extend(n);
+        let mut pts = Vec::with_capacity(n + 1);
+        pts.extend_from_slice(&self.grid[..n]);
+        let seg = self.cum[1..].partition_point(|&c| c < acc).min(self.cum.len() - 2);
+        pts.push(self.point_on(seg, acc));
+        let m = pts.len();
+        let w = HEADING_W;
+        // Headings whose central difference reaches the end sample are this path's own.
+        let shared = (m - 1).saturating_sub(w).min(self.heading.len());
+        let mut heading = Vec::with_capacity(m);
+        let mut tangent = Vec::with_capacity(m);
+        heading.extend_from_slice(&self.heading[..shared]);
+        tangent.extend_from_slice(&self.tangent[..shared]);
+        for i in shared..m {
+            let d = pts[(i + w).min(m - 1)] - pts[i.saturating_sub(w)];
+            let h = d.y.atan2(d.x);
+            let t = match (heading.last(), tangent.last()) {
+                (Some(&lh), Some(&lt)) if f64::to_bits(lh) == h.to_bits() => lt,
+                _ => DVec2::from_angle(h),
+            };
+            heading.push(h);
+            tangent.push(t);
+        }
+        let curvature: Vec<f64> = (0..m)
+            .map(|i| {
+                let (a, b) = (i.saturating_sub(w), (i + w).min(m - 1));
+                if b > a { wrap_angle(heading[b] - heading[a]) / ((b - a) as f64 * STEP) } else { 0.0 }
+            })
+            .collect();
+        let run = straight_runs(&pts, &tangent);
+        Path { pts, heading, tangent, curvature, cap: vec![f64::INFINITY; m], run }
+    }
+}
+
 /// A cubic Hermite curve sampled by arc length: the intercept path of an at-fault agent.
 pub struct Hermite {
     pts: [DVec2; HN + 1],
@@ -335,6 +404,36 @@ mod tests {
         assert!((p.curvature(10.0) - 1.0 / r).abs() < 0.005);
         let (s, d, beyond, _) = p.frenet(q + DVec2::from_angle(h).perp() * 1.5, 6.0);
         assert!((s - 10.0).abs() < 0.05 && (d - 1.5).abs() < 0.05 && beyond == 0.0, "{s} {d}");
+    }
+
+    /// Every field of a path as bits, for exact comparison.
+    fn bits(p: &Path) -> Vec<u64> {
+        let v2 = |v: &[DVec2]| v.iter().flat_map(|q| [q.x.to_bits(), q.y.to_bits()]).collect::<Vec<_>>();
+        let f = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let runs = p.run.iter().flat_map(|&(a, b)| [a as u64, b as u64]);
+        [v2(&p.pts), f(&p.heading), v2(&p.tangent), f(&p.curvature), f(&p.cap)]
+            .concat()
+            .into_iter()
+            .chain(runs)
+            .collect()
+    }
+
+    /// A resampler shared by agents reaching different distances, asked in any order, gives each
+    /// the bits of a path resampled for it alone (what makes sharing invisible in the tracks).
+    #[test]
+    fn shared_resampling_is_bitwise_the_own_one() {
+        let mut pts = vec![DVec2::new(-40.0, 2.0), DVec2::new(0.0, 2.0)];
+        pts.extend((1..=30).map(|i| DVec2::new(0.0, 32.0) + DVec2::from_angle(-1.4 + i as f64 * 0.05) * 30.0));
+        pts.push(*pts.last().unwrap() + DVec2::new(-25.0, 60.0));
+        let untils = [55.3, 0.2, 12.0, 150.0, 1e9, 55.3, 3.7, 90.25, 1.0];
+        for order in [untils.to_vec(), untils.iter().rev().copied().collect()] {
+            let mut shared = Resampler::new(&pts);
+            for &u in &order {
+                let (a, b) = (shared.path(u), Resampler::new(&pts).path(u));
+                assert_eq!(bits(&a), bits(&b), "until {u}");
+                assert!(a.length() > 0.0);
+            }
+        }
     }
 
     /// On a straight run, `frenet_dir` from any guess inside the run lands on the point's

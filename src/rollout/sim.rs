@@ -2,7 +2,7 @@
 //! then computes each agent's next state from everyone's current state (a Jacobi update, so the
 //! result does not depend on agent order), undoes moves that would overlap, and latches crashes.
 
-use super::path::{Hermite, Path};
+use super::path::{Hermite, Path, Resampler};
 use super::route::{Junction, RUN_OUT, chain, find_lane};
 use super::stage::{self, Plan};
 use super::traffic;
@@ -151,14 +151,17 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         }
     }
     let mut errs = vec![];
-    let mut actors: Vec<Actor> = placed.agents.iter().map(|p| build_actor(c, map, p, &track_of, &mut errs)).collect();
+    // One resampling per distinct route (start lane, turn), shared by every agent on it.
+    let mut routes = Routes::new();
+    let mut actors: Vec<Actor> =
+        placed.agents.iter().map(|p| build_actor(c, map, p, &track_of, &mut routes, &mut errs)).collect();
     if !errs.is_empty() {
         return Err(errs);
     }
     if let Some(t) = c.traffic {
         let boxes: Vec<(Obb, f64)> = actors.iter().map(|a| (a.obb(&initial(a)), initial(a).v)).collect();
         for s in traffic::spawn(map, &boxes, t, c.seed) {
-            actors.push(background_actor(map, s, c.duration));
+            actors.push(background_actor(map, s, c.duration, &mut routes));
         }
     }
     let mut confs = vec![];
@@ -181,10 +184,14 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         Sim::new(&actors, &confs, &[], None, dt).run(&mut out);
     } else {
         let mut pass1 = empty_tracks(&actors, c.rate, frames);
-        Sim::new(&actors, &confs, &[], None, dt).run(&mut pass1);
+        let mut states = Vec::with_capacity(frames);
+        Sim::new(&actors, &confs, &[], None, dt).keep_states(&mut states).run(&mut pass1);
         let plans: Vec<Option<Plan>> =
             confs.iter().map(|k| stage::choose(k, &actors, &pass1, dt, c.duration)).collect();
-        Sim::new(&actors, &confs, &plans, Some(&pass1), dt).run(&mut out);
+        // Pass 2 is pass 1 until a planned striker departs or a planned pair first overlaps:
+        // those frames are copied, not simulated again.
+        let start = pass2_start(&actors, &confs, &plans, &states, dt);
+        Sim::new(&actors, &confs, &plans, Some(&pass1), dt).resume(&pass1, &states, start).run(&mut out);
         // A staged crash that does not happen near its time is not silently dropped. (Without a
         // plan the at-fault agent is not ours to steer, e.g. a replayed track: nothing to check.)
         for (k, _) in confs.iter().zip(&plans).filter(|(_, p)| p.is_some()) {
@@ -386,6 +393,7 @@ fn build_actor(
     map: &Map,
     p: &crate::place::PlacedAgent,
     track_of: &[Option<usize>],
+    routes: &mut Routes,
     errs: &mut Vec<Diagnostic>,
 ) -> Actor {
     let info = TrackAgent {
@@ -460,7 +468,7 @@ fn build_actor(
                 let (s, d) = lane.centre.project(pos);
                 (a.s0, a.d0) = (s, d);
                 let v_top = a.v0.max(goal.and_then(|g| g.speed).unwrap_or(0.0)).max(lane.speed_limit);
-                a.path = Path::new_until(&pts, s.max(0.0) + reach(v_top, c.duration));
+                a.path = route_path(routes, (l, turn), &pts, s.max(0.0) + reach(v_top, c.duration));
                 // A turn tighter than the kind can steer (a bus's U-turn on a narrow junction)
                 // would leave the road: refused, not driven wide.
                 if let (Some(t), Some(j)) = (turn, a.junction) {
@@ -556,6 +564,14 @@ fn build_actor(
     a
 }
 
+/// Resampled routes by start lane and turn (`chain`'s arguments, so one key is one chain).
+type Routes = std::collections::HashMap<(usize, Option<Turn>), Resampler>;
+
+/// `Path::new_until(pts, until)` for the chain `key`, reusing the resampling of agents before.
+fn route_path(routes: &mut Routes, key: (usize, Option<Turn>), pts: &[DVec2], until: f64) -> Path {
+    routes.entry(key).or_insert_with(|| Resampler::new(pts)).path(until)
+}
+
 /// Whether a kind drives with lights and siren: the checker resolved it through the kind's
 /// ancestry (`kind my_amb: ambulance`); the stdlib names count even where the scenario's kind
 /// table lacks them (a hand-built `Concrete`).
@@ -571,7 +587,7 @@ fn reach(v: f64, duration: f64) -> f64 {
     v * duration + v * v / (2.0 * 2.0) + 2.5 * v + 60.0
 }
 
-fn background_actor(map: &Map, s: traffic::Spawn, duration: f64) -> Actor {
+fn background_actor(map: &Map, s: traffic::Spawn, duration: f64, routes: &mut Routes) -> Actor {
     let lane = &map.lanes[s.lane];
     let (p, yaw) = lane.centre.pose_at(s.s);
     let info = TrackAgent {
@@ -585,7 +601,7 @@ fn background_actor(map: &Map, s: traffic::Spawn, duration: f64) -> Actor {
     let mut a = base_actor(info, Pose { x: p.x, y: p.y, yaw }, Motion::Vehicle, Class::Vehicle, Drive::Mover);
     let (pts, _, junction) = chain(map, s.lane, None);
     a.junction = junction;
-    a.path = Path::new_until(&pts, s.s.max(0.0) + reach(s.speed.max(s.target), duration));
+    a.path = route_path(routes, (s.lane, None), &pts, s.s.max(0.0) + reach(s.speed.max(s.target), duration));
     a.path.set_caps(a.lim.lat_acc, a.lim.yaw_rate, a.lim.brake);
     a.s0 = s.s;
     a.v0 = s.speed;
@@ -688,9 +704,31 @@ fn cross_line(map: &Map, p: DVec2) -> Option<(f64, f64)> {
     Some((dir.y.atan2(dir.x), last? + 2.0))
 }
 
+/// The first frame at which pass 2 can differ from pass 1: the first whose step starts at or
+/// after a planned striker's departure (`Sim::step`), or an earlier one at which a planned pair
+/// overlaps (`Sim::latch` looks at those). Before it both passes run the same steps on the same
+/// states, so pass 2 resumes from pass 1's state there.
+fn pass2_start(actors: &[Actor], confs: &[Conf], plans: &[Option<Plan>], states: &[Vec<State>], dt: f64) -> usize {
+    let frames = states.len();
+    let mut start = frames.max(1);
+    for (k, plan) in confs.iter().zip(plans).filter_map(|(k, p)| p.as_ref().map(|p| (k, p))) {
+        // The same test as `Sim::step`, frame by frame, so the float comparison is the same one.
+        if let Some(f) = (1..frames).find(|&f| (f - 1) as f64 * dt >= plan.t_depart - 1e-9) {
+            start = start.min(f);
+        }
+        if let Some(f) = (1..start).find(|&f| {
+            let s = &states[f];
+            actors[k.af].obb(&s[k.af]).overlaps(&actors[k.st].obb(&s[k.st]))
+        }) {
+            start = start.min(f);
+        }
+    }
+    start
+}
+
 // ---------------------------------------------------------------- the frame loop
 
-struct Sim<'a> {
+struct Sim<'a, 'b> {
     actors: &'a [Actor],
     confs: &'a [Conf],
     /// Per conflict (pass 2 only).
@@ -709,9 +747,15 @@ struct Sim<'a> {
     yielding: Vec<(Option<f64>, bool)>,
     /// This frame: agents easing aside (`away_from`, triggered), for `pass_offset`.
     easing: Vec<usize>,
+    /// Where to keep every frame's states (pass 1, for `resume`).
+    keep: Option<&'b mut Vec<Vec<State>>>,
+    /// The first frame to simulate: earlier ones are already in the output (`resume`).
+    first: usize,
+    /// Frames `..first` of the output, copied by `run`.
+    prefix: Option<&'b Tracks>,
 }
 
-impl<'a> Sim<'a> {
+impl<'a, 'b> Sim<'a, 'b> {
     fn new(
         actors: &'a [Actor],
         confs: &'a [Conf],
@@ -740,15 +784,42 @@ impl<'a> Sim<'a> {
             yielding: vec![(None, false); actors.len()],
             easing: Vec::with_capacity(actors.len()),
             cur,
+            keep: None,
+            first: 1,
+            prefix: None,
         }
+    }
+
+    fn keep_states(mut self, keep: &'b mut Vec<Vec<State>>) -> Self {
+        self.keep = Some(keep);
+        self
+    }
+
+    /// Start at frame `first` from `states[first - 1]`, taking frames `..first` from `done`
+    /// (the run that produced `states`). Nothing before `first` may be latched.
+    fn resume(mut self, done: &'b Tracks, states: &[Vec<State>], first: usize) -> Self {
+        if first > 1 && first <= states.len() {
+            self.cur.clone_from(&states[first - 1]);
+            self.first = first;
+            self.prefix = Some(done);
+        }
+        self
     }
 
     fn run(mut self, out: &mut Tracks) {
         if out.frames == 0 {
             return;
         }
-        self.record(out);
-        for f in 1..out.frames {
+        match self.prefix {
+            Some(done) => {
+                for (i, (p, v)) in done.poses.iter().zip(&done.speeds).enumerate() {
+                    out.poses[i].extend_from_slice(&p[..self.first]);
+                    out.speeds[i].extend_from_slice(&v[..self.first]);
+                }
+            }
+            None => self.record(out),
+        }
+        for f in self.first..out.frames {
             let t = (f - 1) as f64 * self.dt;
             self.dirs.clear();
             self.dirs.extend(self.cur.iter().map(|s| DVec2::from_angle(s.yaw)));
@@ -771,7 +842,10 @@ impl<'a> Sim<'a> {
         }
     }
 
-    fn record(&self, out: &mut Tracks) {
+    fn record(&mut self, out: &mut Tracks) {
+        if let Some(keep) = self.keep.as_deref_mut() {
+            keep.push(self.cur.clone());
+        }
         for (i, st) in self.cur.iter().enumerate() {
             out.poses[i].push(Pose { x: st.pos.x, y: st.pos.y, yaw: st.yaw });
             out.speeds[i].push(st.v);
