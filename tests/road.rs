@@ -713,7 +713,24 @@ fn roundabout_walkways_follow_the_flares_and_slips() {
         Road { crosswalks: true, ..base.clone() },
         Road { lanes: 3, shoulder: 2.0, radius: 10.0, ..base.clone() },
         Road { lanes: 5, lane_width: 4.07, median: 9.59, radius: 13.18, length: 20.0, ..base.clone() },
-        Road { lanes: 2, lane_width: 3.137596978920497, median: 17.280040893320127, radius: 8.0, length: 20.0, ..base },
+        Road {
+            lanes: 2,
+            lane_width: 3.137596978920497,
+            median: 17.280040893320127,
+            radius: 8.0,
+            length: 20.0,
+            ..base.clone()
+        },
+        // Flares meeting on the ring's diagonal: the ring sidewalk between them had no width left
+        // and came out as a zero-area polygon, drawn as a 2.7 m line over a paved slip.
+        Road {
+            lanes: 2,
+            lane_width: 5.125629700574785,
+            median: 19.362998808362306,
+            radius: 8.125629700574784,
+            length: 20.0,
+            ..base
+        },
     ];
     for r in &cases {
         check_walkways(r, 0.3)

@@ -18,7 +18,7 @@
 use super::arm::{ArmSpec, CROSSWALK, SIDEWALK, add_arm};
 use super::junction::ARMS;
 use super::map::{Connector, Map};
-use super::shape::{arc, cubic, dashes, overlaps_convex, subtract_convex, turn};
+use super::shape::{arc, area2, cubic, dashes, overlaps_convex, subtract_convex, turn};
 use crate::check::scenario::{Road, Turn};
 use crate::geom::{Polygon, Polyline};
 use glam::DVec2;
@@ -185,6 +185,22 @@ fn corner_walkways(
     (j_wide, hw): (f64, f64),
     (j, h): (f64, f64),
 ) {
+    let first = map.walkways.len();
+    corner_pieces(map, flares, slips, r_out, (j_wide, hw), (j, h));
+    // Cuts leave pieces of any shape; one without area is drawn as a line (fillPoly) over paving.
+    let mut added = map.walkways.split_off(first);
+    added.retain(|p| area2(p).abs() >= 2e-4);
+    map.walkways.extend(added);
+}
+
+fn corner_pieces(
+    map: &mut Map,
+    flares: &[Polygon],
+    slips: &[Polygon],
+    r_out: f64,
+    (j_wide, hw): (f64, f64),
+    (j, h): (f64, f64),
+) {
     // In a corner's own frame: the first arm along x, the next along y.
     let (a, b) = (DVec2::new(j_wide, hw), DVec2::new(j, h));
     let d = b - a;
@@ -214,7 +230,10 @@ fn corner_walkways(
             bands.push(bevel.map(|p| world(mirror(p))).to_vec());
         }
         map.walkways.extend(minus(bands, &paving));
-        if theta < FRAC_PI_4 {
+        // The ring's sidewalk between the flares, unless they (nearly) meet on the ring: a wedge
+        // a few centimetres wide would be cut to slivers, and a zero-area one would survive every
+        // cut (it overlaps nothing) yet be drawn as a 1-px line across the paving.
+        if (FRAC_PI_2 - 2.0 * theta) * (r_out + SIDEWALK) > 0.05 {
             let phi = u.to_angle();
             let (a0, a1) = (phi + theta, phi + FRAC_PI_2 - theta);
             let mut ring = arc(DVec2::ZERO, r_out + SIDEWALK, a0, a1);

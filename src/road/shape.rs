@@ -117,7 +117,7 @@ pub(crate) fn grow(b: &mut (DVec2, DVec2), pts: &[DVec2]) {
 }
 
 /// Twice the signed area of `poly` (positive counter-clockwise).
-fn area2(poly: &[DVec2]) -> f64 {
+pub(crate) fn area2(poly: &[DVec2]) -> f64 {
     let n = poly.len();
     (0..n).map(|i| poly[i].perp_dot(poly[(i + 1) % n])).sum()
 }
