@@ -673,18 +673,10 @@ fn check_walkways(r: &Road, yaw: f64) -> Result<(), TestCaseError> {
     Ok(())
 }
 
-const TEMPLATES: [Template; 6] = [
-    Template::Straight,
-    Template::Curve,
-    Template::FourWay,
-    Template::TJunction,
-    Template::Merge,
-    Template::Roundabout,
-];
-
 /// `any_road` on any template, sidewalks on.
 fn any_walked_road() -> impl Strategy<Value = Road> {
-    (0usize..6).prop_flat_map(|t| any_road(TEMPLATES[t])).prop_map(|r| Road { sidewalks: true, ..r })
+    let templates: Vec<Template> = Template::ALL.iter().map(|&(_, t)| t).filter(|&t| t != Template::None).collect();
+    prop::sample::select(templates).prop_flat_map(any_road).prop_map(|r| Road { sidewalks: true, ..r })
 }
 
 proptest! {

@@ -186,21 +186,6 @@ fn corner_walkways(
     (j, h): (f64, f64),
 ) {
     let first = map.walkways.len();
-    corner_pieces(map, flares, slips, r_out, (j_wide, hw), (j, h));
-    // Cuts leave pieces of any shape; one without area is drawn as a line (fillPoly) over paving.
-    let mut added = map.walkways.split_off(first);
-    added.retain(|p| area2(p).abs() >= 2e-4);
-    map.walkways.extend(added);
-}
-
-fn corner_pieces(
-    map: &mut Map,
-    flares: &[Polygon],
-    slips: &[Polygon],
-    r_out: f64,
-    (j_wide, hw): (f64, f64),
-    (j, h): (f64, f64),
-) {
     // In a corner's own frame: the first arm along x, the next along y.
     let (a, b) = (DVec2::new(j_wide, hw), DVec2::new(j, h));
     let d = b - a;
@@ -249,21 +234,25 @@ fn corner_pieces(
             }
         }
     }
-    if slips.is_empty() {
-        return;
-    }
-    // The ring's disk as a circumscribed polygon (it may shave a centimetre off a band).
-    const SIDES: usize = 128;
-    let step = TAU / SIDES as f64;
-    let disk: Polygon = (0..SIDES).map(|i| DVec2::from_angle(step * i as f64) * (r_out / (step / 2.0).cos())).collect();
-    let mut holes = paving.clone();
-    holes.push(&disk);
-    for slip in slips {
-        let (p3, p0) = (slip[3], slip[0]);
-        let mut n = (p0 - p3).perp().normalize();
-        if n.dot(p0 + p3) < 0.0 {
-            n = -n;
+    if !slips.is_empty() {
+        // The ring's disk as a circumscribed polygon (it may shave a centimetre off a band).
+        const SIDES: usize = 128;
+        let step = TAU / SIDES as f64;
+        let disk: Polygon =
+            (0..SIDES).map(|i| DVec2::from_angle(step * i as f64) * (r_out / (step / 2.0).cos())).collect();
+        let mut holes = paving.clone();
+        holes.push(&disk);
+        for slip in slips {
+            let (p3, p0) = (slip[3], slip[0]);
+            let mut n = (p0 - p3).perp().normalize();
+            if n.dot(p0 + p3) < 0.0 {
+                n = -n;
+            }
+            map.walkways.extend(minus(vec![vec![p3, p0, p0 + n * SIDEWALK, p3 + n * SIDEWALK]], &holes));
         }
-        map.walkways.extend(minus(vec![vec![p3, p0, p0 + n * SIDEWALK, p3 + n * SIDEWALK]], &holes));
     }
+    // Cuts leave pieces of any shape; one without area is drawn as a line (fillPoly) over paving.
+    let mut added = map.walkways.split_off(first);
+    added.retain(|p| area2(p).abs() >= 2e-4);
+    map.walkways.extend(added);
 }
