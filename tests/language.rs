@@ -338,7 +338,7 @@ fn stdout_commands_exit_quietly_when_the_reader_goes_away() {
 }
 
 /// `stop behind NAME` (E0206): leaders that are ahead, or that enter the route ahead, pass;
-/// leaders behind, beside or across do not. Judged by the place pass on the placed poses.
+/// leaders behind, beside or across do not; a `change_lane` agent's route is the lane it moves to. Judged by the place pass on the placed poses.
 #[test]
 fn stop_behind_needs_a_leader_ahead_on_the_route() {
     let front_codes = |body: &str| -> Vec<&'static str> {
@@ -370,6 +370,10 @@ fn stop_behind_needs_a_leader_ahead_on_the_route() {
         "road straight { lanes 1; sidewalks on }
          agent a: sedan { at west.in[1], 40 m before center; speed 20 km/h; goal { stop behind p } }
          agent p: pedestrian { at sidewalk(west.in), 10 m before center; goal { speed 1.4 m/s; lateral cross } }",
+        // Changing lane into the leader's lane: its route starts in the lane it moves to.
+        "road straight { lanes 2 }
+         agent a: sedan { at west.in[2], 40 m before center; speed 20 km/h; goal { lateral change_lane left; stop behind b } }
+         agent b: sedan { at west.in[1], 20 m before center; speed 15 km/h }",
         // Placed by coordinates in west.in[1] at the apex of a U-shaped curve: its route is still
         // the lane's (the rollout's route function), so a leader 60 m on round the bend is ahead
         // (a straight ray from its pose passes 30 m from it).
@@ -398,6 +402,10 @@ fn stop_behind_needs_a_leader_ahead_on_the_route() {
         "road straight { lanes 1; shoulder 3 m }
          agent a: sedan { at west.in[1], 40 m before center; speed 20 km/h; goal { stop behind c } }
          object c: traffic_cone { at west.in[1], 20 m before center offset 3 m right }",
+        // Ahead in the lane the agent leaves: it passes the leader, never queues behind it.
+        "road straight { lanes 2 }
+         agent a: sedan { at west.in[2], 40 m before center; speed 20 km/h; goal { lateral change_lane left; stop behind b } }
+         agent b: sedan { at west.in[2], 20 m before center; speed 15 km/h }",
         // The same car: a cone 30 m straight ahead of it, off the road where its lane has bent
         // 11 m away, is not on its route (a straight ray from its pose would meet it).
         "road curve { lanes 1; radius 40 m; angle 180 deg }

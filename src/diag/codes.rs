@@ -317,8 +317,8 @@ Start the pair closer, give them speeds that bring them together by then, or mov
         code: "E0206",
         title: "`stop behind` names an agent that is not ahead",
         explanation: "`stop behind NAME` queues behind a leader, so NAME must be ahead of the agent on its route\n\
-(its lane, continued through the junction by its `turn`, or straight on; an agent off the lanes\n\
-goes along its heading). Judged on the placed poses, NAME qualifies when its centre is further\n\
+(its lane, or the lane its `change_lane` moves it to, continued through the junction by its\n\
+`turn`, or straight on; an agent off the lanes goes along its heading). Judged on the placed poses, NAME qualifies when its centre is further\n\
 along that route and either inside the route's corridor (half the lane width plus half its own\n\
 width: a cyclist at the lane edge counts, a car in the next lane does not), or it will enter the\n\
 corridor ahead: a walker or animal with `lateral cross`, a vehicle with `change_lane` toward it,\n\

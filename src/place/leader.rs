@@ -5,8 +5,8 @@
 //! The route is the one the rollout drives (`rollout::route`, one function for both): the lane a
 //! vehicle is found in from its pose, continued by its `turn` connector, else the straight one,
 //! else the lane's continuation; a walker, an animal or a vehicle off the lanes goes straight
-//! along its heading. (A `change_lane` agent is judged on the lane it starts in.) The leader qualifies when its centre is ahead of the agent's centre along
-//! that route and
+//! along its heading; a `change_lane` agent's route starts in the lane it moves to. The leader
+//! qualifies when its centre is ahead of the agent's centre along that route and
 //! - within the route's corridor (half the lane width plus half its own width: a cyclist at the
 //!   lane edge counts, a car in the next lane does not), or
 //! - it will enter the corridor ahead: a walker or animal that `cross`es, a vehicle that changes
@@ -18,7 +18,7 @@ use crate::check::scenario::{Dir, Lateral, Motion, Place, Stop, Turn};
 use crate::diag::Diagnostic;
 use crate::geom::Polyline;
 use crate::road::Map;
-use crate::rollout::route::{chain, find_lane};
+use crate::rollout::route::{chain, find_lane, side_lane};
 use crate::sample::{Concrete, ConcreteAgent};
 use glam::DVec2;
 
@@ -35,13 +35,19 @@ struct Route {
     half: f64,
 }
 
-/// The lane a vehicle drives from, as the rollout finds it (`rollout::route::find_lane`: the
-/// nearest lane heading its way that holds it); walkers and animals have none.
+/// The lane a vehicle's route starts with, as the rollout finds it (`rollout::route::find_lane`:
+/// the nearest lane heading its way that holds it; for a `change_lane` goal the lane it moves to,
+/// `rollout::route::side_lane`); walkers and animals have none.
 fn lane_of(map: &Map, a: &ConcreteAgent, p: &PlacedAgent) -> Option<usize> {
     if a.motion != Motion::Vehicle {
         return None;
     }
-    find_lane(map, centre(p), p.pose.yaw).map(|(l, _, _)| l)
+    let l = find_lane(map, centre(p), p.pose.yaw).map(|(l, _, _)| l)?;
+    match a.goal.as_ref().map(|g| g.lateral) {
+        // No lane on that side is the rollout's E0204; judged on the start lane meanwhile.
+        Some(Lateral::ChangeLane(side)) => Some(side_lane(map, l, side).unwrap_or(l)),
+        _ => Some(l),
+    }
 }
 
 /// The rollout's route from lane `l` (`rollout::route::chain`, the same function that builds the

@@ -3,7 +3,7 @@
 //! and for the place pass's E0206 check (`place::leader`, which asks whether a `stop behind`
 //! leader is ahead on it), so that the two cannot disagree about where an agent goes.
 
-use crate::check::scenario::Turn;
+use crate::check::scenario::{LaneId, Side, Turn};
 use crate::geom::wrap_angle;
 use crate::road::Map;
 use glam::DVec2;
@@ -47,6 +47,18 @@ pub fn find_lane(map: &Map, p: DVec2, yaw: f64) -> Option<(usize, f64, f64)> {
         }
     }
     best
+}
+
+/// The lane a `change_lane` goal moves to from lane `l`, where the route then starts: lane 1 is
+/// nearest the centre line, so `left` is index - 1 and `right` index + 1 on the same arm and
+/// direction. `None` when there is no lane on that side.
+pub fn side_lane(map: &Map, l: usize, side: Side) -> Option<usize> {
+    let id = map.lanes[l].id;
+    let index = match side {
+        Side::Left => id.index.checked_sub(1)?,
+        Side::Right => id.index + 1,
+    };
+    map.lanes.iter().position(|x| x.id == LaneId { index, ..id })
 }
 
 /// Points of the route starting with lane `l`: its centre, then at each lane end the connector

@@ -3,11 +3,11 @@
 //! result does not depend on agent order), undoes moves that would overlap, and latches crashes.
 
 use super::path::{Hermite, Path, Resampler};
-use super::route::{Junction, RUN_OUT, chain, find_lane};
+use super::route::{Junction, RUN_OUT, chain, find_lane, side_lane};
 use super::stage::{self, Plan};
 use super::traffic;
 use super::{ImpactRecord, Limits, TrackAgent, Tracks, limits};
-use crate::check::scenario::{Class, EMERGENCY_KINDS, Keyframe, LaneId, Lateral, Motion, Side, Stop, Turn};
+use crate::check::scenario::{Class, EMERGENCY_KINDS, Keyframe, Lateral, Motion, Side, Stop, Turn};
 use crate::diag::Diagnostic;
 use crate::geom::{Obb, wrap_angle};
 use crate::place::{Placed, Pose};
@@ -431,15 +431,7 @@ fn build_actor(
         let found = find_lane(map, pos, p.pose.yaw);
         let mut base = found.map(|(l, _, _)| l);
         if let Lateral::ChangeLane(side) = lateral {
-            let target = base.and_then(|l| {
-                let id = map.lanes[l].id;
-                let index = match side {
-                    Side::Left => id.index.checked_sub(1)?,
-                    Side::Right => id.index + 1,
-                };
-                map.lanes.iter().position(|x| x.id == LaneId { index, ..id })
-            });
-            match target {
+            match base.and_then(|l| side_lane(map, l, side)) {
                 Some(t) => base = Some(t),
                 None => fail(
                     errs,
