@@ -300,8 +300,8 @@ fn check_turns(map: &Map, actors: &[Actor], confs: &[Conf], out: &Tracks, errs: 
                 )
                 .label(span, "this goal")
                 .help(
-                    "a wider road (lanes, lane_width, median) or a smaller kind; long vehicles need room to swing \
-                     through a turn (see README, Rollout)",
+                    "a wider road (lanes, lane_width, median, a roundabout's radius) or a smaller kind; long \
+                     vehicles need room to swing through a turn (see README, Rollout)",
                 ),
             );
         }
