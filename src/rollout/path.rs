@@ -84,13 +84,27 @@ impl Path {
     /// v * curvature, and braking at `decel` from any
     /// sample must reach the cap of every sample ahead.
     pub fn set_caps(&mut self, lat_acc: f64, yaw_rate: f64, decel: f64) {
-        let m = self.pts.len();
+        // Each sample's own cap first: independent of its neighbours, so this loop pipelines;
+        // only the braking recursion below is a chain.
+        for (c, k) in self.cap.iter_mut().zip(&self.curvature) {
+            let k = k.abs();
+            *c = if k > 1e-4 { (lat_acc / k).sqrt().min(yaw_rate / k) } else { f64::INFINITY };
+        }
+        let grow = 2.0 * decel * STEP;
+        // From the end back to the last curve the braking term is infinite (inf * inf + grow is
+        // inf for any grow above -inf, and so is its root): that stretch skips the square root,
+        // same bits. (A branch inside the chain loop is compiled to a select that takes the root
+        // anyway, hence two loops.)
         let mut next = f64::INFINITY;
-        for i in (0..m).rev() {
-            let k = self.curvature[i].abs();
-            let local = if k > 1e-4 { (lat_acc / k).sqrt().min(yaw_rate / k) } else { f64::INFINITY };
-            next = local.min((next * next + 2.0 * decel * STEP).sqrt());
+        let mut i = self.cap.len();
+        while i > 0 && next == f64::INFINITY && grow > f64::NEG_INFINITY {
+            i -= 1;
+            next = self.cap[i].min(f64::INFINITY);
             self.cap[i] = next;
+        }
+        for c in self.cap[..i].iter_mut().rev() {
+            next = c.min((next * next + grow).sqrt());
+            *c = next;
         }
     }
 
@@ -463,6 +477,31 @@ mod tests {
             worst = worst.max((s - s_line).abs()).max((l - l_line).abs()).max((t - ln.dir).length());
         }
         assert!(worst < 1e-6, "{worst}");
+    }
+
+    /// `set_caps` skips the square roots behind the last curve: the caps must be the bits of the
+    /// plain recursion, on paths ending straight (a skipped tail) and ending in a curve (none).
+    #[test]
+    fn caps_are_the_plain_recursion() {
+        let mut pts = vec![DVec2::new(-40.0, 2.0), DVec2::new(0.0, 2.0)];
+        pts.extend((1..=30).map(|i| DVec2::new(0.0, 32.0) + DVec2::from_angle(-1.4 + i as f64 * 0.05) * 30.0));
+        let curved_end = pts.clone();
+        pts.push(*pts.last().unwrap() + DVec2::new(-25.0, 60.0));
+        for (pts, decel) in [(&pts, 3.5), (&curved_end, 3.5), (&pts, f64::NEG_INFINITY), (&pts, f64::NAN)] {
+            let mut p = Path::new(pts);
+            p.set_caps(2.5, 0.6, decel);
+            let mut next = f64::INFINITY;
+            let mut want = vec![0.0; p.curvature.len()];
+            for i in (0..want.len()).rev() {
+                let k = p.curvature[i].abs();
+                let local = if k > 1e-4 { (2.5 / k).sqrt().min(0.6 / k) } else { f64::INFINITY };
+                next = local.min((next * next + 2.0 * decel * STEP).sqrt());
+                want[i] = next;
+            }
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&p.cap), bits(&want), "decel {decel}");
+            assert!(p.cap.iter().any(|c| c.is_finite()));
+        }
     }
 
     #[test]
