@@ -2,7 +2,7 @@
 //! then computes each agent's next state from everyone's current state (a Jacobi update, so the
 //! result does not depend on agent order), undoes moves that would overlap, and latches crashes.
 
-use super::path::{Hermite, Path, Resampler};
+use super::path::{Hermite, Line, Path, Resampler};
 use super::route::{Junction, RUN_OUT, chain, find_lane};
 use super::stage::{self, Plan};
 use super::traffic;
@@ -728,6 +728,37 @@ fn pass2_start(actors: &[Actor], confs: &[Conf], plans: &[Option<Plan>], states:
 
 // ---------------------------------------------------------------- the frame loop
 
+/// Agent `j` as `Sim::candidates` sees it this frame: copies of its state's and actor's fields
+/// (same bits), packed so that scanning everyone reads one cache line per agent.
+#[derive(Clone, Copy, Debug)]
+struct Near {
+    pos: DVec2,
+    /// Unit heading (`Sim::dirs`).
+    dir: DVec2,
+    v: f64,
+    radius: f64,
+    hl: f64,
+    hw: f64,
+    /// Holding at its stop line for an emergency vehicle (`Sim::yield_state`).
+    gives_way: bool,
+}
+
+/// What `Sim::candidates` needs of agent `i`'s step in `Sim::drive`.
+struct Corridor {
+    look: f64,
+    /// The lateral band the agent sweeps this step.
+    lo: f64,
+    hi: f64,
+    /// Holding its offset (no lateral move this step).
+    holding: bool,
+    /// The straight run of its route it is on, when holding.
+    line: Option<Line>,
+    /// Clearing a junction for an emergency vehicle.
+    clearing: bool,
+    /// The agent it queues behind.
+    named: Option<usize>,
+}
+
 struct Sim<'a, 'b> {
     actors: &'a [Actor],
     confs: &'a [Conf],
@@ -747,6 +778,10 @@ struct Sim<'a, 'b> {
     yielding: Vec<(Option<f64>, bool)>,
     /// This frame: agents easing aside (`away_from`, triggered), for `pass_offset`.
     easing: Vec<usize>,
+    /// Per agent, this frame: what `candidates` reads, packed.
+    near: Vec<Near>,
+    /// `candidates`' output, kept to reuse its allocation.
+    cand: std::cell::RefCell<Vec<usize>>,
     /// Where to keep every frame's states (pass 1, for `resume`).
     keep: Option<&'b mut Vec<Vec<State>>>,
     /// The first frame to simulate: earlier ones are already in the output (`resume`).
@@ -783,6 +818,8 @@ impl<'a, 'b> Sim<'a, 'b> {
             dirs: cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect(),
             yielding: vec![(None, false); actors.len()],
             easing: Vec::with_capacity(actors.len()),
+            near: Vec::with_capacity(actors.len()),
+            cand: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
             cur,
             keep: None,
             first: 1,
@@ -831,6 +868,11 @@ impl<'a, 'b> Sim<'a, 'b> {
             }
             for i in 0..self.actors.len() {
                 self.yielding[i] = self.yield_state(i);
+            }
+            self.near.clear();
+            for ((st, a), (&dir, y)) in self.cur.iter().zip(self.actors).zip(self.dirs.iter().zip(&self.yielding)) {
+                let gives_way = y.0.is_some();
+                self.near.push(Near { pos: st.pos, dir, v: st.v, radius: a.radius, hl: a.hl, hw: a.hw, gives_way });
             }
             for i in 0..self.actors.len() {
                 self.next[i] = self.step(i, t, f);
@@ -947,52 +989,14 @@ impl<'a, 'b> Sim<'a, 'b> {
         // projection (the pair loop's main cost). Only when holding our offset: lateral moves
         // look at everyone alongside.
         let line = if d_next == st.d { a.path.straight_run(st.s) } else { None };
-        let lateral_free = |j: usize| self.yielding[j].0.is_some() || clearing;
-        // Everyone, and the agent queued behind once more (every effect below is a min or an or,
-        // so seeing it twice is harmless). No spatial index: the look-ahead (up to ~240 m at
-        // highway speed) spans whole maps, so a grid found nearly everyone anyway and cost more
-        // than the distance test below (`bench rollout`, 200 agents).
-        for j in (0..self.actors.len()).chain(named) {
+        let mut cand = self.cand.borrow_mut();
+        let corridor = Corridor { look, lo, hi, holding: d_next == st.d, line, clearing, named };
+        self.candidates(i, &corridor, &mut cand);
+        for &j in cand.iter() {
             let (o, b) = (&self.cur[j], &self.actors[j]);
-            if j == i || self.exempt(i, j) {
-                continue;
-            }
             let is_named = named == Some(j);
             let dp = o.pos - st.pos;
-            let r = look + a.radius + b.radius;
-            if !is_named && dp.length_squared() > r * r {
-                continue;
-            }
             let ahead = dp.dot(fwd);
-            // Well behind us and not beside a lateral move: cannot be in our way.
-            if ahead < -(a.hl + b.radius + 1.0) && !is_named && d_next == st.d {
-                continue;
-            }
-            if let Some(ln) = line
-                && !is_named
-            {
-                let guess = st.s + ahead;
-                let rel = o.pos - ln.origin;
-                let s_line = ln.s0 + rel.dot(ln.dir);
-                if guess > ln.lo && guess < ln.hi && s_line > ln.lo && s_line < ln.hi {
-                    // `frenet_dir` would give s_line, this offset and this tangent to float
-                    // noise (1 mm is far above it), hence the extents below too.
-                    const EPS: f64 = 1e-3;
-                    let l_line = ln.dir.perp_dot(rel);
-                    let (cr, sr) = (self.dirs[j].dot(ln.dir), ln.dir.perp_dot(self.dirs[j]));
-                    let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
-                    let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
-                    let behind = s_line - st.s < -EPS;
-                    let too_far = s_line - st.s - a.hl - ext_lon > look + EPS;
-                    let aside = l_line - ext_lat > hi + EPS || l_line + ext_lat < lo - EPS;
-                    // Nor would it be predicted to cut across (see `obstacle` below).
-                    let v_lat = o.v * sr;
-                    let steady = !a.vehicle || v_lat.abs() < 0.3 - EPS || lateral_free(j);
-                    if behind || too_far || (aside && steady) {
-                        continue;
-                    }
-                }
-            }
             let (sj, lj, beyond, th) = a.path.frenet_dir(o.pos, st.s + ahead);
             if beyond > 0.5 && !is_named {
                 continue;
@@ -1134,6 +1138,70 @@ impl<'a, 'b> Sim<'a, 'b> {
         let (pos, yaw) = self.advance(a, &st, k, adv, 1.0);
         let (s, off, _, _) = a.path.frenet_dir(pos, st.s + adv);
         State { pos, yaw, s, off, ..next }
+    }
+
+    /// The agents `drive`'s pair loop looks at for agent `i`, in the order it visits them: every
+    /// agent in index order, and the one queued behind (`named`) once more (every effect there
+    /// is a min or an or, so seeing it twice is harmless), less those that provably change
+    /// nothing there: itself, its conflict partner, and (except `named`) agents beyond the
+    /// look-ahead, well behind, or off its corridor on a straight stretch. It reads the packed
+    /// per-frame `near` data, the pair loop's main cost being this scan over everyone. No spatial
+    /// index: the look-ahead (up to ~240 m at highway speed) spans whole maps, so a grid found
+    /// nearly everyone anyway and cost more than the distance test below (`bench rollout`, 200
+    /// agents).
+    fn candidates(&self, i: usize, c: &Corridor, out: &mut Vec<usize>) {
+        let (a, st, fwd) = (&self.actors[i], &self.cur[i], self.dirs[i]);
+        let look = c.look;
+        out.clear();
+        for (j, b) in self.near.iter().enumerate() {
+            if j == i || self.exempt(i, j) {
+                continue;
+            }
+            if c.named == Some(j) {
+                out.push(j);
+                continue;
+            }
+            let dp = b.pos - st.pos;
+            let r = look + a.radius + b.radius;
+            if dp.length_squared() > r * r {
+                continue;
+            }
+            let ahead = dp.dot(fwd);
+            // Well behind us and not beside a lateral move: cannot be in our way.
+            if ahead < -(a.hl + b.radius + 1.0) && c.holding {
+                continue;
+            }
+            if let Some(ln) = c.line {
+                let guess = st.s + ahead;
+                let rel = b.pos - ln.origin;
+                let s_line = ln.s0 + rel.dot(ln.dir);
+                if guess > ln.lo && guess < ln.hi && s_line > ln.lo && s_line < ln.hi {
+                    // `frenet_dir` would give s_line, this offset and this tangent to float
+                    // noise (1 mm is far above it), hence the extents below too.
+                    const EPS: f64 = 1e-3;
+                    let l_line = ln.dir.perp_dot(rel);
+                    let (cr, sr) = (b.dir.dot(ln.dir), ln.dir.perp_dot(b.dir));
+                    let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
+                    let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
+                    let behind = s_line - st.s < -EPS;
+                    let too_far = s_line - st.s - a.hl - ext_lon > look + EPS;
+                    let aside = l_line - ext_lat > c.hi + EPS || l_line + ext_lat < c.lo - EPS;
+                    // Nor would it be predicted to cut across (see `obstacle` in `drive`).
+                    let v_lat = b.v * sr;
+                    let steady = !a.vehicle || v_lat.abs() < 0.3 - EPS || b.gives_way || c.clearing;
+                    if behind || too_far || (aside && steady) {
+                        continue;
+                    }
+                }
+            }
+            out.push(j);
+        }
+        if let Some(j) = c.named
+            && j != i
+            && !self.exempt(i, j)
+        {
+            out.push(j);
+        }
     }
 
     /// Move vehicle `a` from `st` by `dist` along a circular arc of curvature `k`, bounded by its
