@@ -782,6 +782,9 @@ struct Sim<'a, 'b> {
     near: Vec<Near>,
     /// `candidates`' output, kept to reuse its allocation.
     cand: std::cell::RefCell<Vec<usize>>,
+    /// `overlap_pairs`' boxes and output, kept likewise.
+    sweep: Vec<(DVec2, DVec2, usize)>,
+    pairs: Vec<(usize, usize)>,
     /// Where to keep every frame's states (pass 1, for `resume`).
     keep: Option<&'b mut Vec<Vec<State>>>,
     /// The first frame to simulate: earlier ones are already in the output (`resume`).
@@ -820,6 +823,8 @@ impl<'a, 'b> Sim<'a, 'b> {
             easing: Vec::with_capacity(actors.len()),
             near: Vec::with_capacity(actors.len()),
             cand: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
+            sweep: Vec::with_capacity(actors.len()),
+            pairs: vec![],
             cur,
             keep: None,
             first: 1,
@@ -1327,27 +1332,26 @@ impl<'a, 'b> Sim<'a, 'b> {
     /// restores the previous frame, which had no overlap, so this always ends.
     fn resolve_overlaps(&mut self) {
         let n = self.actors.len();
+        let pairs = self.overlap_pairs();
         for _ in 0..=n {
             let mut changed = false;
-            for i in 0..n {
-                // The pairs (i, j > i) in index order (undoing a move changes later pairs'
-                // outcome), bounding circles first.
-                for j in i + 1..n {
-                    let (ai, aj) = (&self.actors[i], &self.actors[j]);
-                    let (si, sj) = (&self.next[i], &self.next[j]);
-                    let r = ai.radius + aj.radius;
-                    if si.pos.distance_squared(sj.pos) >= r * r || self.exempt(i, j) {
-                        continue;
-                    }
-                    if !ai.obb(si).overlaps(&aj.obb(sj)) {
-                        continue;
-                    }
-                    for k in [i, j] {
-                        let moved = self.next[k].pos != self.cur[k].pos || self.next[k].yaw != self.cur[k].yaw;
-                        if matches!(self.actors[k].drive, Drive::Mover) && moved {
-                            self.next[k] = State { v: 0.0, ..self.cur[k] };
-                            changed = true;
-                        }
+            // The pairs (i, j > i) in index order (undoing a move changes later pairs'
+            // outcome), bounding circles first.
+            for &(i, j) in &pairs {
+                let (ai, aj) = (&self.actors[i], &self.actors[j]);
+                let (si, sj) = (&self.next[i], &self.next[j]);
+                let r = ai.radius + aj.radius;
+                if si.pos.distance_squared(sj.pos) >= r * r || self.exempt(i, j) {
+                    continue;
+                }
+                if !ai.obb(si).overlaps(&aj.obb(sj)) {
+                    continue;
+                }
+                for k in [i, j] {
+                    let moved = self.next[k].pos != self.cur[k].pos || self.next[k].yaw != self.cur[k].yaw;
+                    if matches!(self.actors[k].drive, Drive::Mover) && moved {
+                        self.next[k] = State { v: 0.0, ..self.cur[k] };
+                        changed = true;
                     }
                 }
             }
@@ -1355,6 +1359,47 @@ impl<'a, 'b> Sim<'a, 'b> {
                 break;
             }
         }
+        self.pairs = pairs;
+    }
+
+    /// The pairs (i, j > i), in index order, whose bounding circles may meet in
+    /// `resolve_overlaps`: there an agent is at its `next` position or, once its move is undone,
+    /// at its `cur` one, so a pair whose boxes around both positions (circle plus `MARGIN`) do
+    /// not meet fails the circle test in every pass and changes nothing. A sweep over the boxes
+    /// sorted by x, instead of every pair; with a position beyond `FAR` or not finite, where the
+    /// margin might not cover float rounding, every pair.
+    fn overlap_pairs(&mut self) -> Vec<(usize, usize)> {
+        // Far above the rounding of coordinates below `FAR` (~1e-7 m).
+        const MARGIN: f64 = 0.01;
+        const FAR: f64 = 1e9;
+        let n = self.actors.len();
+        let mut pairs = std::mem::take(&mut self.pairs);
+        pairs.clear();
+        self.sweep.clear();
+        let mut tame = true;
+        for k in 0..n {
+            let (p, q, r) = (self.next[k].pos, self.cur[k].pos, self.actors[k].radius);
+            tame &= p.abs().max_element() < FAR && q.abs().max_element() < FAR && r.abs() < FAR;
+            let r = DVec2::splat(r + MARGIN);
+            self.sweep.push((p.min(q) - r, p.max(q) + r, k));
+        }
+        if !tame {
+            pairs.extend((0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))));
+            return pairs;
+        }
+        self.sweep.sort_unstable_by(|a, b| a.0.x.total_cmp(&b.0.x));
+        for (x, &(lo, hi, k)) in self.sweep.iter().enumerate() {
+            for &(lo2, hi2, k2) in &self.sweep[x + 1..] {
+                if lo2.x > hi.x {
+                    break;
+                }
+                if lo2.y <= hi.y && hi2.y >= lo.y {
+                    pairs.push((k.min(k2), k.max(k2)));
+                }
+            }
+        }
+        pairs.sort_unstable();
+        pairs
     }
 
     /// Latch each staged conflict at its deepest overlap: once the boxes meet, the frame where
