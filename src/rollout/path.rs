@@ -389,12 +389,19 @@ impl Hermite {
 
     /// Largest curvature along the curve (1/m).
     pub fn max_curvature(&self) -> f64 {
+        // Each segment's direction and length once: every inner sample reads two segments
+        // (`stage::choose` asks this of some 150 curves per conflict).
+        let mut dir = [0.0; HN];
+        let mut len = [0.0; HN];
+        for (i, (d, l)) in dir.iter_mut().zip(&mut len).enumerate() {
+            let seg = self.pts[i + 1] - self.pts[i];
+            (*d, *l) = (seg.y.atan2(seg.x), seg.length());
+        }
         let mut k: f64 = 0.0;
         for i in 1..HN {
-            let (a, b) = (self.pts[i] - self.pts[i - 1], self.pts[i + 1] - self.pts[i]);
-            let ds = 0.5 * (a.length() + b.length());
+            let ds = 0.5 * (len[i - 1] + len[i]);
             if ds > 1e-6 {
-                k = k.max(wrap_angle(b.y.atan2(b.x) - a.y.atan2(a.x)).abs() / ds);
+                k = k.max(wrap_angle(dir[i] - dir[i - 1]).abs() / ds);
             }
         }
         k
@@ -502,6 +509,30 @@ mod tests {
             assert_eq!(bits(&p.cap), bits(&want), "decel {decel}");
             assert!(p.cap.iter().any(|c| c.is_finite()));
         }
+    }
+
+    /// `max_curvature` computes each segment once; its value must be the bits of the turn
+    /// between neighbouring segments over their mean length, taken sample by sample.
+    #[test]
+    fn hermite_curvature_is_the_per_sample_one() {
+        let curves = [
+            Hermite::new(DVec2::ZERO, 0.0, DVec2::new(30.0, 3.0), 0.0),
+            Hermite::new(DVec2::new(5.0, -2.0), 1.2, DVec2::new(-8.0, 14.0), -2.9),
+            Hermite::new(DVec2::new(1.0, 1.0), 0.3, DVec2::new(1.0, 1.0), 0.3),
+            Hermite::new(DVec2::ZERO, 3.1, DVec2::new(0.4, 0.1), -3.1),
+        ];
+        for h in &curves {
+            let mut want: f64 = 0.0;
+            for i in 1..HN {
+                let (a, b) = (h.pts[i] - h.pts[i - 1], h.pts[i + 1] - h.pts[i]);
+                let ds = 0.5 * (a.length() + b.length());
+                if ds > 1e-6 {
+                    want = want.max(wrap_angle(b.y.atan2(b.x) - a.y.atan2(a.x)).abs() / ds);
+                }
+            }
+            assert_eq!(h.max_curvature().to_bits(), want.to_bits());
+        }
+        assert!(curves[1].max_curvature() > 0.05);
     }
 
     #[test]
