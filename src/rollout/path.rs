@@ -42,22 +42,47 @@ pub struct Line {
 /// the run to count as straight: far below the pair checks' 1 mm safety margin.
 const RUN_TOL: f64 = 1e-9;
 
-fn straight_runs(pts: &[DVec2], tangent: &[DVec2]) -> Vec<(u32, u32)> {
+/// The last sample of the straight run starting at `start` (greedy: while the next sample is on
+/// the run's line with its tangent), given that samples `start..=end` are on it: `Ok` when the
+/// sample after it is not, `Err` (the last sample) when the samples run out first, where more
+/// samples could extend it. Reads samples `start..=` the returned one + 1.
+fn run_end(pts: &[DVec2], tangent: &[DVec2], start: usize, mut end: usize) -> Result<usize, usize> {
+    let m = pts.len().min(tangent.len());
+    let (p0, t0) = (pts[start], tangent[start]);
+    while end + 1 < m {
+        let (p, t) = (pts[end + 1], tangent[end + 1]);
+        if !((t - t0).abs().max_element() < RUN_TOL && t0.perp_dot(p - p0).abs() < RUN_TOL * (1.0 + (p - p0).length()))
+        {
+            return Ok(end);
+        }
+        end += 1;
+    }
+    Err(end)
+}
+
+/// Per sample, its straight run (`Path::run`), split greedily from the start. A resampler sharing
+/// these samples gives its first runs (`settled`) and how far the next one is known to reach
+/// (`known`: its start and a sample up to which it holds), so only the rest is tested.
+fn straight_runs(
+    pts: &[DVec2],
+    tangent: &[DVec2],
+    settled: &[(u32, u32)],
+    mut known: Option<(usize, usize)>,
+) -> Vec<(u32, u32)> {
     let m = pts.len();
     let mut run = vec![(0u32, 0u32); m];
     let mut start = 0;
+    for &(a, b) in settled {
+        run[a as usize..=b as usize].fill((a, b));
+        start = b as usize + 1;
+    }
     while start < m {
-        let (p0, t0) = (pts[start], tangent[start]);
-        let mut end = start;
-        while end + 1 < m
-            && (tangent[end + 1] - t0).abs().max_element() < RUN_TOL
-            && t0.perp_dot(pts[end + 1] - p0).abs() < RUN_TOL * (1.0 + (pts[end + 1] - p0).length())
-        {
-            end += 1;
-        }
-        for r in &mut run[start..=end] {
-            *r = (start as u32, end as u32);
-        }
+        let from = match known.take() {
+            Some((a, e)) if a == start => e,
+            _ => start,
+        };
+        let (Ok(end) | Err(end)) = run_end(pts, tangent, start, from);
+        run[start..=end].fill((start as u32, end as u32));
         start = end + 1;
     }
     run
@@ -228,6 +253,14 @@ pub struct Resampler {
     /// grid samples only (`i + 2 < grid.len()`).
     heading: Vec<f64>,
     tangent: Vec<DVec2>,
+    /// Curvature at grid sample `i` for every `i` whose difference reads shared headings only
+    /// (`i + HEADING_W < heading.len()`), as `path` computes it.
+    curvature: Vec<f64>,
+    /// The straight runs of the grid samples with a tangent, as `straight_runs` splits them,
+    /// each ended by a sample that has one (so more samples cannot change it); then the start of
+    /// the next run and the last sample known to be on it.
+    runs: Vec<(u32, u32)>,
+    open: (usize, usize),
 }
 
 /// Half-width of the central difference for headings, in samples: polylines from templates have
@@ -291,6 +324,26 @@ impl Resampler {
             self.heading.push(h);
             self.tangent.push(t);
         }
+        let w = HEADING_W;
+        while self.curvature.len() + w < self.heading.len() {
+            let i = self.curvature.len();
+            let (a, b) = (i.saturating_sub(w), i + w);
+            self.curvature.push(wrap_angle(self.heading[b] - self.heading[a]) / ((b - a) as f64 * STEP));
+        }
+        let (mut start, mut end) = self.open;
+        while start < self.tangent.len() {
+            match run_end(&self.grid, &self.tangent, start, end.max(start)) {
+                Ok(e) => {
+                    self.runs.push((start as u32, e as u32));
+                    (start, end) = (e + 1, e + 1);
+                }
+                Err(e) => {
+                    end = e;
+                    break;
+                }
+            }
+        }
+        self.open = (start, end);
     }
 
     /// The path of the chain's first `until` metres (`Path::new_until`).
@@ -332,13 +385,20 @@ impl Resampler {
             heading.push(h);
             tangent.push(t);
         }
-        let curvature: Vec<f64> = (0..m)
-            .map(|i| {
-                let (a, b) = (i.saturating_sub(w), (i + w).min(m - 1));
-                if b > a { wrap_angle(heading[b] - heading[a]) / ((b - a) as f64 * STEP) } else { 0.0 }
-            })
-            .collect();
-        let run = straight_runs(&pts, &tangent);
+        // Samples `..shared` of this path are the grid's, with its headings and tangents: a
+        // curvature reading only those (its difference ends below `shared`), and a straight run
+        // whose ending test read only those, are the grid's too.
+        let own = shared.saturating_sub(w);
+        let mut curvature = Vec::with_capacity(m);
+        curvature.extend_from_slice(&self.curvature[..own]);
+        curvature.extend((own..m).map(|i| {
+            let (a, b) = (i.saturating_sub(w), (i + w).min(m - 1));
+            if b > a { wrap_angle(heading[b] - heading[a]) / ((b - a) as f64 * STEP) } else { 0.0 }
+        }));
+        let settled = self.runs.partition_point(|&(_, b)| (b as usize + 1) < shared);
+        let next = self.runs.get(settled).map_or(self.open, |&(a, b)| (a as usize, b as usize));
+        let known = (next.0 < shared).then(|| (next.0, next.1.min(shared - 1)));
+        let run = straight_runs(&pts, &tangent, &self.runs[..settled], known);
         Path { pts, heading, tangent, curvature, cap: vec![f64::INFINITY; m], run }
     }
 }
@@ -453,6 +513,21 @@ mod tests {
                 let (a, b) = (shared.path(u), Resampler::new(&pts).path(u));
                 assert_eq!(bits(&a), bits(&b), "until {u}");
                 assert!(a.length() > 0.0);
+                // The curvature and runs taken from the grid are those of the path's own samples.
+                let m = a.pts.len();
+                let curvature: Vec<u64> = (0..m)
+                    .map(|i| {
+                        let (lo, hi) = (i.saturating_sub(HEADING_W), (i + HEADING_W).min(m - 1));
+                        let k = if hi > lo {
+                            wrap_angle(a.heading[hi] - a.heading[lo]) / ((hi - lo) as f64 * STEP)
+                        } else {
+                            0.0
+                        };
+                        k.to_bits()
+                    })
+                    .collect();
+                assert_eq!(a.curvature.iter().map(|k| k.to_bits()).collect::<Vec<_>>(), curvature, "until {u}");
+                assert_eq!(a.run, straight_runs(&a.pts, &a.tangent, &[], None), "until {u}");
             }
         }
     }
