@@ -1379,7 +1379,8 @@ impl<'a, 'b> Sim<'a, 'b> {
         let mut tame = true;
         for k in 0..n {
             let (p, q, r) = (self.next[k].pos, self.cur[k].pos, self.actors[k].radius);
-            tame &= p.abs().max_element() < FAR && q.abs().max_element() < FAR && r.abs() < FAR;
+            // Compared one by one: `max_element` would pass over a NaN.
+            tame &= [p.x, p.y, q.x, q.y, r].iter().all(|c| c.abs() < FAR);
             let r = DVec2::splat(r + MARGIN);
             self.sweep.push((p.min(q) - r, p.max(q) + r, k));
         }
@@ -1521,4 +1522,59 @@ fn replay(keys: &[Keyframe], t: f64) -> (DVec2, f64) {
     let u = if b.t > a.t { (t - a.t) / (b.t - a.t) } else { 1.0 };
     let p = DVec2::new(a.x, a.y).lerp(DVec2::new(b.x, b.y), u);
     (p, wrap_angle(a.yaw + wrap_angle(b.yaw - a.yaw) * u))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `overlap_pairs` may leave out only pairs whose bounding circles cannot meet at any mix of
+    /// the positions `resolve_overlaps` can give them (`next`, or `cur` once undone), and must
+    /// list the rest once each in (i, j) order; with a position it cannot bound, every pair.
+    #[test]
+    fn overlap_pairs_keep_every_pair_that_can_meet() {
+        let mut seed = 7u64;
+        let mut rnd = move || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let n = 120;
+        let actors: Vec<Actor> = (0..n)
+            .map(|k| {
+                let info = TrackAgent {
+                    name: format!("a{k}"),
+                    kind: "sedan".into(),
+                    class: Class::Vehicle,
+                    motion: Motion::Vehicle,
+                    size: [1.0 + 6.0 * rnd(), 0.5 + 2.0 * rnd(), 1.5],
+                    background: false,
+                };
+                base_actor(info, Pose { x: 0.0, y: 0.0, yaw: 0.0 }, Motion::Vehicle, Class::Vehicle, Drive::Mover)
+            })
+            .collect();
+        let mut sim = Sim::new(&actors, &[], &[], None, 0.1);
+        for k in 0..n {
+            // Clusters of touching and nearly touching boxes, moves up to 4 m, a few far away.
+            let base = if k % 10 == 0 { DVec2::new(5e3 * rnd(), -3e3) } else { DVec2::new(60.0 * rnd(), 8.0 * rnd()) };
+            sim.cur[k].pos = base;
+            sim.next[k].pos = base + DVec2::new(4.0 * rnd() - 2.0, 4.0 * rnd() - 2.0);
+        }
+        let can_meet = |sim: &Sim, i: usize, j: usize| {
+            let r = actors[i].radius + actors[j].radius;
+            [sim.next[i].pos, sim.cur[i].pos]
+                .iter()
+                .any(|p| [sim.next[j].pos, sim.cur[j].pos].iter().any(|q| p.distance_squared(*q) < r * r))
+        };
+        let pairs = sim.overlap_pairs();
+        assert!(pairs.windows(2).all(|w| w[0] < w[1]) && pairs.iter().all(|&(i, j)| i < j && j < n));
+        let meeting: Vec<(usize, usize)> =
+            (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))).filter(|&(i, j)| can_meet(&sim, i, j)).collect();
+        assert!(meeting.len() > 50, "the case must have meeting pairs: {}", meeting.len());
+        assert!(meeting.iter().all(|p| pairs.binary_search(p).is_ok()));
+        assert!(pairs.len() < n * (n - 1) / 4, "the sweep should leave most pairs out: {}", pairs.len());
+        sim.next[3].pos.x = f64::NAN;
+        assert_eq!(sim.overlap_pairs().len(), n * (n - 1) / 2);
+        sim.next[3].pos.x = 2e9;
+        assert_eq!(sim.overlap_pairs().len(), n * (n - 1) / 2);
+    }
 }
