@@ -780,8 +780,9 @@ struct Sim<'a, 'b> {
     easing: Vec<usize>,
     /// Per agent, this frame: what `candidates` reads, packed.
     near: Vec<Near>,
-    /// `candidates`' output, kept to reuse its allocation.
+    /// `candidates`' output, and `Path::frenet_dir` of each, kept to reuse their allocations.
     cand: std::cell::RefCell<Vec<usize>>,
+    proj: std::cell::RefCell<Vec<(f64, f64, f64, DVec2)>>,
     /// `overlap_pairs`' boxes and output, kept likewise.
     sweep: Vec<(DVec2, DVec2, usize)>,
     pairs: Vec<(usize, usize)>,
@@ -823,6 +824,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             easing: Vec::with_capacity(actors.len()),
             near: Vec::with_capacity(actors.len()),
             cand: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
+            proj: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
             sweep: Vec::with_capacity(actors.len()),
             pairs: vec![],
             cur,
@@ -997,12 +999,18 @@ impl<'a, 'b> Sim<'a, 'b> {
         let mut cand = self.cand.borrow_mut();
         let corridor = Corridor { look, lo, hi, holding: d_next == st.d, line, clearing, named };
         self.candidates(i, &corridor, &mut cand);
-        for &j in cand.iter() {
+        // Their projections onto our route first, in a loop of their own: each is a chain of
+        // dependent steps, and independent chains overlap there (below, every decision waits
+        // on its own).
+        let mut proj = self.proj.borrow_mut();
+        proj.clear();
+        proj.extend(cand.iter().map(|&j| {
+            let p = self.cur[j].pos;
+            a.path.frenet_dir(p, st.s + (p - st.pos).dot(fwd))
+        }));
+        for (&j, &(sj, lj, beyond, th)) in cand.iter().zip(proj.iter()) {
             let (o, b) = (&self.cur[j], &self.actors[j]);
             let is_named = named == Some(j);
-            let dp = o.pos - st.pos;
-            let ahead = dp.dot(fwd);
-            let (sj, lj, beyond, th) = a.path.frenet_dir(o.pos, st.s + ahead);
             if beyond > 0.5 && !is_named {
                 continue;
             }
