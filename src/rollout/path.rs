@@ -411,19 +411,30 @@ pub struct Hermite {
 
 const HN: usize = 24;
 
+/// The four cubic Hermite basis polynomials at each sample `u = i / HN`, the same for every
+/// curve (`stage::choose` builds some 150 per conflict, the intercept one per frame).
+const HERMITE_BASIS: [[f64; 4]; HN + 1] = hermite_basis();
+
+const fn hermite_basis() -> [[f64; 4]; HN + 1] {
+    let mut b = [[0.0; 4]; HN + 1];
+    let mut i = 0;
+    while i <= HN {
+        let u = i as f64 / HN as f64;
+        let (u2, u3) = (u * u, u * u * u);
+        b[i] = [2.0 * u3 - 3.0 * u2 + 1.0, u3 - 2.0 * u2 + u, -2.0 * u3 + 3.0 * u2, u3 - u2];
+        i += 1;
+    }
+    b
+}
+
 impl Hermite {
     pub fn new(p0: DVec2, yaw0: f64, p1: DVec2, yaw1: f64) -> Hermite {
         let k = p0.distance(p1).max(0.5);
         let (t0, t1) = (DVec2::from_angle(yaw0) * k, DVec2::from_angle(yaw1) * k);
         let mut pts = [DVec2::ZERO; HN + 1];
         let mut cum = [0.0; HN + 1];
-        for (i, q) in pts.iter_mut().enumerate() {
-            let u = i as f64 / HN as f64;
-            let (u2, u3) = (u * u, u * u * u);
-            *q = p0 * (2.0 * u3 - 3.0 * u2 + 1.0)
-                + t0 * (u3 - 2.0 * u2 + u)
-                + p1 * (-2.0 * u3 + 3.0 * u2)
-                + t1 * (u3 - u2);
+        for (q, [b0, b1, b2, b3]) in pts.iter_mut().zip(HERMITE_BASIS) {
+            *q = p0 * b0 + t0 * b1 + p1 * b2 + t1 * b3;
         }
         for i in 1..=HN {
             cum[i] = cum[i - 1] + pts[i].distance(pts[i - 1]);
@@ -608,6 +619,18 @@ mod tests {
             assert_eq!(h.max_curvature().to_bits(), want.to_bits());
         }
         assert!(curves[1].max_curvature() > 0.05);
+    }
+
+    /// The basis table is evaluated at compile time: it must hold the bits the same formulas give
+    /// at run time (what keeps the curves, and so the crashes, bit for bit).
+    #[test]
+    fn hermite_basis_is_the_run_time_one() {
+        for (i, b) in HERMITE_BASIS.iter().enumerate() {
+            let u = std::hint::black_box(i as f64) / HN as f64;
+            let (u2, u3) = (u * u, u * u * u);
+            let want = [2.0 * u3 - 3.0 * u2 + 1.0, u3 - 2.0 * u2 + u, -2.0 * u3 + 3.0 * u2, u3 - u2];
+            assert_eq!(b.map(f64::to_bits), want.map(f64::to_bits), "sample {i}");
+        }
     }
 
     #[test]

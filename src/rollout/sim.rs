@@ -1167,11 +1167,13 @@ impl<'a, 'b> Sim<'a, 'b> {
         let look = c.look;
         out.clear();
         for (j, b) in self.near.iter().enumerate() {
-            if j == i || self.exempt(i, j) {
+            if j == i {
                 continue;
             }
             if c.named == Some(j) {
-                out.push(j);
+                if !self.exempt(i, j) {
+                    out.push(j);
+                }
                 continue;
             }
             let dp = b.pos - st.pos;
@@ -1207,7 +1209,10 @@ impl<'a, 'b> Sim<'a, 'b> {
                     }
                 }
             }
-            out.push(j);
+            // Last: a pure test like the others, and the rarest to hold.
+            if !self.exempt(i, j) {
+                out.push(j);
+            }
         }
         if let Some(j) = c.named
             && j != i
