@@ -686,8 +686,27 @@ fn cross_line(map: &Map, p: DVec2) -> Option<(f64, f64)> {
     let (i, s, d) = near?;
     let (_, h) = map.lanes[i].centre.pose_at(s);
     let dir = DVec2::from_angle(h).perp() * if d > 0.0 { -1.0 } else { 1.0 };
+    // A lane holds q only within its half width and shoulder of its centre line: where the box
+    // of that line, grown by as much and a millimetre (far above rounding), does not hold q,
+    // the projection (this loop's cost) would say no, so it is not made.
+    let boxes: Vec<(DVec2, DVec2)> = map
+        .lanes
+        .iter()
+        .map(|l| {
+            let grow = DVec2::splat(l.width / 2.0 + l.shoulder_right.max(0.0) + 1e-3);
+            let (lo, hi) = l
+                .centre
+                .points
+                .iter()
+                .fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), &q| (lo.min(q), hi.max(q)));
+            (lo - grow, hi + grow)
+        })
+        .collect();
     let on_road = |q: DVec2| {
-        map.lanes.iter().any(|l| {
+        map.lanes.iter().zip(&boxes).any(|(l, (lo, hi))| {
+            if q.x < lo.x || q.x > hi.x || q.y < lo.y || q.y > hi.y {
+                return false;
+            }
             let (s, d) = l.centre.project(q);
             s > 0.0 && s < l.centre.length() && d.abs() <= l.width / 2.0 + if d < 0.0 { l.shoulder_right } else { 0.0 }
         })
