@@ -42,22 +42,47 @@ pub struct Line {
 /// the run to count as straight: far below the pair checks' 1 mm safety margin.
 const RUN_TOL: f64 = 1e-9;
 
-fn straight_runs(pts: &[DVec2], tangent: &[DVec2]) -> Vec<(u32, u32)> {
+/// The last sample of the straight run starting at `start` (greedy: while the next sample is on
+/// the run's line with its tangent), given that samples `start..=end` are on it: `Ok` when the
+/// sample after it is not, `Err` (the last sample) when the samples run out first, where more
+/// samples could extend it. Reads samples `start..=` the returned one + 1.
+fn run_end(pts: &[DVec2], tangent: &[DVec2], start: usize, mut end: usize) -> Result<usize, usize> {
+    let m = pts.len().min(tangent.len());
+    let (p0, t0) = (pts[start], tangent[start]);
+    while end + 1 < m {
+        let (p, t) = (pts[end + 1], tangent[end + 1]);
+        if !((t - t0).abs().max_element() < RUN_TOL && t0.perp_dot(p - p0).abs() < RUN_TOL * (1.0 + (p - p0).length()))
+        {
+            return Ok(end);
+        }
+        end += 1;
+    }
+    Err(end)
+}
+
+/// Per sample, its straight run (`Path::run`), split greedily from the start. A resampler sharing
+/// these samples gives its first runs (`settled`) and how far the next one is known to reach
+/// (`known`: its start and a sample up to which it holds), so only the rest is tested.
+fn straight_runs(
+    pts: &[DVec2],
+    tangent: &[DVec2],
+    settled: &[(u32, u32)],
+    mut known: Option<(usize, usize)>,
+) -> Vec<(u32, u32)> {
     let m = pts.len();
     let mut run = vec![(0u32, 0u32); m];
     let mut start = 0;
+    for &(a, b) in settled {
+        run[a as usize..=b as usize].fill((a, b));
+        start = b as usize + 1;
+    }
     while start < m {
-        let (p0, t0) = (pts[start], tangent[start]);
-        let mut end = start;
-        while end + 1 < m
-            && (tangent[end + 1] - t0).abs().max_element() < RUN_TOL
-            && t0.perp_dot(pts[end + 1] - p0).abs() < RUN_TOL * (1.0 + (pts[end + 1] - p0).length())
-        {
-            end += 1;
-        }
-        for r in &mut run[start..=end] {
-            *r = (start as u32, end as u32);
-        }
+        let from = match known.take() {
+            Some((a, e)) if a == start => e,
+            _ => start,
+        };
+        let (Ok(end) | Err(end)) = run_end(pts, tangent, start, from);
+        run[start..=end].fill((start as u32, end as u32));
         start = end + 1;
     }
     run
@@ -84,13 +109,27 @@ impl Path {
     /// v * curvature, and braking at `decel` from any
     /// sample must reach the cap of every sample ahead.
     pub fn set_caps(&mut self, lat_acc: f64, yaw_rate: f64, decel: f64) {
-        let m = self.pts.len();
+        // Each sample's own cap first: independent of its neighbours, so this loop pipelines;
+        // only the braking recursion below is a chain.
+        for (c, k) in self.cap.iter_mut().zip(&self.curvature) {
+            let k = k.abs();
+            *c = if k > 1e-4 { (lat_acc / k).sqrt().min(yaw_rate / k) } else { f64::INFINITY };
+        }
+        let grow = 2.0 * decel * STEP;
+        // From the end back to the last curve the braking term is infinite (inf * inf + grow is
+        // inf for any grow above -inf, and so is its root): that stretch skips the square root,
+        // same bits. (A branch inside the chain loop is compiled to a select that takes the root
+        // anyway, hence two loops.)
         let mut next = f64::INFINITY;
-        for i in (0..m).rev() {
-            let k = self.curvature[i].abs();
-            let local = if k > 1e-4 { (lat_acc / k).sqrt().min(yaw_rate / k) } else { f64::INFINITY };
-            next = local.min((next * next + 2.0 * decel * STEP).sqrt());
+        let mut i = self.cap.len();
+        while i > 0 && next == f64::INFINITY && grow > f64::NEG_INFINITY {
+            i -= 1;
+            next = self.cap[i].min(f64::INFINITY);
             self.cap[i] = next;
+        }
+        for c in self.cap[..i].iter_mut().rev() {
+            next = c.min((next * next + grow).sqrt());
+            *c = next;
         }
     }
 
@@ -214,6 +253,14 @@ pub struct Resampler {
     /// grid samples only (`i + 2 < grid.len()`).
     heading: Vec<f64>,
     tangent: Vec<DVec2>,
+    /// Curvature at grid sample `i` for every `i` whose difference reads shared headings only
+    /// (`i + HEADING_W < heading.len()`), as `path` computes it.
+    curvature: Vec<f64>,
+    /// The straight runs of the grid samples with a tangent, as `straight_runs` splits them,
+    /// each ended by a sample that has one (so more samples cannot change it); then the start of
+    /// the next run and the last sample known to be on it.
+    runs: Vec<(u32, u32)>,
+    open: (usize, usize),
 }
 
 /// Half-width of the central difference for headings, in samples: polylines from templates have
@@ -277,6 +324,26 @@ impl Resampler {
             self.heading.push(h);
             self.tangent.push(t);
         }
+        let w = HEADING_W;
+        while self.curvature.len() + w < self.heading.len() {
+            let i = self.curvature.len();
+            let (a, b) = (i.saturating_sub(w), i + w);
+            self.curvature.push(wrap_angle(self.heading[b] - self.heading[a]) / ((b - a) as f64 * STEP));
+        }
+        let (mut start, mut end) = self.open;
+        while start < self.tangent.len() {
+            match run_end(&self.grid, &self.tangent, start, end.max(start)) {
+                Ok(e) => {
+                    self.runs.push((start as u32, e as u32));
+                    (start, end) = (e + 1, e + 1);
+                }
+                Err(e) => {
+                    end = e;
+                    break;
+                }
+            }
+        }
+        self.open = (start, end);
     }
 
     /// The path of the chain's first `until` metres (`Path::new_until`).
@@ -318,13 +385,20 @@ impl Resampler {
             heading.push(h);
             tangent.push(t);
         }
-        let curvature: Vec<f64> = (0..m)
-            .map(|i| {
-                let (a, b) = (i.saturating_sub(w), (i + w).min(m - 1));
-                if b > a { wrap_angle(heading[b] - heading[a]) / ((b - a) as f64 * STEP) } else { 0.0 }
-            })
-            .collect();
-        let run = straight_runs(&pts, &tangent);
+        // Samples `..shared` of this path are the grid's, with its headings and tangents: a
+        // curvature reading only those (its difference ends below `shared`), and a straight run
+        // whose ending test read only those, are the grid's too.
+        let own = shared.saturating_sub(w);
+        let mut curvature = Vec::with_capacity(m);
+        curvature.extend_from_slice(&self.curvature[..own]);
+        curvature.extend((own..m).map(|i| {
+            let (a, b) = (i.saturating_sub(w), (i + w).min(m - 1));
+            if b > a { wrap_angle(heading[b] - heading[a]) / ((b - a) as f64 * STEP) } else { 0.0 }
+        }));
+        let settled = self.runs.partition_point(|&(_, b)| (b as usize + 1) < shared);
+        let next = self.runs.get(settled).map_or(self.open, |&(a, b)| (a as usize, b as usize));
+        let known = (next.0 < shared).then(|| (next.0, next.1.min(shared - 1)));
+        let run = straight_runs(&pts, &tangent, &self.runs[..settled], known);
         Path { pts, heading, tangent, curvature, cap: vec![f64::INFINITY; m], run }
     }
 }
@@ -337,19 +411,30 @@ pub struct Hermite {
 
 const HN: usize = 24;
 
+/// The four cubic Hermite basis polynomials at each sample `u = i / HN`, the same for every
+/// curve (`stage::choose` builds some 150 per conflict, the intercept one per frame).
+const HERMITE_BASIS: [[f64; 4]; HN + 1] = hermite_basis();
+
+const fn hermite_basis() -> [[f64; 4]; HN + 1] {
+    let mut b = [[0.0; 4]; HN + 1];
+    let mut i = 0;
+    while i <= HN {
+        let u = i as f64 / HN as f64;
+        let (u2, u3) = (u * u, u * u * u);
+        b[i] = [2.0 * u3 - 3.0 * u2 + 1.0, u3 - 2.0 * u2 + u, -2.0 * u3 + 3.0 * u2, u3 - u2];
+        i += 1;
+    }
+    b
+}
+
 impl Hermite {
     pub fn new(p0: DVec2, yaw0: f64, p1: DVec2, yaw1: f64) -> Hermite {
         let k = p0.distance(p1).max(0.5);
         let (t0, t1) = (DVec2::from_angle(yaw0) * k, DVec2::from_angle(yaw1) * k);
         let mut pts = [DVec2::ZERO; HN + 1];
         let mut cum = [0.0; HN + 1];
-        for (i, q) in pts.iter_mut().enumerate() {
-            let u = i as f64 / HN as f64;
-            let (u2, u3) = (u * u, u * u * u);
-            *q = p0 * (2.0 * u3 - 3.0 * u2 + 1.0)
-                + t0 * (u3 - 2.0 * u2 + u)
-                + p1 * (-2.0 * u3 + 3.0 * u2)
-                + t1 * (u3 - u2);
+        for (q, [b0, b1, b2, b3]) in pts.iter_mut().zip(HERMITE_BASIS) {
+            *q = p0 * b0 + t0 * b1 + p1 * b2 + t1 * b3;
         }
         for i in 1..=HN {
             cum[i] = cum[i - 1] + pts[i].distance(pts[i - 1]);
@@ -375,12 +460,19 @@ impl Hermite {
 
     /// Largest curvature along the curve (1/m).
     pub fn max_curvature(&self) -> f64 {
+        // Each segment's direction and length once: every inner sample reads two segments
+        // (`stage::choose` asks this of some 150 curves per conflict).
+        let mut dir = [0.0; HN];
+        let mut len = [0.0; HN];
+        for (i, (d, l)) in dir.iter_mut().zip(&mut len).enumerate() {
+            let seg = self.pts[i + 1] - self.pts[i];
+            (*d, *l) = (seg.y.atan2(seg.x), seg.length());
+        }
         let mut k: f64 = 0.0;
         for i in 1..HN {
-            let (a, b) = (self.pts[i] - self.pts[i - 1], self.pts[i + 1] - self.pts[i]);
-            let ds = 0.5 * (a.length() + b.length());
+            let ds = 0.5 * (len[i - 1] + len[i]);
             if ds > 1e-6 {
-                k = k.max(wrap_angle(b.y.atan2(b.x) - a.y.atan2(a.x)).abs() / ds);
+                k = k.max(wrap_angle(dir[i] - dir[i - 1]).abs() / ds);
             }
         }
         k
@@ -432,6 +524,21 @@ mod tests {
                 let (a, b) = (shared.path(u), Resampler::new(&pts).path(u));
                 assert_eq!(bits(&a), bits(&b), "until {u}");
                 assert!(a.length() > 0.0);
+                // The curvature and runs taken from the grid are those of the path's own samples.
+                let m = a.pts.len();
+                let curvature: Vec<u64> = (0..m)
+                    .map(|i| {
+                        let (lo, hi) = (i.saturating_sub(HEADING_W), (i + HEADING_W).min(m - 1));
+                        let k = if hi > lo {
+                            wrap_angle(a.heading[hi] - a.heading[lo]) / ((hi - lo) as f64 * STEP)
+                        } else {
+                            0.0
+                        };
+                        k.to_bits()
+                    })
+                    .collect();
+                assert_eq!(a.curvature.iter().map(|k| k.to_bits()).collect::<Vec<_>>(), curvature, "until {u}");
+                assert_eq!(a.run, straight_runs(&a.pts, &a.tangent, &[], None), "until {u}");
             }
         }
     }
@@ -463,6 +570,67 @@ mod tests {
             worst = worst.max((s - s_line).abs()).max((l - l_line).abs()).max((t - ln.dir).length());
         }
         assert!(worst < 1e-6, "{worst}");
+    }
+
+    /// `set_caps` skips the square roots behind the last curve: the caps must be the bits of the
+    /// plain recursion, on paths ending straight (a skipped tail) and ending in a curve (none).
+    #[test]
+    fn caps_are_the_plain_recursion() {
+        let mut pts = vec![DVec2::new(-40.0, 2.0), DVec2::new(0.0, 2.0)];
+        pts.extend((1..=30).map(|i| DVec2::new(0.0, 32.0) + DVec2::from_angle(-1.4 + i as f64 * 0.05) * 30.0));
+        let curved_end = pts.clone();
+        pts.push(*pts.last().unwrap() + DVec2::new(-25.0, 60.0));
+        for (pts, decel) in [(&pts, 3.5), (&curved_end, 3.5), (&pts, f64::NEG_INFINITY), (&pts, f64::NAN)] {
+            let mut p = Path::new(pts);
+            p.set_caps(2.5, 0.6, decel);
+            let mut next = f64::INFINITY;
+            let mut want = vec![0.0; p.curvature.len()];
+            for i in (0..want.len()).rev() {
+                let k = p.curvature[i].abs();
+                let local = if k > 1e-4 { (2.5 / k).sqrt().min(0.6 / k) } else { f64::INFINITY };
+                next = local.min((next * next + 2.0 * decel * STEP).sqrt());
+                want[i] = next;
+            }
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&p.cap), bits(&want), "decel {decel}");
+            assert!(p.cap.iter().any(|c| c.is_finite()));
+        }
+    }
+
+    /// `max_curvature` computes each segment once; its value must be the bits of the turn
+    /// between neighbouring segments over their mean length, taken sample by sample.
+    #[test]
+    fn hermite_curvature_is_the_per_sample_one() {
+        let curves = [
+            Hermite::new(DVec2::ZERO, 0.0, DVec2::new(30.0, 3.0), 0.0),
+            Hermite::new(DVec2::new(5.0, -2.0), 1.2, DVec2::new(-8.0, 14.0), -2.9),
+            Hermite::new(DVec2::new(1.0, 1.0), 0.3, DVec2::new(1.0, 1.0), 0.3),
+            Hermite::new(DVec2::ZERO, 3.1, DVec2::new(0.4, 0.1), -3.1),
+        ];
+        for h in &curves {
+            let mut want: f64 = 0.0;
+            for i in 1..HN {
+                let (a, b) = (h.pts[i] - h.pts[i - 1], h.pts[i + 1] - h.pts[i]);
+                let ds = 0.5 * (a.length() + b.length());
+                if ds > 1e-6 {
+                    want = want.max(wrap_angle(b.y.atan2(b.x) - a.y.atan2(a.x)).abs() / ds);
+                }
+            }
+            assert_eq!(h.max_curvature().to_bits(), want.to_bits());
+        }
+        assert!(curves[1].max_curvature() > 0.05);
+    }
+
+    /// The basis table is evaluated at compile time: it must hold the bits the same formulas give
+    /// at run time (what keeps the curves, and so the crashes, bit for bit).
+    #[test]
+    fn hermite_basis_is_the_run_time_one() {
+        for (i, b) in HERMITE_BASIS.iter().enumerate() {
+            let u = std::hint::black_box(i as f64) / HN as f64;
+            let (u2, u3) = (u * u, u * u * u);
+            let want = [2.0 * u3 - 3.0 * u2 + 1.0, u3 - 2.0 * u2 + u, -2.0 * u3 + 3.0 * u2, u3 - u2];
+            assert_eq!(b.map(f64::to_bits), want.map(f64::to_bits), "sample {i}");
+        }
     }
 
     #[test]

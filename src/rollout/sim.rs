@@ -2,7 +2,7 @@
 //! then computes each agent's next state from everyone's current state (a Jacobi update, so the
 //! result does not depend on agent order), undoes moves that would overlap, and latches crashes.
 
-use super::path::{Hermite, Path, Resampler};
+use super::path::{Hermite, Line, Path, Resampler};
 use super::route::{Junction, RUN_OUT, chain, find_lane, side_lane};
 use super::stage::{self, Plan};
 use super::traffic;
@@ -678,8 +678,27 @@ fn cross_line(map: &Map, p: DVec2) -> Option<(f64, f64)> {
     let (i, s, d) = near?;
     let (_, h) = map.lanes[i].centre.pose_at(s);
     let dir = DVec2::from_angle(h).perp() * if d > 0.0 { -1.0 } else { 1.0 };
+    // A lane holds q only within its half width and shoulder of its centre line: where the box
+    // of that line, grown by as much and a millimetre (far above rounding), does not hold q,
+    // the projection (this loop's cost) would say no, so it is not made.
+    let boxes: Vec<(DVec2, DVec2)> = map
+        .lanes
+        .iter()
+        .map(|l| {
+            let grow = DVec2::splat(l.width / 2.0 + l.shoulder_right.max(0.0) + 1e-3);
+            let (lo, hi) = l
+                .centre
+                .points
+                .iter()
+                .fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), &q| (lo.min(q), hi.max(q)));
+            (lo - grow, hi + grow)
+        })
+        .collect();
     let on_road = |q: DVec2| {
-        map.lanes.iter().any(|l| {
+        map.lanes.iter().zip(&boxes).any(|(l, (lo, hi))| {
+            if q.x < lo.x || q.x > hi.x || q.y < lo.y || q.y > hi.y {
+                return false;
+            }
             let (s, d) = l.centre.project(q);
             s > 0.0 && s < l.centre.length() && d.abs() <= l.width / 2.0 + if d < 0.0 { l.shoulder_right } else { 0.0 }
         })
@@ -720,6 +739,38 @@ fn pass2_start(actors: &[Actor], confs: &[Conf], plans: &[Option<Plan>], states:
 
 // ---------------------------------------------------------------- the frame loop
 
+/// Agent `j` as `Sim::candidates` sees it this frame: copies of its state's and actor's fields
+/// (same bits), packed so that scanning everyone reads 72 contiguous bytes per agent, not its
+/// whole state and actor.
+#[derive(Clone, Copy, Debug)]
+struct Near {
+    pos: DVec2,
+    /// Unit heading (`Sim::dirs`).
+    dir: DVec2,
+    v: f64,
+    radius: f64,
+    hl: f64,
+    hw: f64,
+    /// Holding at its stop line for an emergency vehicle (`Sim::yield_state`).
+    gives_way: bool,
+}
+
+/// What `Sim::candidates` needs of agent `i`'s step in `Sim::drive`.
+struct Corridor {
+    look: f64,
+    /// The lateral band the agent sweeps this step.
+    lo: f64,
+    hi: f64,
+    /// Holding its offset (no lateral move this step).
+    holding: bool,
+    /// The straight run of its route it is on, when holding.
+    line: Option<Line>,
+    /// Clearing a junction for an emergency vehicle.
+    clearing: bool,
+    /// The agent it queues behind.
+    named: Option<usize>,
+}
+
 struct Sim<'a, 'b> {
     actors: &'a [Actor],
     confs: &'a [Conf],
@@ -739,6 +790,14 @@ struct Sim<'a, 'b> {
     yielding: Vec<(Option<f64>, bool)>,
     /// This frame: agents easing aside (`away_from`, triggered), for `pass_offset`.
     easing: Vec<usize>,
+    /// Per agent, this frame: what `candidates` reads, packed.
+    near: Vec<Near>,
+    /// `candidates`' output, and `Path::frenet_dir` of each, kept to reuse their allocations.
+    cand: std::cell::RefCell<Vec<usize>>,
+    proj: std::cell::RefCell<Vec<(f64, f64, f64, DVec2)>>,
+    /// `overlap_pairs`' boxes and output, kept likewise.
+    sweep: Vec<(DVec2, DVec2, usize)>,
+    pairs: Vec<(usize, usize)>,
     /// Where to keep every frame's states (pass 1, for `resume`).
     keep: Option<&'b mut Vec<Vec<State>>>,
     /// The first frame to simulate: earlier ones are already in the output (`resume`).
@@ -775,6 +834,11 @@ impl<'a, 'b> Sim<'a, 'b> {
             dirs: cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect(),
             yielding: vec![(None, false); actors.len()],
             easing: Vec::with_capacity(actors.len()),
+            near: Vec::with_capacity(actors.len()),
+            cand: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
+            proj: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
+            sweep: Vec::with_capacity(actors.len()),
+            pairs: vec![],
             cur,
             keep: None,
             first: 1,
@@ -823,6 +887,11 @@ impl<'a, 'b> Sim<'a, 'b> {
             }
             for i in 0..self.actors.len() {
                 self.yielding[i] = self.yield_state(i);
+            }
+            self.near.clear();
+            for ((st, a), (&dir, y)) in self.cur.iter().zip(self.actors).zip(self.dirs.iter().zip(&self.yielding)) {
+                let gives_way = y.0.is_some();
+                self.near.push(Near { pos: st.pos, dir, v: st.v, radius: a.radius, hl: a.hl, hw: a.hw, gives_way });
             }
             for i in 0..self.actors.len() {
                 self.next[i] = self.step(i, t, f);
@@ -939,53 +1008,21 @@ impl<'a, 'b> Sim<'a, 'b> {
         // projection (the pair loop's main cost). Only when holding our offset: lateral moves
         // look at everyone alongside.
         let line = if d_next == st.d { a.path.straight_run(st.s) } else { None };
-        let lateral_free = |j: usize| self.yielding[j].0.is_some() || clearing;
-        // Everyone, and the agent queued behind once more (every effect below is a min or an or,
-        // so seeing it twice is harmless). No spatial index: the look-ahead (up to ~240 m at
-        // highway speed) spans whole maps, so a grid found nearly everyone anyway and cost more
-        // than the distance test below (`bench rollout`, 200 agents).
-        for j in (0..self.actors.len()).chain(named) {
+        let mut cand = self.cand.borrow_mut();
+        let corridor = Corridor { look, lo, hi, holding: d_next == st.d, line, clearing, named };
+        self.candidates(i, &corridor, &mut cand);
+        // Their projections onto our route first, in a loop of their own: each is a chain of
+        // dependent steps, and independent chains overlap there (below, every decision waits
+        // on its own).
+        let mut proj = self.proj.borrow_mut();
+        proj.clear();
+        proj.extend(cand.iter().map(|&j| {
+            let p = self.cur[j].pos;
+            a.path.frenet_dir(p, st.s + (p - st.pos).dot(fwd))
+        }));
+        for (&j, &(sj, lj, beyond, th)) in cand.iter().zip(proj.iter()) {
             let (o, b) = (&self.cur[j], &self.actors[j]);
-            if j == i || self.exempt(i, j) {
-                continue;
-            }
             let is_named = named == Some(j);
-            let dp = o.pos - st.pos;
-            let r = look + a.radius + b.radius;
-            if !is_named && dp.length_squared() > r * r {
-                continue;
-            }
-            let ahead = dp.dot(fwd);
-            // Well behind us and not beside a lateral move: cannot be in our way.
-            if ahead < -(a.hl + b.radius + 1.0) && !is_named && d_next == st.d {
-                continue;
-            }
-            if let Some(ln) = line
-                && !is_named
-            {
-                let guess = st.s + ahead;
-                let rel = o.pos - ln.origin;
-                let s_line = ln.s0 + rel.dot(ln.dir);
-                if guess > ln.lo && guess < ln.hi && s_line > ln.lo && s_line < ln.hi {
-                    // `frenet_dir` would give s_line, this offset and this tangent to float
-                    // noise (1 mm is far above it), hence the extents below too.
-                    const EPS: f64 = 1e-3;
-                    let l_line = ln.dir.perp_dot(rel);
-                    let (cr, sr) = (self.dirs[j].dot(ln.dir), ln.dir.perp_dot(self.dirs[j]));
-                    let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
-                    let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
-                    let behind = s_line - st.s < -EPS;
-                    let too_far = s_line - st.s - a.hl - ext_lon > look + EPS;
-                    let aside = l_line - ext_lat > hi + EPS || l_line + ext_lat < lo - EPS;
-                    // Nor would it be predicted to cut across (see `obstacle` below).
-                    let v_lat = o.v * sr;
-                    let steady = !a.vehicle || v_lat.abs() < 0.3 - EPS || lateral_free(j);
-                    if behind || too_far || (aside && steady) {
-                        continue;
-                    }
-                }
-            }
-            let (sj, lj, beyond, th) = a.path.frenet_dir(o.pos, st.s + ahead);
             if beyond > 0.5 && !is_named {
                 continue;
             }
@@ -1128,6 +1165,75 @@ impl<'a, 'b> Sim<'a, 'b> {
         State { pos, yaw, s, off, ..next }
     }
 
+    /// The agents `drive`'s pair loop looks at for agent `i`, in the order it visits them: every
+    /// agent in index order, and the one queued behind (`named`) once more (every effect there
+    /// is a min or an or, so seeing it twice is harmless), less those that provably change
+    /// nothing there: itself, its conflict partner, and (except `named`) agents beyond the
+    /// look-ahead, well behind, or off its corridor on a straight stretch. It reads the packed
+    /// per-frame `near` data, the pair loop's main cost being this scan over everyone. No spatial
+    /// index: the look-ahead (up to ~240 m at highway speed) spans whole maps, so a grid found
+    /// nearly everyone anyway and cost more than the distance test below (`bench rollout`, 200
+    /// agents).
+    fn candidates(&self, i: usize, c: &Corridor, out: &mut Vec<usize>) {
+        let (a, st, fwd) = (&self.actors[i], &self.cur[i], self.dirs[i]);
+        let look = c.look;
+        out.clear();
+        for (j, b) in self.near.iter().enumerate() {
+            if j == i {
+                continue;
+            }
+            if c.named == Some(j) {
+                if !self.exempt(i, j) {
+                    out.push(j);
+                }
+                continue;
+            }
+            let dp = b.pos - st.pos;
+            let r = look + a.radius + b.radius;
+            if dp.length_squared() > r * r {
+                continue;
+            }
+            let ahead = dp.dot(fwd);
+            // Well behind us and not beside a lateral move: cannot be in our way.
+            if ahead < -(a.hl + b.radius + 1.0) && c.holding {
+                continue;
+            }
+            if let Some(ln) = c.line {
+                let guess = st.s + ahead;
+                let rel = b.pos - ln.origin;
+                let s_line = ln.s0 + rel.dot(ln.dir);
+                if guess > ln.lo && guess < ln.hi && s_line > ln.lo && s_line < ln.hi {
+                    // `frenet_dir` would give s_line, this offset and this tangent to float
+                    // noise (1 mm is far above it), hence the extents below too.
+                    const EPS: f64 = 1e-3;
+                    let l_line = ln.dir.perp_dot(rel);
+                    let (cr, sr) = (b.dir.dot(ln.dir), ln.dir.perp_dot(b.dir));
+                    let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
+                    let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
+                    let behind = s_line - st.s < -EPS;
+                    let too_far = s_line - st.s - a.hl - ext_lon > look + EPS;
+                    let aside = l_line - ext_lat > c.hi + EPS || l_line + ext_lat < c.lo - EPS;
+                    // Nor would it be predicted to cut across (see `obstacle` in `drive`).
+                    let v_lat = b.v * sr;
+                    let steady = !a.vehicle || v_lat.abs() < 0.3 - EPS || b.gives_way || c.clearing;
+                    if behind || too_far || (aside && steady) {
+                        continue;
+                    }
+                }
+            }
+            // Last: a pure test like the others, and the rarest to hold.
+            if !self.exempt(i, j) {
+                out.push(j);
+            }
+        }
+        if let Some(j) = c.named
+            && j != i
+            && !self.exempt(i, j)
+        {
+            out.push(j);
+        }
+    }
+
     /// Move vehicle `a` from `st` by `dist` along a circular arc of curvature `k`, bounded by its
     /// turning radius and by `yaw_scale` times its class yaw rate at the step's mean speed.
     fn advance(&self, a: &Actor, st: &State, k: f64, dist: f64, yaw_scale: f64) -> (DVec2, f64) {
@@ -1251,27 +1357,26 @@ impl<'a, 'b> Sim<'a, 'b> {
     /// restores the previous frame, which had no overlap, so this always ends.
     fn resolve_overlaps(&mut self) {
         let n = self.actors.len();
+        let pairs = self.overlap_pairs();
         for _ in 0..=n {
             let mut changed = false;
-            for i in 0..n {
-                // The pairs (i, j > i) in index order (undoing a move changes later pairs'
-                // outcome), bounding circles first.
-                for j in i + 1..n {
-                    let (ai, aj) = (&self.actors[i], &self.actors[j]);
-                    let (si, sj) = (&self.next[i], &self.next[j]);
-                    let r = ai.radius + aj.radius;
-                    if si.pos.distance_squared(sj.pos) >= r * r || self.exempt(i, j) {
-                        continue;
-                    }
-                    if !ai.obb(si).overlaps(&aj.obb(sj)) {
-                        continue;
-                    }
-                    for k in [i, j] {
-                        let moved = self.next[k].pos != self.cur[k].pos || self.next[k].yaw != self.cur[k].yaw;
-                        if matches!(self.actors[k].drive, Drive::Mover) && moved {
-                            self.next[k] = State { v: 0.0, ..self.cur[k] };
-                            changed = true;
-                        }
+            // The pairs (i, j > i) in index order (undoing a move changes later pairs'
+            // outcome), bounding circles first.
+            for &(i, j) in &pairs {
+                let (ai, aj) = (&self.actors[i], &self.actors[j]);
+                let (si, sj) = (&self.next[i], &self.next[j]);
+                let r = ai.radius + aj.radius;
+                if si.pos.distance_squared(sj.pos) >= r * r || self.exempt(i, j) {
+                    continue;
+                }
+                if !ai.obb(si).overlaps(&aj.obb(sj)) {
+                    continue;
+                }
+                for k in [i, j] {
+                    let moved = self.next[k].pos != self.cur[k].pos || self.next[k].yaw != self.cur[k].yaw;
+                    if matches!(self.actors[k].drive, Drive::Mover) && moved {
+                        self.next[k] = State { v: 0.0, ..self.cur[k] };
+                        changed = true;
                     }
                 }
             }
@@ -1279,6 +1384,48 @@ impl<'a, 'b> Sim<'a, 'b> {
                 break;
             }
         }
+        self.pairs = pairs;
+    }
+
+    /// The pairs (i, j > i), in index order, whose bounding circles may meet in
+    /// `resolve_overlaps`: there an agent is at its `next` position or, once its move is undone,
+    /// at its `cur` one, so a pair whose boxes around both positions (circle plus `MARGIN`) do
+    /// not meet fails the circle test in every pass and changes nothing. A sweep over the boxes
+    /// sorted by x, instead of every pair; with a position beyond `FAR` or not finite, where the
+    /// margin might not cover float rounding, every pair.
+    fn overlap_pairs(&mut self) -> Vec<(usize, usize)> {
+        // Far above the rounding of coordinates below `FAR` (~1e-7 m).
+        const MARGIN: f64 = 0.01;
+        const FAR: f64 = 1e9;
+        let n = self.actors.len();
+        let mut pairs = std::mem::take(&mut self.pairs);
+        pairs.clear();
+        self.sweep.clear();
+        let mut tame = true;
+        for k in 0..n {
+            let (p, q, r) = (self.next[k].pos, self.cur[k].pos, self.actors[k].radius);
+            // Compared one by one: `max_element` would pass over a NaN.
+            tame &= [p.x, p.y, q.x, q.y, r].iter().all(|c| c.abs() < FAR);
+            let r = DVec2::splat(r + MARGIN);
+            self.sweep.push((p.min(q) - r, p.max(q) + r, k));
+        }
+        if !tame {
+            pairs.extend((0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))));
+            return pairs;
+        }
+        self.sweep.sort_unstable_by(|a, b| a.0.x.total_cmp(&b.0.x));
+        for (x, &(lo, hi, k)) in self.sweep.iter().enumerate() {
+            for &(lo2, hi2, k2) in &self.sweep[x + 1..] {
+                if lo2.x > hi.x {
+                    break;
+                }
+                if lo2.y <= hi.y && hi2.y >= lo.y {
+                    pairs.push((k.min(k2), k.max(k2)));
+                }
+            }
+        }
+        pairs.sort_unstable();
+        pairs
     }
 
     /// Latch each staged conflict at its deepest overlap: once the boxes meet, the frame where
@@ -1400,4 +1547,59 @@ fn replay(keys: &[Keyframe], t: f64) -> (DVec2, f64) {
     let u = if b.t > a.t { (t - a.t) / (b.t - a.t) } else { 1.0 };
     let p = DVec2::new(a.x, a.y).lerp(DVec2::new(b.x, b.y), u);
     (p, wrap_angle(a.yaw + wrap_angle(b.yaw - a.yaw) * u))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `overlap_pairs` may leave out only pairs whose bounding circles cannot meet at any mix of
+    /// the positions `resolve_overlaps` can give them (`next`, or `cur` once undone), and must
+    /// list the rest once each in (i, j) order; with a position it cannot bound, every pair.
+    #[test]
+    fn overlap_pairs_keep_every_pair_that_can_meet() {
+        let mut seed = 7u64;
+        let mut rnd = move || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let n = 120;
+        let actors: Vec<Actor> = (0..n)
+            .map(|k| {
+                let info = TrackAgent {
+                    name: format!("a{k}"),
+                    kind: "sedan".into(),
+                    class: Class::Vehicle,
+                    motion: Motion::Vehicle,
+                    size: [1.0 + 6.0 * rnd(), 0.5 + 2.0 * rnd(), 1.5],
+                    background: false,
+                };
+                base_actor(info, Pose { x: 0.0, y: 0.0, yaw: 0.0 }, Motion::Vehicle, Class::Vehicle, Drive::Mover)
+            })
+            .collect();
+        let mut sim = Sim::new(&actors, &[], &[], None, 0.1);
+        for k in 0..n {
+            // Clusters of touching and nearly touching boxes, moves up to 4 m, a few far away.
+            let base = if k % 10 == 0 { DVec2::new(5e3 * rnd(), -3e3) } else { DVec2::new(60.0 * rnd(), 8.0 * rnd()) };
+            sim.cur[k].pos = base;
+            sim.next[k].pos = base + DVec2::new(4.0 * rnd() - 2.0, 4.0 * rnd() - 2.0);
+        }
+        let can_meet = |sim: &Sim, i: usize, j: usize| {
+            let r = actors[i].radius + actors[j].radius;
+            [sim.next[i].pos, sim.cur[i].pos]
+                .iter()
+                .any(|p| [sim.next[j].pos, sim.cur[j].pos].iter().any(|q| p.distance_squared(*q) < r * r))
+        };
+        let pairs = sim.overlap_pairs();
+        assert!(pairs.windows(2).all(|w| w[0] < w[1]) && pairs.iter().all(|&(i, j)| i < j && j < n));
+        let meeting: Vec<(usize, usize)> =
+            (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))).filter(|&(i, j)| can_meet(&sim, i, j)).collect();
+        assert!(meeting.len() > 50, "the case must have meeting pairs: {}", meeting.len());
+        assert!(meeting.iter().all(|p| pairs.binary_search(p).is_ok()));
+        assert!(pairs.len() < n * (n - 1) / 4, "the sweep should leave most pairs out: {}", pairs.len());
+        sim.next[3].pos.x = f64::NAN;
+        assert_eq!(sim.overlap_pairs().len(), n * (n - 1) / 2);
+        sim.next[3].pos.x = 2e9;
+        assert_eq!(sim.overlap_pairs().len(), n * (n - 1) / 2);
+    }
 }

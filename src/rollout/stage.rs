@@ -198,7 +198,8 @@ pub(super) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
             let len = curve.length();
             let acc = 2.0 * (len - v * tau) / (tau * tau);
             let v_end = v + acc * tau;
-            let lat = v.max(v_end).powi(2) * curve.max_curvature();
+            let k_curve = curve.max_curvature();
+            let lat = v.max(v_end).powi(2) * k_curve;
             // Closing speed along the approach: the at-fault's motion into the struck box.
             let struck_v = DVec2::from_angle(struck_at.yaw) * p1.speeds[k.st][fi];
             let inward = if k.c.impact == Impact::Sideswipe {
@@ -218,7 +219,6 @@ pub(super) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
             // A curve tighter than the car can steer (turning radius, yaw rate) is followed on a
             // wider arc and misses: prefer departures that leave room to turn.
             let k_max = (1.0 / af.r_min).min(STRIKE_YAW * lim.yaw_rate / v.max(v_end).max(1.0));
-            let k_curve = curve.max_curvature();
             if k_curve > k_max {
                 cost += 15.0 + 10.0 * (k_curve / k_max - 1.0);
             }
