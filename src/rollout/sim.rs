@@ -1213,7 +1213,18 @@ impl<'a, 'b> Sim<'a, 'b> {
             } else {
                 0.0
             };
-            let in_cur = lj - ext_lat < cur_hi + margin + swing && lj + ext_lat > cur_lo - margin - swing;
+            let (band_lo, band_hi) = (cur_lo - margin - swing, cur_hi + margin + swing);
+            let mut in_cur = lj - ext_lat < band_hi && lj + ext_lat > band_lo;
+            // A box turned across our path (a long vehicle turning beside us): its extents along
+            // and across the path put corners where it has none. Only the part of it inside our
+            // band counts, and only its nearest point there.
+            let mut gap = gap;
+            if in_cur && !is_named && sr.abs() > 0.05 {
+                match band_front(lj, cr, sr, b.hl, b.hw, band_lo, band_hi) {
+                    Some(x) => gap = ds + x - a.hl,
+                    None => in_cur = false,
+                }
+            }
             let in_now = in_cur || (gap > 0.0 && lj - ext_lat < hi && lj + ext_lat > lo);
             let mut obstacle = in_now || is_named;
             // Someone about to cut across our corridor (a crossing pedestrian, a car in the
@@ -1318,26 +1329,37 @@ impl<'a, 'b> Sim<'a, 'b> {
 
     /// Gipps's safe speed behind leader `j`, `gap` ahead at `v_lon` along our path, as an
     /// acceleration: after this step we must still be able to stop at our emergency braking
-    /// behind the point where the leader stops at its own (at once, for a conflict agent from
-    /// its striker's departure on: the crash latch stops it dead). With every agent inside its
-    /// limits this keeps the overlap safety net from ever braking anyone harder than that.
+    /// behind the point where the leader stops at its own. A conflict agent whose striker has
+    /// set off may instead be stopped dead by the crash latch, but only on touching its
+    /// partner: it stops no sooner than the clearance between the two. With every agent inside
+    /// its limits this keeps the overlap safety net from ever braking anyone harder than that.
     fn safe_acc(&self, i: usize, j: usize, gap: f64, v_lon: f64, t: f64) -> f64 {
         let (a, st, dt) = (&self.actors[i], &self.cur[i], self.dt);
         let b = a.lim.brake_max;
         let lead = &self.actors[j];
-        let dead_stop = lead.in_conflict && self.crash_pending(j, t);
-        let lead_stop = if dead_stop || v_lon <= 0.0 { 0.0 } else { v_lon * v_lon / (2.0 * lead.lim.brake_max) };
+        let mut lead_stop = if v_lon <= 0.0 { 0.0 } else { v_lon * v_lon / (2.0 * lead.lim.brake_max) };
+        if lead.in_conflict
+            && let Some(p) = self.crash_partner(j, t)
+        {
+            let clearance = self.cur[j].pos.distance(self.cur[p].pos) - lead.radius - self.actors[p].radius;
+            lead_stop = lead_stop.min(clearance.max(0.0));
+        }
         // Room left after this step's own travel at the current speed (the half step at `v`).
         let room = gap - SAFE_MARGIN + lead_stop - 0.5 * st.v * dt;
         let v_safe = if room <= 0.0 { 0.0 } else { 0.5 * (-b * dt + (b * b * dt * dt + 8.0 * b * room).sqrt()) };
         (v_safe - st.v) / dt
     }
 
-    /// Whether agent `j` belongs to a staged conflict whose striker has set off and not yet
-    /// struck (pass 2): its latch can stop it dead any frame now.
-    fn crash_pending(&self, j: usize, t: f64) -> bool {
-        self.confs.iter().zip(self.plans).enumerate().any(|(k, (c, p))| {
-            (c.af == j || c.st == j) && !self.latched[k] && p.as_ref().is_some_and(|p| t >= p.t_depart - 1e-9)
+    /// The partner of agent `j` in a staged conflict whose striker has set off and not yet
+    /// struck (pass 2): once the two touch, the latch stops both dead.
+    fn crash_partner(&self, j: usize, t: f64) -> Option<usize> {
+        self.confs.iter().zip(self.plans).enumerate().find_map(|(k, (c, p))| {
+            let pending = !self.latched[k] && p.as_ref().is_some_and(|p| t >= p.t_depart - 1e-9);
+            match (pending, c.af == j, c.st == j) {
+                (true, true, _) => Some(c.st),
+                (true, _, true) => Some(c.af),
+                _ => None,
+            }
         })
     }
 
@@ -1640,7 +1662,6 @@ impl<'a, 'b> Sim<'a, 'b> {
         };
         let own_ext = (v * v / (2.0 * a.lim.brake_max) + SAFE_MARGIN).min(left);
         let mine = envelope(pos, yaw, a.hl, a.hw, own_ext);
-        let me = Obb { center: pos, yaw, length: 2.0 * a.hl, width: 2.0 * a.hw };
         (0..self.actors.len()).any(|j| {
             if j == i || j == struck || self.exempt(i, j) {
                 return false;
@@ -1662,9 +1683,15 @@ impl<'a, 'b> Sim<'a, 'b> {
             if follows || o.v < 0.05 {
                 return false;
             }
-            // As wide as the band its car-following watches (`Sim::drive`'s margin), and more.
-            let ext = o.v * o.v / (2.0 * b.lim.brake_max) + SAFE_MARGIN;
-            envelope(o.pos, o.yaw, b.hl, b.hw + 0.4, ext).overlaps(&me)
+            // Its envelope as its car-following sees us: our box's extent along and across its
+            // heading, against its band (its width and the margin it watches, and more) from
+            // its rear to where it could stop after one more step at its speed.
+            let (rel, (c, sn)) = (pos - o.pos, (yaw - o.yaw).sin_cos());
+            let (c, sn) = (sn.abs(), c.abs());
+            let (lon, lat) = (rel.dot(fwd), fwd.perp_dot(rel).abs());
+            let (ext_lon, ext_lat) = (a.hl * sn + a.hw * c, a.hl * c + a.hw * sn);
+            let reach = b.hl + o.v * o.v / (2.0 * b.lim.brake_max) + o.v * self.dt + SAFE_MARGIN + 0.3;
+            lon - ext_lon < reach && lon + ext_lon > -b.hl && lat - ext_lat < b.hw + 0.4
         })
     }
 
@@ -1744,6 +1771,35 @@ impl<'a, 'b> Sim<'a, 'b> {
             }
         }
     }
+}
+
+/// The nearest longitudinal point, relative to its centre, of the part of a box lying inside the
+/// lateral band `lo..hi` of a path frame (the box centred at lateral offset `lat`, its heading at
+/// cosine `cr` and sine `sr` to the path's, half sizes `hl`, `hw`); `None` when no part does.
+fn band_front(lat: f64, cr: f64, sr: f64, hl: f64, hw: f64, lo: f64, hi: f64) -> Option<f64> {
+    let (ax, ay) = (DVec2::new(cr, sr), DVec2::new(-sr, cr));
+    let c = DVec2::new(0.0, lat);
+    let mut poly = vec![c + ax * hl + ay * hw, c - ax * hl + ay * hw, c - ax * hl - ay * hw, c + ax * hl - ay * hw];
+    // Sutherland-Hodgman against y >= lo, then y <= hi.
+    for (bound, keep_above) in [(lo, true), (hi, false)] {
+        let inside = |p: DVec2| if keep_above { p.y >= bound } else { p.y <= bound };
+        let mut out = Vec::with_capacity(poly.len() + 2);
+        for k in 0..poly.len() {
+            let (p, q) = (poly[k], poly[(k + 1) % poly.len()]);
+            if inside(p) {
+                out.push(p);
+            }
+            if inside(p) != inside(q) {
+                let u = (bound - p.y) / (q.y - p.y);
+                out.push(p + (q - p) * u);
+            }
+        }
+        poly = out;
+        if poly.is_empty() {
+            return None;
+        }
+    }
+    poly.iter().map(|p| p.x).reduce(f64::min)
 }
 
 /// Smooth 0..1 profile with zero velocity and acceleration at both ends.
