@@ -774,12 +774,15 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
 }
 
 /// How far the corners of `a`'s box swing out of its path's lane band in the tightest bend of
-/// its junction path: a box tangent to an arc of curvature k reaches `hl^2 k / 2` beyond it.
+/// its junction path: a box tangent to an arc of curvature k reaches `hl^2 k / 2` beyond it, and
+/// a vehicle that cannot turn that tight runs wider by the difference of the radii.
 fn off_tracking(map: &Map, a: &Actor, j: Junction) -> f64 {
     let entry = j.exit - map.connectors[j.conn].path.length();
     let n = ((j.exit - entry) / 0.5).ceil().max(1.0) as usize;
     let k = (0..=n).map(|i| a.path.curvature(entry + (j.exit - entry) * i as f64 / n as f64).abs()).fold(0.0, f64::max);
-    (0.5 * a.hl * a.hl * k).min(a.hl)
+    // A bend tighter than the vehicle can steer is driven wider, on its own turning radius.
+    let wide = if k > 1e-9 { (a.r_min - 1.0 / k).max(0.0) } else { 0.0 };
+    (0.5 * a.hl * a.hl * k).min(a.hl) + wide
 }
 
 /// The stretches of connector `a` (arc lengths along it) whose points lie within `gap` of
@@ -1206,8 +1209,9 @@ impl<'a, 'b> Sim<'a, 'b> {
             // In the lane we are in now; or in the band we are moving into, and then only when
             // ahead of our front (alongside is the gap acceptance's business).
             // In a bend our box's corners swing out of the band its centre sweeps (a bus turning
-            // at a junction reaches into the next lane): widen the band by that off-tracking.
-            let swing = if a.vehicle && line.is_none() {
+            // at a junction reaches into the next lane): widen the band by that off-tracking, for
+            // one standing there (one on the move will have gone by when we sweep past).
+            let swing = if a.vehicle && line.is_none() && o.v < 0.5 {
                 let k = a.path.curvature(sj).abs().max(a.path.curvature(sj - a.hl).abs());
                 (0.5 * a.hl * a.hl * k).min(a.hl)
             } else {
