@@ -1274,13 +1274,15 @@ proptest! {
         // The braking bound holds everywhere but in two situations the controller does not
         // foresee (README, Rollout "Limits"): a staged striker turning in alongside a bystander,
         // and the tail of a long vehicle (10 m or more) swinging out in a turn onto one beside
-        // it. Only a frame at which the braking agent is within 1 m of a striker, or either of
-        // the two is such a long vehicle, is excused.
+        // it. Only a frame at which (or just before which) the braking agent is within 1 m of a
+        // striker, or either of the two is such a long vehicle, is excused.
         let near = |i: usize, f: usize, k: usize| {
-            let mut o = obb(t, k, f);
-            o.length += 2.0;
-            o.width += 2.0;
-            o.overlaps(&obb(t, i, f))
+            [f - 1, f].iter().any(|&g| {
+                let mut o = obb(t, k, g);
+                o.length += 2.0;
+                o.width += 2.0;
+                o.overlaps(&obb(t, i, g))
+            })
         };
         let long = |k: usize| t.agents[k].motion == Motion::Vehicle && t.agents[k].size[0] >= 10.0;
         let excused =

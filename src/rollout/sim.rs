@@ -727,6 +727,9 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
     let js: Vec<usize> = (0..actors.len())
         .filter(|&i| actors[i].vehicle && matches!(actors[i].drive, Drive::Mover) && actors[i].junction.is_some())
         .collect();
+    // Many agents share a connector (background traffic on one lane): each pair of connectors
+    // is sampled once.
+    let mut profiles = std::collections::HashMap::new();
     for (n, &i) in js.iter().enumerate() {
         for &j in &js[n + 1..] {
             let (a, b) = (&actors[i], &actors[j]);
@@ -740,8 +743,10 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
             // A long box swings wide of its path in a turn (a bus's front corner sweeps into the
             // next lane): the zone widens by each box's off-tracking.
             let gap = a.hw + b.hw + 0.5 + off_tracking(map, a, ji) + off_tracking(map, b, jj);
-            let za = shared_zones(map, ji.conn, jj.conn, gap, 2.0 * a.hl);
-            let zb = shared_zones(map, jj.conn, ji.conn, gap, 2.0 * b.hl);
+            let za =
+                shared_zones(map, (ji.conn, jj.conn), profile(&mut profiles, map, ji.conn, jj.conn), gap, 2.0 * a.hl);
+            let zb =
+                shared_zones(map, (jj.conn, ji.conn), profile(&mut profiles, map, jj.conn, ji.conn), gap, 2.0 * b.hl);
             let entry = |j: Junction| j.exit - map.connectors[j.conn].path.length();
             let (ei, ej) = (entry(ji), entry(jj));
             let (hi, hj) = (a.hl, b.hl);
@@ -785,23 +790,40 @@ fn off_tracking(map: &Map, a: &Actor, j: Junction) -> f64 {
     (0.5 * a.hl * a.hl * k).min(a.hl) + wide
 }
 
-/// The stretches of connector `a` (arc lengths along it) whose points lie within `gap` of
-/// connector `b`'s path, away from a shared start (as `paths_cross`), those less than `join`
-/// apart taken as one; with each, where its middle projects onto `b` (arc length along it).
-/// Two paths can meet twice (a roundabout exit beside another's entry, then the ring).
-fn shared_zones(map: &Map, a: usize, b: usize, gap: f64, join: f64) -> Vec<(f64, f64, f64)> {
-    let (ca, cb) = (&map.connectors[a], &map.connectors[b]);
-    if ca.from == cb.from {
-        return vec![];
-    }
-    let (la, lb) = (ca.path.length(), cb.path.length());
-    let n = (la / 0.5).ceil().max(1.0) as usize;
+/// Connector `a` sampled every half metre against connector `b`'s path: arc length along `a`,
+/// distance to `b` (infinite where the nearest point is beyond `b`'s ends, or where the two leave
+/// the same lane: paths from one lane diverge, they do not cross), arc length along `b`.
+type Profile = Vec<(f64, f64, f64)>;
+
+fn profile<'p>(
+    cache: &'p mut std::collections::HashMap<(usize, usize), Profile>,
+    map: &Map,
+    a: usize,
+    b: usize,
+) -> &'p Profile {
+    cache.entry((a, b)).or_insert_with(|| {
+        let (ca, cb) = (&map.connectors[a], &map.connectors[b]);
+        let (la, lb) = (ca.path.length(), cb.path.length());
+        let n = (la / 0.5).ceil().max(1.0) as usize;
+        (0..=n)
+            .map(|k| {
+                let sa = la * k as f64 / n as f64;
+                let (s, d) = cb.path.project(ca.path.pose_at(sa).0);
+                let near = ca.from != cb.from && s > -0.5 && s < lb + 0.5;
+                (sa, if near { d.abs() } else { f64::INFINITY }, s)
+            })
+            .collect()
+    })
+}
+
+/// The stretches of connector `a` (arc lengths along it) whose samples in `profile` lie within
+/// `gap` of the other path, those less than `join` apart taken as one; with each, where its
+/// middle projects onto `b`. Two paths can meet twice (a roundabout exit beside
+/// another's entry, then the ring).
+fn shared_zones(map: &Map, (a, b): (usize, usize), profile: &Profile, gap: f64, join: f64) -> Vec<(f64, f64, f64)> {
     let mut zones: Vec<(f64, f64, f64)> = vec![];
-    for k in 0..=n {
-        let sa = la * k as f64 / n as f64;
-        let (p, _) = ca.path.pose_at(sa);
-        let (s, d) = cb.path.project(p);
-        if s > -0.5 && s < lb + 0.5 && d.abs() < gap {
+    for &(sa, d, _) in profile {
+        if d < gap {
             match zones.last_mut() {
                 Some(z) if sa - z.1 <= join => z.1 = sa,
                 _ => zones.push((sa, sa, 0.0)),
@@ -809,8 +831,8 @@ fn shared_zones(map: &Map, a: usize, b: usize, gap: f64, join: f64) -> Vec<(f64,
         }
     }
     for z in &mut zones {
-        let (p, _) = ca.path.pose_at(0.5 * (z.0 + z.1));
-        z.2 = cb.path.project(p).0;
+        let (p, _) = map.connectors[a].path.pose_at(0.5 * (z.0 + z.1));
+        z.2 = map.connectors[b].path.project(p).0;
     }
     zones
 }
@@ -1417,9 +1439,9 @@ impl<'a, 'b> Sim<'a, 'b> {
         if st.s >= enter || self.striking(i, t) {
             return Some((0, 0.0, rem));
         }
-        // Hysteresis: one already holding may brake up to its limit to keep holding.
-        let firm = if st.give_way { 1.0 } else { YIELD_BRAKE };
-        if rem <= -0.05 || st.v * st.v / (2.0 * rem.max(1e-3)) > firm * a.lim.brake_max {
+        // Giving way may take up to the emergency braking: within the limits, and it leaves the
+        // fewest pairs where neither can stop (both then go, and only the safety net is left).
+        if rem <= -0.05 || st.v * st.v / (2.0 * rem.max(1e-3)) > a.lim.brake_max {
             return Some((1, 0.0, rem));
         }
         let dist = (enter - st.s).max(0.0);
