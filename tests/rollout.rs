@@ -778,16 +778,17 @@ proptest! {
 /// listed in `strikers` may use the staging's harder acceleration and yaw rate (1.6 x, 1.5 x);
 /// a crash's pair is checked up to its latched frame (the crash stops them dead).
 fn check_kinematics(t: &Tracks, v_max: &[f64], strikers: &[usize]) {
-    assert_eq!(check_kinematics_holds(t, v_max, strikers, false), 0);
+    assert_eq!(check_kinematics_holds(t, v_max, strikers, &|_, _| false), 0);
 }
 
-/// `check_kinematics`, optionally without the braking bound, counting the frames that break it.
-/// Junction scenes and scenes with a crash need that (a known limit, README "Limits"): with no
-/// general right of way, two vehicles whose junction paths cross can be kept apart only by the
-/// overlap safety net (a one-frame stop), and a follower cannot always brake within its limit
-/// for a leader stopped dead by a crash, and a walker stepping out in front of a vehicle that
-/// cannot stop is held by the net. The code before the bicycle model shows the same stops. Every other bound (accelerating, yaw rate, curvature, slip, speed) still holds there.
-fn check_kinematics_holds(t: &Tracks, v_max: &[f64], strikers: &[usize], allow_holds: bool) -> usize {
+/// `check_kinematics`, except the braking bound at the frames `excused(agent, frame)` admits,
+/// counting the frames that break it there.
+fn check_kinematics_holds(
+    t: &Tracks,
+    v_max: &[f64],
+    strikers: &[usize],
+    excused: &dyn Fn(usize, usize) -> bool,
+) -> usize {
     let dt = 1.0 / t.rate;
     let mut holds = 0;
     for (i, a) in t.agents.iter().enumerate() {
@@ -800,7 +801,7 @@ fn check_kinematics_holds(t: &Tracks, v_max: &[f64], strikers: &[usize], allow_h
             assert!(v >= 0.0 && v <= v_max[i] + 0.5, "{}: speed {v:.2} at {f} (max {:.2})", a.name, v_max[i]);
             let acc = (v - t.speeds[i][f - 1]) / dt;
             let (p, q) = (t.poses[i][f - 1], t.poses[i][f]);
-            if allow_holds && acc < -lim.brake_max - 1e-6 {
+            if acc < -lim.brake_max - 1e-6 && excused(i, f) {
                 holds += 1;
             } else {
                 assert!(acc >= -lim.brake_max - 1e-6, "{}: braking {acc} at {f}", a.name);
@@ -1270,9 +1271,23 @@ proptest! {
             })
             .collect();
         let strikers: Vec<usize> = t.impacts.iter().map(|r| r.at_fault).collect();
-        // Off junctions, without a crash and without walkers the limits hold without exception.
-        let exempt = g.template <= 2 || !t.impacts.is_empty() || t.agents.iter().any(|a| a.motion == Motion::Holonomic);
-        check_kinematics_holds(t, &v_max, &strikers, exempt);
+        // The braking bound holds everywhere but in two situations the controller does not
+        // foresee (README, Rollout "Limits"): a staged striker meeting a bystander on its way,
+        // and the tail of a long vehicle (10 m or more) swinging out in a turn onto one beside
+        // it. Only a frame at which (or just before which) the braking agent is within 1 m of
+        // another and either of the two is a striker or such a long vehicle is excused.
+        let near = |i: usize, f: usize, k: usize| {
+            [f - 1, f].iter().any(|&g| {
+                let mut o = obb(t, k, g);
+                o.length += 2.0;
+                o.width += 2.0;
+                o.overlaps(&obb(t, i, g))
+            })
+        };
+        let long = |k: usize| t.agents[k].motion == Motion::Vehicle && t.agents[k].size[0] >= 10.0;
+        let special = |k: usize| strikers.contains(&k) || long(k);
+        let excused = |i: usize, f: usize| (0..n).any(|k| k != i && (special(i) || special(k)) && near(i, f, k));
+        check_kinematics_holds(t, &v_max, &strikers, &excused);
         for (i, a) in t.agents.iter().enumerate() {
             if a.motion != Motion::Vehicle || pair.is_some_and(|(x, y, _)| x == i || y == i) {
                 continue;

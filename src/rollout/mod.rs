@@ -13,7 +13,14 @@
 //!   as kinematic bicycles (along their heading, curvature bounded by `min_turn_radius` and the
 //!   yaw rate); walkers and animals step onto it holonomically;
 //! - junctions: vehicles whose junction path crosses an approaching emergency vehicle's hold at
-//!   their stop line, and those already committed clear the junction first;
+//!   their stop line, and those already committed clear the junction first; any other two whose
+//!   junction paths share a zone go in a strict order (inside it, too close to stop, earlier to
+//!   arrive, then those stopped or queued for something else; names break ties), the other
+//!   holding short of it; a walker about to cross waits at the kerb while a vehicle could not
+//!   stop comfortably for it;
+//! - car-following keeps Gipps's safe speed: able to stop, at emergency braking, behind where the
+//!   leader could stop (within its clearance to its partner, for a conflict agent that the crash
+//!   latch may stop dead); a striker keeps out of bystanders' stopping envelopes;
 //! - a last safety net: a move that would make two boxes overlap is undone (the agent holds its
 //!   previous pose), so the only overlaps in `Tracks` are conflict pairs from their impact on.
 //!

@@ -89,6 +89,32 @@ pub(super) struct Actor {
     /// A vehicle's `turn` goal and its span: `check_turns` refuses a turn whose swept box leaves
     /// the road.
     pub turn_goal: Option<(Turn, crate::source::Span)>,
+    /// Vehicles whose junction path crosses or merges into this one's (`assign_crossings`): who
+    /// enters the shared zone first is settled by the right-of-way rule (`Sim::crossing_hold`).
+    pub crossings: Vec<Crossing>,
+    /// A walker's `cross` goal: the arc length along its walk where its front reaches the road,
+    /// where it waits for a gap (`Sim::kerb_hold`); `None` for everyone else and for walkers in
+    /// a staged conflict.
+    pub kerb: Option<f64>,
+    /// One of the pair of a staged conflict: a latch may stop it dead, so followers keep the
+    /// gap to stop behind it at once (`Sim::drive`).
+    pub in_conflict: bool,
+    /// The lane from which its route enters its first junction (vehicles with `crossings`):
+    /// of those approaching through one lane, only the first can be next into the junction.
+    pub approach: Option<usize>,
+}
+
+/// The stretch that two vehicles' junction paths share, seen from one of them: route arc
+/// lengths of its box centre between which its box may touch the other's path.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Crossing {
+    pub other: usize,
+    /// This agent's zone on its own route: its centre from `enter` to `leave`.
+    pub enter: f64,
+    pub leave: f64,
+    /// The other agent's zone on the other's route.
+    pub other_enter: f64,
+    pub other_leave: f64,
 }
 
 /// How far ahead of an emergency vehicle the junction is cleared: this many seconds at its
@@ -120,6 +146,9 @@ pub(super) struct State {
     pub triggered: bool,
     pub stopped: bool,
     pub frozen: bool,
+    /// Holding back for another agent under the right-of-way rule (at its stop line or short of
+    /// the shared zone) or at the kerb: waiting by choice, ready to go, not blocked.
+    pub give_way: bool,
 }
 
 /// A conflict with its agents as track indices.
@@ -130,6 +159,11 @@ pub(super) struct Conf {
     pub c: crate::check::scenario::Conflict,
 }
 
+/// Time margin by which a vehicle with the right of way must have left a shared zone before
+/// one giving way to it arrives there for that one not to hold, s.
+const CLEAR_MARGIN_S: f64 = 1.0;
+/// Clearance kept to where a leader could stop (`Sim::safe_acc`), m.
+const SAFE_MARGIN: f64 = 0.5;
 /// Largest angle between a vehicle's heading and its lane while it moves sideways (rad).
 const MAX_SLIP: f64 = 0.25;
 /// Lateral speed of a vehicle squeezing past an agent that eases aside for it (m/s).
@@ -177,6 +211,7 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         face_the_striker(&mut actors, k);
     }
     assign_yields(map, &mut actors, &confs);
+    assign_crossings(map, &mut actors, &confs);
     let frames = c.frame_count();
     let dt = if c.rate > 0.0 { 1.0 / c.rate } else { 0.1 };
     let mut out = empty_tracks(&actors, c.rate, frames);
@@ -355,6 +390,7 @@ fn initial(a: &Actor) -> State {
         triggered: false,
         stopped: false,
         frozen: false,
+        give_way: false,
     }
 }
 
@@ -384,6 +420,10 @@ fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Class, drive:
         junction: None,
         yield_to: vec![],
         turn_goal: None,
+        crossings: vec![],
+        kerb: None,
+        in_conflict: false,
+        approach: None,
         info,
     }
 }
@@ -498,7 +538,10 @@ fn build_actor(
         }
     } else if lateral == Lateral::Cross {
         match cross_line(map, pos) {
-            Some((yaw, len)) => a.path = Path::straight(pos, yaw, len),
+            Some((yaw, len, kerb)) => {
+                a.path = Path::straight(pos, yaw, len);
+                a.kerb = Some(kerb);
+            }
             None => {
                 fail(errs, format!("`{}` has no road nearby to cross", ca.name), "place it beside a lane");
                 a.path = Path::straight(pos, p.pose.yaw, 1.0);
@@ -662,9 +705,134 @@ fn assign_yields(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
     }
 }
 
+/// Fill every vehicle's `crossings`: the other vehicles whose first junction path crosses or
+/// merges into its own, with the zone each would share. Emergency vehicles and those yielding to
+/// them are settled by `yield_to`; the two agents of a staged conflict are meant to meet. Marks
+/// the conflict agents, and drops the kerb wait of a walker in a staged conflict.
+fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
+    for k in confs {
+        for x in [k.af, k.st] {
+            actors[x].in_conflict = true;
+            actors[x].kerb = None;
+        }
+    }
+    let js: Vec<usize> = (0..actors.len())
+        .filter(|&i| actors[i].vehicle && matches!(actors[i].drive, Drive::Mover) && actors[i].junction.is_some())
+        .collect();
+    // Many agents share a connector (background traffic on one lane): each pair of connectors
+    // is sampled once.
+    let mut profiles = std::collections::HashMap::new();
+    for (n, &i) in js.iter().enumerate() {
+        for &j in &js[n + 1..] {
+            let (a, b) = (&actors[i], &actors[j]);
+            let (Some(ji), Some(jj)) = (a.junction, b.junction) else { continue };
+            if a.yield_to.contains(&j) || b.yield_to.contains(&i) || (a.emergency && b.emergency) {
+                continue;
+            }
+            if confs.iter().any(|k| (k.af == i && k.st == j) || (k.af == j && k.st == i)) {
+                continue;
+            }
+            // A long box swings wide of its path in a turn (a bus's front corner sweeps into the
+            // next lane): the zone widens by each box's off-tracking.
+            let gap = a.hw + b.hw + 0.5 + off_tracking(map, a, ji) + off_tracking(map, b, jj);
+            let za =
+                shared_zones(map, (ji.conn, jj.conn), profile(&mut profiles, map, ji.conn, jj.conn), gap, 2.0 * a.hl);
+            let zb =
+                shared_zones(map, (jj.conn, ji.conn), profile(&mut profiles, map, jj.conn, ji.conn), gap, 2.0 * b.hl);
+            let entry = |j: Junction| j.exit - map.connectors[j.conn].path.length();
+            let (ei, ej) = (entry(ji), entry(jj));
+            let (hi, hj) = (a.hl, b.hl);
+            // Each stretch of ours goes with the stretch of theirs that its middle lies beside.
+            for &(ai, ao, at) in &za {
+                let dist = |z: &(f64, f64, f64)| (z.0 - at).max(at - z.1).max(0.0);
+                let Some(&(bi, bo, _)) = zb.iter().min_by(|x, y| dist(x).total_cmp(&dist(y))) else { continue };
+                let ci = Crossing {
+                    other: j,
+                    enter: ei + ai - hi,
+                    leave: ei + ao + hi,
+                    other_enter: ej + bi - hj,
+                    other_leave: ej + bo + hj,
+                };
+                let cj = Crossing {
+                    other: i,
+                    enter: ci.other_enter,
+                    leave: ci.other_leave,
+                    other_enter: ci.enter,
+                    other_leave: ci.leave,
+                };
+                actors[i].crossings.push(ci);
+                actors[j].crossings.push(cj);
+            }
+        }
+    }
+    for &i in &js {
+        actors[i].approach = actors[i].junction.map(|j| map.connectors[j.conn].from);
+    }
+}
+
+/// How far the corners of `a`'s box swing out of its path's lane band in the tightest bend of
+/// its junction path: a box tangent to an arc of curvature k reaches `hl^2 k / 2` beyond it, and
+/// a vehicle that cannot turn that tight runs wider by the difference of the radii.
+fn off_tracking(map: &Map, a: &Actor, j: Junction) -> f64 {
+    let entry = j.exit - map.connectors[j.conn].path.length();
+    let n = ((j.exit - entry) / 0.5).ceil().max(1.0) as usize;
+    let k = (0..=n).map(|i| a.path.curvature(entry + (j.exit - entry) * i as f64 / n as f64).abs()).fold(0.0, f64::max);
+    // A bend tighter than the vehicle can steer is driven wider, on its own turning radius.
+    let wide = if k > 1e-9 { (a.r_min - 1.0 / k).max(0.0) } else { 0.0 };
+    (0.5 * a.hl * a.hl * k).min(a.hl) + wide
+}
+
+/// Connector `a` sampled every half metre against connector `b`'s path: arc length along `a`,
+/// distance to `b` (infinite where the nearest point is beyond `b`'s ends, or where the two leave
+/// the same lane: paths from one lane diverge, they do not cross), arc length along `b`.
+type Profile = Vec<(f64, f64, f64)>;
+
+fn profile<'p>(
+    cache: &'p mut std::collections::HashMap<(usize, usize), Profile>,
+    map: &Map,
+    a: usize,
+    b: usize,
+) -> &'p Profile {
+    cache.entry((a, b)).or_insert_with(|| {
+        let (ca, cb) = (&map.connectors[a], &map.connectors[b]);
+        let (la, lb) = (ca.path.length(), cb.path.length());
+        let n = (la / 0.5).ceil().max(1.0) as usize;
+        (0..=n)
+            .map(|k| {
+                let sa = la * k as f64 / n as f64;
+                let (s, d) = cb.path.project(ca.path.pose_at(sa).0);
+                let near = ca.from != cb.from && s > -0.5 && s < lb + 0.5;
+                (sa, if near { d.abs() } else { f64::INFINITY }, s)
+            })
+            .collect()
+    })
+}
+
+/// The stretches of connector `a` (arc lengths along it) whose samples in `profile` lie within
+/// `gap` of the other path, those less than `join` apart taken as one; with each, where its
+/// middle projects onto `b`. Two paths can meet twice (a roundabout exit beside
+/// another's entry, then the ring).
+fn shared_zones(map: &Map, (a, b): (usize, usize), profile: &Profile, gap: f64, join: f64) -> Vec<(f64, f64, f64)> {
+    let mut zones: Vec<(f64, f64, f64)> = vec![];
+    for &(sa, d, _) in profile {
+        if d < gap {
+            match zones.last_mut() {
+                Some(z) if sa - z.1 <= join => z.1 = sa,
+                _ => zones.push((sa, sa, 0.0)),
+            }
+        }
+    }
+    for z in &mut zones {
+        let (p, _) = map.connectors[a].path.pose_at(0.5 * (z.0 + z.1));
+        z.2 = map.connectors[b].path.project(p).0;
+    }
+    zones
+}
+
 /// Heading and length of a walk straight across the nearest road from `p`: perpendicular to
-/// the nearest lane, toward it, ending 2 m past the last lane or shoulder met.
-fn cross_line(map: &Map, p: DVec2) -> Option<(f64, f64)> {
+/// the nearest lane, toward it, ending 2 m past the last lane or shoulder met; and how far along
+/// it the road begins.
+fn cross_line(map: &Map, p: DVec2) -> Option<(f64, f64, f64)> {
     let mut near: Option<(usize, f64, f64)> = None;
     for (i, l) in map.lanes.iter().enumerate() {
         if l.centre.points.len() < 2 {
@@ -703,16 +871,17 @@ fn cross_line(map: &Map, p: DVec2) -> Option<(f64, f64)> {
             s > 0.0 && s < l.centre.length() && d.abs() <= l.width / 2.0 + if d < 0.0 { l.shoulder_right } else { 0.0 }
         })
     };
-    let mut last = None;
+    let (mut first, mut last) = (None, None);
     for k in 0..=160 {
         let dist = k as f64 * 0.5;
         if on_road(p + dir * dist) {
+            first = first.or(Some(dist));
             last = Some(dist);
         } else if last.is_some_and(|l| dist - l > 4.0) {
             break;
         }
     }
-    Some((dir.y.atan2(dir.x), last? + 2.0))
+    Some((dir.y.atan2(dir.x), last? + 2.0, (first? - 0.5).max(0.0)))
 }
 
 /// The first frame at which pass 2 can differ from pass 1: the first whose step starts at or
@@ -786,8 +955,15 @@ struct Sim<'a, 'b> {
     next: Vec<State>,
     /// Unit heading of every agent in `cur`: pair checks use dot and cross products, not trig.
     dirs: Vec<DVec2>,
-    /// Per agent, this frame: `yield_state`.
+    /// Per agent, this frame: `yield_state`, with the right-of-way rule's hold folded in.
     yielding: Vec<(Option<f64>, bool)>,
+    /// Per agent, this frame: held by the right-of-way rule or at the kerb (`right_of_way`).
+    ruled: Vec<bool>,
+    /// Per agent, this frame: how far it may go while holding for anyone (scratch).
+    held: Vec<Option<f64>>,
+    /// Per agent, this frame: another vehicle is ahead of it on its junction approach, not yet
+    /// past its stop line (`queued`).
+    behind: Vec<bool>,
     /// This frame: agents easing aside (`away_from`, triggered), for `pass_offset`.
     easing: Vec<usize>,
     /// Per agent, this frame: what `candidates` reads, packed.
@@ -833,6 +1009,9 @@ impl<'a, 'b> Sim<'a, 'b> {
             next: cur.clone(),
             dirs: cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect(),
             yielding: vec![(None, false); actors.len()],
+            ruled: vec![false; actors.len()],
+            held: vec![None; actors.len()],
+            behind: vec![false; actors.len()],
             easing: Vec::with_capacity(actors.len()),
             near: Vec::with_capacity(actors.len()),
             cand: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
@@ -885,9 +1064,26 @@ impl<'a, 'b> Sim<'a, 'b> {
                     self.easing.push(j);
                 }
             }
+            // Emergency holds first: the right-of-way rule ranks one holding for an emergency
+            // vehicle as not coming.
             for i in 0..self.actors.len() {
                 self.yielding[i] = self.yield_state(i);
             }
+            for i in 0..self.actors.len() {
+                self.behind[i] = self.queued(i);
+            }
+            for i in 0..self.actors.len() {
+                let rule = self.right_of_way(i, t);
+                self.ruled[i] = rule.is_some();
+                self.held[i] = match (self.yielding[i].0, rule) {
+                    (Some(x), Some(y)) => Some(x.min(y)),
+                    (x, y) => x.or(y),
+                };
+            }
+            for i in 0..self.actors.len() {
+                self.yielding[i].0 = self.held[i];
+            }
+            // Packed after the holds are final: `candidates` reads them as `drive` does.
             self.near.clear();
             for ((st, a), (&dir, y)) in self.cur.iter().zip(self.actors).zip(self.dirs.iter().zip(&self.yielding)) {
                 let gives_way = y.0.is_some();
@@ -1064,7 +1260,27 @@ impl<'a, 'b> Sim<'a, 'b> {
             let (v_lon, v_lat) = (o.v * cr, o.v * sr);
             // In the lane we are in now; or in the band we are moving into, and then only when
             // ahead of our front (alongside is the gap acceptance's business).
-            let in_cur = lj - ext_lat < cur_hi + margin && lj + ext_lat > cur_lo - margin;
+            // In a bend our box's corners swing out of the band its centre sweeps (a bus turning
+            // at a junction reaches into the next lane): widen the band by that off-tracking, for
+            // one standing there (one on the move will have gone by when we sweep past).
+            let swing = if a.vehicle && line.is_none() && o.v < 0.5 {
+                let k = a.path.curvature(sj).abs().max(a.path.curvature(sj - a.hl).abs());
+                (0.5 * a.hl * a.hl * k).min(a.hl)
+            } else {
+                0.0
+            };
+            let (band_lo, band_hi) = (cur_lo - margin - swing, cur_hi + margin + swing);
+            let mut in_cur = lj - ext_lat < band_hi && lj + ext_lat > band_lo;
+            // A box turned across our path (a long vehicle turning beside us): its extents along
+            // and across the path put corners where it has none. Only the part of it inside our
+            // band counts, and only its nearest point there.
+            let mut gap = gap;
+            if in_cur && !is_named && sr.abs() > 0.05 {
+                match band_front(lj, cr, sr, b.hl, b.hw, band_lo, band_hi) {
+                    Some(x) => gap = ds + x - a.hl,
+                    None => in_cur = false,
+                }
+            }
             let in_now = in_cur || (gap > 0.0 && lj - ext_lat < hi && lj + ext_lat > lo);
             let mut obstacle = in_now || is_named;
             // Someone about to cut across our corridor (a crossing pedestrian, a car in the
@@ -1094,6 +1310,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             if in_cur || is_named {
                 let lead_move = (v_lon * dt - 0.5 * lim.brake_max * dt * dt).max(0.0);
                 hard = hard.min(gap - 0.2 + lead_move);
+                acc = acc.min(self.safe_acc(i, j, gap, v_lon, t));
             }
         }
         let mut stop_rem = None;
@@ -1133,7 +1350,8 @@ impl<'a, 'b> Sim<'a, 'b> {
             d_next = st.d;
         }
         let stopped = stop_rem.is_some_and(|r| r - adv < 0.3) && v < 0.05;
-        let next = State { v, d: d_next, phase, triggered, stopped, frozen: false, ..st };
+        let give_way = self.ruled[i];
+        let next = State { v, d: d_next, phase, triggered, stopped, frozen: false, give_way, ..st };
         if !a.vehicle {
             // Holonomic: walkers and animals step onto the reference and face where they go.
             let s = st.s + adv;
@@ -1232,6 +1450,194 @@ impl<'a, 'b> Sim<'a, 'b> {
         {
             out.push(j);
         }
+    }
+
+    /// Gipps's safe speed behind leader `j`, `gap` ahead at `v_lon` along our path, as an
+    /// acceleration: after this step we must still be able to stop at our emergency braking
+    /// behind the point where the leader stops at its own. A conflict agent whose striker has
+    /// set off may instead be stopped dead by the crash latch, but only on touching its
+    /// partner: it stops no sooner than the clearance between the two. With every agent inside
+    /// its limits this keeps the overlap safety net from ever braking anyone harder than that.
+    fn safe_acc(&self, i: usize, j: usize, gap: f64, v_lon: f64, t: f64) -> f64 {
+        let (a, st, dt) = (&self.actors[i], &self.cur[i], self.dt);
+        let b = a.lim.brake_max;
+        let lead = &self.actors[j];
+        let mut lead_stop = if v_lon <= 0.0 { 0.0 } else { v_lon * v_lon / (2.0 * lead.lim.brake_max) };
+        if lead.in_conflict
+            && let Some(p) = self.crash_partner(j, t)
+        {
+            let clearance = self.cur[j].pos.distance(self.cur[p].pos) - lead.radius - self.actors[p].radius;
+            lead_stop = lead_stop.min(clearance.max(0.0));
+        }
+        // Room left after this step's own travel at the current speed (the half step at `v`).
+        let room = gap - SAFE_MARGIN + lead_stop - 0.5 * st.v * dt;
+        let v_safe = if room <= 0.0 { 0.0 } else { 0.5 * (-b * dt + (b * b * dt * dt + 8.0 * b * room).sqrt()) };
+        (v_safe - st.v) / dt
+    }
+
+    /// The partner of agent `j` in a staged conflict whose striker has set off and not yet
+    /// struck (pass 2): once the two touch, the latch stops both dead.
+    fn crash_partner(&self, j: usize, t: f64) -> Option<usize> {
+        self.confs.iter().zip(self.plans).enumerate().find_map(|(k, (c, p))| {
+            let pending = !self.latched[k] && p.as_ref().is_some_and(|p| t >= p.t_depart - 1e-9);
+            match (pending, c.af == j, c.st == j) {
+                (true, true, _) => Some(c.st),
+                (true, _, true) => Some(c.af),
+                _ => None,
+            }
+        })
+    }
+
+    /// Whether agent `i` is a striker on its intercept now (it follows its plan, not the rules).
+    fn striking(&self, i: usize, t: f64) -> bool {
+        self.striker[i]
+            .and_then(|k| self.plans[k].as_ref().map(|p| (k, p)))
+            .is_some_and(|(k, p)| t >= p.t_depart - 1e-9 && !self.latched[k])
+    }
+
+    /// The right-of-way rule for agent `i`: how far its front may still go (to its stop line, or
+    /// short of the zone it shares with another vehicle's junction path) while it gives way, or,
+    /// for a walker about to cross, to the kerb while no vehicle could stop for it comfortably.
+    fn right_of_way(&self, i: usize, t: f64) -> Option<f64> {
+        let (a, st) = (&self.actors[i], &self.cur[i]);
+        if st.frozen || st.stopped || !matches!(a.drive, Drive::Mover) || self.striking(i, t) {
+            return None;
+        }
+        if let Some(kerb) = a.kerb {
+            return self.kerb_hold(i, kerb, t);
+        }
+        let mut hold: Option<f64> = None;
+        for c in &a.crossings {
+            if let Some(rem) = self.gives_way(i, c, t) {
+                hold = Some(hold.map_or(rem, |h: f64| h.min(rem)));
+            }
+        }
+        hold
+    }
+
+    /// Agent `i`'s standing toward its shared zone `(enter, leave)`: its rank (0 inside, 1 too
+    /// close to stop, 2 approaching, 3 stopped by anything but this rule) and its time to the
+    /// zone; `None` once it has left the zone, or when it means to stop short of it. Also how
+    /// far its front may go while it holds (stop line, else short of the zone).
+    fn zone_rank(&self, i: usize, enter: f64, leave: f64, t: f64) -> Option<(u8, f64, f64)> {
+        let (a, st) = (&self.actors[i], &self.cur[i]);
+        if st.s > leave || st.frozen || st.stopped {
+            return None;
+        }
+        if let StopGoal::Front(sf) | StopGoal::Centre(sf) = a.stop
+            && sf < enter + a.hl
+            && t >= a.start - 1e-9
+        {
+            return None;
+        }
+        let to_zone = enter - 0.3 - st.s;
+        let rem = match a.junction {
+            Some(j) if j.stop - 0.3 - (st.s + a.hl) > -0.05 => (j.stop - 0.3 - (st.s + a.hl)).min(to_zone),
+            _ => to_zone,
+        };
+        if st.s >= enter || self.striking(i, t) {
+            return Some((0, 0.0, rem));
+        }
+        // Giving way may take up to the emergency braking: within the limits, and it leaves the
+        // fewest pairs where neither can stop (both then go, and only the safety net is left).
+        if rem <= -0.05 || st.v * st.v / (2.0 * rem.max(1e-3)) > a.lim.brake_max {
+            return Some((1, 0.0, rem));
+        }
+        let dist = (enter - st.s).max(0.0);
+        let acc = a.lim.accel;
+        let eta = ((st.v * st.v + 2.0 * acc * dist).sqrt() - st.v) / acc;
+        // Stopped, or holding for an emergency vehicle, for anything but this rule, or queued
+        // behind another approaching the junction: not coming next.
+        let not_next = (st.v < 0.3 && !st.give_way) || self.yielding[i].0.is_some() || self.behind[i];
+        let rank = if not_next { 3 } else { 2 };
+        Some((rank, eta, rem.max(0.0)))
+    }
+
+    /// Whether another vehicle approaches agent `i`'s junction through the same lane ahead of it,
+    /// its front not yet past its stop line.
+    fn queued(&self, i: usize) -> bool {
+        let (a, st) = (&self.actors[i], &self.cur[i]);
+        let (Some(lane), Some(j)) = (a.approach, a.junction) else { return false };
+        let mine = j.stop - (st.s + a.hl);
+        self.actors.iter().zip(&self.cur).enumerate().any(|(k, (b, o))| {
+            let to_stop = b.junction.map_or(f64::NEG_INFINITY, |jb| jb.stop - (o.s + b.hl));
+            k != i && b.approach == Some(lane) && !o.frozen && to_stop > -0.5 && to_stop < mine
+        })
+    }
+
+    /// Whether agent `i` gives way to the other agent of crossing `c`, and then how far its
+    /// front may go. The rule is a strict order on (rank, time to the zone, name) of the two,
+    /// the same seen from either side, so exactly one of two waiting agents goes first: inside
+    /// the zone goes before too close to stop, before approaching, before stopped by something
+    /// else (so nobody waits for a car that waits for something else); the earlier arrival next.
+    fn gives_way(&self, i: usize, c: &Crossing, t: f64) -> Option<f64> {
+        let (ri, ei, rem) = self.zone_rank(i, c.enter, c.leave, t)?;
+        let (rj, ej, _) = self.zone_rank(c.other, c.other_enter, c.other_leave, t)?;
+        if ri <= 1 {
+            return None;
+        }
+        let (ni, nj) = (&self.actors[i].info.name, &self.actors[c.other].info.name);
+        let first = (rj, ej).partial_cmp(&(ri, ei)).is_some_and(|o| o.then(nj.cmp(ni)).is_lt());
+        // No need to hold for one that will have left the zone, at its present speed, a
+        // `CLEAR_MARGIN_S` before we could reach it.
+        let o = &self.cur[c.other];
+        let gone = o.v > 0.5 && (c.other_leave - o.s) / o.v + CLEAR_MARGIN_S < ei;
+        (first && !gone).then_some(rem)
+    }
+
+    /// A walker at the kerb (`Actor::kerb`) waits there while a vehicle whose route crosses its
+    /// walk could not stop comfortably before it; once its front is on the road, or too close to
+    /// the kerb to stop, it goes on (vehicles yield to a walker on the road).
+    fn kerb_hold(&self, i: usize, kerb: f64, t: f64) -> Option<f64> {
+        let (a, st) = (&self.actors[i], &self.cur[i]);
+        if t < a.start - 1e-9 {
+            return None;
+        }
+        let rem = kerb - (st.s + a.hl);
+        let firm = if st.give_way { a.lim.brake_max } else { a.lim.brake };
+        if rem <= -0.05 || st.v * st.v / (2.0 * rem.max(1e-3)) > firm {
+            return None;
+        }
+        let end = a.path.length() - 2.0;
+        if end <= kerb {
+            return None;
+        }
+        let s_mid = 0.5 * (kerb + end);
+        let (mid, _) = a.path.point(s_mid, 0.0);
+        let half = 0.5 * (end - kerb);
+        let clear = a.hw + 1.0;
+        let walk = a.v_goal.max(0.5);
+        let waits = (0..self.actors.len()).any(|j| {
+            let (b, o) = (&self.actors[j], &self.cur[j]);
+            if j == i || !b.vehicle || !matches!(b.drive, Drive::Mover) || o.frozen {
+                return false;
+            }
+            let fwd = DVec2::from_angle(o.yaw);
+            let (sj, lj, beyond, _) = b.path.frenet(mid, o.s + (mid - o.pos).dot(fwd));
+            let ahead = sj - o.s;
+            if beyond > 0.5 || lj.abs() > half + b.hw + clear || ahead < -(b.hl + clear) {
+                return false;
+            }
+            let room = ahead - b.hl - clear;
+            let brake = if self.striking(j, t) { 0.0 } else { b.lim.brake };
+            if room > 0.0 && o.v * o.v <= 2.0 * brake * room {
+                return false;
+            }
+            // It could not stop: wait only if it would pass while we are in its lane (its path
+            // meets our walk at `s_x`), with a second's margin either side.
+            let (x, _) = b.path.point(sj, 0.0);
+            let (s_x, _, _, _) = a.path.frenet(x, s_mid);
+            let lane = b.hw + clear;
+            let t_in = (s_x - lane - (st.s + a.hl)).max(0.0) / walk;
+            let t_out = (s_x + lane - (st.s - a.hl)).max(0.0) / walk;
+            let (t_arr, t_gone) = if o.v < 0.1 {
+                (if room <= 0.0 { 0.0 } else { f64::INFINITY }, f64::INFINITY)
+            } else {
+                (room.max(0.0) / o.v, (ahead + b.hl + clear) / o.v)
+            };
+            t_arr < t_out + 1.0 && t_gone > t_in - 1.0
+        });
+        waits.then_some(rem.max(0.0))
     }
 
     /// Move vehicle `a` from `st` by `dist` along a circular arc of curvature `k`, bounded by its
@@ -1343,14 +1749,75 @@ impl<'a, 'b> Sim<'a, 'b> {
         // Keep rolling (an intercept that stalls never makes contact), within the strike's
         // acceleration.
         let v = (st.v + acc * dt).max(1.0f64.min(st.v + stage::STRIKE_ACCEL * lim.accel * dt));
-        let adv = 0.5 * (st.v + v) * dt;
-        // The arc from here through the curve's point `adv` ahead: the curve itself wherever the
-        // car can follow it; a wider arc where the curve turns tighter than the car can.
-        // In the last metres the contact point itself: the curve's end heading matters less than
-        // reaching its end, and a short re-planned curve can bend tighter than the car.
-        let aim = if len <= 3.0 * adv { g } else { curve.at(adv, gyaw).0 };
-        let (pos, yaw) = self.advance(a, &st, pursuit(st.pos, self.dirs[i], aim), adv, stage::STRIKE_YAW);
+        let step = |v: f64| {
+            let adv = 0.5 * (st.v + v) * dt;
+            // The arc from here through the curve's point `adv` ahead: the curve itself wherever
+            // the car can follow it; a wider arc where the curve turns tighter than the car can.
+            // In the last metres the contact point itself: the curve's end heading matters less
+            // than reaching its end, and a short re-planned curve can bend tighter than the car.
+            let aim = if len <= 3.0 * adv { g } else { curve.at(adv, gyaw).0 };
+            let (pos, yaw) = self.advance(a, &st, pursuit(st.pos, self.dirs[i], aim), adv, stage::STRIKE_YAW);
+            (pos, yaw, (len - adv).max(0.0))
+        };
+        // Reckless toward the struck agent only: it slows, within its emergency braking, rather
+        // than cut into a bystander's stopping distance or come closer to one than its own.
+        let v_min = (st.v - lim.brake_max * dt).max(0.0);
+        let mut pick = (v_min, step(v_min));
+        for k in 0..=8 {
+            let vk = v - (v - v_min) * k as f64 / 8.0;
+            let next = step(vk);
+            if vk <= v_min || !self.strike_blocked(i, plan.struck, next.0, next.1, vk, next.2) {
+                pick = (vk, next);
+                break;
+            }
+        }
+        let (v, (pos, yaw, _)) = pick;
         State { pos, yaw, v, ..st }
+    }
+
+    /// Whether striker `i` at `pos`, `yaw` and speed `v`, `left` metres short of its contact pose,
+    /// would be inside a bystander's stopping envelope (its box stretched ahead by the distance it
+    /// needs to stop at its emergency braking), or have its own envelope (up to the contact pose)
+    /// reach a bystander's. A bystander following the striker is left to its own safe speed.
+    fn strike_blocked(&self, i: usize, struck: usize, pos: DVec2, yaw: f64, v: f64, left: f64) -> bool {
+        let a = &self.actors[i];
+        let envelope = |c: DVec2, yaw: f64, hl: f64, hw: f64, ext: f64| {
+            let dir = DVec2::from_angle(yaw);
+            Obb { center: c + dir * (0.5 * ext), yaw, length: 2.0 * hl + ext, width: 2.0 * hw }
+        };
+        let own_ext = (v * v / (2.0 * a.lim.brake_max) + SAFE_MARGIN).min(left);
+        let mine = envelope(pos, yaw, a.hl, a.hw, own_ext);
+        (0..self.actors.len()).any(|j| {
+            if j == i || j == struck || self.exempt(i, j) {
+                return false;
+            }
+            let (b, o) = (&self.actors[j], &self.cur[j]);
+            let r = a.radius + b.radius + own_ext + o.v * o.v / (2.0 * b.lim.brake_max) + SAFE_MARGIN;
+            if pos.distance_squared(o.pos) > r * r {
+                return false;
+            }
+            let theirs_box = b.obb(o);
+            if mine.overlaps(&theirs_box) {
+                return true;
+            }
+            // Already ahead of it in its lane and heading its way: it follows us, at its own
+            // safe speed. Cutting in from beside is not following.
+            let (fwd, now) = (self.dirs[j], self.cur[i].pos - o.pos);
+            let follows =
+                now.dot(fwd) > b.hl && fwd.perp_dot(now).abs() < a.hw + b.hw && DVec2::from_angle(yaw).dot(fwd) > 0.7;
+            if follows || o.v < 0.05 {
+                return false;
+            }
+            // Its envelope as its car-following sees us: our box's extent along and across its
+            // heading, against its band (its width and the margin it watches, and more) from
+            // its rear to where it could stop after one more step at its speed.
+            let (rel, (c, sn)) = (pos - o.pos, (yaw - o.yaw).sin_cos());
+            let (c, sn) = (sn.abs(), c.abs());
+            let (lon, lat) = (rel.dot(fwd), fwd.perp_dot(rel).abs());
+            let (ext_lon, ext_lat) = (a.hl * sn + a.hw * c, a.hl * c + a.hw * sn);
+            let reach = b.hl + o.v * o.v / (2.0 * b.lim.brake_max) + o.v * self.dt + SAFE_MARGIN + 0.3;
+            lon - ext_lon < reach && lon + ext_lon > -b.hl && lat - ext_lat < b.hw + 0.4
+        })
     }
 
     /// Undo moves until no two boxes overlap (conflict pairs excepted). Undoing every move
@@ -1470,6 +1937,35 @@ impl<'a, 'b> Sim<'a, 'b> {
             }
         }
     }
+}
+
+/// The nearest longitudinal point, relative to its centre, of the part of a box lying inside the
+/// lateral band `lo..hi` of a path frame (the box centred at lateral offset `lat`, its heading at
+/// cosine `cr` and sine `sr` to the path's, half sizes `hl`, `hw`); `None` when no part does.
+fn band_front(lat: f64, cr: f64, sr: f64, hl: f64, hw: f64, lo: f64, hi: f64) -> Option<f64> {
+    let (ax, ay) = (DVec2::new(cr, sr), DVec2::new(-sr, cr));
+    let c = DVec2::new(0.0, lat);
+    let mut poly = vec![c + ax * hl + ay * hw, c - ax * hl + ay * hw, c - ax * hl - ay * hw, c + ax * hl - ay * hw];
+    // Sutherland-Hodgman against y >= lo, then y <= hi.
+    for (bound, keep_above) in [(lo, true), (hi, false)] {
+        let inside = |p: DVec2| if keep_above { p.y >= bound } else { p.y <= bound };
+        let mut out = Vec::with_capacity(poly.len() + 2);
+        for k in 0..poly.len() {
+            let (p, q) = (poly[k], poly[(k + 1) % poly.len()]);
+            if inside(p) {
+                out.push(p);
+            }
+            if inside(p) != inside(q) {
+                let u = (bound - p.y) / (q.y - p.y);
+                out.push(p + (q - p) * u);
+            }
+        }
+        poly = out;
+        if poly.is_empty() {
+            return None;
+        }
+    }
+    poly.iter().map(|p| p.x).reduce(f64::min)
 }
 
 /// Smooth 0..1 profile with zero velocity and acceleration at both ends.
