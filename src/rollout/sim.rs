@@ -1262,8 +1262,12 @@ impl<'a, 'b> Sim<'a, 'b> {
             // ahead of our front (alongside is the gap acceptance's business).
             // In a bend our box's corners swing out of the band its centre sweeps (a bus turning
             // at a junction reaches into the next lane): widen the band by that off-tracking, for
-            // one standing there (one on the move will have gone by when we sweep past).
-            let swing = if a.vehicle && line.is_none() && o.v < 0.5 {
+            // one standing there or holding at its line (one on the move will have gone by when we
+            // sweep past), and only
+            // ahead of our front. Taken where it stands on our route, also while we are still on
+            // the straight before the bend: found only once in the bend, it may be too close to
+            // stop for within our limits.
+            let swing = if a.vehicle && (o.v < 0.5 || self.yielding[j].0.is_some()) && gap > 0.0 {
                 let k = a.path.curvature(sj).abs().max(a.path.curvature(sj - a.hl).abs());
                 (0.5 * a.hl * a.hl * k).min(a.hl)
             } else {
@@ -1279,6 +1283,20 @@ impl<'a, 'b> Sim<'a, 'b> {
                 match band_front(lj, cr, sr, b.hl, b.hw, band_lo, band_hi) {
                     Some(x) => gap = ds + x - a.hl,
                     None => in_cur = false,
+                }
+                // That part alongside us, not ahead: the frame at its projection is turned by our
+                // bend, which can put a corner of a box driving straight beside us into our band.
+                // Measured across our path where we are, it must still reach into the band.
+                if in_cur && gap <= 0.0 {
+                    let (p0, h0) = a.path.point(st.s, 0.0);
+                    let n0 = DVec2::from_angle(h0).perp();
+                    let (lo_c, hi_c) = b
+                        .obb(o)
+                        .corners()
+                        .iter()
+                        .map(|&q| n0.dot(q - p0))
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), d| (l.min(d), h.max(d)));
+                    in_cur = lo_c < band_hi && hi_c > band_lo;
                 }
             }
             let in_now = in_cur || (gap > 0.0 && lj - ext_lat < hi && lj + ext_lat > lo);
@@ -1420,7 +1438,9 @@ impl<'a, 'b> Sim<'a, 'b> {
                 let guess = st.s + ahead;
                 let rel = b.pos - ln.origin;
                 let s_line = ln.s0 + rel.dot(ln.dir);
-                if guess > ln.lo && guess < ln.hi && s_line > ln.lo && s_line < ln.hi {
+                // (Its projection a half length inside the run: `drive` widens the band by our
+                // swing, read from the curvature there and a half length behind it.)
+                if guess > ln.lo && guess < ln.hi && s_line - a.hl > ln.lo && s_line < ln.hi {
                     // `frenet_dir` would give s_line, this offset and this tangent to float
                     // noise (1 mm is far above it), hence the extents below too.
                     const EPS: f64 = 1e-3;
