@@ -505,10 +505,7 @@ fn build_actor(
                 // would leave the road: refused, not driven wide.
                 if let (Some(t), Some(j)) = (turn, a.junction) {
                     a.turn_goal = Some((t, ca.span));
-                    let entry = j.exit - map.connectors[j.conn].path.length();
-                    let n = ((j.exit - entry) / 0.5).ceil().max(1.0) as usize;
-                    let k = (0..=n).map(|i| a.path.curvature(entry + (j.exit - entry) * i as f64 / n as f64).abs());
-                    let k = k.fold(0.0, f64::max);
+                    let k = junction_curvature(map, &a.path, j);
                     if k * a.r_min > TURN_SLACK {
                         fail(
                             errs,
@@ -774,12 +771,23 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
 /// its junction path: a box tangent to an arc of curvature k reaches `hl^2 k / 2` beyond it, and
 /// a vehicle that cannot turn that tight runs wider by the difference of the radii.
 fn off_tracking(map: &Map, a: &Actor, j: Junction) -> f64 {
-    let entry = j.exit - map.connectors[j.conn].path.length();
-    let n = ((j.exit - entry) / 0.5).ceil().max(1.0) as usize;
-    let k = (0..=n).map(|i| a.path.curvature(entry + (j.exit - entry) * i as f64 / n as f64).abs()).fold(0.0, f64::max);
+    let k = junction_curvature(map, &a.path, j);
     // A bend tighter than the vehicle can steer is driven wider, on its own turning radius.
     let wide = if k > 1e-9 { (a.r_min - 1.0 / k).max(0.0) } else { 0.0 };
-    (0.5 * a.hl * a.hl * k).min(a.hl) + wide
+    swing(a.hl, k) + wide
+}
+
+/// The tightest curvature of `path` through its junction `j`, sampled every half metre.
+fn junction_curvature(map: &Map, path: &Path, j: Junction) -> f64 {
+    let entry = j.exit - map.connectors[j.conn].path.length();
+    let n = ((j.exit - entry) / 0.5).ceil().max(1.0) as usize;
+    (0..=n).map(|i| path.curvature(entry + (j.exit - entry) * i as f64 / n as f64).abs()).fold(0.0, f64::max)
+}
+
+/// How far the corners of a box of half length `hl`, tangent to an arc of curvature `k`, reach
+/// beyond the band its centre sweeps (at most `hl`).
+fn swing(hl: f64, k: f64) -> f64 {
+    (0.5 * hl * hl * k).min(hl)
 }
 
 /// Connector `a` sampled every half metre against connector `b`'s path: arc length along `a`,
@@ -1269,7 +1277,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             // stop for within our limits.
             let swing = if a.vehicle && (o.v < 0.5 || self.yielding[j].0.is_some()) && gap > 0.0 {
                 let k = a.path.curvature(sj).abs().max(a.path.curvature(sj - a.hl).abs());
-                (0.5 * a.hl * a.hl * k).min(a.hl)
+                swing(a.hl, k)
             } else {
                 0.0
             };
