@@ -1229,80 +1229,132 @@ proptest! {
     #[test]
     fn generated_scenes_on_every_template(g in gen_scene()) {
         let text = scene_text(&g);
-        let mut sources = rocc::source::SourceMap::default();
-        let checked = rocc::check::check_text("gen.scn", &text, std::path::Path::new("."), &mut sources);
-        // Generated choices the checker or the staging refuses (a crowded placement, a conflict
-        // the pair cannot reach) are not this property's business.
-        prop_assume!(checked.is_ok());
-        let s = checked.expect("checked");
-        let f = rocc::compile::front(s.clone(), None);
-        if let Err(d) = &f {
-            prop_assert!(d.iter().all(|d| d.code.starts_with("E02")), "{text}\n{:?}", d.iter().map(|d| (&d.code, &d.message)).collect::<Vec<_>>());
-        }
-        prop_assume!(f.is_ok());
-        let f = f.expect("front");
-        let t = &f.tracks;
-        let pair = t.impacts.first().map(|r| (r.at_fault, r.struck, r.frame));
-        // The pair's first contact: the crash starts there and is latched at its deepest, within
-        // a second and a half.
-        let pair = pair.map(|(a, b, latched)| {
-            let first = (0..=latched).find(|&k| obb(t, a, k).overlaps(&obb(t, b, k))).unwrap_or(latched);
-            (a, b, first, latched)
-        });
-        if let Some((a, b, first, latched)) = pair {
-            prop_assert!(latched - first <= 15, "{text}\n{} touches {} at frame {first}, latched at {latched}", t.agents[a].name, t.agents[b].name);
-        }
-        let pair = pair.map(|(a, b, first, _)| (a, b, first));
-        let n = t.agents.len();
-        for fr in 0..t.frames {
-            for i in 0..n {
-                for j in i + 1..n {
-                    let allowed = pair.is_some_and(|(a, b, f0)| ((a, b) == (i, j) || (a, b) == (j, i)) && fr >= f0);
-                    prop_assert!(allowed || !obb(t, i, fr).overlaps(&obb(t, j, fr)),
-                        "{text}\n{} and {} overlap at frame {fr}", t.agents[i].name, t.agents[j].name);
-                }
+        generated_scene_holds(&text)?;
+    }
+}
+
+/// The properties every generated scene must have (see `generated_scenes_on_every_template`);
+/// a scene the checker or the staging refuses is rejected, not failed.
+fn generated_scene_holds(text: &str) -> Result<(), TestCaseError> {
+    let text = text.to_string();
+    let mut sources = rocc::source::SourceMap::default();
+    let checked = rocc::check::check_text("gen.scn", &text, std::path::Path::new("."), &mut sources);
+    // Generated choices the checker or the staging refuses (a crowded placement, a conflict
+    // the pair cannot reach) are not this property's business.
+    prop_assume!(checked.is_ok());
+    let s = checked.expect("checked");
+    let f = rocc::compile::front(s.clone(), None);
+    if let Err(d) = &f {
+        prop_assert!(
+            d.iter().all(|d| d.code.starts_with("E02")),
+            "{text}\n{:?}",
+            d.iter().map(|d| (&d.code, &d.message)).collect::<Vec<_>>()
+        );
+    }
+    prop_assume!(f.is_ok());
+    let f = f.expect("front");
+    let t = &f.tracks;
+    let pair = t.impacts.first().map(|r| (r.at_fault, r.struck, r.frame));
+    // The pair's first contact: the crash starts there and is latched at its deepest, within
+    // a second and a half.
+    let pair = pair.map(|(a, b, latched)| {
+        let first = (0..=latched).find(|&k| obb(t, a, k).overlaps(&obb(t, b, k))).unwrap_or(latched);
+        (a, b, first, latched)
+    });
+    if let Some((a, b, first, latched)) = pair {
+        prop_assert!(
+            latched - first <= 15,
+            "{text}\n{} touches {} at frame {first}, latched at {latched}",
+            t.agents[a].name,
+            t.agents[b].name
+        );
+    }
+    let pair = pair.map(|(a, b, first, _)| (a, b, first));
+    let n = t.agents.len();
+    for fr in 0..t.frames {
+        for i in 0..n {
+            for j in i + 1..n {
+                let allowed = pair.is_some_and(|(a, b, f0)| ((a, b) == (i, j) || (a, b) == (j, i)) && fr >= f0);
+                prop_assert!(
+                    allowed || !obb(t, i, fr).overlaps(&obb(t, j, fr)),
+                    "{text}\n{} and {} overlap at frame {fr}",
+                    t.agents[i].name,
+                    t.agents[j].name
+                );
             }
         }
-        let limit = f.map.lanes.iter().map(|l| l.speed_limit).fold(0.0, f64::max);
-        let v_max: Vec<f64> = (0..n)
-            .map(|i| {
-                let goal = f.placed.agents.get(i).and_then(|p| p.source).and_then(|k| f.concrete.agents[k].goal.as_ref()).and_then(|g| g.speed);
-                t.speeds[i][0].max(goal.unwrap_or(0.0)).max(limit).max(if Some(i) == pair.map(|p| p.0) { 40.0 } else { 0.0 })
+    }
+    let limit = f.map.lanes.iter().map(|l| l.speed_limit).fold(0.0, f64::max);
+    let v_max: Vec<f64> = (0..n)
+        .map(|i| {
+            let goal = f
+                .placed
+                .agents
+                .get(i)
+                .and_then(|p| p.source)
+                .and_then(|k| f.concrete.agents[k].goal.as_ref())
+                .and_then(|g| g.speed);
+            t.speeds[i][0].max(goal.unwrap_or(0.0)).max(limit).max(if Some(i) == pair.map(|p| p.0) {
+                40.0
+            } else {
+                0.0
             })
-            .collect();
-        let strikers: Vec<usize> = t.impacts.iter().map(|r| r.at_fault).collect();
-        // The braking bound holds everywhere but in two situations the controller does not
-        // foresee (README, Rollout "Limits"): a staged striker meeting a bystander on its way,
-        // and the tail of a long vehicle (10 m or more) swinging out in a turn onto one beside
-        // it. Only a frame at which (or just before which) the braking agent is within 1 m of
-        // another and either of the two is a striker or such a long vehicle is excused.
-        let near = |i: usize, f: usize, k: usize| {
-            [f - 1, f].iter().any(|&g| {
-                let mut o = obb(t, k, g);
-                o.length += 2.0;
-                o.width += 2.0;
-                o.overlaps(&obb(t, i, g))
-            })
-        };
-        let long = |k: usize| t.agents[k].motion == Motion::Vehicle && t.agents[k].size[0] >= 10.0;
-        let special = |k: usize| strikers.contains(&k) || long(k);
-        let excused = |i: usize, f: usize| (0..n).any(|k| k != i && (special(i) || special(k)) && near(i, f, k));
-        check_kinematics_holds(t, &v_max, &strikers, &excused);
-        for (i, a) in t.agents.iter().enumerate() {
-            if a.motion != Motion::Vehicle || pair.is_some_and(|(x, y, _)| x == i || y == i) {
-                continue;
-            }
-            for (fr, p) in t.poses[i].iter().enumerate() {
-                let mut wheels = obb(t, i, fr);
-                wheels.length *= rocc::rollout::WHEELBASE_SHARE;
-                let corners = wheels.corners();
-                let worst = corners.iter().map(|&q| off_drivable_by(&f.map, q)).fold(0.0, f64::max);
-                prop_assert!(worst <= CORNER_TOL_M,
-                    "{text}\n{} has a wheel {worst:.2} m off the drivable surface at frame {fr}: ({:.1}, {:.1}) yaw {:.1} deg",
-                    a.name, p.x, p.y, p.yaw.to_degrees());
-            }
+        })
+        .collect();
+    let strikers: Vec<usize> = t.impacts.iter().map(|r| r.at_fault).collect();
+    // The braking bound holds everywhere but in two situations the controller does not
+    // foresee (README, Rollout "Limits"): a staged striker meeting a bystander on its way,
+    // and the tail of a long vehicle (10 m or more) swinging out in a turn onto one beside
+    // it. Only a frame at which (or just before which) the braking agent is within 1 m of
+    // another and either of the two is a striker or such a long vehicle is excused.
+    let near = |i: usize, f: usize, k: usize| {
+        [f - 1, f].iter().any(|&g| {
+            let mut o = obb(t, k, g);
+            o.length += 2.0;
+            o.width += 2.0;
+            o.overlaps(&obb(t, i, g))
+        })
+    };
+    let long = |k: usize| t.agents[k].motion == Motion::Vehicle && t.agents[k].size[0] >= 10.0;
+    let special = |k: usize| strikers.contains(&k) || long(k);
+    let excused = |i: usize, f: usize| (0..n).any(|k| k != i && (special(i) || special(k)) && near(i, f, k));
+    check_kinematics_holds(t, &v_max, &strikers, &excused);
+    for (i, a) in t.agents.iter().enumerate() {
+        if a.motion != Motion::Vehicle || pair.is_some_and(|(x, y, _)| x == i || y == i) {
+            continue;
         }
-        let again = rocc::compile::front(s, None).expect("front again");
-        prop_assert_eq!(serde_json::to_string(&again.tracks).ok(), serde_json::to_string(t).ok());
+        for (fr, p) in t.poses[i].iter().enumerate() {
+            let mut wheels = obb(t, i, fr);
+            wheels.length *= rocc::rollout::WHEELBASE_SHARE;
+            let corners = wheels.corners();
+            let worst = corners.iter().map(|&q| off_drivable_by(&f.map, q)).fold(0.0, f64::max);
+            prop_assert!(
+                worst <= CORNER_TOL_M,
+                "{text}\n{} has a wheel {worst:.2} m off the drivable surface at frame {fr}: ({:.1}, {:.1}) yaw {:.1} deg",
+                a.name,
+                p.x,
+                p.y,
+                p.yaw.to_degrees()
+            );
+        }
+    }
+    let again = rocc::compile::front(s, None).expect("front again");
+    prop_assert_eq!(serde_json::to_string(&again.tracks).ok(), serde_json::to_string(t).ok());
+    Ok(())
+}
+
+/// Scenes the generator once produced that broke a property (minimal cases, as scene text, in
+/// `tests/rollout-cases/`): each must still be accepted, and hold.
+#[test]
+fn generated_regression_scenes() {
+    let mut files: Vec<_> =
+        std::fs::read_dir("tests/rollout-cases").expect("cases").map(|e| e.expect("entry").path()).collect();
+    files.sort();
+    assert!(files.len() >= 10, "{files:?}");
+    for p in files {
+        let text = std::fs::read_to_string(&p).expect("read");
+        if let Err(e) = generated_scene_holds(&text) {
+            panic!("{}: {e}", p.display());
+        }
     }
 }

@@ -102,6 +102,36 @@ pub(super) struct Actor {
     /// The lane from which its route enters its first junction (vehicles with `crossings`):
     /// of those approaching through one lane, only the first can be next into the junction.
     pub approach: Option<usize>,
+    /// A vehicle's sweep through its first junction (`assign_bends`).
+    pub bend: Option<std::sync::Arc<Bend>>,
+}
+
+/// How far a vehicle's box reaches beyond the band its path's centre sweeps through its first
+/// junction, metre by metre along its route (`assign_bends`): a U-turn driven wide on an
+/// ambulance's turning radius loops out 10 m and more at its apex, far beyond what the path's
+/// curvature says, and not at all past it.
+#[derive(Clone, Debug)]
+pub(super) struct Bend {
+    /// Route arc length of the first metre.
+    pub from: f64,
+    /// Per metre from `from`: the reach to the right and to the left.
+    pub reach: Vec<(f64, f64)>,
+    /// The widest reach to either side anywhere, at least the corners' swing in the tightest
+    /// bend (`sweep`).
+    pub widest: f64,
+}
+
+impl Bend {
+    /// The widest reach to the right and to the left between route arc lengths `lo` and `hi`.
+    fn within(&self, lo: f64, hi: f64) -> (f64, f64) {
+        let last = self.reach.len() as f64 - 1.0;
+        // `max` and `min` take the number over a NaN: a and b are never NaN.
+        let (a, b) = ((lo - self.from).floor().max(0.0), (hi - self.from).ceil().min(last));
+        if a > b {
+            return (0.0, 0.0);
+        }
+        self.reach[a as usize..=b as usize].iter().fold((0.0, 0.0), |(r, l), &(x, y)| (f64::max(r, x), f64::max(l, y)))
+    }
 }
 
 /// The stretch that two vehicles' junction paths share, seen from one of them: route arc
@@ -115,6 +145,8 @@ pub(super) struct Crossing {
     /// The other agent's zone on the other's route.
     pub other_enter: f64,
     pub other_leave: f64,
+    /// One of the two is an emergency vehicle the other yields to (`Actor::yield_to`).
+    pub emergency: bool,
 }
 
 /// How far ahead of an emergency vehicle the junction is cleared: this many seconds at its
@@ -210,10 +242,11 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
     for k in &confs {
         face_the_striker(&mut actors, k);
     }
-    assign_yields(map, &mut actors, &confs);
-    assign_crossings(map, &mut actors, &confs);
     let frames = c.frame_count();
     let dt = if c.rate > 0.0 { 1.0 / c.rate } else { 0.1 };
+    assign_bends(map, &mut actors, dt);
+    assign_yields(map, &mut actors, &confs);
+    assign_crossings(map, &mut actors, &confs);
     let mut out = empty_tracks(&actors, c.rate, frames);
     if confs.is_empty() {
         Sim::new(&actors, &confs, &[], None, dt).run(&mut out);
@@ -424,6 +457,7 @@ fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Class, drive:
         kerb: None,
         in_conflict: false,
         approach: None,
+        bend: None,
         info,
     }
 }
@@ -723,15 +757,16 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
         for &j in &js[n + 1..] {
             let (a, b) = (&actors[i], &actors[j]);
             let (Some(ji), Some(jj)) = (a.junction, b.junction) else { continue };
-            if a.yield_to.contains(&j) || b.yield_to.contains(&i) || (a.emergency && b.emergency) {
+            if a.emergency && b.emergency {
                 continue;
             }
+            let emergency = a.yield_to.contains(&j) || b.yield_to.contains(&i);
             if confs.iter().any(|k| (k.af == i && k.st == j) || (k.af == j && k.st == i)) {
                 continue;
             }
             // A long box swings wide of its path in a turn (a bus's front corner sweeps into the
             // next lane): the zone widens by each box's off-tracking.
-            let gap = a.hw + b.hw + 0.5 + off_tracking(map, a, ji) + off_tracking(map, b, jj);
+            let gap = a.hw + b.hw + 0.5 + off_tracking(a) + off_tracking(b);
             let za =
                 shared_zones(map, (ji.conn, jj.conn), profile(&mut profiles, map, ji.conn, jj.conn), gap, 2.0 * a.hl);
             let zb =
@@ -749,6 +784,7 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
                     leave: ei + ao + hi,
                     other_enter: ej + bi - hj,
                     other_leave: ej + bo + hj,
+                    emergency,
                 };
                 let cj = Crossing {
                     other: i,
@@ -756,6 +792,7 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
                     leave: ci.other_leave,
                     other_enter: ci.enter,
                     other_leave: ci.leave,
+                    emergency,
                 };
                 actors[i].crossings.push(ci);
                 actors[j].crossings.push(cj);
@@ -770,18 +807,91 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
 /// How far the corners of `a`'s box swing out of its path's lane band in the tightest bend of
 /// its junction path: a box tangent to an arc of curvature k reaches `hl^2 k / 2` beyond it, and
 /// a vehicle that cannot turn that tight runs wider by the difference of the radii.
-fn off_tracking(map: &Map, a: &Actor, j: Junction) -> f64 {
-    let k = junction_curvature(map, &a.path, j);
-    // A bend tighter than the vehicle can steer is driven wider, on its own turning radius.
+fn off_tracking(a: &Actor) -> f64 {
+    a.bend.as_ref().map_or(0.0, |b| b.widest)
+}
+
+/// Fill every vehicle's `bend` through its first junction by a dry run: the vehicle alone,
+/// steered as `Sim::drive` steers (pure pursuit of its path, curvature bounded by its turning
+/// radius and yaw rate) at its path's curve speed, from 10 m before the junction until it has
+/// rejoined its path; each corner beyond the band is booked at its own place along the route.
+/// Runs sharing a connector, start, box and turning radius are done once.
+fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
+    let mut done: std::collections::HashMap<[u64; 6], std::sync::Arc<Bend>> = std::collections::HashMap::new();
+    for a in actors.iter_mut().filter(|a| a.vehicle) {
+        let Some(j) = a.junction else { continue };
+        let entry = j.exit - map.connectors[j.conn].path.length();
+        let start = (entry - 10.0).max(a.s0.min(entry));
+        let key = [j.conn as u64, start.to_bits(), j.exit.to_bits(), a.hl.to_bits(), a.hw.to_bits(), a.r_min.to_bits()];
+        if let Some(b) = done.get(&key) {
+            a.bend = Some(b.clone());
+            continue;
+        }
+        let (kl, kr) = junction_bend(map, &a.path, j);
+        let from = start - 2.0 * a.hl - 5.0;
+        let mut b = Bend { from, reach: vec![], widest: sweep(a, kl.max(kr)) };
+        let (mut pos, mut yaw) = a.path.point(start, 0.0);
+        let mut s = start;
+        for _ in 0..2000 {
+            let v = a.path.cap(s).clamp(1.0, 15.0);
+            let l_d = (0.8 * v).max(2.0 + 0.25 * a.r_min).min(20.0);
+            let fwd = DVec2::from_angle(yaw);
+            let k = pursuit(pos, fwd, a.path.point_fast(s + l_d, 0.0));
+            let dist = v * dt;
+            let k_max = (1.0 / a.r_min).min(a.lim.yaw_rate * dt / dist);
+            (pos, yaw) = arc(pos, yaw, k.clamp(-k_max, k_max), dist);
+            let (ns, off, _, _) = a.path.frenet_dir(pos, s + dist);
+            s = ns;
+            let corners = Obb { center: pos, yaw, length: 2.0 * a.hl, width: 2.0 * a.hw }.corners();
+            for q in corners {
+                let (sq, dq, beyond, _) = a.path.frenet_dir(q, s + (q - pos).dot(fwd));
+                if beyond > 0.0 || dq.abs() <= a.hw {
+                    continue;
+                }
+                let m = (sq - from).max(0.0) as usize;
+                if b.reach.len() <= m {
+                    b.reach.resize(m + 1, (0.0, 0.0));
+                }
+                let (r, l) = &mut b.reach[m];
+                if dq > 0.0 {
+                    *l = l.max(dq - a.hw);
+                } else {
+                    *r = r.max(-dq - a.hw);
+                }
+                b.widest = b.widest.max(dq.abs() - a.hw);
+            }
+            if (s > j.exit + a.hl && off.abs() < 0.05) || s >= a.path.length() - 1.0 {
+                break;
+            }
+        }
+        let b = std::sync::Arc::new(b);
+        done.insert(key, b.clone());
+        a.bend = Some(b);
+    }
+}
+
+/// How far `a`'s box reaches beyond the band its path's centre sweeps, on the outside of a bend
+/// of curvature `k` (not signed): the corners' swing, and a bend tighter than the vehicle can
+/// steer is driven wider, on its own turning radius.
+fn sweep(a: &Actor, k: f64) -> f64 {
     let wide = if k > 1e-9 { (a.r_min - 1.0 / k).max(0.0) } else { 0.0 };
     swing(a.hl, k) + wide
 }
 
 /// The tightest curvature of `path` through its junction `j`, sampled every half metre.
 fn junction_curvature(map: &Map, path: &Path, j: Junction) -> f64 {
+    let (left, right) = junction_bend(map, path, j);
+    left.max(right)
+}
+
+/// `junction_curvature` each way: the tightest left bend and the tightest right bend (both
+/// positive, 0 where there is none).
+fn junction_bend(map: &Map, path: &Path, j: Junction) -> (f64, f64) {
     let entry = j.exit - map.connectors[j.conn].path.length();
     let n = ((j.exit - entry) / 0.5).ceil().max(1.0) as usize;
-    (0..=n).map(|i| path.curvature(entry + (j.exit - entry) * i as f64 / n as f64).abs()).fold(0.0, f64::max)
+    (0..=n)
+        .map(|i| path.curvature(entry + (j.exit - entry) * i as f64 / n as f64))
+        .fold((0.0, 0.0), |(l, r), k| (f64::max(l, k), f64::max(r, -k)))
 }
 
 /// How far the corners of a box of half length `hl`, tangent to an arc of curvature `k`, reach
@@ -1226,14 +1336,17 @@ impl<'a, 'b> Sim<'a, 'b> {
         }));
         for (&j, &(sj, lj, beyond, th)) in cand.iter().zip(proj.iter()) {
             let (o, b) = (&self.cur[j], &self.actors[j]);
-            let is_named = named == Some(j);
-            if beyond > 0.5 && !is_named {
-                continue;
-            }
             // cos and sin of the other's heading relative to the path's.
             let (cr, sr) = (self.dirs[j].dot(th), th.perp_dot(self.dirs[j]));
             let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
             let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
+            // The one we queue behind, while it is on our way: once a vehicle has turned off,
+            // more than a lane from our path, there is no queue to keep (its projection onto our
+            // route then says nothing of a gap). A walker or an animal on the verge stays named.
+            let is_named = named == Some(j) && (!b.vehicle || lj.abs() - ext_lat < a.hw + 3.0);
+            if beyond > 0.5 && !is_named {
+                continue;
+            }
             let ds = sj - st.s;
             if d_next != st.d && ds.abs() < a.hl + ext_lon + 0.5 {
                 let (nlo, nhi) = (st.d.min(d_next) - a.hw - 0.1, st.d.max(d_next) + a.hw + 0.1);
@@ -1269,28 +1382,56 @@ impl<'a, 'b> Sim<'a, 'b> {
             // In the lane we are in now; or in the band we are moving into, and then only when
             // ahead of our front (alongside is the gap acceptance's business).
             // In a bend our box's corners swing out of the band its centre sweeps (a bus turning
-            // at a junction reaches into the next lane): widen the band by that off-tracking, for
-            // one standing there or holding at its line (one on the move will have gone by when we
-            // sweep past), and only
-            // ahead of our front. Taken where it stands on our route, also while we are still on
-            // the straight before the bend: found only once in the bend, it may be too close to
-            // stop for within our limits.
-            let swing = if a.vehicle && (o.v < 0.5 || self.yielding[j].0.is_some()) && gap > 0.0 {
-                let k = a.path.curvature(sj).abs().max(a.path.curvature(sj - a.hl).abs());
-                swing(a.hl, k)
-            } else {
-                0.0
-            };
-            let (band_lo, band_hi) = (cur_lo - margin - swing, cur_hi + margin + swing);
+            // at a junction reaches into the next lane): widen the band by that off-tracking
+            // (`Bend`), for one standing there, holding at its line or coming toward us (one
+            // crossing or going our way will have gone by when we sweep past), and only ahead of
+            // our front. Taken where it stands on our route, also while we are still on the
+            // straight before the bend: found only once in the bend, it may be too close to stop
+            // for within our limits. Only outward: in a left bend the corners reach out to the
+            // right, while on the inside the middle of the box's side is its innermost point (a
+            // car waiting beside the lane a bus turns into is not in its way).
+            let in_sweep = o.v < 0.5 || self.yielding[j].0.is_some() || cr < -0.5;
+            let (mut band_lo, mut band_hi) = (cur_lo - margin, cur_hi + margin);
+            if a.vehicle && in_sweep && gap > 0.0 {
+                let (k0, k1) = (a.path.curvature(sj), a.path.curvature(sj - a.hl));
+                band_lo -= swing(a.hl, k0.max(k1).max(0.0));
+                band_hi += swing(a.hl, (-k0).max(-k1).max(0.0));
+                // The dry run's reach is from the path itself (it steered as we steer): not
+                // added to how far we are off it now.
+                if let Some(b) = &a.bend {
+                    let (r, l) = b.within(sj - 2.0, sj + 2.0);
+                    band_lo = band_lo.min(st.d - a.hw - margin - r);
+                    band_hi = band_hi.max(st.d + a.hw + margin + l);
+                }
+            }
             let mut in_cur = lj - ext_lat < band_hi && lj + ext_lat > band_lo;
             // A box turned across our path (a long vehicle turning beside us): its extents along
             // and across the path put corners where it has none. Only the part of it inside our
             // band counts, and only its nearest point there.
             let mut gap = gap;
-            if in_cur && !is_named && sr.abs() > 0.05 {
-                match band_front(lj, cr, sr, b.hl, b.hw, band_lo, band_hi) {
-                    Some(x) => gap = ds + x - a.hl,
-                    None => in_cur = false,
+            // Within reach of the band: its frame is straight while our path may bend.
+            let near_band = lj - ext_lat < band_hi + 1.5 && lj + ext_lat > band_lo - 1.5;
+            if !is_named && sr.abs() > 0.05 && near_band && (in_cur || gap > 0.0) {
+                if in_cur {
+                    match band_front(lj, cr, sr, b.hl, b.hw, band_lo, band_hi) {
+                        Some(x) => gap = ds + x - a.hl,
+                        None => in_cur = false,
+                    }
+                }
+                // That frame is straight, our path may bend: a long box's far end lies where the
+                // path has turned under it (a standing ambulance's corner inside the bend of our
+                // left turn), in the band though its frame puts it beside. A corner that projected
+                // onto our path where it is lies in the band ahead of us counts too.
+                if !in_cur {
+                    let fwd = DVec2::from_angle(st.yaw);
+                    for q in b.obb(o).corners() {
+                        let (sq, dq, beyond, _) = a.path.frenet_dir(q, st.s + (q - st.pos).dot(fwd));
+                        let ahead = sq - st.s - a.hl;
+                        if beyond <= 0.0 && dq > band_lo && dq < band_hi && ahead > 0.0 {
+                            gap = if in_cur { gap.min(ahead) } else { ahead };
+                            in_cur = true;
+                        }
+                    }
                 }
                 // That part alongside us, not ahead: the frame at its projection is turned by our
                 // bend, which can put a corner of a box driving straight beside us into our band.
@@ -1335,7 +1476,15 @@ impl<'a, 'b> Sim<'a, 'b> {
             }
             if in_cur || is_named {
                 let lead_move = (v_lon * dt - 0.5 * lim.brake_max * dt * dt).max(0.0);
-                hard = hard.min(gap - 0.2 + lead_move);
+                // A walker stops within its own braking: one stepping into another's way just
+                // ahead (two crossing side by side on converging lines, a hand's breadth apart)
+                // slows and lets the other draw away; it is not stopped dead.
+                let keep = gap - 0.2 + lead_move;
+                hard = hard.min(if a.vehicle {
+                    keep
+                } else {
+                    keep.max((st.v * dt - 0.5 * lim.brake_max * dt * dt).max(0.0))
+                });
                 acc = acc.min(self.safe_acc(i, j, gap, v_lon, t));
             }
         }
@@ -1599,6 +1748,12 @@ impl<'a, 'b> Sim<'a, 'b> {
     /// the zone goes before too close to stop, before approaching, before stopped by something
     /// else (so nobody waits for a car that waits for something else); the earlier arrival next.
     fn gives_way(&self, i: usize, c: &Crossing, t: f64) -> Option<f64> {
+        // Between an emergency vehicle and one yielding to it, the yield (`yield_state`) rules;
+        // but one already too far into the junction to hold when the emergency vehicle came near
+        // is clearing it, and the emergency vehicle takes its turn with it by this rule.
+        if c.emergency && !(self.actors[i].emergency && self.yielding[c.other].1) {
+            return None;
+        }
         let (ri, ei, rem) = self.zone_rank(i, c.enter, c.leave, t)?;
         let (rj, ej, _) = self.zone_rank(c.other, c.other_enter, c.other_leave, t)?;
         if ri <= 1 {
