@@ -9,7 +9,7 @@ use super::traffic;
 use super::{ImpactRecord, Limits, TrackAgent, Tracks, limits};
 use crate::check::scenario::{Class, EMERGENCY_KINDS, Keyframe, Lateral, Motion, Side, Stop, Turn};
 use crate::diag::Diagnostic;
-use crate::geom::{Obb, wrap_angle};
+use crate::geom::{Obb, Projector, wrap_angle};
 use crate::place::{Placed, Pose};
 use crate::road::Map;
 use crate::sample::Concrete;
@@ -805,10 +805,12 @@ fn profile<'p>(
         let (ca, cb) = (&map.connectors[a], &map.connectors[b]);
         let (la, lb) = (ca.path.length(), cb.path.length());
         let n = (la / 0.5).ceil().max(1.0) as usize;
+        let on_b = Projector::new(&cb.path);
+        let mut hint = 0;
         (0..=n)
             .map(|k| {
                 let sa = la * k as f64 / n as f64;
-                let (s, d) = cb.path.project(ca.path.pose_at(sa).0);
+                let (s, d) = on_b.project(ca.path.point_at(sa), &mut hint);
                 let near = ca.from != cb.from && s > -0.5 && s < lb + 0.5;
                 (sa, if near { d.abs() } else { f64::INFINITY }, s)
             })
