@@ -717,8 +717,9 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
         .filter(|&i| actors[i].vehicle && matches!(actors[i].drive, Drive::Mover) && actors[i].junction.is_some())
         .collect();
     // Many agents share a connector (background traffic on one lane): each pair of connectors
-    // is sampled once.
+    // is sampled once, each vehicle's off-tracking taken once.
     let mut profiles = std::collections::HashMap::new();
+    let off: Vec<f64> = actors.iter().map(|a| a.junction.map_or(0.0, |j| off_tracking(map, a, j))).collect();
     for (n, &i) in js.iter().enumerate() {
         for &j in &js[n + 1..] {
             let (a, b) = (&actors[i], &actors[j]);
@@ -731,7 +732,7 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
             }
             // A long box swings wide of its path in a turn (a bus's front corner sweeps into the
             // next lane): the zone widens by each box's off-tracking.
-            let gap = a.hw + b.hw + 0.5 + off_tracking(map, a, ji) + off_tracking(map, b, jj);
+            let gap = a.hw + b.hw + 0.5 + off[i] + off[j];
             let za =
                 shared_zones(map, (ji.conn, jj.conn), profile(&mut profiles, map, ji.conn, jj.conn), gap, 2.0 * a.hl);
             let zb =
