@@ -122,6 +122,8 @@ pub struct Projector<'a> {
     line: &'a Polyline,
     /// Per chunk of `CHUNK` segments, the bounding box of their points.
     boxes: Vec<(DVec2, DVec2)>,
+    /// The bounding box of every point.
+    whole: (DVec2, DVec2),
     /// Every coordinate finite and within `FAR`, where `MARGIN` bounds the rounding.
     tame: bool,
 }
@@ -135,32 +137,71 @@ impl<'a> Projector<'a> {
     pub fn new(line: &'a Polyline) -> Projector<'a> {
         let n = line.points.len();
         let segs = n.saturating_sub(1);
+        let bound = |pts: &[DVec2]| {
+            pts.iter().fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), &q| (lo.min(q), hi.max(q)))
+        };
         let boxes = (0..segs.div_ceil(Self::CHUNK))
-            .map(|c| {
-                let pts = &line.points[c * Self::CHUNK..((c + 1) * Self::CHUNK + 1).min(n)];
-                pts.iter().fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), &q| (lo.min(q), hi.max(q)))
-            })
+            .map(|c| bound(&line.points[c * Self::CHUNK..((c + 1) * Self::CHUNK + 1).min(n)]))
             .collect();
         // Compared one by one: `max_element` would pass over a NaN.
         let tame = line.points.iter().all(|q| q.x.abs() < Self::FAR && q.y.abs() < Self::FAR);
-        Projector { line, boxes, tame }
+        Projector { line, boxes, whole: bound(&line.points), tame }
     }
 
     /// `self.line.project(p)`; `hint` is a segment to try first (the last answer's, for points
     /// taken in order along another path), updated.
     pub fn project(&self, p: DVec2, hint: &mut usize) -> (f64, f64) {
+        let (_, s, off) = self.nearest(p, hint, f64::INFINITY);
+        (s, off)
+    }
+
+    /// `Some(self.line.project(p))`, or `None` where the point lies farther than `reach` from
+    /// the line (by the distance `project` measures, the size of its offset): for asking only
+    /// whether points come within some `gap <= reach` of the line, which fails on either. A NaN
+    /// reach bounds nothing.
+    pub fn project_within(&self, p: DVec2, hint: &mut usize, reach: f64) -> Option<(f64, f64)> {
+        if !self.bounded(p) || reach.is_nan() {
+            return Some(self.line.project(p));
+        }
+        let (dist, s, off) = self.nearest(p, hint, reach);
+        (dist <= reach).then_some((s, off))
+    }
+
+    /// Whether the margin bounds the rounding for `p`: it and the line are within `FAR`, and
+    /// the line has a segment.
+    fn bounded(&self, p: DVec2) -> bool {
+        self.tame && self.line.points.len() >= 2 && p.x.abs() < Self::FAR && p.y.abs() < Self::FAR
+    }
+
+    /// The first segment of least distance to `p`, as `Polyline::project` finds it, where that
+    /// distance is at most `reach` (its distance, arc length and offset); else possibly an
+    /// infinite distance.
+    fn nearest(&self, p: DVec2, hint: &mut usize, reach: f64) -> (f64, f64, f64) {
         let segs = self.line.points.len().saturating_sub(1);
-        if segs == 0 || !self.tame || !(p.x.abs() < Self::FAR && p.y.abs() < Self::FAR) {
-            return self.line.project(p);
+        let scan_all = || {
+            (0..segs)
+                .map(|i| self.line.project_on(i, p))
+                .fold((f64::INFINITY, 0.0, 0.0), |b, x| if x.0 < b.0 { x } else { b })
+        };
+        if !self.bounded(p) {
+            return scan_all();
         }
-        let bound = self.line.project_on((*hint).min(segs - 1), p).0 + Self::MARGIN;
+        // Some segment's distance (the hint's) bounds the least one; so does `reach` where the
+        // least one matters. Chunks beyond the bound hold no segment that could be it.
+        let bound = self.line.project_on((*hint).min(segs - 1), p).0.min(reach) + Self::MARGIN;
         if !bound.is_finite() {
-            return self.line.project(p);
+            return scan_all();
         }
-        let mut best = (f64::INFINITY, 0.0, 0.0);
-        for (c, &(lo, hi)) in self.boxes.iter().enumerate() {
+        let beyond = |(lo, hi): (DVec2, DVec2)| {
             let out = (lo - p).max(p - hi).max(DVec2::ZERO);
-            if out.length_squared() > bound * bound {
+            out.length_squared() > bound * bound
+        };
+        let mut best = (f64::INFINITY, 0.0, 0.0);
+        if beyond(self.whole) {
+            return best;
+        }
+        for (c, &b) in self.boxes.iter().enumerate() {
+            if beyond(b) {
                 continue;
             }
             for i in c * Self::CHUNK..((c + 1) * Self::CHUNK).min(segs) {
@@ -171,7 +212,7 @@ impl<'a> Projector<'a> {
                 }
             }
         }
-        (best.1, best.2)
+        best
     }
 }
 
@@ -324,17 +365,33 @@ mod tests {
             DVec2::new(f64::NAN, 0.0),
         ]);
         let bits = |(a, b): (f64, f64)| (a.to_bits(), b.to_bits());
+        let mut pruned = 0;
         for l in &lines {
             let pr = Projector::new(l);
             let mut hint = 0;
             for (k, &p) in points.iter().enumerate() {
-                let want = bits(plain(l, p));
-                assert_eq!(bits(l.project(p)), want, "{p}");
-                assert_eq!(bits(pr.project(p, &mut hint)), want, "{p}");
+                let want = plain(l, p);
+                assert_eq!(bits(l.project(p)), bits(want), "{p}");
+                assert_eq!(bits(pr.project(p, &mut hint)), bits(want), "{p}");
                 let mut other = k * 37 % 400;
-                assert_eq!(bits(pr.project(p, &mut other)), want, "{p} from {}", k * 37 % 400);
+                assert_eq!(bits(pr.project(p, &mut other)), bits(want), "{p} from {}", k * 37 % 400);
+                // Within a reach: the same where the point is that near, else `None` only if
+                // the distance `project` measures is greater.
+                for reach in [0.0, 0.3, 2.0, 7.5, 40.0, f64::INFINITY, -1.0, f64::NAN] {
+                    match pr.project_within(p, &mut other, reach) {
+                        Some(got) => assert_eq!(bits(got), bits(want), "{p} within {reach}"),
+                        None => {
+                            assert!(want.1.abs() > reach, "{p} within {reach}: {want:?}");
+                            pruned += 1;
+                        }
+                    }
+                    if want.1.abs() <= reach {
+                        assert!(pr.project_within(p, &mut hint, reach).is_some(), "{p} within {reach}");
+                    }
+                }
             }
         }
+        assert!(pruned > 5000, "points far from the line are answered without projecting: {pruned}");
     }
 
     #[test]

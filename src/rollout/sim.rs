@@ -667,10 +667,12 @@ fn paths_cross(map: &Map, a: usize, b: usize, gap: f64) -> bool {
     }
     let (la, lb) = (ca.path.length(), cb.path.length());
     let n = (la / 0.5).ceil().max(1.0) as usize;
+    let on_b = Projector::new(&cb.path);
+    let mut hint = 0;
     (0..=n).any(|k| {
-        let (p, _) = ca.path.pose_at(la * k as f64 / n as f64);
-        let (s, d) = cb.path.project(p);
-        s > -0.5 && s < lb + 0.5 && d.abs() < gap
+        // Farther than `gap` fails the test below in any case.
+        let p = ca.path.point_at(la * k as f64 / n as f64);
+        on_b.project_within(p, &mut hint, gap).is_some_and(|(s, d)| s > -0.5 && s < lb + 0.5 && d.abs() < gap)
     })
 }
 
@@ -733,10 +735,20 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
             // A long box swings wide of its path in a turn (a bus's front corner sweeps into the
             // next lane): the zone widens by each box's off-tracking.
             let gap = a.hw + b.hw + 0.5 + off[i] + off[j];
-            let za =
-                shared_zones(map, (ji.conn, jj.conn), profile(&mut profiles, map, ji.conn, jj.conn), gap, 2.0 * a.hl);
-            let zb =
-                shared_zones(map, (jj.conn, ji.conn), profile(&mut profiles, map, jj.conn, ji.conn), gap, 2.0 * b.hl);
+            let za = shared_zones(
+                map,
+                (ji.conn, jj.conn),
+                profile(&mut profiles, map, ji.conn, jj.conn, gap),
+                gap,
+                2.0 * a.hl,
+            );
+            let zb = shared_zones(
+                map,
+                (jj.conn, ji.conn),
+                profile(&mut profiles, map, jj.conn, ji.conn, gap),
+                gap,
+                2.0 * b.hl,
+            );
             let entry = |j: Junction| j.exit - map.connectors[j.conn].path.length();
             let (ei, ej) = (entry(ji), entry(jj));
             let (hi, hj) = (a.hl, b.hl);
@@ -793,30 +805,44 @@ fn swing(hl: f64, k: f64) -> f64 {
 
 /// Connector `a` sampled every half metre against connector `b`'s path: arc length along `a`,
 /// distance to `b` (infinite where the nearest point is beyond `b`'s ends, or where the two leave
-/// the same lane: paths from one lane diverge, they do not cross), arc length along `b`.
+/// the same lane: paths from one lane diverge, they do not cross), arc length along `b`. Taken
+/// for `shared_zones`' test `distance < gap`: a distance beyond the profile's reach (at least
+/// the gap asked for) reads infinite, its arc length NaN.
 type Profile = Vec<(f64, f64, f64)>;
 
+/// The reach of a profile at least: wider than any two boxes' gap but a long vehicle's in a
+/// tight turn, so one profile per pair of connectors serves every pair of agents on them.
+const PROFILE_REACH: f64 = 12.0;
+
 fn profile<'p>(
-    cache: &'p mut std::collections::HashMap<(usize, usize), Profile>,
+    cache: &'p mut std::collections::HashMap<(usize, usize), (f64, Profile)>,
     map: &Map,
     a: usize,
     b: usize,
+    gap: f64,
 ) -> &'p Profile {
-    cache.entry((a, b)).or_insert_with(|| {
+    let entry = cache.entry((a, b)).or_insert((f64::NEG_INFINITY, vec![]));
+    // Only the samples within the reach are projected; farther ones fail the test anyway.
+    if !(entry.0 >= gap) {
+        let reach = gap.max(PROFILE_REACH);
         let (ca, cb) = (&map.connectors[a], &map.connectors[b]);
         let (la, lb) = (ca.path.length(), cb.path.length());
         let n = (la / 0.5).ceil().max(1.0) as usize;
         let on_b = Projector::new(&cb.path);
         let mut hint = 0;
-        (0..=n)
+        let samples = (0..=n)
             .map(|k| {
                 let sa = la * k as f64 / n as f64;
-                let (s, d) = on_b.project(ca.path.point_at(sa), &mut hint);
+                let Some((s, d)) = on_b.project_within(ca.path.point_at(sa), &mut hint, reach) else {
+                    return (sa, f64::INFINITY, f64::NAN);
+                };
                 let near = ca.from != cb.from && s > -0.5 && s < lb + 0.5;
                 (sa, if near { d.abs() } else { f64::INFINITY }, s)
             })
-            .collect()
-    })
+            .collect();
+        *entry = (reach, samples);
+    }
+    &entry.1
 }
 
 /// The stretches of connector `a` (arc lengths along it) whose samples in `profile` lie within
