@@ -977,6 +977,68 @@ struct Corridor {
     named: Option<usize>,
 }
 
+/// How far inside the look-ahead's bounds `candidate` counts an agent on a straight run, m.
+const LINE_EPS: f64 = 1e-3;
+/// From this many agents on, `candidates` asks `AlongIndex` for the agents near a straight run
+/// instead of testing everyone (below, building it costs more than it saves).
+const ALONG_MIN_AGENTS: usize = 40;
+/// Coordinates up to which `ALONG_MARGIN` bounds the rounding of the index's bounds.
+const ALONG_FAR: f64 = 1e6;
+const ALONG_MARGIN: f64 = 0.01;
+/// Width of `AlongIndex`'s lanes across the direction, m.
+const ALONG_BIN: f64 = 2.0;
+
+/// Every agent's place along (`pos . dir`) and across (`dir x pos`) one direction, in bins
+/// across it, each sorted along: the agents near a stretch of a straight run are a few ranges.
+struct AlongIndex {
+    key: (u64, u64),
+    /// (bin across, place along, agent), sorted.
+    items: Vec<(i64, f64, usize)>,
+    /// Agents whose speed across the direction `candidate` counts as moving across it (or
+    /// that it cannot tell), not holding at a line.
+    crossing: Vec<usize>,
+    /// Every coordinate finite and within `ALONG_FAR`.
+    tame: bool,
+}
+
+impl AlongIndex {
+    fn new(near: &[Near], dir: DVec2) -> AlongIndex {
+        let mut tame = true;
+        let mut items = Vec::with_capacity(near.len());
+        let mut crossing = vec![];
+        for (j, b) in near.iter().enumerate() {
+            tame &= b.pos.x.abs() < ALONG_FAR && b.pos.y.abs() < ALONG_FAR;
+            let (along, across) = (b.pos.dot(dir), dir.perp_dot(b.pos));
+            items.push(((across / ALONG_BIN).floor() as i64, along, j));
+            // As `candidate` takes it, with room for rounding.
+            let v_lat = b.v * dir.perp_dot(b.dir);
+            if !(v_lat.abs() < 0.3 - LINE_EPS - 1e-6) && !b.gives_way {
+                crossing.push(j);
+            }
+        }
+        items.sort_unstable_by(|x, y| x.0.cmp(&y.0).then(x.1.total_cmp(&y.1)));
+        AlongIndex { key: (dir.x.to_bits(), dir.y.to_bits()), items, crossing, tame }
+    }
+
+    /// Append the agents placed along within `lo..=hi` in the bins holding `l_lo..=l_hi` across.
+    fn collect(&self, lo: f64, hi: f64, l_lo: f64, l_hi: f64, out: &mut Vec<usize>) {
+        let (b_lo, b_hi) = ((l_lo / ALONG_BIN).floor() as i64, (l_hi / ALONG_BIN).floor() as i64);
+        let first = self.items.partition_point(|x| (x.0, x.1) < (b_lo, lo));
+        let mut k = first;
+        while k < self.items.len() && self.items[k].0 <= b_hi {
+            let bin = self.items[k].0;
+            // This bin's stretch from `lo`, then on to the next bin.
+            let start = k + self.items[k..].partition_point(|x| x.0 == bin && x.1 < lo);
+            let mut e = start;
+            while e < self.items.len() && self.items[e].0 == bin && self.items[e].1 <= hi {
+                out.push(self.items[e].2);
+                e += 1;
+            }
+            k = e + self.items[e..].partition_point(|x| x.0 == bin);
+        }
+    }
+}
+
 struct Sim<'a, 'b> {
     actors: &'a [Actor],
     confs: &'a [Conf],
@@ -1005,6 +1067,12 @@ struct Sim<'a, 'b> {
     easing: Vec<usize>,
     /// Per agent, this frame: what `candidates` reads, packed.
     near: Vec<Near>,
+    /// This frame: everyone placed along and across each straight-run direction `candidates`
+    /// asked about (`AlongIndex`), built on the first ask; and the agents one ask yields.
+    along: std::cell::RefCell<Vec<AlongIndex>>,
+    subset: std::cell::RefCell<Vec<usize>>,
+    /// The largest bounding radius of any agent.
+    max_radius: f64,
     /// `candidates`' output, and `Path::frenet_dir` of each, kept to reuse their allocations.
     cand: std::cell::RefCell<Vec<usize>>,
     proj: std::cell::RefCell<Vec<(f64, f64, f64, DVec2)>>,
@@ -1051,6 +1119,9 @@ impl<'a, 'b> Sim<'a, 'b> {
             behind: vec![false; actors.len()],
             easing: Vec::with_capacity(actors.len()),
             near: Vec::with_capacity(actors.len()),
+            along: std::cell::RefCell::new(vec![]),
+            subset: std::cell::RefCell::new(Vec::with_capacity(actors.len())),
+            max_radius: actors.iter().map(|a| a.radius).fold(0.0, f64::max),
             cand: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
             proj: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
             sweep: Vec::with_capacity(actors.len()),
@@ -1126,6 +1197,7 @@ impl<'a, 'b> Sim<'a, 'b> {
                 let gives_way = y.0.is_some();
                 self.near.push(Near { pos: st.pos, dir, v: st.v, radius: a.radius, hl: a.hl, hw: a.hw, gives_way });
             }
+            self.along.get_mut().clear();
             for i in 0..self.actors.len() {
                 self.next[i] = self.step(i, t, f);
             }
@@ -1448,57 +1520,21 @@ impl<'a, 'b> Sim<'a, 'b> {
     /// nearly everyone anyway and cost more than the distance test below (`bench rollout`, 200
     /// agents).
     fn candidates(&self, i: usize, c: &Corridor, out: &mut Vec<usize>) {
-        let (a, st, fwd) = (&self.actors[i], &self.cur[i], self.dirs[i]);
-        let look = c.look;
         out.clear();
-        for (j, b) in self.near.iter().enumerate() {
-            if j == i {
-                continue;
-            }
-            if c.named == Some(j) {
-                if !self.exempt(i, j) {
+        if self.near.len() >= ALONG_MIN_AGENTS
+            && let Some(ln) = c.line
+            && self.corridor_subset(i, c, ln)
+        {
+            for &j in self.subset.borrow().iter() {
+                if self.candidate(i, c, j) {
                     out.push(j);
                 }
-                continue;
             }
-            let dp = b.pos - st.pos;
-            let r = look + a.radius + b.radius;
-            if dp.length_squared() > r * r {
-                continue;
-            }
-            let ahead = dp.dot(fwd);
-            // Well behind us and not beside a lateral move: cannot be in our way.
-            if ahead < -(a.hl + b.radius + 1.0) && c.holding {
-                continue;
-            }
-            if let Some(ln) = c.line {
-                let guess = st.s + ahead;
-                let rel = b.pos - ln.origin;
-                let s_line = ln.s0 + rel.dot(ln.dir);
-                // (Its projection a half length inside the run: `drive` widens the band by our
-                // swing, read from the curvature there and a half length behind it.)
-                if guess > ln.lo && guess < ln.hi && s_line - a.hl > ln.lo && s_line < ln.hi {
-                    // `frenet_dir` would give s_line, this offset and this tangent to float
-                    // noise (1 mm is far above it), hence the extents below too.
-                    const EPS: f64 = 1e-3;
-                    let l_line = ln.dir.perp_dot(rel);
-                    let (cr, sr) = (b.dir.dot(ln.dir), ln.dir.perp_dot(b.dir));
-                    let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
-                    let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
-                    let behind = s_line - st.s < -EPS;
-                    let too_far = s_line - st.s - a.hl - ext_lon > look + EPS;
-                    let aside = l_line - ext_lat > c.hi + EPS || l_line + ext_lat < c.lo - EPS;
-                    // Nor would it be predicted to cut across (see `obstacle` in `drive`).
-                    let v_lat = b.v * sr;
-                    let steady = !a.vehicle || v_lat.abs() < 0.3 - EPS || b.gives_way || c.clearing;
-                    if behind || too_far || (aside && steady) {
-                        continue;
-                    }
+        } else {
+            for j in 0..self.near.len() {
+                if self.candidate(i, c, j) {
+                    out.push(j);
                 }
-            }
-            // Last: a pure test like the others, and the rarest to hold.
-            if !self.exempt(i, j) {
-                out.push(j);
             }
         }
         if let Some(j) = c.named
@@ -1507,6 +1543,115 @@ impl<'a, 'b> Sim<'a, 'b> {
         {
             out.push(j);
         }
+    }
+
+    /// Whether `candidates` keeps agent `j` for agent `i`'s pair loop.
+    #[inline(always)]
+    fn candidate(&self, i: usize, c: &Corridor, j: usize) -> bool {
+        let (a, st, fwd) = (&self.actors[i], &self.cur[i], self.dirs[i]);
+        let look = c.look;
+        let b = &self.near[j];
+        if j == i {
+            return false;
+        }
+        if c.named == Some(j) {
+            return !self.exempt(i, j);
+        }
+        let dp = b.pos - st.pos;
+        let r = look + a.radius + b.radius;
+        if dp.length_squared() > r * r {
+            return false;
+        }
+        let ahead = dp.dot(fwd);
+        // Well behind us and not beside a lateral move: cannot be in our way.
+        if ahead < -(a.hl + b.radius + 1.0) && c.holding {
+            return false;
+        }
+        if let Some(ln) = c.line {
+            let guess = st.s + ahead;
+            let rel = b.pos - ln.origin;
+            let s_line = ln.s0 + rel.dot(ln.dir);
+            // (Its projection a half length inside the run: `drive` widens the band by our
+            // swing, read from the curvature there and a half length behind it.)
+            if guess > ln.lo && guess < ln.hi && s_line - a.hl > ln.lo && s_line < ln.hi {
+                // `frenet_dir` would give s_line, this offset and this tangent to float
+                // noise (1 mm is far above it), hence the extents below too.
+                let l_line = ln.dir.perp_dot(rel);
+                let (cr, sr) = (b.dir.dot(ln.dir), ln.dir.perp_dot(b.dir));
+                let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
+                let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
+                let behind = s_line - st.s < -LINE_EPS;
+                let too_far = s_line - st.s - a.hl - ext_lon > look + LINE_EPS;
+                let aside = l_line - ext_lat > c.hi + LINE_EPS || l_line + ext_lat < c.lo - LINE_EPS;
+                // Nor would it be predicted to cut across (see `obstacle` in `drive`).
+                let v_lat = b.v * sr;
+                let steady = !a.vehicle || v_lat.abs() < 0.3 - LINE_EPS || b.gives_way || c.clearing;
+                if behind || too_far || (aside && steady) {
+                    return false;
+                }
+            }
+        }
+        // Last: a pure test like the others, and the rarest to hold.
+        !self.exempt(i, j)
+    }
+
+    /// Fill `subset` with, in index order, every agent that `candidate` can keep for agent `i`
+    /// on the straight run `ln` (and maybe others): those whose place along the run lies in
+    /// the corridor ahead and across it near our band, those moving across the run, and
+    /// `named`. `false` (subset unset) where that cannot be bounded: the run ending within
+    /// reach ahead or close behind (there `candidate` does not use the run), a lateral move, or
+    /// coordinates beyond `ALONG_FAR`.
+    fn corridor_subset(&self, i: usize, c: &Corridor, ln: Line) -> bool {
+        const FAR: f64 = ALONG_FAR;
+        let (a, st) = (&self.actors[i], &self.cur[i]);
+        let rmax = self.max_radius;
+        // Everyone `candidate` keeps lies within `reach` of us (its circle test), and (holding
+        // our offset) no farther behind than `back` along our heading, so along the run too
+        // but for the turn `g` of our heading from it: then its guess and its place along the
+        // run are inside the run, where `candidate` uses it. The margin covers rounding (below
+        // 1e-8 m within `FAR`) and a unit vector's length.
+        let m = ALONG_MARGIN;
+        let reach = c.look + a.radius + rmax;
+        let back = a.hl + rmax + 1.0;
+        let g = reach * (self.dirs[i] - ln.dir).length();
+        let s_here = ln.s0 + (st.pos - ln.origin).dot(ln.dir);
+        let inside = st.s - back - m > ln.lo
+            && s_here - back - g - a.hl - m > ln.lo
+            && st.s + reach + m < ln.hi
+            && s_here + reach + m < ln.hi;
+        let sizes = [reach, g, s_here, st.s, ln.s0, ln.origin.x, ln.origin.y, st.pos.x, st.pos.y, c.lo, c.hi, a.hl];
+        if !c.holding || !inside || !sizes.iter().all(|x| x.abs() < FAR) {
+            return false;
+        }
+        let mut along = self.along.borrow_mut();
+        let key = (ln.dir.x.to_bits(), ln.dir.y.to_bits());
+        let k = match along.iter().position(|x| x.key == key) {
+            Some(k) => k,
+            None => {
+                along.push(AlongIndex::new(&self.near, ln.dir));
+                along.len() - 1
+            }
+        };
+        let ix = &along[k];
+        if !ix.tame {
+            return false;
+        }
+        // Inside the run `candidate` keeps an agent only where it is not behind, not beyond the
+        // look-ahead (its extents are within `rmax`), and beside our band, or moving across.
+        let (o_along, o_across) = (ln.origin.dot(ln.dir), ln.dir.perp_dot(ln.origin));
+        let lo = st.s - ln.s0 + o_along - LINE_EPS - m;
+        let hi = st.s - ln.s0 + o_along + a.hl + rmax + c.look + LINE_EPS + m;
+        let (l_lo, l_hi) = (c.lo - rmax - LINE_EPS - m + o_across, c.hi + rmax + LINE_EPS + m + o_across);
+        let mut sub = self.subset.borrow_mut();
+        sub.clear();
+        ix.collect(lo, hi, l_lo, l_hi, &mut sub);
+        if a.vehicle && !c.clearing {
+            sub.extend_from_slice(&ix.crossing);
+        }
+        sub.extend(c.named);
+        sub.sort_unstable();
+        sub.dedup();
+        true
     }
 
     /// Gipps's safe speed behind leader `j`, `gap` ahead at `v_lon` along our path, as an
