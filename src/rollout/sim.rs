@@ -992,49 +992,77 @@ const ALONG_BIN: f64 = 2.0;
 /// across it, each sorted along: the agents near a stretch of a straight run are a few ranges.
 struct AlongIndex {
     key: (u64, u64),
-    /// (bin across, place along, agent), sorted.
-    items: Vec<(i64, f64, usize)>,
+    /// The first bin across, and where each bin's agents start in `along` / `agent`.
+    min_bin: i64,
+    starts: Vec<usize>,
+    along: Vec<f64>,
+    agent: Vec<usize>,
     /// Agents whose speed across the direction `candidate` counts as moving across it (or
     /// that it cannot tell), not holding at a line.
     crossing: Vec<usize>,
-    /// Every coordinate finite and within `ALONG_FAR`.
+    /// Every coordinate finite and within `ALONG_FAR`, and not too many bins.
     tame: bool,
 }
 
 impl AlongIndex {
     fn new(near: &[Near], dir: DVec2) -> AlongIndex {
-        let mut tame = true;
-        let mut items = Vec::with_capacity(near.len());
-        let mut crossing = vec![];
+        let mut ix = AlongIndex {
+            key: (dir.x.to_bits(), dir.y.to_bits()),
+            min_bin: 0,
+            starts: vec![],
+            along: vec![],
+            agent: vec![],
+            crossing: vec![],
+            tame: near.iter().all(|b| b.pos.x.abs() < ALONG_FAR && b.pos.y.abs() < ALONG_FAR),
+        };
+        if !ix.tame {
+            return ix;
+        }
+        let bin = |b: &Near| (dir.perp_dot(b.pos) / ALONG_BIN).floor() as i64;
+        let (lo, hi) = near.iter().fold((i64::MAX, i64::MIN), |(l, h), b| (l.min(bin(b)), h.max(bin(b))));
+        if near.is_empty() || hi - lo > 4 * near.len() as i64 + 64 {
+            ix.tame = false;
+            return ix;
+        }
+        // A counting sort by bin, then each bin along.
+        ix.min_bin = lo;
+        let mut starts = vec![0usize; (hi - lo + 2) as usize];
+        for b in near {
+            starts[(bin(b) - lo + 1) as usize] += 1;
+        }
+        for k in 1..starts.len() {
+            starts[k] += starts[k - 1];
+        }
+        let mut fill = starts.clone();
+        let mut items = vec![(0.0, 0usize); near.len()];
         for (j, b) in near.iter().enumerate() {
-            tame &= b.pos.x.abs() < ALONG_FAR && b.pos.y.abs() < ALONG_FAR;
-            let (along, across) = (b.pos.dot(dir), dir.perp_dot(b.pos));
-            items.push(((across / ALONG_BIN).floor() as i64, along, j));
+            let k = &mut fill[(bin(b) - lo) as usize];
+            items[*k] = (b.pos.dot(dir), j);
+            *k += 1;
             // As `candidate` takes it, with room for rounding.
             let v_lat = b.v * dir.perp_dot(b.dir);
             if !(v_lat.abs() < 0.3 - LINE_EPS - 1e-6) && !b.gives_way {
-                crossing.push(j);
+                ix.crossing.push(j);
             }
         }
-        items.sort_unstable_by(|x, y| x.0.cmp(&y.0).then(x.1.total_cmp(&y.1)));
-        AlongIndex { key: (dir.x.to_bits(), dir.y.to_bits()), items, crossing, tame }
+        for w in starts.windows(2) {
+            items[w[0]..w[1]].sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+        }
+        (ix.along, ix.agent) = items.into_iter().unzip();
+        ix.starts = starts;
+        ix
     }
 
     /// Append the agents placed along within `lo..=hi` in the bins holding `l_lo..=l_hi` across.
     fn collect(&self, lo: f64, hi: f64, l_lo: f64, l_hi: f64, out: &mut Vec<usize>) {
-        let (b_lo, b_hi) = ((l_lo / ALONG_BIN).floor() as i64, (l_hi / ALONG_BIN).floor() as i64);
-        let first = self.items.partition_point(|x| (x.0, x.1) < (b_lo, lo));
-        let mut k = first;
-        while k < self.items.len() && self.items[k].0 <= b_hi {
-            let bin = self.items[k].0;
-            // This bin's stretch from `lo`, then on to the next bin.
-            let start = k + self.items[k..].partition_point(|x| x.0 == bin && x.1 < lo);
-            let mut e = start;
-            while e < self.items.len() && self.items[e].0 == bin && self.items[e].1 <= hi {
-                out.push(self.items[e].2);
-                e += 1;
-            }
-            k = e + self.items[e..].partition_point(|x| x.0 == bin);
+        let nbins = self.starts.len() as i64 - 1;
+        let b_lo = ((l_lo / ALONG_BIN).floor() as i64 - self.min_bin).max(0);
+        let b_hi = ((l_hi / ALONG_BIN).floor() as i64 - self.min_bin).min(nbins - 1);
+        for b in b_lo..=b_hi {
+            let (s, e) = (self.starts[b as usize], self.starts[b as usize + 1]);
+            let first = s + self.along[s..e].partition_point(|&x| x < lo);
+            let last = first + self.along[first..e].partition_point(|&x| x <= hi);
+            out.extend_from_slice(&self.agent[first..last]);
         }
     }
 }
