@@ -151,20 +151,21 @@ impl<'a> Projector<'a> {
     /// `self.line.project(p)`; `hint` is a segment to try first (the last answer's, for points
     /// taken in order along another path), updated.
     pub fn project(&self, p: DVec2, hint: &mut usize) -> (f64, f64) {
-        let (_, s, off) = self.nearest(p, hint, f64::INFINITY);
+        let ((_, s, off), _) = self.nearest(p, hint, f64::INFINITY);
         (s, off)
     }
 
-    /// `Some(self.line.project(p))`, or `None` where the point lies farther than `reach` from
-    /// the line (by the distance `project` measures, the size of its offset): for asking only
-    /// whether points come within some `gap <= reach` of the line, which fails on either. A NaN
-    /// reach bounds nothing.
-    pub fn project_within(&self, p: DVec2, hint: &mut usize, reach: f64) -> Option<(f64, f64)> {
+    /// `Ok(self.line.project(p))`, or `Err` where the point lies farther than `reach` from the
+    /// line (by the distance `project` measures, the size of its offset): for asking only
+    /// whether points come within some `gap <= reach` of the line, which fails on either. The
+    /// error holds a floor under that distance (a point `x` from `p` lies at least the floor
+    /// less `x` away). A NaN reach bounds nothing.
+    pub fn project_within(&self, p: DVec2, hint: &mut usize, reach: f64) -> Result<(f64, f64), f64> {
         if !self.bounded(p) || reach.is_nan() {
-            return Some(self.line.project(p));
+            return Ok(self.line.project(p));
         }
-        let (dist, s, off) = self.nearest(p, hint, reach);
-        (dist <= reach).then_some((s, off))
+        let ((dist, s, off), floor) = self.nearest(p, hint, reach);
+        if dist <= reach { Ok((s, off)) } else { Err(floor) }
     }
 
     /// Whether the margin bounds the rounding for `p`: it and the line are within `FAR`, and
@@ -175,13 +176,14 @@ impl<'a> Projector<'a> {
 
     /// The first segment of least distance to `p`, as `Polyline::project` finds it, where that
     /// distance is at most `reach` (its distance, arc length and offset); else possibly an
-    /// infinite distance.
-    fn nearest(&self, p: DVec2, hint: &mut usize, reach: f64) -> (f64, f64, f64) {
+    /// infinite distance. With a floor under that distance (less than it by `MARGIN` at least).
+    fn nearest(&self, p: DVec2, hint: &mut usize, reach: f64) -> ((f64, f64, f64), f64) {
         let segs = self.line.points.len().saturating_sub(1);
         let scan_all = || {
-            (0..segs)
+            let best = (0..segs)
                 .map(|i| self.line.project_on(i, p))
-                .fold((f64::INFINITY, 0.0, 0.0), |b, x| if x.0 < b.0 { x } else { b })
+                .fold((f64::INFINITY, 0.0, 0.0), |b, x| if x.0 < b.0 { x } else { b });
+            (best, f64::NEG_INFINITY)
         };
         if !self.bounded(p) {
             return scan_all();
@@ -192,16 +194,17 @@ impl<'a> Projector<'a> {
         if !bound.is_finite() {
             return scan_all();
         }
-        let beyond = |(lo, hi): (DVec2, DVec2)| {
-            let out = (lo - p).max(p - hi).max(DVec2::ZERO);
-            out.length_squared() > bound * bound
-        };
+        let away = |(lo, hi): (DVec2, DVec2)| (lo - p).max(p - hi).max(DVec2::ZERO).length_squared();
         let mut best = (f64::INFINITY, 0.0, 0.0);
-        if beyond(self.whole) {
-            return best;
+        let whole = away(self.whole);
+        if whole > bound * bound {
+            return (best, whole.sqrt() - Self::MARGIN);
         }
+        let mut nearest_box = f64::INFINITY;
         for (c, &b) in self.boxes.iter().enumerate() {
-            if beyond(b) {
+            let d2 = away(b);
+            nearest_box = nearest_box.min(d2);
+            if d2 > bound * bound {
                 continue;
             }
             for i in c * Self::CHUNK..((c + 1) * Self::CHUNK).min(segs) {
@@ -212,7 +215,7 @@ impl<'a> Projector<'a> {
                 }
             }
         }
-        best
+        (best, nearest_box.sqrt() - Self::MARGIN)
     }
 }
 
@@ -379,14 +382,18 @@ mod tests {
                 // the distance `project` measures is greater.
                 for reach in [0.0, 0.3, 2.0, 7.5, 40.0, f64::INFINITY, -1.0, f64::NAN] {
                     match pr.project_within(p, &mut other, reach) {
-                        Some(got) => assert_eq!(bits(got), bits(want), "{p} within {reach}"),
-                        None => {
+                        Ok(got) => assert_eq!(bits(got), bits(want), "{p} within {reach}"),
+                        Err(floor) => {
                             assert!(want.1.abs() > reach, "{p} within {reach}: {want:?}");
+                            // The floor holds for points near this one (1 m off, any way).
+                            for q in [p, p + DVec2::X, p - DVec2::Y, p + DVec2::new(0.6, 0.8)] {
+                                assert!(plain(l, q).1.abs() >= floor - p.distance(q), "{q} floor {floor}");
+                            }
                             pruned += 1;
                         }
                     }
                     if want.1.abs() <= reach {
-                        assert!(pr.project_within(p, &mut hint, reach).is_some(), "{p} within {reach}");
+                        assert!(pr.project_within(p, &mut hint, reach).is_ok(), "{p} within {reach}");
                     }
                 }
             }

@@ -672,7 +672,7 @@ fn paths_cross(map: &Map, a: usize, b: usize, gap: f64) -> bool {
     (0..=n).any(|k| {
         // Farther than `gap` fails the test below in any case.
         let p = ca.path.point_at(la * k as f64 / n as f64);
-        on_b.project_within(p, &mut hint, gap).is_some_and(|(s, d)| s > -0.5 && s < lb + 0.5 && d.abs() < gap)
+        on_b.project_within(p, &mut hint, gap).is_ok_and(|(s, d)| s > -0.5 && s < lb + 0.5 && d.abs() < gap)
     })
 }
 
@@ -807,7 +807,7 @@ fn swing(hl: f64, k: f64) -> f64 {
 /// distance to `b` (infinite where the nearest point is beyond `b`'s ends, or where the two leave
 /// the same lane: paths from one lane diverge, they do not cross), arc length along `b`. Taken
 /// for `shared_zones`' test `distance < gap`: a distance beyond the profile's reach (at least
-/// the gap asked for) reads infinite, its arc length NaN.
+/// the gap asked for) reads infinite, its arc length NaN, as do paths from one lane.
 type Profile = Vec<(f64, f64, f64)>;
 
 /// The reach of a profile at least: wider than any two boxes' gap but a long vehicle's in a
@@ -830,13 +830,24 @@ fn profile<'p>(
         let n = (la / 0.5).ceil().max(1.0) as usize;
         let on_b = Projector::new(&cb.path);
         let mut hint = 0;
+        // A sample `x` along `a` from one at `floor` from `b` lies at least `floor - x` from it:
+        // the samples up to where that reaches within `reach` (a margin short) are not taken.
+        let mut far_until = f64::NEG_INFINITY;
         let samples = (0..=n)
             .map(|k| {
                 let sa = la * k as f64 / n as f64;
-                let Some((s, d)) = on_b.project_within(ca.path.point_at(sa), &mut hint, reach) else {
+                // Paths from one lane diverge: they do not cross.
+                if ca.from == cb.from || sa < far_until {
                     return (sa, f64::INFINITY, f64::NAN);
+                }
+                let (s, d) = match on_b.project_within(ca.path.point_at(sa), &mut hint, reach) {
+                    Ok(x) => x,
+                    Err(floor) => {
+                        far_until = sa + (floor - reach - 0.01);
+                        return (sa, f64::INFINITY, f64::NAN);
+                    }
                 };
-                let near = ca.from != cb.from && s > -0.5 && s < lb + 0.5;
+                let near = s > -0.5 && s < lb + 0.5;
                 (sa, if near { d.abs() } else { f64::INFINITY }, s)
             })
             .collect();
