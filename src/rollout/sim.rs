@@ -810,9 +810,10 @@ fn swing(hl: f64, k: f64) -> f64 {
 /// the gap asked for) reads infinite, its arc length NaN, as do paths from one lane.
 type Profile = Vec<(f64, f64, f64)>;
 
-/// The reach of a profile at least: wider than any two boxes' gap but a long vehicle's in a
-/// tight turn, so one profile per pair of connectors serves every pair of agents on them.
-const PROFILE_REACH: f64 = 12.0;
+/// The reach of a profile at least: wider than two cars' gap on bends (~3 m), so one profile
+/// per pair of connectors serves most pairs of agents on them; a wider gap (a long vehicle's
+/// off-tracking) recomputes it. Farther samples cost a bounding-box test, nearer ones a scan.
+const PROFILE_REACH: f64 = 4.0;
 
 fn profile<'p>(
     cache: &'p mut std::collections::HashMap<(usize, usize), (f64, Profile)>,
