@@ -2291,6 +2291,82 @@ fn replay(keys: &[Keyframe], t: f64) -> (DVec2, f64) {
 mod tests {
     use super::*;
 
+    /// `candidates` through the along index must give exactly the agents (and order) of the scan
+    /// of everyone, for agents on a straight run among others ahead, behind, beside, far off,
+    /// crossing it, walking, holding at a line, with and without a named leader; and the index
+    /// must answer most asks, or the test proves nothing.
+    #[test]
+    fn along_index_keeps_every_candidate() {
+        let mut seed = 11u64;
+        let mut rnd = move || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let n = 160;
+        let mut actors: Vec<Actor> = (0..n)
+            .map(|k| {
+                let info = TrackAgent {
+                    name: format!("a{k}"),
+                    kind: "sedan".into(),
+                    class: Class::Vehicle,
+                    motion: Motion::Vehicle,
+                    size: [1.0 + 11.0 * rnd(), 0.5 + 2.0 * rnd(), 1.5],
+                    background: false,
+                };
+                base_actor(info, Pose { x: 0.0, y: 0.0, yaw: 0.0 }, Motion::Vehicle, Class::Vehicle, Drive::Mover)
+            })
+            .collect();
+        for a in actors.iter_mut().step_by(9) {
+            a.vehicle = false;
+        }
+        let road = Path::straight(DVec2::new(-300.0, 40.0), 0.37, 3000.0);
+        let mut sim = Sim::new(&actors, &[], &[], None, 0.1);
+        for k in 0..n {
+            let s = 500.0 + 700.0 * rnd();
+            let lat = (rnd() - 0.5) * 40.0;
+            let (p, h) = road.point(s, lat);
+            let turn = match k % 7 {
+                0 => 1.2,
+                1 => std::f64::consts::PI,
+                _ => (rnd() - 0.5) * 0.03,
+            };
+            sim.cur[k] = State { pos: p, yaw: h + turn, v: 35.0 * rnd(), s, d: lat, off: lat, ..sim.cur[k] };
+        }
+        sim.dirs = sim.cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect();
+        sim.near = (0..n)
+            .map(|k| {
+                let (st, a) = (&sim.cur[k], &actors[k]);
+                let gives_way = k % 11 == 0;
+                Near { pos: st.pos, dir: sim.dirs[k], v: st.v, radius: a.radius, hl: a.hl, hw: a.hw, gives_way }
+            })
+            .collect();
+        let (mut asked, mut indexed) = (0, 0);
+        for i in 0..n {
+            let st = sim.cur[i];
+            let Some(line) = road.straight_run(st.s) else { continue };
+            for (k, look) in [15.0, 60.0, 240.0].into_iter().enumerate() {
+                let wide = 2.0 * rnd();
+                let c = Corridor {
+                    look,
+                    lo: st.d - actors[i].hw - wide,
+                    hi: st.d + actors[i].hw + 0.1,
+                    holding: true,
+                    line: Some(line),
+                    clearing: k == 1 && i % 2 == 0,
+                    named: (k == 2).then_some((i * 7 + 3) % n),
+                };
+                let mut got = vec![];
+                sim.candidates(i, &c, &mut got);
+                let mut want: Vec<usize> = (0..n).filter(|&j| sim.candidate(i, &c, j)).collect();
+                want.extend(c.named.filter(|&j| j != i));
+                assert_eq!(got, want, "agent {i}, look {look}");
+                asked += 1;
+                indexed += usize::from(sim.corridor_subset(i, &c, line));
+            }
+        }
+        assert!(indexed * 10 > asked * 9, "the index answered {indexed} of {asked}");
+    }
+
     /// `overlap_pairs` may leave out only pairs whose bounding circles cannot meet at any mix of
     /// the positions `resolve_overlaps` can give them (`next`, or `cur` once undone), and must
     /// list the rest once each in (i, j) order; with a position it cannot bound, every pair.
