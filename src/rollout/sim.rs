@@ -824,7 +824,8 @@ fn profile<'p>(
 ) -> &'p Profile {
     let entry = cache.entry((a, b)).or_insert((f64::NEG_INFINITY, vec![]));
     // Only the samples within the reach are projected; farther ones fail the test anyway.
-    if !(entry.0 >= gap) {
+    let covers = entry.0 >= gap;
+    if !covers {
         let reach = gap.max(PROFILE_REACH);
         let (ca, cb) = (&map.connectors[a], &map.connectors[b]);
         let (la, lb) = (ca.path.length(), cb.path.length());
@@ -1053,7 +1054,8 @@ impl AlongIndex {
             *k += 1;
             // As `candidate` takes it, with room for rounding.
             let v_lat = b.v * dir.perp_dot(b.dir);
-            if !(v_lat.abs() < 0.3 - LINE_EPS - 1e-6) && !b.gives_way {
+            let steady = v_lat.abs() < 0.3 - LINE_EPS - 1e-6;
+            if !steady && !b.gives_way {
                 ix.crossing.push(j);
             }
         }
@@ -2341,15 +2343,15 @@ mod tests {
             })
             .collect();
         let (mut asked, mut indexed) = (0, 0);
-        for i in 0..n {
+        for (i, ai) in actors.iter().enumerate() {
             let st = sim.cur[i];
             let Some(line) = road.straight_run(st.s) else { continue };
             for (k, look) in [15.0, 60.0, 240.0].into_iter().enumerate() {
                 let wide = 2.0 * rnd();
                 let c = Corridor {
                     look,
-                    lo: st.d - actors[i].hw - wide,
-                    hi: st.d + actors[i].hw + 0.1,
+                    lo: st.d - ai.hw - wide,
+                    hi: st.d + ai.hw + 0.1,
                     holding: true,
                     line: Some(line),
                     clearing: k == 1 && i % 2 == 0,
