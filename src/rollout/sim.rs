@@ -1558,24 +1558,25 @@ impl<'a, 'b> Sim<'a, 'b> {
     /// is a min or an or, so seeing it twice is harmless), less those that provably change
     /// nothing there: itself, its conflict partner, and (except `named`) agents beyond the
     /// look-ahead, well behind, or off its corridor on a straight stretch. It reads the packed
-    /// per-frame `near` data, the pair loop's main cost being this scan over everyone. No spatial
-    /// index: the look-ahead (up to ~240 m at highway speed) spans whole maps, so a grid found
-    /// nearly everyone anyway and cost more than the distance test below (`bench rollout`, 200
-    /// agents).
+    /// per-frame `near` data. The look-ahead (up to ~240 m at highway speed) spans whole maps,
+    /// so a grid finds nearly everyone; but on a straight run the corridor is a thin strip along
+    /// it: with many agents, those to test come from `AlongIndex` (`corridor_subset`), in index
+    /// order, the same ones the scan of everyone keeps.
     fn candidates(&self, i: usize, c: &Corridor, out: &mut Vec<usize>) {
         out.clear();
+        let me = (i, &self.actors[i], &self.cur[i], self.dirs[i]);
         if self.near.len() >= ALONG_MIN_AGENTS
             && let Some(ln) = c.line
             && self.corridor_subset(i, c, ln)
         {
             for &j in self.subset.borrow().iter() {
-                if self.candidate(i, c, j) {
+                if self.candidate(me, c, j) {
                     out.push(j);
                 }
             }
         } else {
             for j in 0..self.near.len() {
-                if self.candidate(i, c, j) {
+                if self.candidate(me, c, j) {
                     out.push(j);
                 }
             }
@@ -1588,10 +1589,11 @@ impl<'a, 'b> Sim<'a, 'b> {
         }
     }
 
-    /// Whether `candidates` keeps agent `j` for agent `i`'s pair loop.
+    /// Whether `candidates` keeps agent `j` for agent `i`'s pair loop (`me`: `i`, its actor,
+    /// state and heading).
     #[inline(always)]
-    fn candidate(&self, i: usize, c: &Corridor, j: usize) -> bool {
-        let (a, st, fwd) = (&self.actors[i], &self.cur[i], self.dirs[i]);
+    fn candidate(&self, me: (usize, &Actor, &State, DVec2), c: &Corridor, j: usize) -> bool {
+        let (i, a, st, fwd) = me;
         let look = c.look;
         let b = &self.near[j];
         if j == i {
@@ -2360,7 +2362,8 @@ mod tests {
                 };
                 let mut got = vec![];
                 sim.candidates(i, &c, &mut got);
-                let mut want: Vec<usize> = (0..n).filter(|&j| sim.candidate(i, &c, j)).collect();
+                let me = (i, ai, &sim.cur[i], sim.dirs[i]);
+                let mut want: Vec<usize> = (0..n).filter(|&j| sim.candidate(me, &c, j)).collect();
                 want.extend(c.named.filter(|&j| j != i));
                 assert_eq!(got, want, "agent {i}, look {look}");
                 asked += 1;
