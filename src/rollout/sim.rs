@@ -1693,7 +1693,7 @@ impl<'a, 'b> Sim<'a, 'b> {
         if a.vehicle && !c.clearing {
             sub.extend_from_slice(&ix.crossing);
         }
-        sub.extend(c.named);
+        sub.extend(c.named.filter(|&j| j < self.near.len()));
         sub.sort_unstable();
         sub.dedup();
         true
