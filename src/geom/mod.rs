@@ -34,12 +34,25 @@ impl Polyline {
 
     /// Position and heading (rad) at arc length `s`, clamped to the ends.
     pub fn pose_at(&self, s: f64) -> (DVec2, f64) {
+        let (p, d) = self.point_dir_at(s);
+        (p, d.y.atan2(d.x))
+    }
+
+    /// `pose_at`'s position, without the heading's trigonometry.
+    pub fn point_at(&self, s: f64) -> DVec2 {
+        self.point_dir_at(s).0
+    }
+
+    /// Position at arc length `s` (clamped to the ends) and the vector of its segment (zero
+    /// with fewer than two points; `pose_at`'s heading is its angle).
+    #[inline]
+    fn point_dir_at(&self, s: f64) -> (DVec2, DVec2) {
         let n = self.points.len();
         if n == 0 {
-            return (DVec2::ZERO, 0.0);
+            return (DVec2::ZERO, DVec2::ZERO);
         }
         if n == 1 {
-            return (self.points[0], 0.0);
+            return (self.points[0], DVec2::ZERO);
         }
         let s = s.clamp(0.0, self.length());
         let i = match self.s.binary_search_by(|x| x.total_cmp(&s)) {
@@ -50,7 +63,7 @@ impl Polyline {
         let seg = self.s[i + 1] - self.s[i];
         let t = if seg > 0.0 { (s - self.s[i]) / seg } else { 0.0 };
         let d = b - a;
-        (a + d * t, d.y.atan2(d.x))
+        (a + d * t, d)
     }
 
     /// Point at arc length `s` shifted `offset` metres to the left of the direction of travel.
@@ -63,18 +76,26 @@ impl Polyline {
     pub fn project(&self, p: DVec2) -> (f64, f64) {
         let mut best = (f64::INFINITY, 0.0, 0.0);
         for i in 0..self.points.len().saturating_sub(1) {
-            let (a, b) = (self.points[i], self.points[i + 1]);
-            let d = b - a;
-            let len2 = d.length_squared();
-            let t = if len2 > 0.0 { ((p - a).dot(d) / len2).clamp(0.0, 1.0) } else { 0.0 };
-            let q = a + d * t;
-            let dist = p.distance(q);
-            if dist < best.0 {
-                let side = d.perp_dot(p - a).signum();
-                best = (dist, self.s[i] + t * len2.sqrt(), side * dist);
+            let seg = self.project_on(i, p);
+            if seg.0 < best.0 {
+                best = seg;
             }
         }
         (best.1, best.2)
+    }
+
+    /// `p` projected onto segment `i`: its distance, the arc length of its foot and its signed
+    /// offset (left positive). `project` keeps the first segment of least distance.
+    #[inline(always)]
+    fn project_on(&self, i: usize, p: DVec2) -> (f64, f64, f64) {
+        let (a, b) = (self.points[i], self.points[i + 1]);
+        let d = b - a;
+        let len2 = d.length_squared();
+        let t = if len2 > 0.0 { ((p - a).dot(d) / len2).clamp(0.0, 1.0) } else { 0.0 };
+        let q = a + d * t;
+        let dist = p.distance(q);
+        let side = d.perp_dot(p - a).signum();
+        (dist, self.s[i] + t * len2.sqrt(), side * dist)
     }
 
     /// The polyline shifted sideways by `offset` (left positive), vertex by vertex.
@@ -89,6 +110,112 @@ impl Polyline {
             })
             .collect();
         Polyline::new(pts)
+    }
+}
+
+/// `Polyline::project` for many points onto one long polyline (a roundabout's ring connector
+/// against every sample of another path): the same result, bit for bit, from fewer segments.
+/// Segments come in chunks with a bounding box; a chunk whose box lies farther from the point
+/// than some segment's distance (plus a margin far above rounding) holds no segment of least
+/// distance, so it is passed over, and the rest are scanned in order as `project` does.
+pub struct Projector<'a> {
+    line: &'a Polyline,
+    /// Per chunk of `CHUNK` segments, the bounding box of their points.
+    boxes: Vec<(DVec2, DVec2)>,
+    /// The bounding box of every point.
+    whole: (DVec2, DVec2),
+    /// Every coordinate finite and within `FAR`, where `MARGIN` bounds the rounding.
+    tame: bool,
+}
+
+impl<'a> Projector<'a> {
+    const CHUNK: usize = 8;
+    /// Far above the rounding of distances between points within `FAR` (~1e-6 m).
+    const MARGIN: f64 = 0.01;
+    const FAR: f64 = 1e9;
+
+    pub fn new(line: &'a Polyline) -> Projector<'a> {
+        let n = line.points.len();
+        let segs = n.saturating_sub(1);
+        let bound = |pts: &[DVec2]| {
+            pts.iter().fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), &q| (lo.min(q), hi.max(q)))
+        };
+        let boxes = (0..segs.div_ceil(Self::CHUNK))
+            .map(|c| bound(&line.points[c * Self::CHUNK..((c + 1) * Self::CHUNK + 1).min(n)]))
+            .collect();
+        // Compared one by one: `max_element` would pass over a NaN.
+        let tame = line.points.iter().all(|q| q.x.abs() < Self::FAR && q.y.abs() < Self::FAR);
+        Projector { line, boxes, whole: bound(&line.points), tame }
+    }
+
+    /// `self.line.project(p)`; `hint` is a segment to try first (the last answer's, for points
+    /// taken in order along another path), updated.
+    pub fn project(&self, p: DVec2, hint: &mut usize) -> (f64, f64) {
+        let ((_, s, off), _) = self.nearest(p, hint, f64::INFINITY);
+        (s, off)
+    }
+
+    /// `Ok(self.line.project(p))`, or `Err` where the point lies farther than `reach` from the
+    /// line (by the distance `project` measures, the size of its offset): for asking only
+    /// whether points come within some `gap <= reach` of the line, which fails on either. The
+    /// error holds a floor under that distance (a point `x` from `p` lies at least the floor
+    /// less `x` away). A NaN reach bounds nothing.
+    pub fn project_within(&self, p: DVec2, hint: &mut usize, reach: f64) -> Result<(f64, f64), f64> {
+        if !self.bounded(p) || reach.is_nan() {
+            return Ok(self.line.project(p));
+        }
+        let ((dist, s, off), floor) = self.nearest(p, hint, reach);
+        if dist <= reach { Ok((s, off)) } else { Err(floor) }
+    }
+
+    /// Whether the margin bounds the rounding for `p`: it and the line are within `FAR`, and
+    /// the line has a segment.
+    fn bounded(&self, p: DVec2) -> bool {
+        self.tame && self.line.points.len() >= 2 && p.x.abs() < Self::FAR && p.y.abs() < Self::FAR
+    }
+
+    /// The first segment of least distance to `p`, as `Polyline::project` finds it, where that
+    /// distance is at most `reach` (its distance, arc length and offset); else possibly an
+    /// infinite distance. With a floor under that distance (less than it by `MARGIN` at least).
+    fn nearest(&self, p: DVec2, hint: &mut usize, reach: f64) -> ((f64, f64, f64), f64) {
+        let segs = self.line.points.len().saturating_sub(1);
+        let scan_all = || {
+            let best = (0..segs)
+                .map(|i| self.line.project_on(i, p))
+                .fold((f64::INFINITY, 0.0, 0.0), |b, x| if x.0 < b.0 { x } else { b });
+            (best, f64::NEG_INFINITY)
+        };
+        if !self.bounded(p) {
+            return scan_all();
+        }
+        // Some segment's distance (the hint's) bounds the least one; so does `reach` where the
+        // least one matters. Chunks beyond the bound hold no segment that could be it.
+        let bound = self.line.project_on((*hint).min(segs - 1), p).0.min(reach) + Self::MARGIN;
+        if !bound.is_finite() {
+            return scan_all();
+        }
+        let away = |(lo, hi): (DVec2, DVec2)| (lo - p).max(p - hi).max(DVec2::ZERO).length_squared();
+        let mut best = (f64::INFINITY, 0.0, 0.0);
+        let whole = away(self.whole);
+        if whole > bound * bound {
+            return (best, whole.sqrt() - Self::MARGIN);
+        }
+        let mut nearest_box = f64::INFINITY;
+        for (c, &b) in self.boxes.iter().enumerate() {
+            let d2 = away(b);
+            nearest_box = nearest_box.min(d2);
+            if d2 > bound * bound {
+                continue;
+            }
+            for i in c * Self::CHUNK..((c + 1) * Self::CHUNK).min(segs) {
+                let seg = self.line.project_on(i, p);
+                if seg.0 < best.0 {
+                    best = seg;
+                    *hint = i;
+                }
+            }
+        }
+        (best, nearest_box.sqrt() - Self::MARGIN)
     }
 }
 
@@ -195,6 +322,83 @@ mod tests {
         assert!((yaw - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
         let (s, lat) = l.project(DVec2::new(5.0, 1.0));
         assert!((s - 5.0).abs() < 1e-12 && (lat - 1.0).abs() < 1e-12);
+    }
+
+    /// `Projector` gives the bits of the plain scan over every segment (kept written out here as
+    /// `project` was before it shared its segment step): on a ring traced twice (ties between
+    /// segments), with repeated points, from any hint, for points on vertices, near and far, and
+    /// for coordinates it cannot bound (the plain scan then).
+    #[test]
+    fn projector_is_the_plain_scan() {
+        let plain = |l: &Polyline, p: DVec2| {
+            let mut best = (f64::INFINITY, 0.0, 0.0);
+            for i in 0..l.points.len().saturating_sub(1) {
+                let (a, b) = (l.points[i], l.points[i + 1]);
+                let d = b - a;
+                let len2 = d.length_squared();
+                let t = if len2 > 0.0 { ((p - a).dot(d) / len2).clamp(0.0, 1.0) } else { 0.0 };
+                let q = a + d * t;
+                let dist = p.distance(q);
+                if dist < best.0 {
+                    let side = d.perp_dot(p - a).signum();
+                    best = (dist, l.s[i] + t * len2.sqrt(), side * dist);
+                }
+            }
+            (best.1, best.2)
+        };
+        let mut ring: Vec<DVec2> =
+            (0..=300).map(|i| DVec2::new(40.0, -12.0) + DVec2::from_angle(i as f64 * 0.042) * 25.0).collect();
+        ring.insert(37, ring[37]);
+        ring.insert(90, ring[90]);
+        let lines = [
+            Polyline::new(ring.clone()),
+            Polyline::new(vec![DVec2::new(1.0, 2.0), DVec2::new(60.0, 2.0)]),
+            Polyline::new(vec![DVec2::new(3.0, 3.0)]),
+            Polyline::new(vec![]),
+            Polyline::new(vec![DVec2::new(0.0, 0.0), DVec2::new(f64::NAN, 1.0), DVec2::new(5.0, 5.0)]),
+            Polyline::new(vec![DVec2::new(0.0, 0.0), DVec2::new(2e9, 1.0)]),
+        ];
+        let mut points: Vec<DVec2> =
+            (0..2500).map(|k| DVec2::new((k % 50) as f64 * 1.7 - 5.0, (k / 50) as f64 * 1.3 - 45.0)).collect();
+        points.extend(ring.iter().step_by(7).copied());
+        points.extend([
+            DVec2::new(40.0, -12.0),
+            DVec2::new(1e7, -3e8),
+            DVec2::new(2e9, 0.0),
+            DVec2::new(f64::NAN, 0.0),
+        ]);
+        let bits = |(a, b): (f64, f64)| (a.to_bits(), b.to_bits());
+        let mut pruned = 0;
+        for l in &lines {
+            let pr = Projector::new(l);
+            let mut hint = 0;
+            for (k, &p) in points.iter().enumerate() {
+                let want = plain(l, p);
+                assert_eq!(bits(l.project(p)), bits(want), "{p}");
+                assert_eq!(bits(pr.project(p, &mut hint)), bits(want), "{p}");
+                let mut other = k * 37 % 400;
+                assert_eq!(bits(pr.project(p, &mut other)), bits(want), "{p} from {}", k * 37 % 400);
+                // Within a reach: the same where the point is that near, else `None` only if
+                // the distance `project` measures is greater.
+                for reach in [0.0, 0.3, 2.0, 7.5, 40.0, f64::INFINITY, -1.0, f64::NAN] {
+                    match pr.project_within(p, &mut other, reach) {
+                        Ok(got) => assert_eq!(bits(got), bits(want), "{p} within {reach}"),
+                        Err(floor) => {
+                            assert!(want.1.abs() > reach, "{p} within {reach}: {want:?}");
+                            // The floor holds for points near this one (1 m off, any way).
+                            for q in [p, p + DVec2::X, p - DVec2::Y, p + DVec2::new(0.6, 0.8)] {
+                                assert!(plain(l, q).1.abs() >= floor - p.distance(q), "{q} floor {floor}");
+                            }
+                            pruned += 1;
+                        }
+                    }
+                    if want.1.abs() <= reach {
+                        assert!(pr.project_within(p, &mut hint, reach).is_ok(), "{p} within {reach}");
+                    }
+                }
+            }
+        }
+        assert!(pruned > 5000, "points far from the line are answered without projecting: {pruned}");
     }
 
     #[test]

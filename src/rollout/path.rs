@@ -3,19 +3,25 @@
 
 use crate::geom::wrap_angle;
 use glam::DVec2;
+use std::rc::Rc;
 
 /// Sample spacing of a resampled path, m. Fine enough that linear interpolation between samples
 /// is indistinguishable from the source polylines at BEV resolution (0.25 m).
 pub const STEP: f64 = 0.5;
 
+/// A path's samples: `..cut` read from the grid its route shares with every agent on it (`Grid`,
+/// not copied per agent), `cut..` its own (its end, and the differences that reach it).
 #[derive(Clone, Debug, Default)]
 pub struct Path {
+    grid: Rc<Grid>,
+    cut: usize,
     pts: Vec<DVec2>,
     heading: Vec<f64>,
     /// Unit tangents (the headings as vectors), so projections need no trigonometry.
     tangent: Vec<DVec2>,
     curvature: Vec<f64>,
-    /// Highest speed at each sample that still lets the agent slow for the curves ahead.
+    /// Per sample, every one: the highest speed that still lets the agent slow for the curves
+    /// ahead.
     cap: Vec<f64>,
     /// Per sample: the first and last sample of the straight run holding it (samples on one
     /// line with one tangent, split greedily from the start), for `Path::straight_run`.
@@ -46,11 +52,11 @@ const RUN_TOL: f64 = 1e-9;
 /// the run's line with its tangent), given that samples `start..=end` are on it: `Ok` when the
 /// sample after it is not, `Err` (the last sample) when the samples run out first, where more
 /// samples could extend it. Reads samples `start..=` the returned one + 1.
-fn run_end(pts: &[DVec2], tangent: &[DVec2], start: usize, mut end: usize) -> Result<usize, usize> {
-    let m = pts.len().min(tangent.len());
-    let (p0, t0) = (pts[start], tangent[start]);
+/// `at(k)` is sample `k`'s point and tangent, for `k < m`.
+fn run_end(at: impl Fn(usize) -> (DVec2, DVec2), m: usize, start: usize, mut end: usize) -> Result<usize, usize> {
+    let (p0, t0) = at(start);
     while end + 1 < m {
-        let (p, t) = (pts[end + 1], tangent[end + 1]);
+        let (p, t) = at(end + 1);
         if !((t - t0).abs().max_element() < RUN_TOL && t0.perp_dot(p - p0).abs() < RUN_TOL * (1.0 + (p - p0).length()))
         {
             return Ok(end);
@@ -64,12 +70,11 @@ fn run_end(pts: &[DVec2], tangent: &[DVec2], start: usize, mut end: usize) -> Re
 /// these samples gives its first runs (`settled`) and how far the next one is known to reach
 /// (`known`: its start and a sample up to which it holds), so only the rest is tested.
 fn straight_runs(
-    pts: &[DVec2],
-    tangent: &[DVec2],
+    at: impl Fn(usize) -> (DVec2, DVec2) + Copy,
+    m: usize,
     settled: &[(u32, u32)],
     mut known: Option<(usize, usize)>,
 ) -> Vec<(u32, u32)> {
-    let m = pts.len();
     let mut run = vec![(0u32, 0u32); m];
     let mut start = 0;
     for &(a, b) in settled {
@@ -81,7 +86,7 @@ fn straight_runs(
             Some((a, e)) if a == start => e,
             _ => start,
         };
-        let (Ok(end) | Err(end)) = run_end(pts, tangent, start, from);
+        let (Ok(end) | Err(end)) = run_end(at, m, start, from);
         run[start..=end].fill((start as u32, end as u32));
         start = end + 1;
     }
@@ -111,7 +116,8 @@ impl Path {
     pub fn set_caps(&mut self, lat_acc: f64, yaw_rate: f64, decel: f64) {
         // Each sample's own cap first: independent of its neighbours, so this loop pipelines;
         // only the braking recursion below is a chain.
-        for (c, k) in self.cap.iter_mut().zip(&self.curvature) {
+        let curvature = self.grid.curvature[..self.cut].iter().chain(&self.curvature);
+        for (c, k) in self.cap.iter_mut().zip(curvature) {
             let k = k.abs();
             *c = if k > 1e-4 { (lat_acc / k).sqrt().min(yaw_rate / k) } else { f64::INFINITY };
         }
@@ -134,13 +140,39 @@ impl Path {
     }
 
     pub fn length(&self) -> f64 {
-        (self.pts.len() - 1) as f64 * STEP
+        (self.len() - 1) as f64 * STEP
+    }
+
+    /// Number of samples.
+    #[inline]
+    fn len(&self) -> usize {
+        self.cut + self.pts.len()
+    }
+
+    #[inline(always)]
+    fn pt(&self, i: usize) -> DVec2 {
+        if i < self.cut { self.grid.pts[i] } else { self.pts[i - self.cut] }
+    }
+
+    #[inline(always)]
+    fn head(&self, i: usize) -> f64 {
+        if i < self.cut { self.grid.heading[i] } else { self.heading[i - self.cut] }
+    }
+
+    #[inline(always)]
+    fn tan(&self, i: usize) -> DVec2 {
+        if i < self.cut { self.grid.tangent[i] } else { self.tangent[i - self.cut] }
+    }
+
+    #[inline(always)]
+    fn curv(&self, i: usize) -> f64 {
+        if i < self.cut { self.grid.curvature[i] } else { self.curvature[i - self.cut] }
     }
 
     #[inline]
     fn locate(&self, s: f64) -> (usize, f64) {
-        let x = (s / STEP).clamp(0.0, (self.pts.len() - 1) as f64);
-        let i = (x as usize).min(self.pts.len() - 2);
+        let x = (s / STEP).clamp(0.0, (self.len() - 1) as f64);
+        let i = (x as usize).min(self.len() - 2);
         (i, x - i as f64)
     }
 
@@ -148,8 +180,8 @@ impl Path {
     #[inline]
     pub fn at(&self, s: f64) -> (DVec2, f64) {
         let (i, t) = self.locate(s);
-        let p = self.pts[i].lerp(self.pts[i + 1], t);
-        let h = self.heading[i] + wrap_angle(self.heading[i + 1] - self.heading[i]) * t;
+        let p = self.pt(i).lerp(self.pt(i + 1), t);
+        let h = self.head(i) + wrap_angle(self.head(i + 1) - self.head(i)) * t;
         (p, h)
     }
 
@@ -161,7 +193,7 @@ impl Path {
 
     pub fn curvature(&self, s: f64) -> f64 {
         let (i, t) = self.locate(s);
-        self.curvature[i] * (1.0 - t) + self.curvature[i + 1] * t
+        self.curv(i) * (1.0 - t) + self.curv(i + 1) * t
     }
 
     /// Point at `s` shifted `d` metres to the left.
@@ -185,7 +217,7 @@ impl Path {
     pub fn frenet(&self, p: DVec2, guess: f64) -> (f64, f64, f64, f64) {
         let (s, off, beyond, _) = self.frenet_dir(p, guess);
         let (i, u) = self.locate(s);
-        let h = self.heading[i] + wrap_angle(self.heading[i + 1] - self.heading[i]) * u;
+        let h = self.head(i) + wrap_angle(self.head(i + 1) - self.head(i)) * u;
         (s, off, beyond, h)
     }
 
@@ -224,21 +256,21 @@ impl Path {
             return None;
         }
         let a = a as usize;
-        Some(Line { origin: self.pts[a], s0: a as f64 * STEP, dir: self.tangent[a], lo, hi })
+        Some(Line { origin: self.pt(a), s0: a as f64 * STEP, dir: self.tan(a), lo, hi })
     }
 
     #[inline]
     fn at_vec(&self, s: f64) -> (DVec2, DVec2) {
         let (i, u) = self.locate(s);
-        (self.pts[i].lerp(self.pts[i + 1], u), self.tangent[i].lerp(self.tangent[i + 1], u))
+        (self.pt(i).lerp(self.pt(i + 1), u), self.tan(i).lerp(self.tan(i + 1), u))
     }
 }
 
 /// The resampling of one chain of points, kept to share among every agent on that chain: the
 /// samples at multiples of `STEP`, with their headings and tangents (the trigonometry, most of a
 /// path's cost), are the same bits whatever length an agent keeps, so they are computed once,
-/// as far as the farthest-reaching agent needs; only each path's last samples, which depend on
-/// where it ends, are its own.
+/// as far as the farthest-reaching agent needs, and read in place by every path; only each
+/// path's last samples, which depend on where it ends, are its own.
 #[derive(Clone, Debug, Default)]
 pub struct Resampler {
     /// The chain without consecutive duplicates, and the arc length at each of its points.
@@ -247,20 +279,26 @@ pub struct Resampler {
     total: f64,
     /// Chain segment of the last grid sample (segments are searched forward from it).
     seg: usize,
-    /// The sample at `k * STEP` for every `k` computed so far.
-    grid: Vec<DVec2>,
-    /// Heading and unit tangent at grid sample `i`, for every `i` whose central difference reads
-    /// grid samples only (`i + 2 < grid.len()`).
-    heading: Vec<f64>,
-    tangent: Vec<DVec2>,
-    /// Curvature at grid sample `i` for every `i` whose difference reads shared headings only
-    /// (`i + HEADING_W < heading.len()`), as `path` computes it.
-    curvature: Vec<f64>,
+    /// Shared with the paths made so far; growing it copies it only while one holds it.
+    grid: Rc<Grid>,
     /// The straight runs of the grid samples with a tangent, as `straight_runs` splits them,
     /// each ended by a sample that has one (so more samples cannot change it); then the start of
     /// the next run and the last sample known to be on it.
     runs: Vec<(u32, u32)>,
     open: (usize, usize),
+}
+
+#[derive(Clone, Debug, Default)]
+struct Grid {
+    /// The sample at `k * STEP` for every `k` computed so far.
+    pts: Vec<DVec2>,
+    /// Heading and unit tangent at grid sample `i`, for every `i` whose central difference reads
+    /// grid samples only (`i + 2 < pts.len()`).
+    heading: Vec<f64>,
+    tangent: Vec<DVec2>,
+    /// Curvature at grid sample `i` for every `i` whose difference reads shared headings only
+    /// (`i + HEADING_W < heading.len()`), as `path` computes it.
+    curvature: Vec<f64>,
 }
 
 /// Half-width of the central difference for headings, in samples: polylines from templates have
@@ -294,45 +332,58 @@ impl Resampler {
         a + (b - a) * t
     }
 
-    /// Grow the grid to `n` samples, with the headings and tangents that those determine.
+    /// Grow the grid to at least `n` samples, with the headings and tangents that those
+    /// determine. Paths made before hold the grid: it then grows by half again at least (within
+    /// the chain), so that agents asking for a little more each do not copy it each.
     fn extend(&mut self, n: usize) {
-        if self.grid.capacity() < n {
+        if self.grid.pts.len() >= n {
+            return;
+        }
+        let whole = (self.total / STEP).floor() as usize + 1;
+        let n = if Rc::strong_count(&self.grid) > 1 { n.max((self.grid.pts.len() * 3 / 2).min(whole)) } else { n };
+        let grid = Rc::make_mut(&mut self.grid);
+        if grid.pts.capacity() < n {
             // Later agents on the route may ask for more: room for the whole route (or twice this
             // request on a long one) at once, not a copy per growth.
-            let cap = ((self.total / STEP) as usize + 2).min(2 * n).max(n);
-            self.grid.reserve_exact(cap - self.grid.len());
-            self.heading.reserve_exact(cap - self.heading.len());
-            self.tangent.reserve_exact(cap - self.tangent.len());
+            let cap = (whole + 1).min(2 * n).max(n);
+            grid.pts.reserve_exact(cap - grid.pts.len());
+            grid.heading.reserve_exact(cap - grid.heading.len());
+            grid.tangent.reserve_exact(cap - grid.tangent.len());
         }
-        while self.grid.len() < n {
-            let s = self.grid.len() as f64 * STEP;
+        while grid.pts.len() < n {
+            let s = grid.pts.len() as f64 * STEP;
             while self.seg + 2 < self.cum.len() && self.cum[self.seg + 1] < s {
                 self.seg += 1;
             }
-            self.grid.push(self.point_on(self.seg, s));
+            let (a, b) = (self.pts_in[self.seg], self.pts_in[self.seg + 1]);
+            let len = self.cum[self.seg + 1] - self.cum[self.seg];
+            let t = if len > 0.0 { ((s - self.cum[self.seg]) / len).clamp(0.0, 1.0) } else { 0.0 };
+            grid.pts.push(a + (b - a) * t);
         }
-        let g = self.grid.len();
-        while self.heading.len() + HEADING_W < g {
-            let i = self.heading.len();
-            let d = self.grid[i + HEADING_W] - self.grid[i.saturating_sub(HEADING_W)];
+        let g = grid.pts.len();
+        while grid.heading.len() + HEADING_W < g {
+            let i = grid.heading.len();
+            let d = grid.pts[i + HEADING_W] - grid.pts[i.saturating_sub(HEADING_W)];
             let h = d.y.atan2(d.x);
             // Straight stretches repeat a heading bit for bit: reuse its sine and cosine.
-            let t = match (self.heading.last(), self.tangent.last()) {
+            let t = match (grid.heading.last(), grid.tangent.last()) {
                 (Some(&lh), Some(&lt)) if lh.to_bits() == h.to_bits() => lt,
                 _ => DVec2::from_angle(h),
             };
-            self.heading.push(h);
-            self.tangent.push(t);
+            grid.heading.push(h);
+            grid.tangent.push(t);
         }
         let w = HEADING_W;
-        while self.curvature.len() + w < self.heading.len() {
-            let i = self.curvature.len();
+        while grid.curvature.len() + w < grid.heading.len() {
+            let i = grid.curvature.len();
             let (a, b) = (i.saturating_sub(w), i + w);
-            self.curvature.push(wrap_angle(self.heading[b] - self.heading[a]) / ((b - a) as f64 * STEP));
+            let k = wrap_angle(grid.heading[b] - grid.heading[a]) / ((b - a) as f64 * STEP);
+            grid.curvature.push(k);
         }
         let (mut start, mut end) = self.open;
-        while start < self.tangent.len() {
-            match run_end(&self.grid, &self.tangent, start, end.max(start)) {
+        let m = grid.pts.len().min(grid.tangent.len());
+        while start < grid.tangent.len() {
+            match run_end(|k| (grid.pts[k], grid.tangent[k]), m, start, end.max(start)) {
                 Ok(e) => {
                     self.runs.push((start as u32, e as u32));
                     (start, end) = (e + 1, e + 1);
@@ -351,6 +402,8 @@ impl Resampler {
         if self.pts_in.len() < 2 {
             let p = self.pts_in.first().copied().unwrap_or(DVec2::ZERO);
             return Path {
+                grid: Rc::default(),
+                cut: 0,
                 pts: vec![p, p],
                 heading: vec![0.0; 2],
                 tangent: vec![DVec2::X; 2],
@@ -363,44 +416,68 @@ impl Resampler {
         // Samples `..n` lie on the grid (k * STEP <= acc); the last one is the end, at `acc`.
         let n = (acc / STEP).floor() as usize + 1;
         self.extend(n);
-        let mut pts = Vec::with_capacity(n + 1);
-        pts.extend_from_slice(&self.grid[..n]);
+        let grid = &*self.grid;
         let seg = self.cum[1..].partition_point(|&c| c < acc).min(self.cum.len() - 2);
-        pts.push(self.point_on(seg, acc));
-        let m = pts.len();
+        let end = self.point_on(seg, acc);
+        let m = n + 1;
         let w = HEADING_W;
         // Headings whose central difference reaches the end sample are this path's own.
-        let shared = (m - 1).saturating_sub(w).min(self.heading.len());
-        let mut heading = Vec::with_capacity(m);
-        let mut tangent = Vec::with_capacity(m);
-        heading.extend_from_slice(&self.heading[..shared]);
-        tangent.extend_from_slice(&self.tangent[..shared]);
+        let shared = (m - 1).saturating_sub(w).min(grid.heading.len());
+        // Samples `..shared` of this path are the grid's, with its headings and tangents: a
+        // curvature reading only those (its difference ends below `shared`), and a straight run
+        // whose ending test read only those, are the grid's too. Samples from `cut` on are the
+        // path's own copies.
+        let own = shared.saturating_sub(w);
+        let cut = own;
+        let pt = |i: usize| if i < n { grid.pts[i] } else { end };
+        let mut heading = Vec::with_capacity(m - cut);
+        let mut tangent = Vec::with_capacity(m - cut);
+        heading.extend_from_slice(&grid.heading[cut..shared]);
+        tangent.extend_from_slice(&grid.tangent[cut..shared]);
         for i in shared..m {
-            let d = pts[(i + w).min(m - 1)] - pts[i.saturating_sub(w)];
+            let d = pt((i + w).min(m - 1)) - pt(i.saturating_sub(w));
             let h = d.y.atan2(d.x);
-            let t = match (heading.last(), tangent.last()) {
-                (Some(&lh), Some(&lt)) if f64::to_bits(lh) == h.to_bits() => lt,
+            let last = if i > 0 {
+                Some((head_at(grid, cut, &heading, i - 1), tan_at(grid, cut, &tangent, i - 1)))
+            } else {
+                None
+            };
+            let t = match last {
+                Some((lh, lt)) if f64::to_bits(lh) == h.to_bits() => lt,
                 _ => DVec2::from_angle(h),
             };
             heading.push(h);
             tangent.push(t);
         }
-        // Samples `..shared` of this path are the grid's, with its headings and tangents: a
-        // curvature reading only those (its difference ends below `shared`), and a straight run
-        // whose ending test read only those, are the grid's too.
-        let own = shared.saturating_sub(w);
-        let mut curvature = Vec::with_capacity(m);
-        curvature.extend_from_slice(&self.curvature[..own]);
-        curvature.extend((own..m).map(|i| {
-            let (a, b) = (i.saturating_sub(w), (i + w).min(m - 1));
-            if b > a { wrap_angle(heading[b] - heading[a]) / ((b - a) as f64 * STEP) } else { 0.0 }
-        }));
+        let curvature: Vec<f64> = (own..m)
+            .map(|i| {
+                let (a, b) = (i.saturating_sub(w), (i + w).min(m - 1));
+                if b > a {
+                    wrap_angle(head_at(grid, cut, &heading, b) - head_at(grid, cut, &heading, a))
+                        / ((b - a) as f64 * STEP)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
         let settled = self.runs.partition_point(|&(_, b)| (b as usize + 1) < shared);
         let next = self.runs.get(settled).map_or(self.open, |&(a, b)| (a as usize, b as usize));
         let known = (next.0 < shared).then(|| (next.0, next.1.min(shared - 1)));
-        let run = straight_runs(&pts, &tangent, &self.runs[..settled], known);
-        Path { pts, heading, tangent, curvature, cap: vec![f64::INFINITY; m], run }
+        let run = straight_runs(|k| (pt(k), tan_at(grid, cut, &tangent, k)), m, &self.runs[..settled], known);
+        let pts = (cut..m).map(pt).collect();
+        Path { grid: Rc::clone(&self.grid), cut, pts, heading, tangent, curvature, cap: vec![f64::INFINITY; m], run }
     }
+}
+
+/// Heading of sample `i` of a path being made: the grid's below `cut`, else its own (`own[i - cut]`).
+#[inline(always)]
+fn head_at(grid: &Grid, cut: usize, own: &[f64], i: usize) -> f64 {
+    if i < cut { grid.heading[i] } else { own[i - cut] }
+}
+
+#[inline(always)]
+fn tan_at(grid: &Grid, cut: usize, own: &[DVec2], i: usize) -> DVec2 {
+    if i < cut { grid.tangent[i] } else { own[i - cut] }
 }
 
 /// A cubic Hermite curve sampled by arc length: the intercept path of an at-fault agent.
@@ -498,16 +575,24 @@ mod tests {
         assert!((s - 10.0).abs() < 0.05 && (d - 1.5).abs() < 0.05 && beyond == 0.0, "{s} {d}");
     }
 
+    /// A path's samples, wherever they are kept: points, headings, tangents, curvature.
+    fn full(p: &Path) -> (Vec<DVec2>, Vec<f64>, Vec<DVec2>, Vec<f64>) {
+        let m = p.len();
+        (
+            (0..m).map(|i| p.pt(i)).collect(),
+            (0..m).map(|i| p.head(i)).collect(),
+            (0..m).map(|i| p.tan(i)).collect(),
+            (0..m).map(|i| p.curv(i)).collect(),
+        )
+    }
+
     /// Every field of a path as bits, for exact comparison.
     fn bits(p: &Path) -> Vec<u64> {
         let v2 = |v: &[DVec2]| v.iter().flat_map(|q| [q.x.to_bits(), q.y.to_bits()]).collect::<Vec<_>>();
         let f = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         let runs = p.run.iter().flat_map(|&(a, b)| [a as u64, b as u64]);
-        [v2(&p.pts), f(&p.heading), v2(&p.tangent), f(&p.curvature), f(&p.cap)]
-            .concat()
-            .into_iter()
-            .chain(runs)
-            .collect()
+        let (pts, heading, tangent, curvature) = full(p);
+        [v2(&pts), f(&heading), v2(&tangent), f(&curvature), f(&p.cap)].concat().into_iter().chain(runs).collect()
     }
 
     /// A resampler shared by agents reaching different distances, asked in any order, gives each
@@ -517,28 +602,40 @@ mod tests {
         let mut pts = vec![DVec2::new(-40.0, 2.0), DVec2::new(0.0, 2.0)];
         pts.extend((1..=30).map(|i| DVec2::new(0.0, 32.0) + DVec2::from_angle(-1.4 + i as f64 * 0.05) * 30.0));
         pts.push(*pts.last().unwrap() + DVec2::new(-25.0, 60.0));
-        let untils = [55.3, 0.2, 12.0, 150.0, 1e9, 55.3, 3.7, 90.25, 1.0];
-        for order in [untils.to_vec(), untils.iter().rev().copied().collect()] {
+        let untils = [55.3, 0.2, 12.0, 150.0, 1e9, 55.3, 3.7, 90.25, 1.0, 60.0, 61.0, 62.5, 140.0];
+        let sorted = {
+            let mut u = untils.to_vec();
+            u.sort_by(f64::total_cmp);
+            u
+        };
+        for order in [untils.to_vec(), untils.iter().rev().copied().collect(), sorted] {
             let mut shared = Resampler::new(&pts);
+            // Paths kept while later ones grow the grid they read (copied then, and grown ahead).
+            let mut kept = vec![];
             for &u in &order {
                 let (a, b) = (shared.path(u), Resampler::new(&pts).path(u));
                 assert_eq!(bits(&a), bits(&b), "until {u}");
+                kept.push((u, a.clone()));
                 assert!(a.length() > 0.0);
                 // The curvature and runs taken from the grid are those of the path's own samples.
-                let m = a.pts.len();
+                let (pts, heading, tangent, curv) = full(&a);
+                let m = pts.len();
                 let curvature: Vec<u64> = (0..m)
                     .map(|i| {
                         let (lo, hi) = (i.saturating_sub(HEADING_W), (i + HEADING_W).min(m - 1));
                         let k = if hi > lo {
-                            wrap_angle(a.heading[hi] - a.heading[lo]) / ((hi - lo) as f64 * STEP)
+                            wrap_angle(heading[hi] - heading[lo]) / ((hi - lo) as f64 * STEP)
                         } else {
                             0.0
                         };
                         k.to_bits()
                     })
                     .collect();
-                assert_eq!(a.curvature.iter().map(|k| k.to_bits()).collect::<Vec<_>>(), curvature, "until {u}");
-                assert_eq!(a.run, straight_runs(&a.pts, &a.tangent, &[], None), "until {u}");
+                assert_eq!(curv.iter().map(|k| k.to_bits()).collect::<Vec<_>>(), curvature, "until {u}");
+                assert_eq!(a.run, straight_runs(|k| (pts[k], tangent[k]), m, &[], None), "until {u}");
+            }
+            for (u, a) in &kept {
+                assert_eq!(bits(a), bits(&Resampler::new(&pts).path(*u)), "kept, until {u}");
             }
         }
     }
@@ -584,9 +681,10 @@ mod tests {
             let mut p = Path::new(pts);
             p.set_caps(2.5, 0.6, decel);
             let mut next = f64::INFINITY;
-            let mut want = vec![0.0; p.curvature.len()];
+            let curvature = full(&p).3;
+            let mut want = vec![0.0; curvature.len()];
             for i in (0..want.len()).rev() {
-                let k = p.curvature[i].abs();
+                let k = curvature[i].abs();
                 let local = if k > 1e-4 { (2.5 / k).sqrt().min(0.6 / k) } else { f64::INFINITY };
                 next = local.min((next * next + 2.0 * decel * STEP).sqrt());
                 want[i] = next;

@@ -9,7 +9,7 @@ use super::traffic;
 use super::{ImpactRecord, Limits, TrackAgent, Tracks, limits};
 use crate::check::scenario::{Class, EMERGENCY_KINDS, Keyframe, Lateral, Motion, Side, Stop, Turn};
 use crate::diag::Diagnostic;
-use crate::geom::{Obb, wrap_angle};
+use crate::geom::{Obb, Projector, wrap_angle};
 use crate::place::{Placed, Pose};
 use crate::road::Map;
 use crate::sample::Concrete;
@@ -701,10 +701,12 @@ fn paths_cross(map: &Map, a: usize, b: usize, gap: f64) -> bool {
     }
     let (la, lb) = (ca.path.length(), cb.path.length());
     let n = (la / 0.5).ceil().max(1.0) as usize;
+    let on_b = Projector::new(&cb.path);
+    let mut hint = 0;
     (0..=n).any(|k| {
-        let (p, _) = ca.path.pose_at(la * k as f64 / n as f64);
-        let (s, d) = cb.path.project(p);
-        s > -0.5 && s < lb + 0.5 && d.abs() < gap
+        // Farther than `gap` fails the test below in any case.
+        let p = ca.path.point_at(la * k as f64 / n as f64);
+        on_b.project_within(p, &mut hint, gap).is_ok_and(|(s, d)| s > -0.5 && s < lb + 0.5 && d.abs() < gap)
     })
 }
 
@@ -767,10 +769,20 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
             // A long box swings wide of its path in a turn (a bus's front corner sweeps into the
             // next lane): the zone widens by each box's off-tracking.
             let gap = a.hw + b.hw + 0.5 + off_tracking(a) + off_tracking(b);
-            let za =
-                shared_zones(map, (ji.conn, jj.conn), profile(&mut profiles, map, ji.conn, jj.conn), gap, 2.0 * a.hl);
-            let zb =
-                shared_zones(map, (jj.conn, ji.conn), profile(&mut profiles, map, jj.conn, ji.conn), gap, 2.0 * b.hl);
+            let za = shared_zones(
+                map,
+                (ji.conn, jj.conn),
+                profile(&mut profiles, map, ji.conn, jj.conn, gap),
+                gap,
+                2.0 * a.hl,
+            );
+            let zb = shared_zones(
+                map,
+                (jj.conn, ji.conn),
+                profile(&mut profiles, map, jj.conn, ji.conn, gap),
+                gap,
+                2.0 * b.hl,
+            );
             let entry = |j: Junction| j.exit - map.connectors[j.conn].path.length();
             let (ei, ej) = (entry(ji), entry(jj));
             let (hi, hj) = (a.hl, b.hl);
@@ -804,9 +816,8 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
     }
 }
 
-/// How far the corners of `a`'s box swing out of its path's lane band in the tightest bend of
-/// its junction path: a box tangent to an arc of curvature k reaches `hl^2 k / 2` beyond it, and
-/// a vehicle that cannot turn that tight runs wider by the difference of the radii.
+/// How far `a`'s box reaches out of its path's lane band anywhere through its junction
+/// (`Bend::widest`).
 fn off_tracking(a: &Actor) -> f64 {
     a.bend.as_ref().map_or(0.0, |b| b.widest)
 }
@@ -902,28 +913,57 @@ fn swing(hl: f64, k: f64) -> f64 {
 
 /// Connector `a` sampled every half metre against connector `b`'s path: arc length along `a`,
 /// distance to `b` (infinite where the nearest point is beyond `b`'s ends, or where the two leave
-/// the same lane: paths from one lane diverge, they do not cross), arc length along `b`.
+/// the same lane: paths from one lane diverge, they do not cross), arc length along `b`. Taken
+/// for `shared_zones`' test `distance < gap`: a distance beyond the profile's reach (at least
+/// the gap asked for) reads infinite, its arc length NaN, as do paths from one lane.
 type Profile = Vec<(f64, f64, f64)>;
 
+/// The reach of a profile at least: wider than two cars' gap on bends (~3 m), so one profile
+/// per pair of connectors serves most pairs of agents on them; a wider gap (a long vehicle's
+/// off-tracking) recomputes it. Farther samples cost a bounding-box test, nearer ones a scan.
+const PROFILE_REACH: f64 = 4.0;
+
 fn profile<'p>(
-    cache: &'p mut std::collections::HashMap<(usize, usize), Profile>,
+    cache: &'p mut std::collections::HashMap<(usize, usize), (f64, Profile)>,
     map: &Map,
     a: usize,
     b: usize,
+    gap: f64,
 ) -> &'p Profile {
-    cache.entry((a, b)).or_insert_with(|| {
+    let entry = cache.entry((a, b)).or_insert((f64::NEG_INFINITY, vec![]));
+    // Only the samples within the reach are projected; farther ones fail the test anyway.
+    let covers = entry.0 >= gap;
+    if !covers {
+        let reach = gap.max(PROFILE_REACH);
         let (ca, cb) = (&map.connectors[a], &map.connectors[b]);
         let (la, lb) = (ca.path.length(), cb.path.length());
         let n = (la / 0.5).ceil().max(1.0) as usize;
-        (0..=n)
+        let on_b = Projector::new(&cb.path);
+        let mut hint = 0;
+        // A sample `x` along `a` from one at `floor` from `b` lies at least `floor - x` from it:
+        // the samples up to where that reaches within `reach` (a margin short) are not taken.
+        let mut far_until = f64::NEG_INFINITY;
+        let samples = (0..=n)
             .map(|k| {
                 let sa = la * k as f64 / n as f64;
-                let (s, d) = cb.path.project(ca.path.pose_at(sa).0);
-                let near = ca.from != cb.from && s > -0.5 && s < lb + 0.5;
+                // Paths from one lane diverge: they do not cross.
+                if ca.from == cb.from || sa < far_until {
+                    return (sa, f64::INFINITY, f64::NAN);
+                }
+                let (s, d) = match on_b.project_within(ca.path.point_at(sa), &mut hint, reach) {
+                    Ok(x) => x,
+                    Err(floor) => {
+                        far_until = sa + (floor - reach - 0.01);
+                        return (sa, f64::INFINITY, f64::NAN);
+                    }
+                };
+                let near = s > -0.5 && s < lb + 0.5;
                 (sa, if near { d.abs() } else { f64::INFINITY }, s)
             })
-            .collect()
-    })
+            .collect();
+        *entry = (reach, samples);
+    }
+    &entry.1
 }
 
 /// The stretches of connector `a` (arc lengths along it) whose samples in `profile` lie within
@@ -1058,6 +1098,98 @@ struct Corridor {
     named: Option<usize>,
 }
 
+/// How far inside the look-ahead's bounds `candidate` counts an agent on a straight run, m.
+const LINE_EPS: f64 = 1e-3;
+/// From this many agents on, `candidates` asks `AlongIndex` for the agents near a straight run
+/// instead of testing everyone (below, building it costs more than it saves: measured slower
+/// at 42 agents on `highway_merge`, with its many lane directions, faster at 50 on one road).
+const ALONG_MIN_AGENTS: usize = 48;
+/// Coordinates up to which `ALONG_MARGIN` bounds the rounding of the index's bounds.
+const ALONG_FAR: f64 = 1e6;
+const ALONG_MARGIN: f64 = 0.01;
+/// Width of `AlongIndex`'s lanes across the direction, m.
+const ALONG_BIN: f64 = 2.0;
+
+/// Every agent's place along (`pos . dir`) and across (`dir x pos`) one direction, in bins
+/// across it, each sorted along: the agents near a stretch of a straight run are a few ranges.
+struct AlongIndex {
+    key: (u64, u64),
+    /// The first bin across, and where each bin's agents start in `along` / `agent`.
+    min_bin: i64,
+    starts: Vec<usize>,
+    along: Vec<f64>,
+    agent: Vec<usize>,
+    /// Agents whose speed across the direction `candidate` counts as moving across it (or
+    /// that it cannot tell), not holding at a line.
+    crossing: Vec<usize>,
+    /// Every coordinate finite and within `ALONG_FAR`, and not too many bins.
+    tame: bool,
+}
+
+impl AlongIndex {
+    fn new(near: &[Near], dir: DVec2) -> AlongIndex {
+        let mut ix = AlongIndex {
+            key: (dir.x.to_bits(), dir.y.to_bits()),
+            min_bin: 0,
+            starts: vec![],
+            along: vec![],
+            agent: vec![],
+            crossing: vec![],
+            tame: near.iter().all(|b| b.pos.x.abs() < ALONG_FAR && b.pos.y.abs() < ALONG_FAR),
+        };
+        if !ix.tame {
+            return ix;
+        }
+        let bin = |b: &Near| (dir.perp_dot(b.pos) / ALONG_BIN).floor() as i64;
+        let (lo, hi) = near.iter().fold((i64::MAX, i64::MIN), |(l, h), b| (l.min(bin(b)), h.max(bin(b))));
+        if near.is_empty() || hi - lo > 4 * near.len() as i64 + 64 {
+            ix.tame = false;
+            return ix;
+        }
+        // A counting sort by bin, then each bin along.
+        ix.min_bin = lo;
+        let mut starts = vec![0usize; (hi - lo + 2) as usize];
+        for b in near {
+            starts[(bin(b) - lo + 1) as usize] += 1;
+        }
+        for k in 1..starts.len() {
+            starts[k] += starts[k - 1];
+        }
+        let mut fill = starts.clone();
+        let mut items = vec![(0.0, 0usize); near.len()];
+        for (j, b) in near.iter().enumerate() {
+            let k = &mut fill[(bin(b) - lo) as usize];
+            items[*k] = (b.pos.dot(dir), j);
+            *k += 1;
+            // As `candidate` takes it, with room for rounding.
+            let v_lat = b.v * dir.perp_dot(b.dir);
+            let steady = v_lat.abs() < 0.3 - LINE_EPS - 1e-6;
+            if !steady && !b.gives_way {
+                ix.crossing.push(j);
+            }
+        }
+        for w in starts.windows(2) {
+            items[w[0]..w[1]].sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+        }
+        (ix.along, ix.agent) = items.into_iter().unzip();
+        ix.starts = starts;
+        ix
+    }
+
+    /// Append the agents placed along within `lo..=hi` in the bins holding `l_lo..=l_hi` across.
+    fn collect(&self, lo: f64, hi: f64, l_lo: f64, l_hi: f64, out: &mut Vec<usize>) {
+        let nbins = self.starts.len() as i64 - 1;
+        let b_lo = ((l_lo / ALONG_BIN).floor() as i64 - self.min_bin).max(0);
+        let b_hi = ((l_hi / ALONG_BIN).floor() as i64 - self.min_bin).min(nbins - 1);
+        for b in b_lo..=b_hi {
+            let (s, e) = (self.starts[b as usize], self.starts[b as usize + 1]);
+            let first = s + self.along[s..e].partition_point(|&x| x < lo);
+            let last = first + self.along[first..e].partition_point(|&x| x <= hi);
+            out.extend_from_slice(&self.agent[first..last]);
+        }
+    }
+}
+
 struct Sim<'a, 'b> {
     actors: &'a [Actor],
     confs: &'a [Conf],
@@ -1086,6 +1218,12 @@ struct Sim<'a, 'b> {
     easing: Vec<usize>,
     /// Per agent, this frame: what `candidates` reads, packed.
     near: Vec<Near>,
+    /// This frame: everyone placed along and across each straight-run direction `candidates`
+    /// asked about (`AlongIndex`), built on the first ask; and the agents one ask yields.
+    along: std::cell::RefCell<Vec<AlongIndex>>,
+    subset: std::cell::RefCell<Vec<usize>>,
+    /// The largest bounding radius of any agent.
+    max_radius: f64,
     /// `candidates`' output, and `Path::frenet_dir` of each, kept to reuse their allocations.
     cand: std::cell::RefCell<Vec<usize>>,
     proj: std::cell::RefCell<Vec<(f64, f64, f64, DVec2)>>,
@@ -1132,6 +1270,9 @@ impl<'a, 'b> Sim<'a, 'b> {
             behind: vec![false; actors.len()],
             easing: Vec::with_capacity(actors.len()),
             near: Vec::with_capacity(actors.len()),
+            along: std::cell::RefCell::new(vec![]),
+            subset: std::cell::RefCell::new(Vec::with_capacity(actors.len())),
+            max_radius: actors.iter().map(|a| a.radius).fold(0.0, f64::max),
             cand: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
             proj: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
             sweep: Vec::with_capacity(actors.len()),
@@ -1207,6 +1348,7 @@ impl<'a, 'b> Sim<'a, 'b> {
                 let gives_way = y.0.is_some();
                 self.near.push(Near { pos: st.pos, dir, v: st.v, radius: a.radius, hl: a.hl, hw: a.hw, gives_way });
             }
+            self.along.get_mut().clear();
             for i in 0..self.actors.len() {
                 self.next[i] = self.step(i, t, f);
             }
@@ -1323,7 +1465,17 @@ impl<'a, 'b> Sim<'a, 'b> {
         // look at everyone alongside.
         let line = if d_next == st.d { a.path.straight_run(st.s) } else { None };
         let mut cand = self.cand.borrow_mut();
-        let corridor = Corridor { look, lo, hi, holding: d_next == st.d, line, clearing, named };
+        // Our sweep through the junction ahead (`Bend`, read in the loop below at each one's
+        // place) and the reach of the corner test for turned boxes there widen the band in which
+        // `candidates` may not pass anyone over.
+        let (c_lo, c_hi) = match &a.bend {
+            Some(b) => match b.within(st.s - 2.0, st.s + a.hl + look + self.max_radius + 2.0) {
+                (0.0, 0.0) => (lo, hi),
+                (r, l) => (lo.min(st.d - a.hw - margin - r) - 1.5, hi.max(st.d + a.hw + margin + l) + 1.5),
+            },
+            None => (lo, hi),
+        };
+        let corridor = Corridor { look, lo: c_lo, hi: c_hi, holding: d_next == st.d, line, clearing, named };
         self.candidates(i, &corridor, &mut cand);
         // Their projections onto our route first, in a loop of their own: each is a chain of
         // dependent steps, and independent chains overlap there (below, every decision waits
@@ -1563,62 +1715,27 @@ impl<'a, 'b> Sim<'a, 'b> {
     /// is a min or an or, so seeing it twice is harmless), less those that provably change
     /// nothing there: itself, its conflict partner, and (except `named`) agents beyond the
     /// look-ahead, well behind, or off its corridor on a straight stretch. It reads the packed
-    /// per-frame `near` data, the pair loop's main cost being this scan over everyone. No spatial
-    /// index: the look-ahead (up to ~240 m at highway speed) spans whole maps, so a grid found
-    /// nearly everyone anyway and cost more than the distance test below (`bench rollout`, 200
-    /// agents).
+    /// per-frame `near` data. The look-ahead (up to ~240 m at highway speed) spans whole maps,
+    /// so a grid finds nearly everyone; but on a straight run the corridor is a thin strip along
+    /// it: with many agents, those to test come from `AlongIndex` (`corridor_subset`), in index
+    /// order, the same ones the scan of everyone keeps.
     fn candidates(&self, i: usize, c: &Corridor, out: &mut Vec<usize>) {
-        let (a, st, fwd) = (&self.actors[i], &self.cur[i], self.dirs[i]);
-        let look = c.look;
         out.clear();
-        for (j, b) in self.near.iter().enumerate() {
-            if j == i {
-                continue;
-            }
-            if c.named == Some(j) {
-                if !self.exempt(i, j) {
+        let me = (i, &self.actors[i], &self.cur[i], self.dirs[i]);
+        if self.near.len() >= ALONG_MIN_AGENTS
+            && let Some(ln) = c.line
+            && self.corridor_subset(i, c, ln)
+        {
+            for &j in self.subset.borrow().iter() {
+                if self.candidate(me, c, j) {
                     out.push(j);
                 }
-                continue;
             }
-            let dp = b.pos - st.pos;
-            let r = look + a.radius + b.radius;
-            if dp.length_squared() > r * r {
-                continue;
-            }
-            let ahead = dp.dot(fwd);
-            // Well behind us and not beside a lateral move: cannot be in our way.
-            if ahead < -(a.hl + b.radius + 1.0) && c.holding {
-                continue;
-            }
-            if let Some(ln) = c.line {
-                let guess = st.s + ahead;
-                let rel = b.pos - ln.origin;
-                let s_line = ln.s0 + rel.dot(ln.dir);
-                // (Its projection a half length inside the run: `drive` widens the band by our
-                // swing, read from the curvature there and a half length behind it.)
-                if guess > ln.lo && guess < ln.hi && s_line - a.hl > ln.lo && s_line < ln.hi {
-                    // `frenet_dir` would give s_line, this offset and this tangent to float
-                    // noise (1 mm is far above it), hence the extents below too.
-                    const EPS: f64 = 1e-3;
-                    let l_line = ln.dir.perp_dot(rel);
-                    let (cr, sr) = (b.dir.dot(ln.dir), ln.dir.perp_dot(b.dir));
-                    let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
-                    let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
-                    let behind = s_line - st.s < -EPS;
-                    let too_far = s_line - st.s - a.hl - ext_lon > look + EPS;
-                    let aside = l_line - ext_lat > c.hi + EPS || l_line + ext_lat < c.lo - EPS;
-                    // Nor would it be predicted to cut across (see `obstacle` in `drive`).
-                    let v_lat = b.v * sr;
-                    let steady = !a.vehicle || v_lat.abs() < 0.3 - EPS || b.gives_way || c.clearing;
-                    if behind || too_far || (aside && steady) {
-                        continue;
-                    }
+        } else {
+            for j in 0..self.near.len() {
+                if self.candidate(me, c, j) {
+                    out.push(j);
                 }
-            }
-            // Last: a pure test like the others, and the rarest to hold.
-            if !self.exempt(i, j) {
-                out.push(j);
             }
         }
         if let Some(j) = c.named
@@ -1627,6 +1744,116 @@ impl<'a, 'b> Sim<'a, 'b> {
         {
             out.push(j);
         }
+    }
+
+    /// Whether `candidates` keeps agent `j` for agent `i`'s pair loop (`me`: `i`, its actor,
+    /// state and heading).
+    #[inline(always)]
+    fn candidate(&self, me: (usize, &Actor, &State, DVec2), c: &Corridor, j: usize) -> bool {
+        let (i, a, st, fwd) = me;
+        let look = c.look;
+        let b = &self.near[j];
+        if j == i {
+            return false;
+        }
+        if c.named == Some(j) {
+            return !self.exempt(i, j);
+        }
+        let dp = b.pos - st.pos;
+        let r = look + a.radius + b.radius;
+        if dp.length_squared() > r * r {
+            return false;
+        }
+        let ahead = dp.dot(fwd);
+        // Well behind us and not beside a lateral move: cannot be in our way.
+        if ahead < -(a.hl + b.radius + 1.0) && c.holding {
+            return false;
+        }
+        if let Some(ln) = c.line {
+            let guess = st.s + ahead;
+            let rel = b.pos - ln.origin;
+            let s_line = ln.s0 + rel.dot(ln.dir);
+            // (Its projection a half length inside the run: `drive` widens the band by our
+            // swing, read from the curvature there and a half length behind it.)
+            if guess > ln.lo && guess < ln.hi && s_line - a.hl > ln.lo && s_line < ln.hi {
+                // `frenet_dir` would give s_line, this offset and this tangent to float
+                // noise (1 mm is far above it), hence the extents below too.
+                let l_line = ln.dir.perp_dot(rel);
+                let (cr, sr) = (b.dir.dot(ln.dir), ln.dir.perp_dot(b.dir));
+                let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
+                let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
+                let behind = s_line - st.s < -LINE_EPS;
+                let too_far = s_line - st.s - a.hl - ext_lon > look + LINE_EPS;
+                let aside = l_line - ext_lat > c.hi + LINE_EPS || l_line + ext_lat < c.lo - LINE_EPS;
+                // Nor would it be predicted to cut across (see `obstacle` in `drive`).
+                let v_lat = b.v * sr;
+                let steady = !a.vehicle || v_lat.abs() < 0.3 - LINE_EPS || b.gives_way || c.clearing;
+                if behind || too_far || (aside && steady) {
+                    return false;
+                }
+            }
+        }
+        // Last: a pure test like the others, and the rarest to hold.
+        !self.exempt(i, j)
+    }
+
+    /// Fill `subset` with, in index order, every agent that `candidate` can keep for agent `i`
+    /// on the straight run `ln` (and maybe others): those whose place along the run lies in
+    /// the corridor ahead and across it near our band, those moving across the run, and
+    /// `named`. `false` (subset unset) where that cannot be bounded: the run ending within
+    /// reach ahead or close behind (there `candidate` does not use the run), a lateral move, or
+    /// coordinates beyond `ALONG_FAR`.
+    fn corridor_subset(&self, i: usize, c: &Corridor, ln: Line) -> bool {
+        const FAR: f64 = ALONG_FAR;
+        let (a, st) = (&self.actors[i], &self.cur[i]);
+        let rmax = self.max_radius;
+        // Everyone `candidate` keeps lies within `reach` of us (its circle test), and (holding
+        // our offset) no farther behind than `back` along our heading, so along the run too
+        // but for the turn `g` of our heading from it: then its guess and its place along the
+        // run are inside the run, where `candidate` uses it. The margin covers rounding (below
+        // 1e-8 m within `FAR`) and a unit vector's length.
+        let m = ALONG_MARGIN;
+        let reach = c.look + a.radius + rmax;
+        let back = a.hl + rmax + 1.0;
+        let g = reach * (self.dirs[i] - ln.dir).length();
+        let s_here = ln.s0 + (st.pos - ln.origin).dot(ln.dir);
+        let inside = st.s - back - m > ln.lo
+            && s_here - back - g - a.hl - m > ln.lo
+            && st.s + reach + m < ln.hi
+            && s_here + reach + m < ln.hi;
+        let sizes = [reach, g, s_here, st.s, ln.s0, ln.origin.x, ln.origin.y, st.pos.x, st.pos.y, c.lo, c.hi, a.hl];
+        if !c.holding || !inside || !sizes.iter().all(|x| x.abs() < FAR) {
+            return false;
+        }
+        let mut along = self.along.borrow_mut();
+        let key = (ln.dir.x.to_bits(), ln.dir.y.to_bits());
+        let k = match along.iter().position(|x| x.key == key) {
+            Some(k) => k,
+            None => {
+                along.push(AlongIndex::new(&self.near, ln.dir));
+                along.len() - 1
+            }
+        };
+        let ix = &along[k];
+        if !ix.tame {
+            return false;
+        }
+        // Inside the run `candidate` keeps an agent only where it is not behind, not beyond the
+        // look-ahead (its extents are within `rmax`), and beside our band, or moving across.
+        let (o_along, o_across) = (ln.origin.dot(ln.dir), ln.dir.perp_dot(ln.origin));
+        let lo = st.s - ln.s0 + o_along - LINE_EPS - m;
+        let hi = st.s - ln.s0 + o_along + a.hl + rmax + c.look + LINE_EPS + m;
+        let (l_lo, l_hi) = (c.lo - rmax - LINE_EPS - m + o_across, c.hi + rmax + LINE_EPS + m + o_across);
+        let mut sub = self.subset.borrow_mut();
+        sub.clear();
+        ix.collect(lo, hi, l_lo, l_hi, &mut sub);
+        if a.vehicle && !c.clearing {
+            sub.extend_from_slice(&ix.crossing);
+        }
+        sub.extend(c.named.filter(|&j| j < self.near.len()));
+        sub.sort_unstable();
+        sub.dedup();
+        true
     }
 
     /// Gipps's safe speed behind leader `j`, `gap` ahead at `v_lon` along our path, as an
@@ -2231,6 +2458,83 @@ fn replay(keys: &[Keyframe], t: f64) -> (DVec2, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `candidates` through the along index must give exactly the agents (and order) of the scan
+    /// of everyone, for agents on a straight run among others ahead, behind, beside, far off,
+    /// crossing it, walking, holding at a line, with and without a named leader; and the index
+    /// must answer most asks, or the test proves nothing.
+    #[test]
+    fn along_index_keeps_every_candidate() {
+        let mut seed = 11u64;
+        let mut rnd = move || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let n = 160;
+        let mut actors: Vec<Actor> = (0..n)
+            .map(|k| {
+                let info = TrackAgent {
+                    name: format!("a{k}"),
+                    kind: "sedan".into(),
+                    class: Class::Vehicle,
+                    motion: Motion::Vehicle,
+                    size: [1.0 + 11.0 * rnd(), 0.5 + 2.0 * rnd(), 1.5],
+                    background: false,
+                };
+                base_actor(info, Pose { x: 0.0, y: 0.0, yaw: 0.0 }, Motion::Vehicle, Class::Vehicle, Drive::Mover)
+            })
+            .collect();
+        for a in actors.iter_mut().step_by(9) {
+            a.vehicle = false;
+        }
+        let road = Path::straight(DVec2::new(-300.0, 40.0), 0.37, 3000.0);
+        let mut sim = Sim::new(&actors, &[], &[], None, 0.1);
+        for k in 0..n {
+            let s = 500.0 + 700.0 * rnd();
+            let lat = (rnd() - 0.5) * 40.0;
+            let (p, h) = road.point(s, lat);
+            let turn = match k % 7 {
+                0 => 1.2,
+                1 => std::f64::consts::PI,
+                _ => (rnd() - 0.5) * 0.03,
+            };
+            sim.cur[k] = State { pos: p, yaw: h + turn, v: 35.0 * rnd(), s, d: lat, off: lat, ..sim.cur[k] };
+        }
+        sim.dirs = sim.cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect();
+        sim.near = (0..n)
+            .map(|k| {
+                let (st, a) = (&sim.cur[k], &actors[k]);
+                let gives_way = k % 11 == 0;
+                Near { pos: st.pos, dir: sim.dirs[k], v: st.v, radius: a.radius, hl: a.hl, hw: a.hw, gives_way }
+            })
+            .collect();
+        let (mut asked, mut indexed) = (0, 0);
+        for (i, ai) in actors.iter().enumerate() {
+            let st = sim.cur[i];
+            let Some(line) = road.straight_run(st.s) else { continue };
+            for (k, look) in [15.0, 60.0, 240.0].into_iter().enumerate() {
+                let wide = 2.0 * rnd();
+                let c = Corridor {
+                    look,
+                    lo: st.d - ai.hw - wide,
+                    hi: st.d + ai.hw + 0.1,
+                    holding: true,
+                    line: Some(line),
+                    clearing: k == 1 && i % 2 == 0,
+                    named: (k == 2).then_some((i * 7 + 3) % n),
+                };
+                let mut got = vec![];
+                sim.candidates(i, &c, &mut got);
+                let me = (i, ai, &sim.cur[i], sim.dirs[i]);
+                let mut want: Vec<usize> = (0..n).filter(|&j| sim.candidate(me, &c, j)).collect();
+                want.extend(c.named.filter(|&j| j != i));
+                assert_eq!(got, want, "agent {i}, look {look}");
+                asked += 1;
+                indexed += usize::from(sim.corridor_subset(i, &c, line));
+            }
+        }
+        assert!(indexed * 10 > asked * 9, "the index answered {indexed} of {asked}");
+    }
 
     /// `overlap_pairs` may leave out only pairs whose bounding circles cannot meet at any mix of
     /// the positions `resolve_overlaps` can give them (`next`, or `cur` once undone), and must
