@@ -1221,7 +1221,8 @@ fn off_drivable_by(m: &Map, p: DVec2) -> f64 {
 const CORNER_TOL_M: f64 = 0.25;
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 96, max_global_rejects: 4096, ..ProptestConfig::default() })]
+    // 96 scenes in CI; `ROCC_SCENES=1000` (with `PROPTEST_RNG_SEED` to vary them) for a longer run.
+    #![proptest_config(ProptestConfig { cases: scene_cases(), max_global_rejects: 64 * scene_cases(), ..ProptestConfig::default() })]
 
     /// Over generated scenes on every template: no overlap but the conflict pair's from about
     /// its impact on; bicycle kinematics and class limits; vehicles on the drivable surface
@@ -1343,14 +1344,22 @@ fn generated_scene_holds(text: &str) -> Result<(), TestCaseError> {
     Ok(())
 }
 
+fn scene_cases() -> u32 {
+    std::env::var("ROCC_SCENES").ok().and_then(|v| v.parse().ok()).unwrap_or(96)
+}
+
 /// Scenes the generator once produced that broke a property (minimal cases, as scene text, in
-/// `tests/rollout-cases/`): each must still be accepted, and hold.
+/// `tests/rollout-cases/`, or in the folder `ROCC_CASES` names): each must still be accepted,
+/// and hold.
 #[test]
 fn generated_regression_scenes() {
-    let mut files: Vec<_> =
-        std::fs::read_dir("tests/rollout-cases").expect("cases").map(|e| e.expect("entry").path()).collect();
+    let dir = std::env::var("ROCC_CASES").ok();
+    let mut files: Vec<_> = std::fs::read_dir(dir.as_deref().unwrap_or("tests/rollout-cases"))
+        .expect("cases")
+        .map(|e| e.expect("entry").path())
+        .collect();
     files.sort();
-    assert!(files.len() >= 10, "{files:?}");
+    assert!(files.len() >= 10 || dir.is_some(), "{files:?}");
     for p in files {
         let text = std::fs::read_to_string(&p).expect("read");
         if let Err(e) = generated_scene_holds(&text) {
