@@ -759,9 +759,6 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
         for &j in &js[n + 1..] {
             let (a, b) = (&actors[i], &actors[j]);
             let (Some(ji), Some(jj)) = (a.junction, b.junction) else { continue };
-            if a.emergency && b.emergency {
-                continue;
-            }
             let emergency = a.yield_to.contains(&j) || b.yield_to.contains(&i);
             if confs.iter().any(|k| (k.af == i && k.st == j) || (k.af == j && k.st == i)) {
                 continue;
@@ -2316,12 +2313,20 @@ impl<'a, 'b> Sim<'a, 'b> {
                 continue;
             }
             let (af, st) = (conf.af, conf.st);
-            let (a, b) = (self.actors[af].obb(&self.next[af]), self.actors[st].obb(&self.next[st]));
+            let (mut a, mut b) = (self.actors[af].obb(&self.next[af]), self.actors[st].obb(&self.next[st]));
             if !a.overlaps(&b) {
-                continue;
+                if self.prev_depth[k] <= 0.0 {
+                    continue;
+                }
+                // They touched last frame and come apart now (a graze ahead of the planned
+                // impact): that was the crash, deepest last frame. The pair stays where it was.
+                for x in [af, st] {
+                    self.next[x] = State { v: 0.0, ..self.cur[x] };
+                }
+                (a, b) = (self.actors[af].obb(&self.next[af]), self.actors[st].obb(&self.next[st]));
             }
             let depth = stage::depth(&a, &b);
-            if depth >= 0.8 * plan.delta || t >= plan.t_impact - 0.5 * self.dt || depth < self.prev_depth[k] {
+            if depth >= 0.8 * plan.delta || t >= plan.t_impact - 0.5 * self.dt || depth <= self.prev_depth[k] {
                 self.latched[k] = true;
                 self.next[af].frozen = true;
                 self.next[st].frozen = true;
