@@ -149,24 +149,30 @@ impl Path {
         self.cut + self.pts.len()
     }
 
+    /// Sample `i` of a per-sample array: the route's shared one below `cut`, our own tail above.
+    #[inline(always)]
+    fn pick<T: Copy>(&self, i: usize, shared: &[T], own: &[T]) -> T {
+        if i < self.cut { shared[i] } else { own[i - self.cut] }
+    }
+
     #[inline(always)]
     fn pt(&self, i: usize) -> DVec2 {
-        if i < self.cut { self.grid.pts[i] } else { self.pts[i - self.cut] }
+        self.pick(i, &self.grid.pts, &self.pts)
     }
 
     #[inline(always)]
     fn head(&self, i: usize) -> f64 {
-        if i < self.cut { self.grid.heading[i] } else { self.heading[i - self.cut] }
+        self.pick(i, &self.grid.heading, &self.heading)
     }
 
     #[inline(always)]
     fn tan(&self, i: usize) -> DVec2 {
-        if i < self.cut { self.grid.tangent[i] } else { self.tangent[i - self.cut] }
+        self.pick(i, &self.grid.tangent, &self.tangent)
     }
 
     #[inline(always)]
     fn curv(&self, i: usize) -> f64 {
-        if i < self.cut { self.grid.curvature[i] } else { self.curvature[i - self.cut] }
+        self.pick(i, &self.grid.curvature, &self.curvature)
     }
 
     #[inline]

@@ -842,12 +842,10 @@ fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
         let mut s = start;
         for _ in 0..2000 {
             let v = a.path.cap(s).clamp(1.0, 15.0);
-            let l_d = (0.8 * v).max(2.0 + 0.25 * a.r_min).min(20.0);
             let fwd = DVec2::from_angle(yaw);
-            let k = pursuit(pos, fwd, a.path.point_fast(s + l_d, 0.0));
+            let k = pursuit(pos, fwd, a.path.point_fast(s + look_ahead(a, v), 0.0));
             let dist = v * dt;
-            let k_max = (1.0 / a.r_min).min(a.lim.yaw_rate * dt / dist);
-            (pos, yaw) = arc(pos, yaw, k.clamp(-k_max, k_max), dist);
+            (pos, yaw) = steer(a, pos, yaw, k, dist, dt, 1.0);
             let (ns, off, _, _) = a.path.frenet_dir(pos, s + dist);
             s = ns;
             let corners = Obb { center: pos, yaw, length: 2.0 * a.hl, width: 2.0 * a.hw }.corners();
@@ -1687,7 +1685,7 @@ impl<'a, 'b> Sim<'a, 'b> {
         // Kinematic bicycle: pure pursuit of the reference (the route shifted by the lateral
         // goal's offset, taken where the profile will be when the car gets there), curvature
         // bounded by the turning radius and the yaw rate, position integrated along the heading.
-        let l_d = (0.8 * v).max(2.0 + 0.25 * a.r_min).min(20.0);
+        let l_d = look_ahead(a, v);
         let horizon = l_d / v.max(1.0);
         let d_look = if side_blocked {
             st.d
@@ -2050,11 +2048,7 @@ impl<'a, 'b> Sim<'a, 'b> {
     /// Move vehicle `a` from `st` by `dist` along a circular arc of curvature `k`, bounded by its
     /// turning radius and by `yaw_scale` times its class yaw rate at the step's mean speed.
     fn advance(&self, a: &Actor, st: &State, k: f64, dist: f64, yaw_scale: f64) -> (DVec2, f64) {
-        if dist <= 0.0 {
-            return (st.pos, st.yaw);
-        }
-        let k_max = (1.0 / a.r_min).min(yaw_scale * a.lim.yaw_rate * self.dt / dist);
-        arc(st.pos, st.yaw, k.clamp(-k_max, k_max), dist)
+        steer(a, st.pos, st.yaw, k, dist, self.dt, yaw_scale)
     }
 
     /// How agent `i` gives the junction to an emergency vehicle on a crossing path: short of the
@@ -2403,6 +2397,20 @@ fn pursuit(p: DVec2, fwd: DVec2, aim: DVec2) -> f64 {
     if l2 < 1e-12 { 0.0 } else { 2.0 * fwd.perp_dot(rel) / l2 }
 }
 
+/// `Sim::advance` from a bare pose (the dry run of `assign_bends` steers as the rollout does).
+fn steer(a: &Actor, pos: DVec2, yaw: f64, k: f64, dist: f64, dt: f64, yaw_scale: f64) -> (DVec2, f64) {
+    if dist <= 0.0 {
+        return (pos, yaw);
+    }
+    let k_max = (1.0 / a.r_min).min(yaw_scale * a.lim.yaw_rate * dt / dist);
+    arc(pos, yaw, k.clamp(-k_max, k_max), dist)
+}
+
+/// Pure pursuit's look-ahead distance for vehicle `a` at speed `v`, m.
+fn look_ahead(a: &Actor, v: f64) -> f64 {
+    (0.8 * v).max(2.0 + 0.25 * a.r_min).min(20.0)
+}
+
 /// Exact integration of the kinematic bicycle over a step of length `dist` at curvature `k`:
 /// the box moves along a circular arc tangent to its heading (no sideways slip).
 fn arc(p: DVec2, yaw: f64, k: f64, dist: f64) -> (DVec2, f64) {
@@ -2464,31 +2472,40 @@ fn replay(keys: &[Keyframe], t: f64) -> (DVec2, f64) {
 mod tests {
     use super::*;
 
-    /// `candidates` through the along index must give exactly the agents (and order) of the scan
-    /// of everyone, for agents on a straight run among others ahead, behind, beside, far off,
-    /// crossing it, walking, holding at a line, with and without a named leader; and the index
-    /// must answer most asks, or the test proves nothing.
-    #[test]
-    fn along_index_keeps_every_candidate() {
-        let mut seed = 11u64;
-        let mut rnd = move || {
+    /// A reproducible stream of numbers in [0, 1) (a 64-bit LCG's top 53 bits).
+    fn lcg(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
             seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
-        let n = 160;
-        let mut actors: Vec<Actor> = (0..n)
+        }
+    }
+
+    /// `n` vehicle actors of random size (1 m to `1 + extra` m long) at the origin.
+    fn random_boxes(n: usize, extra: f64, rnd: &mut impl FnMut() -> f64) -> Vec<Actor> {
+        (0..n)
             .map(|k| {
                 let info = TrackAgent {
                     name: format!("a{k}"),
                     kind: "sedan".into(),
                     class: Class::Vehicle,
                     motion: Motion::Vehicle,
-                    size: [1.0 + 11.0 * rnd(), 0.5 + 2.0 * rnd(), 1.5],
+                    size: [1.0 + extra * rnd(), 0.5 + 2.0 * rnd(), 1.5],
                     background: false,
                 };
                 base_actor(info, Pose { x: 0.0, y: 0.0, yaw: 0.0 }, Motion::Vehicle, Class::Vehicle, Drive::Mover)
             })
-            .collect();
+            .collect()
+    }
+
+    /// `candidates` through the along index must give exactly the agents (and order) of the scan
+    /// of everyone, for agents on a straight run among others ahead, behind, beside, far off,
+    /// crossing it, walking, holding at a line, with and without a named leader; and the index
+    /// must answer most asks, or the test proves nothing.
+    #[test]
+    fn along_index_keeps_every_candidate() {
+        let mut rnd = lcg(11);
+        let n = 160;
+        let mut actors = random_boxes(n, 11.0, &mut rnd);
         for a in actors.iter_mut().step_by(9) {
             a.vehicle = false;
         }
@@ -2546,25 +2563,9 @@ mod tests {
     /// list the rest once each in (i, j) order; with a position it cannot bound, every pair.
     #[test]
     fn overlap_pairs_keep_every_pair_that_can_meet() {
-        let mut seed = 7u64;
-        let mut rnd = move || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = lcg(7);
         let n = 120;
-        let actors: Vec<Actor> = (0..n)
-            .map(|k| {
-                let info = TrackAgent {
-                    name: format!("a{k}"),
-                    kind: "sedan".into(),
-                    class: Class::Vehicle,
-                    motion: Motion::Vehicle,
-                    size: [1.0 + 6.0 * rnd(), 0.5 + 2.0 * rnd(), 1.5],
-                    background: false,
-                };
-                base_actor(info, Pose { x: 0.0, y: 0.0, yaw: 0.0 }, Motion::Vehicle, Class::Vehicle, Drive::Mover)
-            })
-            .collect();
+        let actors = random_boxes(n, 6.0, &mut rnd);
         let mut sim = Sim::new(&actors, &[], &[], None, 0.1);
         for k in 0..n {
             // Clusters of touching and nearly touching boxes, moves up to 4 m, a few far away.
