@@ -511,6 +511,45 @@ fn lane_change_waits_for_a_car_alongside() {
     assert!(overlaps(&t, &[]).is_empty());
 }
 
+/// A car creeping at walking pace noses into the next lane no steeper than the slip angle (its
+/// lateral reference does not run ahead of its body), and the car coming up that lane gets by
+/// with a comfortable brake at most (it used to find the creeper's nose across its lane 4.5 m
+/// ahead, at 13 m/s).
+#[test]
+fn a_creeping_lane_change_noses_out_gently() {
+    let m = straight(2);
+    let g = Some(Goal { lateral: Lateral::ChangeLane(Side::Left), speed: Some(0.4), ..goal() });
+    let ego = car("ego", on(&m, id(Arm::West, Dir::In, 2), 150.0, 0.0), 0.4, g);
+    let fast = car("fast", on(&m, id(Arm::West, Dir::In, 1), 90.0, 0.0), 13.0, None);
+    let t = run(vec![ego, fast], vec![], &m, 8.0);
+    let steepest = t.poses[0].iter().map(|p| wrap_angle(p.yaw).abs()).fold(0.0, f64::max);
+    assert!(steepest < 0.27, "heading {steepest:.3} rad off the lane");
+    let y_end = t.poses[0][t.frames - 1].y;
+    assert!(y_end > -5.25 + 0.2, "no progress toward the next lane: y = {y_end:.2}");
+    assert!(overlaps(&t, &[]).is_empty());
+    let lim = limits(Class::Vehicle, Motion::Vehicle);
+    let hardest = t.speeds[1].windows(2).map(|w| (w[1] - w[0]) * t.rate).fold(0.0, f64::min);
+    assert!(hardest >= -lim.brake - 1e-6, "the car in the next lane braked at {hardest:.2} m/s^2");
+    assert!(t.poses[1][t.frames - 1].x > 0.0 + 5.0, "the car in the next lane did not get by");
+    check_limits(&t);
+}
+
+/// Two pedestrians a step apart cross side by side: turning on the spot to face the road, their
+/// boxes' corners would meet, so each keeps its heading and steps on sideways; both get across
+/// (they used to stand at the kerb for good).
+#[test]
+fn walkers_side_by_side_both_cross() {
+    let text = std::fs::read_to_string("tests/rollout-cases/walkers-turning-side-by-side.scn").expect("case");
+    let f = front_of(&text);
+    let t = &f.tracks;
+    for name in ["w0", "w1"] {
+        let i = t.agents.iter().position(|a| a.name == name).expect("walker");
+        let (p, q) = (t.poses[i][0], t.poses[i][t.frames - 1]);
+        let walked = DVec2::new(q.x - p.x, q.y - p.y).length();
+        assert!(walked > 5.0, "{name} walked {walked:.2} m");
+    }
+}
+
 #[test]
 fn pull_to_shoulder_and_away_from() {
     let m = straight(2);

@@ -198,6 +198,8 @@ const CLEAR_MARGIN_S: f64 = 1.0;
 const SAFE_MARGIN: f64 = 0.5;
 /// Largest angle between a vehicle's heading and its lane while it moves sideways (rad).
 const MAX_SLIP: f64 = 0.25;
+/// How far a vehicle's lateral reference may lead its body's offset (m).
+const MAX_LEAD: f64 = 0.5;
 /// Lateral speed of a vehicle squeezing past an agent that eases aside for it (m/s).
 const PASS_LAT_RATE: f64 = 1.0;
 /// Side clearance kept while passing it (m).
@@ -1437,6 +1439,10 @@ impl<'a, 'b> Sim<'a, 'b> {
             // a slow lane change takes longer than its nominal duration instead of crabbing.
             let max_step = st.v.max(3.0) * MAX_SLIP.tan() * dt;
             d_next = st.d + (d_next - st.d).clamp(-max_step, max_step);
+            // Nor does the reference run ahead of the box: a car creeping at walking pace would
+            // otherwise finish its lane change on paper, seconds before its body has moved, and
+            // point its nose ever more steeply into the next lane, past the gap acceptance.
+            d_next = d_next.clamp(st.d.min(st.off - MAX_LEAD), st.d.max(st.off + MAX_LEAD));
         }
         let margin = if a.vehicle { 0.25 } else { 0.1 };
         let goal_d = target.filter(|_| st.phase < 1.0).or(pass_target).unwrap_or(st.d);
@@ -1444,6 +1450,8 @@ impl<'a, 'b> Sim<'a, 'b> {
         let (cur_lo, cur_hi) = (st.d.min(st.off) - a.hw, st.d.max(st.off) + a.hw);
         let (lo, hi) = (cur_lo.min(goal_d - a.hw) - margin, cur_hi.max(goal_d + a.hw) + margin);
 
+        // Half done once the profile and the body itself are half way over.
+        let half_done = st.phase >= 0.5 && target.is_none_or(|tg| (st.off - a.d0).abs() >= 0.5 * (tg - a.d0).abs());
         let fwd = self.dirs[i];
         let look = st.v * st.v / (2.0 * lim.brake) + 2.5 * st.v + 15.0;
         let mut acc = idm_free(st.v, v_des, lim, dt);
@@ -1505,7 +1513,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             }
             // Gap acceptance: a lateral move not yet half done waits while the target band has
             // someone too close ahead or closing from behind.
-            if d_next != st.d && st.phase < 0.5 {
+            if d_next != st.d && !half_done {
                 let (jlo, jhi) = (lj - ext_lat, lj + ext_lat);
                 let in_target = jlo < goal_d + a.hw + 0.1 && jhi > goal_d - a.hw - 0.1;
                 let in_current = jlo < cur_hi && jhi > cur_lo;
@@ -1698,6 +1706,10 @@ impl<'a, 'b> Sim<'a, 'b> {
         };
         let slip = v.max(3.0) * MAX_SLIP.tan() * horizon;
         let d_look = d_next + (d_look - d_next).clamp(-slip, slip);
+        // Aimed no steeper than the slip angle from where the body is (a creeping car noses out
+        // gently instead of turning broadside into the next lane).
+        let reach = l_d * MAX_SLIP.tan();
+        let d_look = d_look.clamp(d_next.min(st.off - reach), d_next.max(st.off + reach));
         let aim = a.path.point_fast(st.s + l_d, d_look);
         let k = pursuit(st.pos, self.dirs[i], aim);
         let (pos, yaw) = self.advance(a, &st, k, adv, 1.0);
@@ -2226,7 +2238,8 @@ impl<'a, 'b> Sim<'a, 'b> {
     fn resolve_overlaps(&mut self) {
         let n = self.actors.len();
         let pairs = self.overlap_pairs();
-        for _ in 0..=n {
+        // Each pass undoes at least one turn or move: two per agent at most.
+        for _ in 0..=2 * n {
             let mut changed = false;
             // The pairs (i, j > i) in index order (undoing a move changes later pairs'
             // outcome), bounding circles first.
@@ -2241,11 +2254,21 @@ impl<'a, 'b> Sim<'a, 'b> {
                     continue;
                 }
                 for k in [i, j] {
-                    let moved = self.next[k].pos != self.cur[k].pos || self.next[k].yaw != self.cur[k].yaw;
-                    if matches!(self.actors[k].drive, Drive::Mover) && moved {
-                        self.next[k] = State { v: 0.0, ..self.cur[k] };
-                        changed = true;
+                    let (nk, ck) = (self.next[k], self.cur[k]);
+                    let moved = nk.pos != ck.pos || nk.yaw != ck.yaw;
+                    if !matches!(self.actors[k].drive, Drive::Mover) || !moved {
+                        continue;
                     }
+                    // A walker turning on the spot sweeps its corners out to its half-diagonal:
+                    // beside another (two crossing side by side) it keeps its heading and steps
+                    // on sideways, rather than standing there for good.
+                    if !self.actors[k].vehicle && nk.yaw != ck.yaw && nk.pos != ck.pos {
+                        self.next[k].yaw = ck.yaw;
+                        changed = true;
+                        continue;
+                    }
+                    self.next[k] = State { v: 0.0, ..self.cur[k] };
+                    changed = true;
                 }
             }
             if !changed {
