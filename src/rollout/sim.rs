@@ -134,6 +134,21 @@ impl Bend {
     }
 }
 
+impl Bend {
+    /// The route arc length of the first metre between `lo` and `hi` where the box reaches at
+    /// least `right` to the right or `left` to the left (either may be infinite: that side is
+    /// not asked about).
+    fn first_reach(&self, lo: f64, hi: f64, right: f64, left: f64) -> Option<f64> {
+        let last = self.reach.len() as f64 - 1.0;
+        let (a, b) = ((lo - self.from).floor().max(0.0), (hi - self.from).ceil().min(last));
+        if a > b {
+            return None;
+        }
+        let m = self.reach[a as usize..=b as usize].iter().position(|&(r, l)| r >= right || l >= left)?;
+        Some(self.from + a + m as f64)
+    }
+}
+
 /// The stretch that two vehicles' junction paths share, seen from one of them: route arc
 /// lengths of its box centre between which its box may touch the other's path.
 #[derive(Clone, Copy, Debug)]
@@ -1603,6 +1618,39 @@ impl<'a, 'b> Sim<'a, 'b> {
                     in_cur = lo_c < band_hi && hi_c > band_lo;
                 }
             }
+            // Where our path bends between here and a turned box, the straight frame at its
+            // projection misplaces it (a bus driving straight past our right turn lies in the
+            // band there, and clear of it on the road): our band is laid along the path itself,
+            // a metre at a time, and only a box it meets counts, from where it first meets it.
+            if in_cur && !is_named && sr.abs() > 0.05 {
+                let reach = (sj + ext_lon + a.hl + 1.0).min(a.path.length());
+                if a.path.straight_run(st.s).is_none_or(|ln| ln.hi < reach) {
+                    match self.band_meets(a, st.s, reach, (band_lo, band_hi), &b.obb(o)) {
+                        Some(s_hit) => gap = s_hit - st.s,
+                        None => in_cur = false,
+                    }
+                }
+            }
+            // One coming toward us in its lane beside our path meets us wherever our turn
+            // sweeps out over that lane between us and it (a bus's front corner swinging into
+            // the oncoming lane as it turns right): found only once there, it is on us. We hold
+            // short of the first such metre, as of something standing there, till it has passed.
+            let (jlo, jhi) = (lj - ext_lat, lj + ext_lat);
+            let beside = jlo >= cur_hi + margin || jhi <= cur_lo - margin;
+            if a.vehicle && beside && !is_named && cr < -0.5 && gap > 0.0 {
+                if let Some(bd) = &a.bend {
+                    let left = if jlo >= cur_hi + margin { jlo - (st.d + a.hw + margin) } else { f64::INFINITY };
+                    let right = if jhi <= cur_lo - margin { (st.d - a.hw - margin) - jhi } else { f64::INFINITY };
+                    // Too close to hold short at a comfortable braking, we are committed (as to a
+                    // junction zone, `zone_rank`): the other sees our box and keeps clear.
+                    let short = |at: f64| at - st.s - a.hl - 0.5;
+                    let hit = bd.first_reach(st.s + a.hl, sj, right, left);
+                    if let Some(at) = hit.filter(|&at| st.v * st.v < 2.0 * lim.brake * short(at)) {
+                        in_cur = true;
+                        gap = gap.min(short(at));
+                    }
+                }
+            }
             let in_now = in_cur || (gap > 0.0 && lj - ext_lat < hi && lj + ext_lat > lo);
             let mut obstacle = in_now || is_named;
             // Someone about to cut across our corridor (a crossing pedestrian, a car in the
@@ -1715,6 +1763,26 @@ impl<'a, 'b> Sim<'a, 'b> {
         let (pos, yaw) = self.advance(a, &st, k, adv, 1.0);
         let (s, off, _, _) = a.path.frenet_dir(pos, st.s + adv);
         State { pos, yaw, s, off, ..next }
+    }
+
+    /// The first centre arc length from `from` (to within a quarter metre, never past the
+    /// true one) at which the box of `a`, stretched across its path to the offsets `band`,
+    /// meets `theirs`, following its path up to `to`.
+    fn band_meets(&self, a: &Actor, from: f64, to: f64, band: (f64, f64), theirs: &Obb) -> Option<f64> {
+        let (mid, width) = (0.5 * (band.0 + band.1), band.1 - band.0);
+        // The box for every centre position in [s, s + step].
+        let meets = |s: f64, step: f64| {
+            let (p, h) = a.path.point(s + 0.5 * step, mid);
+            Obb { center: p, yaw: h, length: 2.0 * a.hl + step, width }.overlaps(theirs)
+        };
+        let mut s = from;
+        while s < to {
+            if meets(s, 1.0) {
+                return (0..4).map(|k| s + 0.25 * k as f64).find(|&q| meets(q, 0.25)).or(Some(s + 0.75));
+            }
+            s += 1.0;
+        }
+        None
     }
 
     /// The agents `drive`'s pair loop looks at for agent `i`, in the order it visits them: every
