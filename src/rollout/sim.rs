@@ -1637,18 +1637,22 @@ impl<'a, 'b> Sim<'a, 'b> {
             // short of the first such metre, as of something standing there, till it has passed.
             let (jlo, jhi) = (lj - ext_lat, lj + ext_lat);
             let beside = jlo >= cur_hi + margin || jhi <= cur_lo - margin;
-            if a.vehicle && beside && !is_named && cr < -0.5 && gap > 0.0 {
-                if let Some(bd) = &a.bend {
-                    let left = if jlo >= cur_hi + margin { jlo - (st.d + a.hw + margin) } else { f64::INFINITY };
-                    let right = if jhi <= cur_lo - margin { (st.d - a.hw - margin) - jhi } else { f64::INFINITY };
-                    // Too close to hold short at a comfortable braking, we are committed (as to a
-                    // junction zone, `zone_rank`): the other sees our box and keeps clear.
-                    let short = |at: f64| at - st.s - a.hl - 0.5;
-                    let hit = bd.first_reach(st.s + a.hl, sj, right, left);
-                    if let Some(at) = hit.filter(|&at| st.v * st.v < 2.0 * lim.brake * short(at)) {
-                        in_cur = true;
-                        gap = gap.min(short(at));
-                    }
+            if a.vehicle
+                && beside
+                && !is_named
+                && cr < -0.5
+                && gap > 0.0
+                && let Some(bd) = &a.bend
+            {
+                let left = if jlo >= cur_hi + margin { jlo - (st.d + a.hw + margin) } else { f64::INFINITY };
+                let right = if jhi <= cur_lo - margin { (st.d - a.hw - margin) - jhi } else { f64::INFINITY };
+                // Too close to hold short at a comfortable braking, we are committed (as to a
+                // junction zone, `zone_rank`): the other sees our box and keeps clear.
+                let short = |at: f64| at - st.s - a.hl - 0.5;
+                let hit = bd.first_reach(st.s + a.hl, sj, right, left);
+                if let Some(at) = hit.filter(|&at| st.v * st.v < 2.0 * lim.brake * short(at)) {
+                    in_cur = true;
+                    gap = gap.min(short(at));
                 }
             }
             let in_now = in_cur || (gap > 0.0 && lj - ext_lat < hi && lj + ext_lat > lo);
