@@ -119,6 +119,10 @@ pub(super) struct Bend {
     /// The widest reach to either side anywhere, at least the corners' swing in the tightest
     /// bend (`sweep`).
     pub widest: f64,
+    /// The box stretched over its reach, a metre of path each, where it reaches beyond the band
+    /// (`sweep_entry`), and their bounding box (lower and upper corners).
+    pub slices: Vec<(f64, Obb)>,
+    pub bounds: (DVec2, DVec2),
 }
 
 impl Bend {
@@ -135,6 +139,16 @@ impl Bend {
 }
 
 impl Bend {
+    /// The route arc length of the first metre from `lo` to `hi` whose slice meets `theirs`.
+    fn meets(&self, theirs: &Obb, lo: f64, hi: f64) -> Option<f64> {
+        let ((min, max), c, r) = (self.bounds, theirs.center, 0.5 * theirs.length.hypot(theirs.width));
+        if c.x + r < min.x || c.x - r > max.x || c.y + r < min.y || c.y - r > max.y {
+            return None;
+        }
+        let (at, _) = self.slices.iter().find(|(s, q)| *s + 1.0 > lo && *s < hi && q.overlaps(theirs))?;
+        Some(*at)
+    }
+
     /// The route arc length of the first metre between `lo` and `hi` where the box reaches at
     /// least `right` to the right or `left` to the left (either may be infinite: that side is
     /// not asked about).
@@ -800,6 +814,7 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
             let entry = |j: Junction| j.exit - map.connectors[j.conn].path.length();
             let (ei, ej) = (entry(ji), entry(jj));
             let (hi, hj) = (a.hl, b.hl);
+            let first = actors[i].crossings.len();
             // Each stretch of ours goes with the stretch of theirs that its middle lies beside.
             for &(ai, ao, at) in &za {
                 let dist = |z: &(f64, f64, f64)| (z.0 - at).max(at - z.1).max(0.0);
@@ -822,6 +837,30 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
                 };
                 actors[i].crossings.push(ci);
                 actors[j].crossings.push(cj);
+            }
+            // Where one's sweep reaches over the other's approach short of their first shared
+            // stretch, that stretch begins there for the other (it holds clear of the loop).
+            let n_new = actors[i].crossings.len() - first;
+            if n_new > 0 {
+                let k0 = (first..first + n_new)
+                    .min_by(|&x, &y| actors[i].crossings[x].enter.total_cmp(&actors[i].crossings[y].enter));
+                let k1 = (first..first + n_new)
+                    .min_by(|&x, &y| actors[i].crossings[x].other_enter.total_cmp(&actors[i].crossings[y].other_enter));
+                let kj0 = actors[j].crossings.len() - n_new;
+                if let Some(k) = k0 {
+                    let enter = actors[i].crossings[k].enter;
+                    if let Some(s) = sweep_entry(&actors[j], &actors[i], ei - 2.0 * hi - 20.0, enter) {
+                        actors[i].crossings[k].enter = s;
+                        actors[j].crossings[kj0 + k - first].other_enter = s;
+                    }
+                }
+                if let Some(k) = k1 {
+                    let enter = actors[i].crossings[k].other_enter;
+                    if let Some(s) = sweep_entry(&actors[i], &actors[j], ej - 2.0 * hj - 20.0, enter) {
+                        actors[i].crossings[k].other_enter = s;
+                        actors[j].crossings[kj0 + k - first].enter = s;
+                    }
+                }
             }
         }
     }
@@ -854,7 +893,13 @@ fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
         }
         let (kl, kr) = junction_bend(map, &a.path, j);
         let from = start - 2.0 * a.hl - 5.0;
-        let mut b = Bend { from, reach: vec![], widest: sweep(a, kl.max(kr)) };
+        let mut b = Bend {
+            from,
+            reach: vec![],
+            widest: sweep(a, kl.max(kr)),
+            slices: vec![],
+            bounds: (DVec2::INFINITY, DVec2::NEG_INFINITY),
+        };
         let (mut pos, mut yaw) = a.path.point(start, 0.0);
         let mut s = start;
         for _ in 0..2000 {
@@ -887,10 +932,42 @@ fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
                 break;
             }
         }
+        for (m, &(r, l)) in b.reach.iter().enumerate() {
+            if r > 0.0 || l > 0.0 {
+                let (p, h) = a.path.point(b.from + m as f64 + 0.5, 0.5 * (l - r));
+                let slice = Obb { center: p, yaw: h, length: 1.0, width: 2.0 * a.hw + r + l };
+                for q in slice.corners() {
+                    b.bounds = (b.bounds.0.min(q), b.bounds.1.max(q));
+                }
+                b.slices.push((b.from + m as f64, slice));
+            }
+        }
         let b = std::sync::Arc::new(b);
         done.insert(key, b.clone());
         a.bend = Some(b);
     }
+}
+
+/// The first centre position on `b`'s route from `lo` up to `hi` at which its box, half a metre
+/// wider all round, meets `a`'s junction sweep beyond its path's band (`Bend::slices`): a U-turn
+/// driven wide loops out over the cross street's approach, short of where the two connectors
+/// come near each other.
+fn sweep_entry(a: &Actor, b: &Actor, lo: f64, hi: f64) -> Option<f64> {
+    let bend = a.bend.as_ref()?;
+    let (min, max) = bend.bounds;
+    let r = b.radius + 0.5;
+    let mut s = lo;
+    while s < hi {
+        let (p, h) = b.path.point(s, 0.0);
+        if p.x + r > min.x && p.x - r < max.x && p.y + r > min.y && p.y - r < max.y {
+            let mine = Obb { center: p, yaw: h, length: 2.0 * b.hl + 1.0, width: 2.0 * b.hw + 1.0 };
+            if bend.slices.iter().any(|(_, q)| q.overlaps(&mine)) {
+                return Some(s);
+            }
+        }
+        s += 0.5;
+    }
+    None
 }
 
 /// How far `a`'s box reaches beyond the band its path's centre sweeps, on the outside of a bend
@@ -1566,22 +1643,31 @@ impl<'a, 'b> Sim<'a, 'b> {
                 let (k0, k1) = (a.path.curvature(sj), a.path.curvature(sj - a.hl));
                 band_lo -= swing(a.hl, k0.max(k1).max(0.0));
                 band_hi += swing(a.hl, (-k0).max(-k1).max(0.0));
-                // The dry run's reach is from the path itself (it steered as we steer): not
-                // added to how far we are off it now.
-                if let Some(b) = &a.bend {
-                    let (r, l) = b.within(sj - 2.0, sj + 2.0);
-                    band_lo = band_lo.min(st.d - a.hw - margin - r);
-                    band_hi = band_hi.max(st.d + a.hw + margin + l);
-                }
             }
             let mut in_cur = lj - ext_lat < band_hi && lj + ext_lat > band_lo;
+            let mut gap = gap;
+            // Our sweep through the junction (the dry run's, `Bend::slices`) where it lies on the
+            // road: one it reaches is in our way from the first metre that reaches it. (Laid out
+            // in the straight frame at the other's projection, a U-turn's loop reached over cars
+            // holding well clear of it.)
+            let mut swept = false;
+            if !in_cur
+                && a.vehicle
+                && in_sweep
+                && gap > 0.0
+                && let Some(bd) = &a.bend
+                && let Some(at) = bd.meets(&b.obb(o), st.s, sj + ext_lon + a.hl)
+            {
+                in_cur = true;
+                swept = true;
+                gap = gap.min(at - st.s - a.hl);
+            }
             // A box turned across our path (a long vehicle turning beside us): its extents along
             // and across the path put corners where it has none. Only the part of it inside our
             // band counts, and only its nearest point there.
-            let mut gap = gap;
             // Within reach of the band: its frame is straight while our path may bend.
             let near_band = lj - ext_lat < band_hi + 1.5 && lj + ext_lat > band_lo - 1.5;
-            if !is_named && sr.abs() > 0.05 && near_band && (in_cur || gap > 0.0) {
+            if !swept && !is_named && sr.abs() > 0.05 && near_band && (in_cur || gap > 0.0) {
                 if in_cur {
                     match band_front(lj, cr, sr, b.hl, b.hw, band_lo, band_hi) {
                         Some(x) => gap = ds + x - a.hl,
@@ -1622,7 +1708,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             // projection misplaces it (a bus driving straight past our right turn lies in the
             // band there, and clear of it on the road): our band is laid along the path itself,
             // a metre at a time, and only a box it meets counts, from where it first meets it.
-            if in_cur && !is_named && sr.abs() > 0.05 {
+            if in_cur && !swept && !is_named && sr.abs() > 0.05 {
                 let reach = (sj + ext_lon + a.hl + 1.0).min(a.path.length());
                 if a.path.straight_run(st.s).is_none_or(|ln| ln.hi < reach) {
                     match self.band_meets(a, st.s, reach, (band_lo, band_hi), &b.obb(o)) {
@@ -1631,7 +1717,7 @@ impl<'a, 'b> Sim<'a, 'b> {
                     }
                 }
             }
-            // One coming toward us in its lane beside our path meets us wherever our turn
+            // One driving toward us in its lane beside our path meets us wherever our turn
             // sweeps out over that lane between us and it (a bus's front corner swinging into
             // the oncoming lane as it turns right): found only once there, it is on us. We hold
             // short of the first such metre, as of something standing there, till it has passed.
@@ -1641,6 +1727,7 @@ impl<'a, 'b> Sim<'a, 'b> {
                 && beside
                 && !is_named
                 && cr < -0.5
+                && v_lon < -0.5
                 && gap > 0.0
                 && let Some(bd) = &a.bend
             {
@@ -1661,9 +1748,10 @@ impl<'a, 'b> Sim<'a, 'b> {
             // junction, a lane changer) counts as in it. Walkers do not wait for predicted
             // vehicles: vehicles yield to them, which keeps the two from waiting on each other.
             // One holding at its stop line for an emergency vehicle stays out of the junction;
-            // one clearing the junction for it has the right of way over predicted crossers
-            // (they yield to it), so the two never wait on each other.
-            let gives_way = self.yielding[j].0.is_some() || clearing;
+            // one clearing the junction for it has the right of way over predicted vehicles
+            // crossing (they yield to it), so the two never wait on each other; not over a
+            // walker, who steps off the kerb in front of any car that could stop for them.
+            let gives_way = self.yielding[j].0.is_some() || (clearing && b.vehicle);
             if !obstacle && a.vehicle && v_lat.abs() > 0.3 && !gives_way {
                 // A walker or an animal heading for the road gets two more seconds of slack:
                 // drivers brake for someone stepping off the kerb, not only for someone already
@@ -1685,9 +1773,11 @@ impl<'a, 'b> Sim<'a, 'b> {
                 let lead_move = (v_lon * dt - 0.5 * lim.brake_max * dt * dt).max(0.0);
                 // A walker stops within its own braking: one stepping into another's way just
                 // ahead (two crossing side by side on converging lines, a hand's breadth apart)
-                // slows and lets the other draw away; it is not stopped dead.
+                // slows and lets the other draw away; it is not stopped dead. Nor is anyone for
+                // one alongside (no gap ahead to keep: stopping dead opens none, a car passing
+                // close by in the lane we edge toward goes by all the same).
                 let keep = gap - 0.2 + lead_move;
-                hard = hard.min(if a.vehicle {
+                hard = hard.min(if a.vehicle && gap > 0.0 {
                     keep
                 } else {
                     keep.max((st.v * dt - 0.5 * lim.brake_max * dt * dt).max(0.0))
