@@ -1169,6 +1169,7 @@ struct Near {
     hw: f64,
     /// Holding at its stop line for an emergency vehicle (`Sim::yield_state`).
     gives_way: bool,
+    vehicle: bool,
 }
 
 /// What `Sim::candidates` needs of agent `i`'s step in `Sim::drive`.
@@ -1435,7 +1436,16 @@ impl<'a, 'b> Sim<'a, 'b> {
             self.near.clear();
             for ((st, a), (&dir, y)) in self.cur.iter().zip(self.actors).zip(self.dirs.iter().zip(&self.yielding)) {
                 let gives_way = y.0.is_some();
-                self.near.push(Near { pos: st.pos, dir, v: st.v, radius: a.radius, hl: a.hl, hw: a.hw, gives_way });
+                self.near.push(Near {
+                    pos: st.pos,
+                    dir,
+                    v: st.v,
+                    radius: a.radius,
+                    hl: a.hl,
+                    hw: a.hw,
+                    gives_way,
+                    vehicle: a.vehicle,
+                });
             }
             self.along.get_mut().clear();
             for i in 0..self.actors.len() {
@@ -1956,7 +1966,7 @@ impl<'a, 'b> Sim<'a, 'b> {
                 let aside = l_line - ext_lat > c.hi + LINE_EPS || l_line + ext_lat < c.lo - LINE_EPS;
                 // Nor would it be predicted to cut across (see `obstacle` in `drive`).
                 let v_lat = b.v * sr;
-                let steady = !a.vehicle || v_lat.abs() < 0.3 - LINE_EPS || b.gives_way || c.clearing;
+                let steady = !a.vehicle || v_lat.abs() < 0.3 - LINE_EPS || b.gives_way || (c.clearing && b.vehicle);
                 if behind || too_far || (aside && steady) {
                     return false;
                 }
@@ -2016,8 +2026,9 @@ impl<'a, 'b> Sim<'a, 'b> {
         let mut sub = self.subset.borrow_mut();
         sub.clear();
         ix.collect(lo, hi, l_lo, l_hi, &mut sub);
-        if a.vehicle && !c.clearing {
-            sub.extend_from_slice(&ix.crossing);
+        if a.vehicle {
+            // Clearing the junction for an emergency vehicle, we predict walkers only.
+            sub.extend(ix.crossing.iter().filter(|&&j| !c.clearing || !self.near[j].vehicle));
         }
         sub.extend(c.named.filter(|&j| j < self.near.len()));
         sub.sort_unstable();
@@ -2712,7 +2723,16 @@ mod tests {
             .map(|k| {
                 let (st, a) = (&sim.cur[k], &actors[k]);
                 let gives_way = k % 11 == 0;
-                Near { pos: st.pos, dir: sim.dirs[k], v: st.v, radius: a.radius, hl: a.hl, hw: a.hw, gives_way }
+                Near {
+                    pos: st.pos,
+                    dir: sim.dirs[k],
+                    v: st.v,
+                    radius: a.radius,
+                    hl: a.hl,
+                    hw: a.hw,
+                    gives_way,
+                    vehicle: a.vehicle,
+                }
             })
             .collect();
         let (mut asked, mut indexed) = (0, 0);
