@@ -198,6 +198,15 @@ pub(super) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
             let len = curve.length();
             let acc = 2.0 * (len - v * tau) / (tau * tau);
             let v_end = v + acc * tau;
+            // The cost below adds only terms that are not negative to its first two, and float
+            // addition is monotone: this sum without the curvature's two terms is a lower bound
+            // of the cost, bit for bit, and a candidate it puts at or above the best cannot
+            // replace it (`cost < best`). The curvature (24 arctangents) is not computed then.
+            if let Some((b, _)) = &best
+                && lower_bound(t_imp, t_req, acc, lim, v_end, drift, natural.is_some_and(|n| n <= fd)) >= *b
+            {
+                continue;
+            }
             let k_curve = curve.max_curvature();
             let lat = v.max(v_end).powi(2) * k_curve;
             // Closing speed along the approach: the at-fault's motion into the struck box.
@@ -245,6 +254,24 @@ pub(super) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
         }
     }
     best.map(|b| b.1)
+}
+
+/// `choose`'s cost of a candidate without its curvature terms (the lateral acceleration above the
+/// limit, the curve tighter than the car can steer) and its closing-speed term, all of them at
+/// least 0: the same sums in the same order, so never above the cost.
+fn lower_bound(t_imp: f64, t_req: f64, acc: f64, lim: super::Limits, v_end: f64, drift: f64, natural: bool) -> f64 {
+    let mut cost = 3.0 * (t_imp - t_req).abs() + acc.abs() / lim.accel + 0.0;
+    if acc > STRIKE_ACCEL * lim.accel || acc < -lim.brake_max {
+        cost += 20.0 + acc.abs();
+    }
+    if v_end < 1.0 {
+        cost += 20.0;
+    }
+    cost += 3.0 * drift.abs();
+    if natural {
+        cost += 50.0;
+    }
+    cost
 }
 
 /// Penetration depth of two overlapping boxes: the smallest overlap over the separating axes.
