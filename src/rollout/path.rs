@@ -512,8 +512,13 @@ const fn hermite_basis() -> [[f64; 4]; HN + 1] {
 
 impl Hermite {
     pub fn new(p0: DVec2, yaw0: f64, p1: DVec2, yaw1: f64) -> Hermite {
+        Hermite::with_dirs(p0, DVec2::from_angle(yaw0), p1, DVec2::from_angle(yaw1))
+    }
+
+    /// `new` given the unit headings `DVec2::from_angle(yaw0)` and `DVec2::from_angle(yaw1)`.
+    pub fn with_dirs(p0: DVec2, dir0: DVec2, p1: DVec2, dir1: DVec2) -> Hermite {
         let k = p0.distance(p1).max(0.5);
-        let (t0, t1) = (DVec2::from_angle(yaw0) * k, DVec2::from_angle(yaw1) * k);
+        let (t0, t1) = (dir0 * k, dir1 * k);
         let mut pts = [DVec2::ZERO; HN + 1];
         let mut cum = [0.0; HN + 1];
         for (q, [b0, b1, b2, b3]) in pts.iter_mut().zip(HERMITE_BASIS) {
