@@ -367,15 +367,14 @@ impl Resampler {
             grid.pts.push(a + (b - a) * t);
         }
         let g = grid.pts.len();
+        // Straight stretches repeat a few differences and headings bit for bit (a line at an
+        // angle alternates between neighbouring floats): the arctangent and the sine and cosine
+        // of one seen among the last `RECENT` are reused, the same calls on the same bits.
+        let mut seen = Recent::default();
         while grid.heading.len() + HEADING_W < g {
             let i = grid.heading.len();
             let d = grid.pts[i + HEADING_W] - grid.pts[i.saturating_sub(HEADING_W)];
-            let h = d.y.atan2(d.x);
-            // Straight stretches repeat a heading bit for bit: reuse its sine and cosine.
-            let t = match (grid.heading.last(), grid.tangent.last()) {
-                (Some(&lh), Some(&lt)) if lh.to_bits() == h.to_bits() => lt,
-                _ => DVec2::from_angle(h),
-            };
+            let (h, t) = seen.heading(d);
             grid.heading.push(h);
             grid.tangent.push(t);
         }
@@ -472,6 +471,40 @@ impl Resampler {
         let run = straight_runs(|k| (pt(k), tan_at(grid, cut, &tangent, k)), m, &self.runs[..settled], known);
         let pts = (cut..m).map(pt).collect();
         Path { grid: Rc::clone(&self.grid), cut, pts, heading, tangent, curvature, cap: vec![f64::INFINITY; m], run }
+    }
+}
+
+/// How many of the last distinct differences `Recent` remembers.
+const RECENT: usize = 8;
+
+/// The last `RECENT` distinct sample differences met (by their bits), with the heading and unit
+/// tangent of each: `d.y.atan2(d.x)` and `DVec2::from_angle` of it.
+#[derive(Default)]
+struct Recent {
+    keys: [(u64, u64); RECENT],
+    vals: [(f64, DVec2); RECENT],
+    len: usize,
+    next: usize,
+}
+
+impl Recent {
+    #[inline]
+    fn heading(&mut self, d: DVec2) -> (f64, DVec2) {
+        let key = (d.x.to_bits(), d.y.to_bits());
+        if let Some(k) = self.keys[..self.len].iter().position(|&x| x == key) {
+            return self.vals[k];
+        }
+        let h = d.y.atan2(d.x);
+        // A new difference may still give a heading met before (its sine and cosine too).
+        let t = match self.vals[..self.len].iter().find(|v| v.0.to_bits() == h.to_bits()) {
+            Some(v) => v.1,
+            None => DVec2::from_angle(h),
+        };
+        self.keys[self.next] = key;
+        self.vals[self.next] = (h, t);
+        self.next = (self.next + 1) % RECENT;
+        self.len = (self.len + 1).min(RECENT);
+        (h, t)
     }
 }
 
