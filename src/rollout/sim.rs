@@ -840,15 +840,17 @@ fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
         let mut b = Bend { from, reach: vec![], widest: sweep(a, kl.max(kr)) };
         let (mut pos, mut yaw) = a.path.point(start, 0.0);
         let mut s = start;
+        // The unit heading of `yaw`, taken once per step: the corners' and the next step's.
+        let mut fwd = DVec2::from_angle(yaw);
         for _ in 0..2000 {
             let v = a.path.cap(s).clamp(1.0, 15.0);
-            let fwd = DVec2::from_angle(yaw);
             let k = pursuit(pos, fwd, a.path.point_fast(s + look_ahead(a, v), 0.0));
             let dist = v * dt;
             (pos, yaw) = steer(a, pos, yaw, k, dist, dt, 1.0);
             let (ns, off, _, _) = a.path.frenet_dir(pos, s + dist);
             s = ns;
-            let corners = Obb { center: pos, yaw, length: 2.0 * a.hl, width: 2.0 * a.hw }.corners();
+            let dir = DVec2::from_angle(yaw);
+            let corners = Obb { center: pos, yaw, length: 2.0 * a.hl, width: 2.0 * a.hw }.corners_along(dir);
             for q in corners {
                 let (sq, dq, beyond, _) = a.path.frenet_dir(q, s + (q - pos).dot(fwd));
                 if beyond > 0.0 || dq.abs() <= a.hw {
@@ -866,6 +868,7 @@ fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
                 }
                 b.widest = b.widest.max(dq.abs() - a.hw);
             }
+            fwd = dir;
             if (s > j.exit + a.hl && off.abs() < 0.05) || s >= a.path.length() - 1.0 {
                 break;
             }
@@ -1209,6 +1212,16 @@ struct Sim<'a, 'b> {
     /// Per agent, this frame: another vehicle is ahead of it on its junction approach, not yet
     /// past its stop line (`queued`).
     behind: Vec<bool>,
+    /// Per agent: a slot for its approach lane (`Actor::approach`), dense from 0; and per slot,
+    /// this frame, the two least distances to the stop line among the agents `queued` counts
+    /// there, with their indices (`queue_heads`).
+    approach_slot: Vec<Option<usize>>,
+    lane_least: Vec<[(f64, usize); 2]>,
+    /// Per agent: where its crossings start in `ranks`; and per crossing, this frame, its
+    /// `zone_rank` once asked for (`rank`): each pair's rule asks for both of its zones' ranks
+    /// from either side.
+    cross_at: Vec<usize>,
+    ranks: std::cell::RefCell<Vec<Option<Option<(u8, f64, f64)>>>>,
     /// This frame: agents easing aside (`away_from`, triggered), for `pass_offset`.
     easing: Vec<usize>,
     /// Per agent, this frame: what `candidates` reads, packed.
@@ -1248,6 +1261,18 @@ impl<'a, 'b> Sim<'a, 'b> {
             }
         }
         let cur: Vec<State> = actors.iter().map(initial).collect();
+        let mut lanes: Vec<usize> = actors.iter().filter_map(|a| a.approach).collect();
+        lanes.sort_unstable();
+        lanes.dedup();
+        let approach_slot = actors.iter().map(|a| a.approach.and_then(|l| lanes.binary_search(&l).ok())).collect();
+        let cross_at: Vec<usize> = actors
+            .iter()
+            .scan(0, |n, a| {
+                *n += a.crossings.len();
+                Some(*n - a.crossings.len())
+            })
+            .collect();
+        let crossings = actors.iter().map(|a| a.crossings.len()).sum();
         Sim {
             actors,
             confs,
@@ -1263,6 +1288,10 @@ impl<'a, 'b> Sim<'a, 'b> {
             ruled: vec![false; actors.len()],
             held: vec![None; actors.len()],
             behind: vec![false; actors.len()],
+            approach_slot,
+            lane_least: vec![[(f64::INFINITY, usize::MAX); 2]; lanes.len()],
+            cross_at,
+            ranks: std::cell::RefCell::new(vec![None; crossings]),
             easing: Vec::with_capacity(actors.len()),
             near: Vec::with_capacity(actors.len()),
             along: std::cell::RefCell::new(vec![]),
@@ -1323,9 +1352,8 @@ impl<'a, 'b> Sim<'a, 'b> {
             for i in 0..self.actors.len() {
                 self.yielding[i] = self.yield_state(i);
             }
-            for i in 0..self.actors.len() {
-                self.behind[i] = self.queued(i);
-            }
+            self.queue_heads();
+            self.ranks.get_mut().fill(None);
             for i in 0..self.actors.len() {
                 let rule = self.right_of_way(i, t);
                 self.ruled[i] = rule.is_some();
@@ -1952,6 +1980,60 @@ impl<'a, 'b> Sim<'a, 'b> {
         Some((rank, eta, rem.max(0.0)))
     }
 
+    /// `zone_rank(i, enter, leave, t)`, taken once per frame for each of `i`'s crossings (the
+    /// zone with these bounds): what it reads (`cur`, `behind`, the emergency holds) is settled
+    /// before the right-of-way rule runs, and `ranks` is cleared each frame.
+    fn rank(&self, i: usize, enter: f64, leave: f64, t: f64) -> Option<(u8, f64, f64)> {
+        let same = |c: &Crossing| c.enter.to_bits() == enter.to_bits() && c.leave.to_bits() == leave.to_bits();
+        let Some(k) = self.actors[i].crossings.iter().position(same) else {
+            return self.zone_rank(i, enter, leave, t);
+        };
+        let slot = self.cross_at[i] + k;
+        if let Some(r) = self.ranks.borrow()[slot] {
+            debug_assert_eq!(r, self.zone_rank(i, enter, leave, t), "stale zone rank for agent {i}");
+            return r;
+        }
+        let r = self.zone_rank(i, enter, leave, t);
+        self.ranks.borrow_mut()[slot] = Some(r);
+        r
+    }
+
+    /// `behind[i] = queued(i)` for every agent, in one pass over everyone and one over the agents
+    /// instead of one over everyone per agent: someone else is queued ahead of `i` exactly when
+    /// the least distance to the stop line among the others counted on its lane (the least, or
+    /// the second least where the least is `i`'s own) is below `i`'s, the same floats compared.
+    fn queue_heads(&mut self) {
+        self.lane_least.fill([(f64::INFINITY, usize::MAX); 2]);
+        for (k, (b, o)) in self.actors.iter().zip(&self.cur).enumerate() {
+            let Some(slot) = self.approach_slot[k] else { continue };
+            let to_stop = b.junction.map_or(f64::NEG_INFINITY, |jb| jb.stop - (o.s + b.hl));
+            let counted = !o.frozen && to_stop > -0.5;
+            if !counted {
+                continue;
+            }
+            let least = &mut self.lane_least[slot];
+            if to_stop < least[0].0 {
+                least[1] = least[0];
+                least[0] = (to_stop, k);
+            } else if to_stop < least[1].0 {
+                least[1] = (to_stop, k);
+            }
+        }
+        for i in 0..self.actors.len() {
+            let (a, st) = (&self.actors[i], &self.cur[i]);
+            self.behind[i] = match (self.approach_slot[i], a.junction) {
+                (Some(slot), Some(j)) => {
+                    let mine = j.stop - (st.s + a.hl);
+                    let least = self.lane_least[slot];
+                    let other = if least[0].1 == i { least[1].0 } else { least[0].0 };
+                    other < mine
+                }
+                _ => false,
+            };
+            debug_assert_eq!(self.behind[i], self.queued(i), "queue_heads differs from queued for agent {i}");
+        }
+    }
+
     /// Whether another vehicle approaches agent `i`'s junction through the same lane ahead of it,
     /// its front not yet past its stop line.
     fn queued(&self, i: usize) -> bool {
@@ -1976,8 +2058,8 @@ impl<'a, 'b> Sim<'a, 'b> {
         if c.emergency && !(self.actors[i].emergency && self.yielding[c.other].1) {
             return None;
         }
-        let (ri, ei, rem) = self.zone_rank(i, c.enter, c.leave, t)?;
-        let (rj, ej, _) = self.zone_rank(c.other, c.other_enter, c.other_leave, t)?;
+        let (ri, ei, rem) = self.rank(i, c.enter, c.leave, t)?;
+        let (rj, ej, _) = self.rank(c.other, c.other_enter, c.other_leave, t)?;
         if ri <= 1 {
             return None;
         }
