@@ -119,6 +119,9 @@ pub(super) struct Bend {
     /// The widest reach to either side anywhere, at least the corners' swing in the tightest
     /// bend (`sweep`).
     pub widest: f64,
+    /// `reach`'s widest over every run of `2^k` metres from each metre, for `k` from 1
+    /// (`index`): `within` is asked per agent per frame over up to the look-ahead.
+    pub spans: Vec<Vec<(f64, f64)>>,
 }
 
 impl Bend {
@@ -130,7 +133,34 @@ impl Bend {
         if a > b {
             return (0.0, 0.0);
         }
-        self.reach[a as usize..=b as usize].iter().fold((0.0, 0.0), |(r, l), &(x, y)| (f64::max(r, x), f64::max(l, y)))
+        let (a, b) = (a as usize, b as usize);
+        // The widest of a set of reaches is the same number whatever the order it is taken in
+        // (each is 0 or above, never NaN): two overlapping spans cover the range.
+        let k = (b - a + 1).ilog2() as usize;
+        if k == 0 || k > self.spans.len() {
+            return self.reach[a..=b].iter().fold((0.0, 0.0), |(r, l), &(x, y)| (f64::max(r, x), f64::max(l, y)));
+        }
+        let t = &self.spans[k - 1];
+        let ((r0, l0), (r1, l1)) = (t[a], t[b + 1 - (1 << k)]);
+        let widest = (f64::max(f64::max(0.0, r0), r1), f64::max(f64::max(0.0, l0), l1));
+        debug_assert_eq!(
+            widest,
+            self.reach[a..=b].iter().fold((0.0, 0.0), |(r, l), &(x, y)| (f64::max(r, x), f64::max(l, y)))
+        );
+        widest
+    }
+
+    /// Fill `spans` from `reach`.
+    fn index(&mut self) {
+        self.spans.clear();
+        let mut h = 1;
+        while 2 * h <= self.reach.len() {
+            let prev = self.spans.last().unwrap_or(&self.reach);
+            let next: Vec<(f64, f64)> =
+                (0..=prev.len() - 1 - h).map(|i| (f64::max(prev[i].0, prev[i + h].0), f64::max(prev[i].1, prev[i + h].1))).collect();
+            self.spans.push(next);
+            h *= 2;
+        }
     }
 }
 
@@ -837,7 +867,7 @@ fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
         }
         let (kl, kr) = junction_bend(map, &a.path, j);
         let from = start - 2.0 * a.hl - 5.0;
-        let mut b = Bend { from, reach: vec![], widest: sweep(a, kl.max(kr)) };
+        let mut b = Bend { from, reach: vec![], widest: sweep(a, kl.max(kr)), spans: vec![] };
         let (mut pos, mut yaw) = a.path.point(start, 0.0);
         let mut s = start;
         // The unit heading of `yaw`, taken once per step: the corners' and the next step's.
@@ -873,6 +903,7 @@ fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
                 break;
             }
         }
+        b.index();
         let b = std::sync::Arc::new(b);
         done.insert(key, b.clone());
         a.bend = Some(b);
