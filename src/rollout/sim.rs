@@ -156,8 +156,9 @@ impl Bend {
         let mut h = 1;
         while 2 * h <= self.reach.len() {
             let prev = self.spans.last().unwrap_or(&self.reach);
-            let next: Vec<(f64, f64)> =
-                (0..=prev.len() - 1 - h).map(|i| (f64::max(prev[i].0, prev[i + h].0), f64::max(prev[i].1, prev[i + h].1))).collect();
+            let next: Vec<(f64, f64)> = (0..=prev.len() - 1 - h)
+                .map(|i| (f64::max(prev[i].0, prev[i + h].0), f64::max(prev[i].1, prev[i + h].1)))
+                .collect();
             self.spans.push(next);
             h *= 2;
         }
@@ -1219,6 +1220,9 @@ impl AlongIndex {
     }
 }
 
+/// `Sim::zone_rank`'s answer.
+type Rank = Option<(u8, f64, f64)>;
+
 struct Sim<'a, 'b> {
     actors: &'a [Actor],
     confs: &'a [Conf],
@@ -1252,7 +1256,7 @@ struct Sim<'a, 'b> {
     /// `zone_rank` once asked for (`rank`): each pair's rule asks for both of its zones' ranks
     /// from either side.
     cross_at: Vec<usize>,
-    ranks: std::cell::RefCell<Vec<Option<Option<(u8, f64, f64)>>>>,
+    ranks: std::cell::RefCell<Vec<Option<Rank>>>,
     /// This frame: agents easing aside (`away_from`, triggered), for `pass_offset`.
     easing: Vec<usize>,
     /// Per agent, this frame: what `candidates` reads, packed.
@@ -2014,7 +2018,7 @@ impl<'a, 'b> Sim<'a, 'b> {
     /// `zone_rank(i, enter, leave, t)`, taken once per frame for each of `i`'s crossings (the
     /// zone with these bounds): what it reads (`cur`, `behind`, the emergency holds) is settled
     /// before the right-of-way rule runs, and `ranks` is cleared each frame.
-    fn rank(&self, i: usize, enter: f64, leave: f64, t: f64) -> Option<(u8, f64, f64)> {
+    fn rank(&self, i: usize, enter: f64, leave: f64, t: f64) -> Rank {
         let same = |c: &Crossing| c.enter.to_bits() == enter.to_bits() && c.leave.to_bits() == leave.to_bits();
         let Some(k) = self.actors[i].crossings.iter().position(same) else {
             return self.zone_rank(i, enter, leave, t);
