@@ -4,6 +4,8 @@
 //!
 //! - front: parse + check per library file, and generated files of 10/100/1000 agents;
 //! - rollout: cost per agent-frame over the library, and on generated 50- and 200-agent scenes;
+//!   `bench rollout-loop NAME [SECONDS]` rolls one library scene (file stem, or `gen50`/`gen200`)
+//!   out again and again for a profiler (default 10 s); opt in.
 //! - stages: frames/s of BEV, occupancy, LiDAR (+ rays/s) and of each writer, on the
 //!   ambulance example (background traffic included), one core and every core;
 //! - e2e: `rocc compile` of the whole library at full stage into a temporary directory
@@ -198,6 +200,31 @@ fn bench_rollout() {
         );
     }
     println!("  digest of every track above and of {} shared examples: {h:016x}", shared.len());
+}
+
+/// One scene rolled out for `secs` seconds, so that a profiler sees nothing else.
+fn rollout_loop(name: &str, secs: f64) {
+    let f = match name.strip_prefix("gen").and_then(|n| n.parse::<usize>().ok()) {
+        Some(n) => {
+            let mut sources = SourceMap::default();
+            rocc::check::check_text("gen.scn", &generated(n), Path::new("."), &mut sources)
+                .ok()
+                .and_then(|s| front(s, None).ok())
+        }
+        None => load(&root().join(format!("scenarios/{name}.scn"))),
+    };
+    let Some(f) = f else {
+        println!("== rollout-loop: no scene `{name}` (a library file stem, or gen50/gen200)");
+        return;
+    };
+    let t0 = Instant::now();
+    let mut runs = 0usize;
+    while t0.elapsed().as_secs_f64() < secs {
+        std::hint::black_box(rocc::rollout::rollout(&f.concrete, &f.map, &f.placed).is_ok());
+        runs += 1;
+    }
+    let af = (f.tracks.agents.len() * f.tracks.frames * runs.max(1)) as f64;
+    println!("== rollout-loop {name}: {runs} runs, {:.3} us/agent-frame", t0.elapsed().as_secs_f64() * 1e6 / af);
 }
 
 fn pool(threads: usize) -> rayon::ThreadPool {
@@ -411,6 +438,11 @@ fn main() {
     }
     if want("rollout") {
         bench_rollout();
+    }
+    if let Some(i) = args.iter().position(|a| a == "rollout-loop") {
+        let secs = args.get(i + 2).and_then(|s| s.parse().ok()).unwrap_or(10.0);
+        rollout_loop(args.get(i + 1).map_or("", String::as_str), secs);
+        return;
     }
     if want("stages") {
         bench_stages();

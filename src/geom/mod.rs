@@ -231,8 +231,13 @@ pub struct Obb {
 impl Obb {
     /// Corners counter-clockwise: front-left, rear-left, rear-right, front-right.
     pub fn corners(&self) -> [DVec2; 4] {
-        let f = DVec2::new(self.yaw.cos(), self.yaw.sin()) * (self.length / 2.0);
-        let l = DVec2::new(-self.yaw.sin(), self.yaw.cos()) * (self.width / 2.0);
+        self.corners_along(DVec2::new(self.yaw.cos(), self.yaw.sin()))
+    }
+
+    /// `corners` given the unit heading `DVec2::from_angle(self.yaw)` (the same sine and cosine).
+    pub fn corners_along(&self, dir: DVec2) -> [DVec2; 4] {
+        let f = dir * (self.length / 2.0);
+        let l = DVec2::new(-dir.y, dir.x) * (self.width / 2.0);
         [self.center + f + l, self.center - f + l, self.center - f - l, self.center + f - l]
     }
 

@@ -177,9 +177,12 @@ impl Path {
 
     #[inline]
     fn locate(&self, s: f64) -> (usize, f64) {
-        let x = (s / STEP).clamp(0.0, (self.len() - 1) as f64);
-        let i = (x as usize).min(self.len() - 2);
-        (i, x - i as f64)
+        // Through i64, not usize: the same values (below 2^63), but one instruction each way on
+        // x86-64 where unsigned conversions take several, on the projections' dependent chain.
+        let last = self.len() - 1;
+        let x = (s / STEP).clamp(0.0, last as i64 as f64);
+        let i = (x as i64 as usize).min(last - 1);
+        (i, x - i as i64 as f64)
     }
 
     /// Position and heading at arc length `s` (clamped to the ends).
@@ -367,15 +370,14 @@ impl Resampler {
             grid.pts.push(a + (b - a) * t);
         }
         let g = grid.pts.len();
+        // Straight stretches repeat a few differences and headings bit for bit (a line at an
+        // angle alternates between neighbouring floats): the arctangent and the sine and cosine
+        // of one seen among the last `RECENT` are reused, the same calls on the same bits.
+        let mut seen = Recent::default();
         while grid.heading.len() + HEADING_W < g {
             let i = grid.heading.len();
             let d = grid.pts[i + HEADING_W] - grid.pts[i.saturating_sub(HEADING_W)];
-            let h = d.y.atan2(d.x);
-            // Straight stretches repeat a heading bit for bit: reuse its sine and cosine.
-            let t = match (grid.heading.last(), grid.tangent.last()) {
-                (Some(&lh), Some(&lt)) if lh.to_bits() == h.to_bits() => lt,
-                _ => DVec2::from_angle(h),
-            };
+            let (h, t) = seen.heading(d);
             grid.heading.push(h);
             grid.tangent.push(t);
         }
@@ -475,6 +477,40 @@ impl Resampler {
     }
 }
 
+/// How many of the last distinct differences `Recent` remembers.
+const RECENT: usize = 8;
+
+/// The last `RECENT` distinct sample differences met (by their bits), with the heading and unit
+/// tangent of each: `d.y.atan2(d.x)` and `DVec2::from_angle` of it.
+#[derive(Default)]
+struct Recent {
+    keys: [(u64, u64); RECENT],
+    vals: [(f64, DVec2); RECENT],
+    len: usize,
+    next: usize,
+}
+
+impl Recent {
+    #[inline]
+    fn heading(&mut self, d: DVec2) -> (f64, DVec2) {
+        let key = (d.x.to_bits(), d.y.to_bits());
+        if let Some(k) = self.keys[..self.len].iter().position(|&x| x == key) {
+            return self.vals[k];
+        }
+        let h = d.y.atan2(d.x);
+        // A new difference may still give a heading met before (its sine and cosine too).
+        let t = match self.vals[..self.len].iter().find(|v| v.0.to_bits() == h.to_bits()) {
+            Some(v) => v.1,
+            None => DVec2::from_angle(h),
+        };
+        self.keys[self.next] = key;
+        self.vals[self.next] = (h, t);
+        self.next = (self.next + 1) % RECENT;
+        self.len = (self.len + 1).min(RECENT);
+        (h, t)
+    }
+}
+
 /// Heading of sample `i` of a path being made: the grid's below `cut`, else its own (`own[i - cut]`).
 #[inline(always)]
 fn head_at(grid: &Grid, cut: usize, own: &[f64], i: usize) -> f64 {
@@ -512,8 +548,13 @@ const fn hermite_basis() -> [[f64; 4]; HN + 1] {
 
 impl Hermite {
     pub fn new(p0: DVec2, yaw0: f64, p1: DVec2, yaw1: f64) -> Hermite {
+        Hermite::with_dirs(p0, DVec2::from_angle(yaw0), p1, DVec2::from_angle(yaw1))
+    }
+
+    /// `new` given the unit headings `DVec2::from_angle(yaw0)` and `DVec2::from_angle(yaw1)`.
+    pub fn with_dirs(p0: DVec2, dir0: DVec2, p1: DVec2, dir1: DVec2) -> Hermite {
         let k = p0.distance(p1).max(0.5);
-        let (t0, t1) = (DVec2::from_angle(yaw0) * k, DVec2::from_angle(yaw1) * k);
+        let (t0, t1) = (dir0 * k, dir1 * k);
         let mut pts = [DVec2::ZERO; HN + 1];
         let mut cum = [0.0; HN + 1];
         for (q, [b0, b1, b2, b3]) in pts.iter_mut().zip(HERMITE_BASIS) {

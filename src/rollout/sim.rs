@@ -123,6 +123,9 @@ pub(super) struct Bend {
     /// (`sweep_entry`), and their bounding box (lower and upper corners).
     pub slices: Vec<(f64, Obb)>,
     pub bounds: (DVec2, DVec2),
+    /// `reach`'s widest over every run of `2^k` metres from each metre, for `k` from 1
+    /// (`index`): `within` is asked per agent per frame over up to the look-ahead.
+    pub spans: Vec<Vec<(f64, f64)>>,
 }
 
 impl Bend {
@@ -134,7 +137,35 @@ impl Bend {
         if a > b {
             return (0.0, 0.0);
         }
-        self.reach[a as usize..=b as usize].iter().fold((0.0, 0.0), |(r, l), &(x, y)| (f64::max(r, x), f64::max(l, y)))
+        let (a, b) = (a as usize, b as usize);
+        // The widest of a set of reaches is the same number whatever the order it is taken in
+        // (each is 0 or above, never NaN): two overlapping spans cover the range.
+        let k = (b - a + 1).ilog2() as usize;
+        if k == 0 || k > self.spans.len() {
+            return self.reach[a..=b].iter().fold((0.0, 0.0), |(r, l), &(x, y)| (f64::max(r, x), f64::max(l, y)));
+        }
+        let t = &self.spans[k - 1];
+        let ((r0, l0), (r1, l1)) = (t[a], t[b + 1 - (1 << k)]);
+        let widest = (f64::max(f64::max(0.0, r0), r1), f64::max(f64::max(0.0, l0), l1));
+        debug_assert_eq!(
+            widest,
+            self.reach[a..=b].iter().fold((0.0, 0.0), |(r, l), &(x, y)| (f64::max(r, x), f64::max(l, y)))
+        );
+        widest
+    }
+
+    /// Fill `spans` from `reach`.
+    fn index(&mut self) {
+        self.spans.clear();
+        let mut h = 1;
+        while 2 * h <= self.reach.len() {
+            let prev = self.spans.last().unwrap_or(&self.reach);
+            let next: Vec<(f64, f64)> = (0..=prev.len() - 1 - h)
+                .map(|i| (f64::max(prev[i].0, prev[i + h].0), f64::max(prev[i].1, prev[i + h].1)))
+                .collect();
+            self.spans.push(next);
+            h *= 2;
+        }
     }
 }
 
@@ -899,18 +930,21 @@ fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
             widest: sweep(a, kl.max(kr)),
             slices: vec![],
             bounds: (DVec2::INFINITY, DVec2::NEG_INFINITY),
+            spans: vec![],
         };
         let (mut pos, mut yaw) = a.path.point(start, 0.0);
         let mut s = start;
+        // The unit heading of `yaw`, taken once per step: the corners' and the next step's.
+        let mut fwd = DVec2::from_angle(yaw);
         for _ in 0..2000 {
             let v = a.path.cap(s).clamp(1.0, 15.0);
-            let fwd = DVec2::from_angle(yaw);
             let k = pursuit(pos, fwd, a.path.point_fast(s + look_ahead(a, v), 0.0));
             let dist = v * dt;
             (pos, yaw) = steer(a, pos, yaw, k, dist, dt, 1.0);
             let (ns, off, _, _) = a.path.frenet_dir(pos, s + dist);
             s = ns;
-            let corners = Obb { center: pos, yaw, length: 2.0 * a.hl, width: 2.0 * a.hw }.corners();
+            let dir = DVec2::from_angle(yaw);
+            let corners = Obb { center: pos, yaw, length: 2.0 * a.hl, width: 2.0 * a.hw }.corners_along(dir);
             for q in corners {
                 let (sq, dq, beyond, _) = a.path.frenet_dir(q, s + (q - pos).dot(fwd));
                 if beyond > 0.0 || dq.abs() <= a.hw {
@@ -928,6 +962,7 @@ fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
                 }
                 b.widest = b.widest.max(dq.abs() - a.hw);
             }
+            fwd = dir;
             if (s > j.exit + a.hl && off.abs() < 0.05) || s >= a.path.length() - 1.0 {
                 break;
             }
@@ -942,6 +977,7 @@ fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
                 b.slices.push((b.from + m as f64, slice));
             }
         }
+        b.index();
         let b = std::sync::Arc::new(b);
         done.insert(key, b.clone());
         a.bend = Some(b);
@@ -1280,6 +1316,9 @@ impl AlongIndex {
     }
 }
 
+/// `Sim::zone_rank`'s answer.
+type Rank = Option<(u8, f64, f64)>;
+
 struct Sim<'a, 'b> {
     actors: &'a [Actor],
     confs: &'a [Conf],
@@ -1304,6 +1343,16 @@ struct Sim<'a, 'b> {
     /// Per agent, this frame: another vehicle is ahead of it on its junction approach, not yet
     /// past its stop line (`queued`).
     behind: Vec<bool>,
+    /// Per agent: a slot for its approach lane (`Actor::approach`), dense from 0; and per slot,
+    /// this frame, the two least distances to the stop line among the agents `queued` counts
+    /// there, with their indices (`queue_heads`).
+    approach_slot: Vec<Option<usize>>,
+    lane_least: Vec<[(f64, usize); 2]>,
+    /// Per agent: where its crossings start in `ranks`; and per crossing, this frame, its
+    /// `zone_rank` once asked for (`rank`): each pair's rule asks for both of its zones' ranks
+    /// from either side.
+    cross_at: Vec<usize>,
+    ranks: std::cell::RefCell<Vec<Option<Rank>>>,
     /// This frame: agents easing aside (`away_from`, triggered), for `pass_offset`.
     easing: Vec<usize>,
     /// Per agent, this frame: what `candidates` reads, packed.
@@ -1343,6 +1392,18 @@ impl<'a, 'b> Sim<'a, 'b> {
             }
         }
         let cur: Vec<State> = actors.iter().map(initial).collect();
+        let mut lanes: Vec<usize> = actors.iter().filter_map(|a| a.approach).collect();
+        lanes.sort_unstable();
+        lanes.dedup();
+        let approach_slot = actors.iter().map(|a| a.approach.and_then(|l| lanes.binary_search(&l).ok())).collect();
+        let cross_at: Vec<usize> = actors
+            .iter()
+            .scan(0, |n, a| {
+                *n += a.crossings.len();
+                Some(*n - a.crossings.len())
+            })
+            .collect();
+        let crossings = actors.iter().map(|a| a.crossings.len()).sum();
         Sim {
             actors,
             confs,
@@ -1358,6 +1419,10 @@ impl<'a, 'b> Sim<'a, 'b> {
             ruled: vec![false; actors.len()],
             held: vec![None; actors.len()],
             behind: vec![false; actors.len()],
+            approach_slot,
+            lane_least: vec![[(f64::INFINITY, usize::MAX); 2]; lanes.len()],
+            cross_at,
+            ranks: std::cell::RefCell::new(vec![None; crossings]),
             easing: Vec::with_capacity(actors.len()),
             near: Vec::with_capacity(actors.len()),
             along: std::cell::RefCell::new(vec![]),
@@ -1418,9 +1483,8 @@ impl<'a, 'b> Sim<'a, 'b> {
             for i in 0..self.actors.len() {
                 self.yielding[i] = self.yield_state(i);
             }
-            for i in 0..self.actors.len() {
-                self.behind[i] = self.queued(i);
-            }
+            self.queue_heads();
+            self.ranks.get_mut().fill(None);
             for i in 0..self.actors.len() {
                 let rule = self.right_of_way(i, t);
                 self.ruled[i] = rule.is_some();
@@ -2137,6 +2201,60 @@ impl<'a, 'b> Sim<'a, 'b> {
         Some((rank, eta, rem.max(0.0)))
     }
 
+    /// `zone_rank(i, enter, leave, t)`, taken once per frame for each of `i`'s crossings (the
+    /// zone with these bounds): what it reads (`cur`, `behind`, the emergency holds) is settled
+    /// before the right-of-way rule runs, and `ranks` is cleared each frame.
+    fn rank(&self, i: usize, enter: f64, leave: f64, t: f64) -> Rank {
+        let same = |c: &Crossing| c.enter.to_bits() == enter.to_bits() && c.leave.to_bits() == leave.to_bits();
+        let Some(k) = self.actors[i].crossings.iter().position(same) else {
+            return self.zone_rank(i, enter, leave, t);
+        };
+        let slot = self.cross_at[i] + k;
+        if let Some(r) = self.ranks.borrow()[slot] {
+            debug_assert_eq!(r, self.zone_rank(i, enter, leave, t), "stale zone rank for agent {i}");
+            return r;
+        }
+        let r = self.zone_rank(i, enter, leave, t);
+        self.ranks.borrow_mut()[slot] = Some(r);
+        r
+    }
+
+    /// `behind[i] = queued(i)` for every agent, in one pass over everyone and one over the agents
+    /// instead of one over everyone per agent: someone else is queued ahead of `i` exactly when
+    /// the least distance to the stop line among the others counted on its lane (the least, or
+    /// the second least where the least is `i`'s own) is below `i`'s, the same floats compared.
+    fn queue_heads(&mut self) {
+        self.lane_least.fill([(f64::INFINITY, usize::MAX); 2]);
+        for (k, (b, o)) in self.actors.iter().zip(&self.cur).enumerate() {
+            let Some(slot) = self.approach_slot[k] else { continue };
+            let to_stop = b.junction.map_or(f64::NEG_INFINITY, |jb| jb.stop - (o.s + b.hl));
+            let counted = !o.frozen && to_stop > -0.5;
+            if !counted {
+                continue;
+            }
+            let least = &mut self.lane_least[slot];
+            if to_stop < least[0].0 {
+                least[1] = least[0];
+                least[0] = (to_stop, k);
+            } else if to_stop < least[1].0 {
+                least[1] = (to_stop, k);
+            }
+        }
+        for i in 0..self.actors.len() {
+            let (a, st) = (&self.actors[i], &self.cur[i]);
+            self.behind[i] = match (self.approach_slot[i], a.junction) {
+                (Some(slot), Some(j)) => {
+                    let mine = j.stop - (st.s + a.hl);
+                    let least = self.lane_least[slot];
+                    let other = if least[0].1 == i { least[1].0 } else { least[0].0 };
+                    other < mine
+                }
+                _ => false,
+            };
+            debug_assert_eq!(self.behind[i], self.queued(i), "queue_heads differs from queued for agent {i}");
+        }
+    }
+
     /// Whether another vehicle approaches agent `i`'s junction through the same lane ahead of it,
     /// its front not yet past its stop line.
     fn queued(&self, i: usize) -> bool {
@@ -2161,8 +2279,8 @@ impl<'a, 'b> Sim<'a, 'b> {
         if c.emergency && !(self.actors[i].emergency && self.yielding[c.other].1) {
             return None;
         }
-        let (ri, ei, rem) = self.zone_rank(i, c.enter, c.leave, t)?;
-        let (rj, ej, _) = self.zone_rank(c.other, c.other_enter, c.other_leave, t)?;
+        let (ri, ei, rem) = self.rank(i, c.enter, c.leave, t)?;
+        let (rj, ej, _) = self.rank(c.other, c.other_enter, c.other_leave, t)?;
         if ri <= 1 {
             return None;
         }

@@ -37,7 +37,12 @@ pub(super) struct Plan {
 
 /// World pose of a point given in the frame of `base`.
 pub(super) fn compose(base: Pose, rel: DVec2, rel_yaw: f64) -> (DVec2, f64) {
-    let p = DVec2::new(base.x, base.y) + rel.rotate(DVec2::from_angle(base.yaw));
+    compose_turned(base, DVec2::from_angle(base.yaw), rel, rel_yaw)
+}
+
+/// `compose` given `DVec2::from_angle(base.yaw)` as `rot`.
+fn compose_turned(base: Pose, rot: DVec2, rel: DVec2, rel_yaw: f64) -> (DVec2, f64) {
+    let p = DVec2::new(base.x, base.y) + rel.rotate(rot);
     (p, wrap_angle(base.yaw + rel_yaw))
 }
 
@@ -177,8 +182,15 @@ pub(super) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
     let hi = (((t_req + WINDOW_S) / dt).round() as usize).min(last);
     let lim = af.lim;
     let mut best: Option<(f64, Plan)> = None;
+    // Some 150 candidates share a few angles: each sine and cosine is taken once (the same
+    // calls on the same arguments, so the same bits), the at-fault heading's per frame.
+    let (rel_cos, rel_sin) = (rel_yaw.cos(), rel_yaw.sin());
+    let mut af_dirs: Vec<Option<DVec2>> = vec![None; pa.len()];
     for (fi, &struck_at) in ps.iter().enumerate().take(hi + 1).skip(lo) {
         let t_imp = fi as f64 * dt;
+        let struck_dir = DVec2::from_angle(struck_at.yaw);
+        let (g0, _) = compose_turned(struck_at, struck_dir, rel_pos0, rel_yaw);
+        let struck_v = struck_dir * p1.speeds[k.st][fi];
         for tau in [1.5, 2.0, 2.5, 3.0, 4.0] {
             let fd = ((t_imp - tau) / dt).round().max(0.0) as usize;
             if fd + 3 > fi {
@@ -187,28 +199,43 @@ pub(super) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
             let tau = (fi - fd) as f64 * dt;
             let s = pa[fd];
             let v = p1.speeds[k.af][fd];
-            let (g0, _) = compose(struck_at, rel_pos0, rel_yaw);
             let v_end0 = 2.0 * DVec2::new(s.x, s.y).distance(g0) / tau - v;
             // Sideswipes: where the corner first touches depends on the relative motion.
-            let (v_rel, v_lat) = (v_end0 * rel_yaw.cos() - p1.speeds[k.st][fi], (v_end0 * rel_yaw.sin()).abs());
+            let (v_rel, v_lat) = (v_end0 * rel_cos - p1.speeds[k.st][fi], (v_end0 * rel_sin).abs());
             let drift = if k.c.impact == Impact::Sideswipe { v_rel * delta0 / v_lat.max(0.3) } else { 0.0 };
-            let (rel_pos, _, delta) = relative(k.c.impact, k.c.point, sizes.0, sizes.1, start, drift);
-            let (g, gyaw) = compose(struck_at, rel_pos, rel_yaw);
-            let curve = Hermite::new(DVec2::new(s.x, s.y), s.yaw, g, gyaw);
+            // Only a sideswipe's pose depends on the drift: any other is the one at drift 0.
+            let (rel_pos, delta) = if k.c.impact == Impact::Sideswipe {
+                let (p, _, d) = relative(k.c.impact, k.c.point, sizes.0, sizes.1, start, drift);
+                (p, d)
+            } else {
+                (rel_pos0, delta0)
+            };
+            let (g, gyaw) = compose_turned(struck_at, struck_dir, rel_pos, rel_yaw);
+            let goal_dir = DVec2::from_angle(gyaw);
+            let af_dir = *af_dirs[fd].get_or_insert_with(|| DVec2::from_angle(s.yaw));
+            let curve = Hermite::with_dirs(DVec2::new(s.x, s.y), af_dir, g, goal_dir);
             let len = curve.length();
             let acc = 2.0 * (len - v * tau) / (tau * tau);
             let v_end = v + acc * tau;
+            // The cost below adds only terms that are not negative to its first two, and float
+            // addition is monotone: this sum without the curvature's two terms is a lower bound
+            // of the cost, bit for bit, and a candidate it puts at or above the best cannot
+            // replace it (`cost < best`). The curvature (24 arctangents) is not computed then.
+            if let Some((b, _)) = &best
+                && lower_bound(t_imp, t_req, acc, lim, v_end, drift, natural.is_some_and(|n| n <= fd)) >= *b
+            {
+                continue;
+            }
             let k_curve = curve.max_curvature();
             let lat = v.max(v_end).powi(2) * k_curve;
             // Closing speed along the approach: the at-fault's motion into the struck box.
-            let struck_v = DVec2::from_angle(struck_at.yaw) * p1.speeds[k.st][fi];
             let inward = if k.c.impact == Impact::Sideswipe {
                 let side = if rel_pos.y >= 0.0 { -1.0 } else { 1.0 };
-                DVec2::new(0.0, side).rotate(DVec2::from_angle(struck_at.yaw))
+                DVec2::new(0.0, side).rotate(struck_dir)
             } else {
-                DVec2::from_angle(gyaw)
+                goal_dir
             };
-            let closing = (DVec2::from_angle(gyaw) * v_end - struck_v).dot(inward);
+            let closing = (goal_dir * v_end - struck_v).dot(inward);
             let mut cost = 3.0 * (t_imp - t_req).abs() + acc.abs() / lim.accel + 2.0 * (lat - lim.lat_acc).max(0.0);
             if acc > STRIKE_ACCEL * lim.accel || acc < -lim.brake_max {
                 cost += 20.0 + acc.abs();
@@ -245,6 +272,24 @@ pub(super) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
         }
     }
     best.map(|b| b.1)
+}
+
+/// `choose`'s cost of a candidate without its curvature terms (the lateral acceleration above the
+/// limit, the curve tighter than the car can steer) and its closing-speed term, all of them at
+/// least 0: the same sums in the same order, so never above the cost.
+fn lower_bound(t_imp: f64, t_req: f64, acc: f64, lim: super::Limits, v_end: f64, drift: f64, natural: bool) -> f64 {
+    let mut cost = 3.0 * (t_imp - t_req).abs() + acc.abs() / lim.accel + 0.0;
+    if acc > STRIKE_ACCEL * lim.accel || acc < -lim.brake_max {
+        cost += 20.0 + acc.abs();
+    }
+    if v_end < 1.0 {
+        cost += 20.0;
+    }
+    cost += 3.0 * drift.abs();
+    if natural {
+        cost += 50.0;
+    }
+    cost
 }
 
 /// Penetration depth of two overlapping boxes: the smallest overlap over the separating axes.
