@@ -176,7 +176,11 @@ impl Bend {
         if c.x + r < min.x || c.x - r > max.x || c.y + r < min.y || c.y - r > max.y {
             return None;
         }
-        let (at, _) = self.slices.iter().find(|(s, q)| *s + 1.0 > lo && *s < hi && q.overlaps(theirs))?;
+        let near = |q: &Obb| {
+            let rq = r + 0.5 * q.length.hypot(q.width);
+            q.center.distance_squared(c) < rq * rq
+        };
+        let (at, _) = self.slices.iter().find(|(s, q)| *s + 1.0 > lo && *s < hi && near(q) && q.overlaps(theirs))?;
         Some(*at)
     }
 
@@ -258,6 +262,9 @@ const CLEAR_MARGIN_S: f64 = 1.0;
 const SAFE_MARGIN: f64 = 0.5;
 /// Largest angle between a vehicle's heading and its lane while it moves sideways (rad).
 const MAX_SLIP: f64 = 0.25;
+/// The least reach beyond the band a junction sweep's slice is kept for (`Bend::slices`), m:
+/// the vehicle band's margin in `Sim::drive`.
+const SLICE_MIN: f64 = 0.25;
 /// How far a vehicle's lateral reference may lead its body's offset (m).
 const MAX_LEAD: f64 = 0.5;
 /// Lateral speed of a vehicle squeezing past an agent that eases aside for it (m/s).
@@ -967,8 +974,9 @@ fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
                 break;
             }
         }
+        // Reaches within the band's margin are the band's business.
         for (m, &(r, l)) in b.reach.iter().enumerate() {
-            if r > 0.0 || l > 0.0 {
+            if r > SLICE_MIN || l > SLICE_MIN {
                 let (p, h) = a.path.point(b.from + m as f64 + 0.5, 0.5 * (l - r));
                 let slice = Obb { center: p, yaw: h, length: 1.0, width: 2.0 * a.hw + r + l };
                 for q in slice.corners() {
@@ -997,7 +1005,11 @@ fn sweep_entry(a: &Actor, b: &Actor, lo: f64, hi: f64) -> Option<f64> {
         let (p, h) = b.path.point(s, 0.0);
         if p.x + r > min.x && p.x - r < max.x && p.y + r > min.y && p.y - r < max.y {
             let mine = Obb { center: p, yaw: h, length: 2.0 * b.hl + 1.0, width: 2.0 * b.hw + 1.0 };
-            if bend.slices.iter().any(|(_, q)| q.overlaps(&mine)) {
+            let near = |q: &Obb| {
+                let rq = r + 0.5 * q.length.hypot(q.width);
+                q.center.distance_squared(p) < rq * rq
+            };
+            if bend.slices.iter().any(|(_, q)| near(q) && q.overlaps(&mine)) {
                 return Some(s);
             }
         }
