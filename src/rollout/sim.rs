@@ -1855,7 +1855,12 @@ impl<'a, 'b> Sim<'a, 'b> {
             if v_lon < 0.5 {
                 acc = acc.min(stop_law(st.v, gap - s0, lim, dt));
             }
-            if in_cur || is_named {
+            // Only into the band's margin (a standing car's corner at arm's length from our
+            // side, the band's edge shifting by millimetres as we steer): brake for it, but no
+            // stop dead, which only a box in our way itself calls for.
+            let margin_only =
+                !swept && !is_named && (lj - ext_lat >= band_hi - margin || lj + ext_lat <= band_lo + margin);
+            if (in_cur && !margin_only) || is_named {
                 let lead_move = (v_lon * dt - 0.5 * lim.brake_max * dt * dt).max(0.0);
                 // A walker stops within its own braking: one stepping into another's way just
                 // ahead (two crossing side by side on converging lines, a hand's breadth apart)
