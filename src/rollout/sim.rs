@@ -1733,16 +1733,23 @@ impl<'a, 'b> Sim<'a, 'b> {
             let mut in_cur = lj - ext_lat < band_hi && lj + ext_lat > band_lo;
             let mut gap = gap;
             // Our sweep through the junction (the dry run's, `Bend::slices`) where it lies on the
-            // road: one it reaches is in our way from the first metre that reaches it. (Laid out
-            // in the straight frame at the other's projection, a U-turn's loop reached over cars
-            // holding well clear of it.)
+            // road: one it reaches is in our way from the first metre that reaches it; one
+            // holding at its line, also where it will stand there (rolling up to it, it was found
+            // only once inside). Laid out in the straight frame at the other's projection, a
+            // U-turn's loop reached over cars holding well clear of it.
             let mut swept = false;
             if !in_cur
                 && a.vehicle
                 && in_sweep
                 && gap > 0.0
                 && let Some(bd) = &a.bend
-                && let Some(at) = bd.meets(&b.obb(o), st.s, sj + ext_lon + a.hl)
+                && let Some(at) = self.yielding[j]
+                    .0
+                    .map(|rem| State { pos: o.pos + self.dirs[j] * rem, ..*o })
+                    .into_iter()
+                    .chain([*o])
+                    .filter_map(|q| bd.meets(&b.obb(&q), st.s, sj + ext_lon + a.hl + 2.0 * b.hl))
+                    .reduce(f64::min)
             {
                 in_cur = true;
                 swept = true;
