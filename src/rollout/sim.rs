@@ -1750,6 +1750,9 @@ impl<'a, 'b> Sim<'a, 'b> {
                     .chain([*o])
                     .filter_map(|q| bd.meets(&b.obb(&q), st.s, sj + ext_lon + a.hl + 2.0 * b.hl))
                     .reduce(f64::min)
+                    // One still moving, too close to stop for within our braking: we are
+                    // committed (as to a junction zone), and it sees our box.
+                    .filter(|&at| o.v < 0.5 || st.v * st.v <= 2.0 * lim.brake_max * (at - st.s - a.hl))
             {
                 in_cur = true;
                 swept = true;
