@@ -1276,9 +1276,6 @@ proptest! {
 /// The properties every generated scene must have (see `generated_scenes_on_every_template`);
 /// a scene the checker or the staging refuses is rejected, not failed.
 fn generated_scene_holds(text: &str) -> Result<(), TestCaseError> {
-    if std::env::var("DBGTEXT").is_ok() {
-        eprintln!("=====\n{text}");
-    }
     let text = text.to_string();
     let mut sources = rocc::source::SourceMap::default();
     let checked = rocc::check::check_text("gen.scn", &text, std::path::Path::new("."), &mut sources);

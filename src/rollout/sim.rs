@@ -1756,7 +1756,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             {
                 in_cur = true;
                 swept = true;
-                gap = gap.min(at - st.s - a.hl);
+                gap = at - st.s - a.hl;
             }
             // A box turned across our path (a long vehicle turning beside us): its extents along
             // and across the path put corners where it has none. Only the part of it inside our
