@@ -265,6 +265,10 @@ const MAX_SLIP: f64 = 0.25;
 /// The least reach beyond the band a junction sweep's slice is kept for (`Bend::slices`), m:
 /// the vehicle band's margin in `Sim::drive`.
 const SLICE_MIN: f64 = 0.25;
+/// Lateral clearance a walker keeps from another walking beside it, and how fast it steps aside
+/// to keep it (m, m/s).
+const WALK_CLEAR: f64 = 0.15;
+const WALK_ASIDE: f64 = 0.2;
 /// How far a vehicle's lateral reference may lead its body's offset (m).
 const MAX_LEAD: f64 = 0.5;
 /// Lateral speed of a vehicle squeezing past an agent that eases aside for it (m/s).
@@ -1635,6 +1639,9 @@ impl<'a, 'b> Sim<'a, 'b> {
         let mut acc = idm_free(st.v, v_des, lim, dt);
         let mut hard = f64::INFINITY;
         let mut side_blocked = false;
+        // Walkers beside each other on converging lines (side by side on a curve's sidewalk):
+        // each steps away from the other (sum of sides, -1 right, +1 left).
+        let mut aside = 0.0f64;
         let named = match a.stop {
             StopGoal::Behind(k) if active => Some(k),
             _ => None,
@@ -1702,6 +1709,12 @@ impl<'a, 'b> Sim<'a, 'b> {
                     if g < 2.0 + 0.8 * back + (back - front).max(0.0).powi(2) / 6.0 {
                         side_blocked = true;
                     }
+                }
+            }
+            if !a.vehicle && !b.vehicle && st.v > 0.1 && ds.abs() < a.hl + ext_lon {
+                let rel = lj - st.d;
+                if rel.abs() - ext_lat - a.hw < WALK_CLEAR {
+                    aside -= rel.signum();
                 }
             }
             if ds <= 0.0 {
@@ -1926,12 +1939,15 @@ impl<'a, 'b> Sim<'a, 'b> {
         let give_way = self.ruled[i];
         let next = State { v, d: d_next, phase, triggered, stopped, frozen: false, give_way, ..st };
         if !a.vehicle {
-            // Holonomic: walkers and animals step onto the reference and face where they go.
+            // Holonomic: walkers and animals step onto the reference and face where they go
+            // (a step aside from a neighbour does not turn them).
+            let step_aside = if aside == 0.0 { 0.0 } else { aside.signum() * WALK_ASIDE * dt };
             let s = st.s + adv;
-            let (pos, h) = a.path.point(s, d_next);
+            let (pos, h) = a.path.point(s, d_next + step_aside);
             let d_rate = (d_next - st.d) / dt;
             let yaw = if adv > 1e-4 || d_rate.abs() > 1e-4 { h + d_rate.atan2(v.max(1.0)) } else { st.yaw };
-            return State { pos, yaw: turn_toward(st.yaw, yaw, lim.yaw_rate, dt), s, off: d_next, ..next };
+            let d = d_next + step_aside;
+            return State { pos, yaw: turn_toward(st.yaw, yaw, lim.yaw_rate, dt), s, d, off: d, ..next };
         }
         // Kinematic bicycle: pure pursuit of the reference (the route shifted by the lateral
         // goal's offset, taken where the profile will be when the car gets there), curvature
@@ -2571,22 +2587,32 @@ impl<'a, 'b> Sim<'a, 'b> {
                 if !ai.obb(si).overlaps(&aj.obb(sj)) {
                     continue;
                 }
+                // A walker turning on the spot sweeps its corners out to its half-diagonal:
+                // beside another (two crossing side by side) it keeps its heading and steps on
+                // sideways, rather than standing there for good. Turns are undone first, moves
+                // only if the pair still overlaps without them.
+                let turning = |k: usize| {
+                    let (nk, ck) = (self.next[k], self.cur[k]);
+                    !self.actors[k].vehicle
+                        && matches!(self.actors[k].drive, Drive::Mover)
+                        && nk.yaw != ck.yaw
+                        && nk.pos != ck.pos
+                };
+                let turns = [(i, turning(i)), (j, turning(j))];
+                if turns.iter().any(|t| t.1) {
+                    for (k, _) in turns.into_iter().filter(|t| t.1) {
+                        self.next[k].yaw = self.cur[k].yaw;
+                    }
+                    changed = true;
+                    continue;
+                }
                 for k in [i, j] {
                     let (nk, ck) = (self.next[k], self.cur[k]);
                     let moved = nk.pos != ck.pos || nk.yaw != ck.yaw;
-                    if !matches!(self.actors[k].drive, Drive::Mover) || !moved {
-                        continue;
-                    }
-                    // A walker turning on the spot sweeps its corners out to its half-diagonal:
-                    // beside another (two crossing side by side) it keeps its heading and steps
-                    // on sideways, rather than standing there for good.
-                    if !self.actors[k].vehicle && nk.yaw != ck.yaw && nk.pos != ck.pos {
-                        self.next[k].yaw = ck.yaw;
+                    if matches!(self.actors[k].drive, Drive::Mover) && moved {
+                        self.next[k] = State { v: 0.0, ..self.cur[k] };
                         changed = true;
-                        continue;
                     }
-                    self.next[k] = State { v: 0.0, ..self.cur[k] };
-                    changed = true;
                 }
             }
             if !changed {
