@@ -131,13 +131,7 @@ pub(super) struct Bend {
 impl Bend {
     /// The widest reach to the right and to the left between route arc lengths `lo` and `hi`.
     fn within(&self, lo: f64, hi: f64) -> (f64, f64) {
-        let last = self.reach.len() as f64 - 1.0;
-        // `max` and `min` take the number over a NaN: a and b are never NaN.
-        let (a, b) = ((lo - self.from).floor().max(0.0), (hi - self.from).ceil().min(last));
-        if a > b {
-            return (0.0, 0.0);
-        }
-        let (a, b) = (a as usize, b as usize);
+        let Some((a, b)) = self.metres(lo, hi) else { return (0.0, 0.0) };
         // The widest of a set of reaches is the same number whatever the order it is taken in
         // (each is 0 or above, never NaN): two overlapping spans cover the range.
         let k = (b - a + 1).ilog2() as usize;
@@ -154,6 +148,14 @@ impl Bend {
         widest
     }
 
+    /// The indices into `reach` of the metres covering route arc lengths `lo` to `hi`, if any.
+    fn metres(&self, lo: f64, hi: f64) -> Option<(usize, usize)> {
+        let last = self.reach.len() as f64 - 1.0;
+        // `max` and `min` take the number over a NaN: a and b are never NaN.
+        let (a, b) = ((lo - self.from).floor().max(0.0), (hi - self.from).ceil().min(last));
+        (a <= b).then_some((a as usize, b as usize))
+    }
+
     /// Fill `spans` from `reach`.
     fn index(&mut self) {
         self.spans.clear();
@@ -167,9 +169,7 @@ impl Bend {
             h *= 2;
         }
     }
-}
 
-impl Bend {
     /// The route arc length of the first metre from `lo` to `hi` whose slice meets `theirs`.
     fn meets(&self, theirs: &Obb, lo: f64, hi: f64) -> Option<f64> {
         let ((min, max), c, r) = (self.bounds, theirs.center, 0.5 * theirs.length.hypot(theirs.width));
@@ -188,13 +188,9 @@ impl Bend {
     /// least `right` to the right or `left` to the left (either may be infinite: that side is
     /// not asked about).
     fn first_reach(&self, lo: f64, hi: f64, right: f64, left: f64) -> Option<f64> {
-        let last = self.reach.len() as f64 - 1.0;
-        let (a, b) = ((lo - self.from).floor().max(0.0), (hi - self.from).ceil().min(last));
-        if a > b {
-            return None;
-        }
-        let m = self.reach[a as usize..=b as usize].iter().position(|&(r, l)| r >= right || l >= left)?;
-        Some(self.from + a + m as f64)
+        let (a, b) = self.metres(lo, hi)?;
+        let m = self.reach[a..=b].iter().position(|&(r, l)| r >= right || l >= left)?;
+        Some(self.from + a as f64 + m as f64)
     }
 }
 
@@ -1002,20 +998,12 @@ fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
 /// come near each other.
 fn sweep_entry(a: &Actor, b: &Actor, lo: f64, hi: f64) -> Option<f64> {
     let bend = a.bend.as_ref()?;
-    let (min, max) = bend.bounds;
-    let r = b.radius + 0.5;
     let mut s = lo;
     while s < hi {
         let (p, h) = b.path.point(s, 0.0);
-        if p.x + r > min.x && p.x - r < max.x && p.y + r > min.y && p.y - r < max.y {
-            let mine = Obb { center: p, yaw: h, length: 2.0 * b.hl + 1.0, width: 2.0 * b.hw + 1.0 };
-            let near = |q: &Obb| {
-                let rq = r + 0.5 * q.length.hypot(q.width);
-                q.center.distance_squared(p) < rq * rq
-            };
-            if bend.slices.iter().any(|(_, q)| near(q) && q.overlaps(&mine)) {
-                return Some(s);
-            }
+        let mine = Obb { center: p, yaw: h, length: 2.0 * b.hl + 1.0, width: 2.0 * b.hw + 1.0 };
+        if bend.meets(&mine, f64::NEG_INFINITY, f64::INFINITY).is_some() {
+            return Some(s);
         }
         s += 0.5;
     }
@@ -1222,6 +1210,12 @@ struct Near {
     /// Holding at its stop line for an emergency vehicle (`Sim::yield_state`).
     gives_way: bool,
     vehicle: bool,
+}
+
+impl Near {
+    fn new(st: &State, a: &Actor, dir: DVec2, gives_way: bool) -> Near {
+        Near { pos: st.pos, dir, v: st.v, radius: a.radius, hl: a.hl, hw: a.hw, gives_way, vehicle: a.vehicle }
+    }
 }
 
 /// What `Sim::candidates` needs of agent `i`'s step in `Sim::drive`.
@@ -1515,17 +1509,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             // Packed after the holds are final: `candidates` reads them as `drive` does.
             self.near.clear();
             for ((st, a), (&dir, y)) in self.cur.iter().zip(self.actors).zip(self.dirs.iter().zip(&self.yielding)) {
-                let gives_way = y.0.is_some();
-                self.near.push(Near {
-                    pos: st.pos,
-                    dir,
-                    v: st.v,
-                    radius: a.radius,
-                    hl: a.hl,
-                    hw: a.hw,
-                    gives_way,
-                    vehicle: a.vehicle,
-                });
+                self.near.push(Near::new(st, a, dir, y.0.is_some()));
             }
             self.along.get_mut().clear();
             for i in 0..self.actors.len() {
@@ -1820,7 +1804,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             if in_cur && !swept && !is_named && sr.abs() > 0.05 {
                 let reach = (sj + ext_lon + a.hl + 1.0).min(a.path.length());
                 if a.path.straight_run(st.s).is_none_or(|ln| ln.hi < reach) {
-                    match self.band_meets(a, st.s, reach, (band_lo, band_hi), &b.obb(o)) {
+                    match band_meets(a, st.s, reach, (band_lo, band_hi), &b.obb(o)) {
                         Some(s_hit) => gap = s_hit - st.s,
                         None => in_cur = false,
                     }
@@ -1974,26 +1958,6 @@ impl<'a, 'b> Sim<'a, 'b> {
         let (pos, yaw) = self.advance(a, &st, k, adv, 1.0);
         let (s, off, _, _) = a.path.frenet_dir(pos, st.s + adv);
         State { pos, yaw, s, off, ..next }
-    }
-
-    /// The first centre arc length from `from` (to within a quarter metre, never past the
-    /// true one) at which the box of `a`, stretched across its path to the offsets `band`,
-    /// meets `theirs`, following its path up to `to`.
-    fn band_meets(&self, a: &Actor, from: f64, to: f64, band: (f64, f64), theirs: &Obb) -> Option<f64> {
-        let (mid, width) = (0.5 * (band.0 + band.1), band.1 - band.0);
-        // The box for every centre position in [s, s + step].
-        let meets = |s: f64, step: f64| {
-            let (p, h) = a.path.point(s + 0.5 * step, mid);
-            Obb { center: p, yaw: h, length: 2.0 * a.hl + step, width }.overlaps(theirs)
-        };
-        let mut s = from;
-        while s < to {
-            if meets(s, 1.0) {
-                return (0..4).map(|k| s + 0.25 * k as f64).find(|&q| meets(q, 0.25)).or(Some(s + 0.75));
-            }
-            s += 1.0;
-        }
-        None
     }
 
     /// The agents `drive`'s pair loop looks at for agent `i`, in the order it visits them: every
@@ -2715,6 +2679,26 @@ impl<'a, 'b> Sim<'a, 'b> {
     }
 }
 
+/// The first centre arc length from `from` (to within a quarter metre, never past the
+/// true one) at which the box of `a`, stretched across its path to the offsets `band`,
+/// meets `theirs`, following its path up to `to`.
+fn band_meets(a: &Actor, from: f64, to: f64, band: (f64, f64), theirs: &Obb) -> Option<f64> {
+    let (mid, width) = (0.5 * (band.0 + band.1), band.1 - band.0);
+    // The box for every centre position in [s, s + step].
+    let meets = |s: f64, step: f64| {
+        let (p, h) = a.path.point(s + 0.5 * step, mid);
+        Obb { center: p, yaw: h, length: 2.0 * a.hl + step, width }.overlaps(theirs)
+    };
+    let mut s = from;
+    while s < to {
+        if meets(s, 1.0) {
+            return (0..4).map(|k| s + 0.25 * k as f64).find(|&q| meets(q, 0.25)).or(Some(s + 0.75));
+        }
+        s += 1.0;
+    }
+    None
+}
+
 /// The nearest longitudinal point, relative to its centre, of the part of a box lying inside the
 /// lateral band `lo..hi` of a path frame (the box centred at lateral offset `lat`, its heading at
 /// cosine `cr` and sine `sr` to the path's, half sizes `hl`, `hw`); `None` when no part does.
@@ -2890,22 +2874,7 @@ mod tests {
             sim.cur[k] = State { pos: p, yaw: h + turn, v: 35.0 * rnd(), s, d: lat, off: lat, ..sim.cur[k] };
         }
         sim.dirs = sim.cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect();
-        sim.near = (0..n)
-            .map(|k| {
-                let (st, a) = (&sim.cur[k], &actors[k]);
-                let gives_way = k % 11 == 0;
-                Near {
-                    pos: st.pos,
-                    dir: sim.dirs[k],
-                    v: st.v,
-                    radius: a.radius,
-                    hl: a.hl,
-                    hw: a.hw,
-                    gives_way,
-                    vehicle: a.vehicle,
-                }
-            })
-            .collect();
+        sim.near = (0..n).map(|k| Near::new(&sim.cur[k], &actors[k], sim.dirs[k], k % 11 == 0)).collect();
         let (mut asked, mut indexed) = (0, 0);
         for (i, ai) in actors.iter().enumerate() {
             let st = sim.cur[i];
