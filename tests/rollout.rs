@@ -947,6 +947,31 @@ fn a_turn_that_puts_the_wheels_off_the_road_is_refused() {
     assert!(front(&text("t_junction", 1, "bus", "east", "left")).is_ok(), "overhang over the kerb is no refusal");
 }
 
+/// A sedan 6 m before its line at 8.9 m/s cannot brake down to its U-turn's curve speed at its
+/// comfortable braking, and takes the turn wide, 3 m off the road: refused with E0204, which
+/// names the speed and says to lower it. From 30 m out at 5 m/s the same U-turn is accepted.
+/// (It used to pass only by braking past its limit for a car crossing its path.)
+#[test]
+fn a_turn_taken_too_fast_is_refused_naming_the_speed() {
+    let text = |at: &str, speed: &str| {
+        format!(
+            "scenario t {{ duration 8 s\n road four_way {{ lanes 1; lane_width 3.5 m; speed_limit 40 km/h; sidewalks on }}\n \
+             agent v0: sedan {{ at west.in[1], 6 m before stop_line; speed 9.8 m/s; goal {{ turn straight }} }}\n \
+             agent v1: sedan {{ at east.in[1], {at} before stop_line; speed {speed} m/s; goal {{ turn u_turn }} }}\n}}"
+        )
+    };
+    let front = |t: &str| {
+        let mut sources = rocc::source::SourceMap::default();
+        let s = rocc::check::check_text("t.scn", t, std::path::Path::new("."), &mut sources).expect("checks");
+        rocc::compile::front(s, None)
+    };
+    let Err(errs) = front(&text("6 m", "8.9")) else { panic!("not refused") };
+    assert_eq!(errs.iter().map(|d| d.code).collect::<Vec<_>>(), ["E0204"]);
+    assert!(errs[0].message.contains("m/s where it allows"), "{}", errs[0].message);
+    assert!(errs[0].help.as_deref().is_some_and(|h| h.starts_with("a lower `speed`")), "{:?}", errs[0].help);
+    assert!(front(&text("30 m", "5")).is_ok(), "the slower U-turn is refused");
+}
+
 /// Two walkers placed 0.6 m apart with 0.61 m long boxes interpenetrate by a centimetre: the
 /// place pass refuses it (E0202) instead of starting the tracks with an overlap (the template
 /// property test found such a pair at frame 0); 0.59 m long ones pass.
@@ -1405,4 +1430,28 @@ fn generated_regression_scenes() {
             panic!("{}: {e}", p.display());
         }
     }
+}
+
+/// Two cars too close to hold at their lines whose paths cross: the right-of-way rule ranks
+/// both "committed", and the one that can still stop short of the zone within its emergency
+/// braking (the car going straight) gives way there at once, while the left-turner goes
+/// through at its curve speed. Before, the rule let both go, and the straight car braked only
+/// once the turner's sideways motion showed, 0.4 s later and at 5.75 m/s2 instead of 3.9.
+#[test]
+fn of_two_committed_cars_the_one_that_can_still_stop_gives_way() {
+    let text = std::fs::read_to_string("tests/rollout-cases/committed-left-turn-meets-straight.scn").expect("case");
+    let f = front_of(&text);
+    let t = &f.tracks;
+    let idx = |name: &str| t.agents.iter().position(|a| a.name == name).expect("agent");
+    let (straight, left) = (idx("v0"), idx("v1"));
+    let dt = 1.0 / t.rate;
+    let dec = |k: usize, f: usize| (t.speeds[k][f - 1] - t.speeds[k][f]) / dt;
+    assert!(dec(straight, 1) > 2.0, "the straight car does not give way at once: {:.2} m/s2", dec(straight, 1));
+    // Most of the way at about the deceleration its stop needs (9.8 m/s over 12 m).
+    let steady = (1..15).map(|f| dec(straight, f)).fold(0.0, f64::max);
+    assert!(steady < 4.5, "braked at {steady:.2} m/s2 on the way to its stop");
+    assert!((0..t.frames).any(|f| t.speeds[straight][f] < 0.05), "the straight car never stops");
+    let slowest = (0..t.frames).map(|f| t.speeds[left][f]).fold(f64::INFINITY, f64::min);
+    assert!(slowest > 5.0, "the left-turner slowed to {slowest:.2} m/s");
+    assert!(overlaps(t, &[]).is_empty());
 }

@@ -366,6 +366,10 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
 /// one BEV pixel (0.25 m), the resolution at which the surface is drawn.
 const TURN_OFF_ROAD_M: f64 = 0.25;
 
+/// How far over its path's curve speed a vehicle may take a turn before E0204 blames the speed
+/// (car-following settles onto the speed from just above it).
+const TURN_SPEED_SLACK: f64 = 0.5;
+
 /// E0204 for a turn the vehicle drives but cannot make on this road: the junction path is within
 /// `TURN_SLACK` of its turning radius, yet its wheels leave the drivable surface by more than
 /// `TURN_OFF_ROAD_M` while in the junction. The wheels span the box's width and its wheelbase
@@ -408,10 +412,21 @@ fn check_turns(map: &Map, actors: &[Actor], confs: &[Conf], out: &Tracks, errs: 
             conn.path.points.iter().fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
         let (lo, hi) = (lo - DVec2::splat(a.radius + 1.0), hi + DVec2::splat(a.radius + 1.0));
         let mut worst = (0.0, 0);
+        // The most it went over the speed its path allows there (the turn's curve speed), and
+        // where: it brakes for a turn at its comfortable braking only, so one placed too fast
+        // and too close takes the turn wide.
+        let mut over = (0.0, 0.0, 0.0);
+        let mut guess = a.s0;
         for (f, p) in out.poses[i].iter().enumerate() {
             let c = DVec2::new(p.x, p.y);
             if !(c.cmpge(lo).all() && c.cmple(hi).all()) {
                 continue;
+            }
+            let (s, ..) = a.path.frenet(c, guess);
+            guess = s;
+            let (v, cap) = (out.speeds[i][f], a.path.cap(s));
+            if v - cap > over.0 {
+                over = (v - cap, v, cap);
             }
             let obb = Obb { center: c, yaw: p.yaw, length: super::WHEELBASE_SHARE * 2.0 * a.hl, width: 2.0 * a.hw };
             for q in obb.corners() {
@@ -423,24 +438,27 @@ fn check_turns(map: &Map, actors: &[Actor], confs: &[Conf], out: &Tracks, errs: 
         }
         if worst.0 > TURN_OFF_ROAD_M {
             let t = worst.1 as f64 / out.rate.max(1e-9);
-            errs.push(
-                Diagnostic::error(
-                    "E0204",
-                    format!(
-                        "`{}` ({}, turning radius {:.1} m) cannot turn {} here: its box leaves the road by {:.1} m at {t:.1} s",
-                        a.info.name,
-                        a.info.kind,
-                        a.r_min,
-                        turn_name(turn),
-                        worst.0
-                    ),
-                )
-                .label(span, "this goal")
-                .help(
-                    "a wider road (lanes, lane_width, median, a roundabout's radius) or a smaller kind; long \
-                     vehicles need room to swing through a turn (see README, Rollout)",
-                ),
+            let mut message = format!(
+                "`{}` ({}, turning radius {:.1} m) cannot turn {} here: its box leaves the road by {:.1} m at {t:.1} s",
+                a.info.name,
+                a.info.kind,
+                a.r_min,
+                turn_name(turn),
+                worst.0
             );
+            let mut help = String::from(
+                "a wider road (lanes, lane_width, median, a roundabout's radius) or a smaller kind; long vehicles \
+                 need room to swing through a turn (see README, Rollout)",
+            );
+            if over.0 > TURN_SPEED_SLACK {
+                message += &format!(", driving it at {:.1} m/s where it allows {:.1} m/s", over.1, over.2);
+                help = format!(
+                    "a lower `speed`, or a start farther from the junction: it brakes for a turn at its comfortable \
+                     braking ({:.1} m/s2) only; else {help}",
+                    a.lim.brake
+                );
+            }
+            errs.push(Diagnostic::error("E0204", message).label(span, "this goal").help(help));
         }
     }
 }
@@ -1611,7 +1629,10 @@ impl<'a, 'b> Sim<'a, 'b> {
             d_next = d_next.clamp(st.d.min(st.off - MAX_LEAD), st.d.max(st.off + MAX_LEAD));
         }
         let margin = if a.vehicle { 0.25 } else { 0.1 };
-        let goal_d = target.filter(|_| st.phase < 1.0).or(pass_target).unwrap_or(st.d);
+        // Till the reference is there: the profile's clock runs out while a creeping car's
+        // reference is held back by its body (`MAX_LEAD`), and the target lane must still be
+        // watched (a car creeping alongside in it was driven into).
+        let goal_d = target.filter(|&tg| st.phase < 1.0 || (st.d - tg).abs() > 1e-3).or(pass_target).unwrap_or(st.d);
         // The band the box occupies now: a steering vehicle lags its reference offset.
         let (cur_lo, cur_hi) = (st.d.min(st.off) - a.hw, st.d.max(st.off) + a.hw);
         let (lo, hi) = (cur_lo.min(goal_d - a.hw) - margin, cur_hi.max(goal_d + a.hw) + margin);
@@ -2288,6 +2309,9 @@ impl<'a, 'b> Sim<'a, 'b> {
         }
         let (ri, ei, rem) = self.rank(i, c.enter, c.leave, t)?;
         let (rj, ej, _) = self.rank(c.other, c.other_enter, c.other_leave, t)?;
+        if ri == 1 && rj == 1 {
+            return self.committed_gives_way(i, c);
+        }
         if ri <= 1 {
             return None;
         }
@@ -2298,6 +2322,31 @@ impl<'a, 'b> Sim<'a, 'b> {
         let o = &self.cur[c.other];
         let gone = o.v > 0.5 && (c.other_leave - o.s) / o.v + CLEAR_MARGIN_S < ei;
         (first && !gone).then_some(rem)
+    }
+
+    /// Between two vehicles both too close to hold at their lines (rank 1 each, so the rule
+    /// above lets both go): whether `i` still gives way, short of the zone itself, and then how
+    /// far its front may go. One that can stop short of the zone within its emergency braking
+    /// gives way to one that cannot; of two that can, the later to reach it at its present
+    /// speed (then the name), the same order seen from either side. Two cars 6 m before their
+    /// lines at 9 m/s, one going straight and one making a U-turn into the same lane, used to
+    /// drive into each other's way.
+    fn committed_gives_way(&self, i: usize, c: &Crossing) -> Option<f64> {
+        let short_of = |k: usize, enter: f64| {
+            let (a, st) = (&self.actors[k], &self.cur[k]);
+            let rem = enter - 0.3 - st.s;
+            let can = rem > -0.05 && st.v * st.v <= 2.0 * a.lim.brake_max * rem.max(1e-3);
+            can.then_some((rem.max(0.0), (enter - st.s) / st.v.max(0.1)))
+        };
+        let (rem, ti) = short_of(i, c.enter)?;
+        let first = match short_of(c.other, c.other_enter) {
+            None => true,
+            Some((_, tj)) => {
+                let (ni, nj) = (&self.actors[i].info.name, &self.actors[c.other].info.name);
+                tj.partial_cmp(&ti).is_some_and(|o| o.then(nj.cmp(ni)).is_lt())
+            }
+        };
+        first.then_some(rem)
     }
 
     /// A walker at the kerb (`Actor::kerb`) waits there while a vehicle whose route crosses its
@@ -2522,10 +2571,10 @@ impl<'a, 'b> Sim<'a, 'b> {
             // Its envelope as its car-following sees us: our box's extent along and across its
             // heading, against its band (its width and the margin it watches, and more) from
             // its rear to where it could stop after one more step at its speed.
-            let (rel, (c, sn)) = (pos - o.pos, (yaw - o.yaw).sin_cos());
-            let (c, sn) = (sn.abs(), c.abs());
+            let (rel, (sn, c)) = (pos - o.pos, (yaw - o.yaw).sin_cos());
+            let (c, sn) = (c.abs(), sn.abs());
             let (lon, lat) = (rel.dot(fwd), fwd.perp_dot(rel).abs());
-            let (ext_lon, ext_lat) = (a.hl * sn + a.hw * c, a.hl * c + a.hw * sn);
+            let (ext_lon, ext_lat) = (a.hl * c + a.hw * sn, a.hl * sn + a.hw * c);
             let reach = b.hl + o.v * o.v / (2.0 * b.lim.brake_max) + o.v * self.dt + SAFE_MARGIN + 0.3;
             lon - ext_lon < reach && lon + ext_lon > -b.hl && lat - ext_lat < b.hw + 0.4
         })
