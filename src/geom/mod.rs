@@ -201,17 +201,27 @@ impl<'a> Projector<'a> {
             return (best, whole.sqrt() - Self::MARGIN);
         }
         let mut nearest_box = f64::INFINITY;
+        // Once a segment is found, one farther than it by the margin cannot be the first of
+        // least distance either (`project` keeps the first under `<`): the bound tightens, and
+        // a segment's own box (its two ends) is tested before its projection's division and
+        // roots.
+        let mut lim = bound;
         for (c, &b) in self.boxes.iter().enumerate() {
             let d2 = away(b);
             nearest_box = nearest_box.min(d2);
-            if d2 > bound * bound {
+            if d2 > lim * lim {
                 continue;
             }
             for i in c * Self::CHUNK..((c + 1) * Self::CHUNK).min(segs) {
+                let (a, e) = (self.line.points[i], self.line.points[i + 1]);
+                if away((a.min(e), a.max(e))) > lim * lim {
+                    continue;
+                }
                 let seg = self.line.project_on(i, p);
                 if seg.0 < best.0 {
                     best = seg;
                     *hint = i;
+                    lim = lim.min(best.0 + Self::MARGIN);
                 }
             }
         }

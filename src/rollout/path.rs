@@ -155,6 +155,18 @@ impl Path {
         if i < self.cut { shared[i] } else { own[i - self.cut] }
     }
 
+    /// Samples `i` and `i + 1` of a per-sample array: one test for where they lie, and one
+    /// bounds check, where both are the route's (most reads).
+    #[inline(always)]
+    fn pick2<T: Copy>(&self, i: usize, shared: &[T], own: &[T]) -> (T, T) {
+        if i + 1 < self.cut {
+            let w = &shared[i..i + 2];
+            (w[0], w[1])
+        } else {
+            (self.pick(i, shared, own), self.pick(i + 1, shared, own))
+        }
+    }
+
     #[inline(always)]
     fn pt(&self, i: usize) -> DVec2 {
         self.pick(i, &self.grid.pts, &self.pts)
@@ -271,7 +283,9 @@ impl Path {
     #[inline]
     fn at_vec(&self, s: f64) -> (DVec2, DVec2) {
         let (i, u) = self.locate(s);
-        (self.pt(i).lerp(self.pt(i + 1), u), self.tan(i).lerp(self.tan(i + 1), u))
+        let (p0, p1) = self.pick2(i, &self.grid.pts, &self.pts);
+        let (t0, t1) = self.pick2(i, &self.grid.tangent, &self.tangent);
+        (p0.lerp(p1, u), t0.lerp(t1, u))
     }
 }
 
