@@ -264,6 +264,38 @@ impl Path {
         (s, off.dot(t.perp()), beyond, t.normalize_or(DVec2::X))
     }
 
+    /// `frenet_dir` of each point from its guess, without the tangent: the searches run side by
+    /// side, a Newton step of each per round, so that their dependent chains overlap. Each
+    /// takes the steps `frenet_dir` takes on the same values (one that has converged waits,
+    /// its step's result dropped), so each result is `frenet_dir`'s, bit for bit.
+    #[inline]
+    pub fn frenet_many<const N: usize>(&self, ps: [DVec2; N], guesses: [f64; N]) -> [(f64, f64, f64); N] {
+        let len = self.length();
+        let mut s = guesses.map(|g| g.clamp(0.0, len));
+        let mut along = [0.0; N];
+        let mut live = [true; N];
+        for _ in 0..4 {
+            if !live.contains(&true) {
+                break;
+            }
+            for k in 0..N {
+                let (q, t) = self.at_vec(s[k]);
+                let a = (ps[k] - q).dot(t);
+                let ns = (s[k] + a).clamp(0.0, len);
+                let done = (ns - s[k]).abs() < 0.02;
+                if live[k] {
+                    (along[k], s[k], live[k]) = (a, ns, !done);
+                }
+            }
+        }
+        std::array::from_fn(|k| {
+            let (q, t) = self.at_vec(s[k]);
+            let off = ps[k] - q;
+            let beyond = if s[k] <= 0.0 || s[k] >= len { along[k].abs().min(off.dot(t).abs()) } else { 0.0 };
+            (s[k], off.dot(t.perp()), beyond)
+        })
+    }
+
     /// The straight run of the path around arc length `s`, if `s` lies inside one at least a metre
     /// long.
     pub fn straight_run(&self, s: f64) -> Option<Line> {
@@ -699,6 +731,36 @@ mod tests {
                 assert_eq!(bits(a), bits(&Resampler::new(&pts).path(*u)), "kept, until {u}");
             }
         }
+    }
+
+    /// `frenet_many` is `frenet_dir` for each point, bit for bit: points on, beside and beyond
+    /// the path (both ends, where the search clamps), from near and far guesses, on a path that
+    /// reads its route's shared samples and its own.
+    #[test]
+    fn frenet_many_is_frenet_dir_each() {
+        let mut pts = vec![DVec2::new(-40.0, 2.0), DVec2::new(0.0, 2.0)];
+        pts.extend((1..=30).map(|i| DVec2::new(0.0, 32.0) + DVec2::from_angle(-1.4 + i as f64 * 0.05) * 30.0));
+        let mut shared = Resampler::new(&pts);
+        let _longer = shared.path(1e9);
+        let p = shared.path(70.0);
+        assert!(p.cut > 0 && p.cut < p.len(), "reads shared and own samples");
+        let bits = |(s, d, b): (f64, f64, f64)| [s.to_bits(), d.to_bits(), b.to_bits()];
+        let mut n = 0;
+        for k in 0..600 {
+            let along = k as f64 * 0.137 - 8.0;
+            let (q, h) = p.at(along);
+            let ps: [DVec2; 4] = std::array::from_fn(|c| {
+                q + DVec2::from_angle(h + c as f64 * 1.3) * (0.3 + (k % 9) as f64 * (1.0 + c as f64))
+            });
+            let guesses: [f64; 4] = std::array::from_fn(|c| along + ((k * 5 + c * 3) % 17) as f64 - 8.0);
+            let many = p.frenet_many(ps, guesses);
+            for c in 0..4 {
+                let (s, d, b, _) = p.frenet_dir(ps[c], guesses[c]);
+                assert_eq!(bits(many[c]), bits((s, d, b)), "{:?} from {}", ps[c], guesses[c]);
+                n += usize::from(b > 0.0);
+            }
+        }
+        assert!(n > 50, "points beyond the ends are covered: {n}");
     }
 
     /// On a straight run, `frenet_dir` from any guess inside the run lands on the point's

@@ -952,8 +952,8 @@ fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
             s = ns;
             let dir = DVec2::from_angle(yaw);
             let corners = Obb { center: pos, yaw, length: 2.0 * a.hl, width: 2.0 * a.hw }.corners_along(dir);
-            for q in corners {
-                let (sq, dq, beyond, _) = a.path.frenet_dir(q, s + (q - pos).dot(fwd));
+            let found = a.path.frenet_many(corners, corners.map(|q| s + (q - pos).dot(fwd)));
+            for (sq, dq, beyond) in found {
                 if beyond > 0.0 || dq.abs() <= a.hw {
                     continue;
                 }
