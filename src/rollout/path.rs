@@ -187,7 +187,7 @@ impl Path {
         self.pick(i, &self.grid.curvature, &self.curvature)
     }
 
-    #[inline]
+    #[inline(always)]
     fn locate(&self, s: f64) -> (usize, f64) {
         // Through i64, not usize: the same values (below 2^63), but one instruction each way on
         // x86-64 where unsigned conversions take several, on the projections' dependent chain.
@@ -312,7 +312,7 @@ impl Path {
         Some(Line { origin: self.pt(a), s0: a as f64 * STEP, dir: self.tan(a), lo, hi })
     }
 
-    #[inline]
+    #[inline(always)]
     fn at_vec(&self, s: f64) -> (DVec2, DVec2) {
         let (i, u) = self.locate(s);
         let (p0, p1) = self.pick2(i, &self.grid.pts, &self.pts);
