@@ -1069,6 +1069,7 @@ fn profile<'p>(
         let n = (la / 0.5).ceil().max(1.0) as usize;
         let on_b = Projector::new(&cb.path);
         let mut hint = 0;
+        let (strict, mut seg) = (ca.path.strictly_increasing(), None);
         // A sample `x` along `a` from one at `floor` from `b` lies at least `floor - x` from it:
         // the samples up to where that reaches within `reach` (a margin short) are not taken.
         let mut far_until = f64::NEG_INFINITY;
@@ -1079,7 +1080,7 @@ fn profile<'p>(
                 if ca.from == cb.from || sa < far_until {
                     return (sa, f64::INFINITY, f64::NAN);
                 }
-                let (s, d) = match on_b.project_within(ca.path.point_at(sa), &mut hint, reach) {
+                let (s, d) = match on_b.project_within(ca.path.point_at_walk(sa, &mut seg, strict), &mut hint, reach) {
                     Ok(x) => x,
                     Err(floor) => {
                         far_until = sa + (floor - reach - 0.01);
