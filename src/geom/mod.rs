@@ -120,13 +120,26 @@ impl Polyline {
     /// offset (left positive). `project` keeps the first segment of least distance.
     #[inline(always)]
     fn project_on(&self, i: usize, p: DVec2) -> (f64, f64, f64) {
+        let foot = self.foot_on(i, p);
+        self.finish_on(i, p, foot, foot.0.sqrt())
+    }
+
+    /// `project_on`'s first half: the squared distance (`p.distance(q)` is its root), and what
+    /// `finish_on` needs (the foot's parameter, the segment's squared length and vector).
+    #[inline(always)]
+    fn foot_on(&self, i: usize, p: DVec2) -> (f64, f64, f64, DVec2) {
         let (a, b) = (self.points[i], self.points[i + 1]);
         let d = b - a;
         let len2 = d.length_squared();
         let t = if len2 > 0.0 { ((p - a).dot(d) / len2).clamp(0.0, 1.0) } else { 0.0 };
         let q = a + d * t;
-        let dist = p.distance(q);
-        let side = d.perp_dot(p - a).signum();
+        ((p - q).length_squared(), t, len2, d)
+    }
+
+    /// `project_on` from `foot_on` and the distance.
+    #[inline(always)]
+    fn finish_on(&self, i: usize, p: DVec2, (_, t, len2, d): (f64, f64, f64, DVec2), dist: f64) -> (f64, f64, f64) {
+        let side = d.perp_dot(p - self.points[i]).signum();
         (dist, self.s[i] + t * len2.sqrt(), side * dist)
     }
 
@@ -246,6 +259,7 @@ impl<'a> Projector<'a> {
         // a segment's own box (its two ends) is tested before its projection's division and
         // roots.
         let mut lim = bound;
+        let mut best_d2 = f64::INFINITY;
         // A group's box holds its chunks' boxes, so its distance (the same monotone float
         // operations on wider bounds) is no more than theirs: it stands in for them in the
         // floor, and rules them all out when it is beyond the bound.
@@ -268,9 +282,16 @@ impl<'a> Projector<'a> {
                     if away((a.min(e), a.max(e))) > lim * lim {
                         continue;
                     }
-                    let seg = self.line.project_on(i, p);
-                    if seg.0 < best.0 {
-                        best = seg;
+                    // A square above the best one has a root no smaller (the root is
+                    // monotone): it cannot be less, so neither root nor the rest is taken.
+                    let foot = self.line.foot_on(i, p);
+                    if foot.0 > best_d2 {
+                        continue;
+                    }
+                    let dist = foot.0.sqrt();
+                    if dist < best.0 {
+                        best = self.line.finish_on(i, p, foot, dist);
+                        best_d2 = foot.0;
                         *hint = i;
                         lim = lim.min(best.0 + Self::MARGIN);
                     }
