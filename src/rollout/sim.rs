@@ -919,19 +919,57 @@ fn off_tracking(a: &Actor) -> f64 {
 /// rejoined its path; each corner beyond the band is booked at its own place along the route.
 /// Runs sharing a connector, start, box and turning radius are done once.
 fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
-    let mut done: std::collections::HashMap<[u64; 6], std::sync::Arc<Bend>> = std::collections::HashMap::new();
-    for a in actors.iter_mut().filter(|a| a.vehicle) {
+    // The first vehicle with each key runs; later ones take its bend.
+    let mut runs: Vec<DryRun> = vec![];
+    let mut run_of: Vec<Option<usize>> = vec![None; actors.len()];
+    let mut keys: std::collections::HashMap<[u64; 6], usize> = std::collections::HashMap::new();
+    for (i, a) in actors.iter().enumerate().filter(|(_, a)| a.vehicle) {
         let Some(j) = a.junction else { continue };
         let entry = j.exit - map.connectors[j.conn].path.length();
         let start = (entry - 10.0).max(a.s0.min(entry));
         let key = [j.conn as u64, start.to_bits(), j.exit.to_bits(), a.hl.to_bits(), a.hw.to_bits(), a.r_min.to_bits()];
-        if let Some(b) = done.get(&key) {
-            a.bend = Some(b.clone());
-            continue;
+        run_of[i] = Some(*keys.entry(key).or_insert_with(|| {
+            runs.push(DryRun::new(map, i, a, j, start));
+            runs.len() - 1
+        }));
+    }
+    // Each run is a long chain of dependent steps: the runs take a step each in turn, so that
+    // their chains overlap. A run's steps read only its own state, so each is the run it
+    // would be alone.
+    let mut steps = 0;
+    while steps < 2000 && runs.iter().any(|r| r.live) {
+        for r in runs.iter_mut().filter(|r| r.live) {
+            r.step(&actors[r.actor], dt);
         }
+        steps += 1;
+    }
+    let bends: Vec<std::sync::Arc<Bend>> = runs.into_iter().map(|r| std::sync::Arc::new(r.finish(actors))).collect();
+    for (a, r) in actors.iter_mut().zip(run_of) {
+        if let Some(r) = r {
+            a.bend = Some(bends[r].clone());
+        }
+    }
+}
+
+/// One dry run of `assign_bends`: its vehicle (track index), junction, the bend it fills, and
+/// its state between steps.
+struct DryRun {
+    actor: usize,
+    j: Junction,
+    b: Bend,
+    pos: DVec2,
+    yaw: f64,
+    s: f64,
+    /// The unit heading of `yaw`, taken once per step: the corners' and the next step's.
+    fwd: DVec2,
+    live: bool,
+}
+
+impl DryRun {
+    fn new(map: &Map, actor: usize, a: &Actor, j: Junction, start: f64) -> DryRun {
         let (kl, kr) = junction_bend(map, &a.path, j);
         let from = start - 2.0 * a.hl - 5.0;
-        let mut b = Bend {
+        let b = Bend {
             from,
             reach: vec![],
             widest: sweep(a, kl.max(kr)),
@@ -939,41 +977,51 @@ fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
             bounds: (DVec2::INFINITY, DVec2::NEG_INFINITY),
             spans: vec![],
         };
-        let (mut pos, mut yaw) = a.path.point(start, 0.0);
-        let mut s = start;
-        // The unit heading of `yaw`, taken once per step: the corners' and the next step's.
-        let mut fwd = DVec2::from_angle(yaw);
-        for _ in 0..2000 {
-            let v = a.path.cap(s).clamp(1.0, 15.0);
-            let k = pursuit(pos, fwd, a.path.point_fast(s + look_ahead(a, v), 0.0));
-            let dist = v * dt;
-            (pos, yaw) = steer(a, pos, yaw, k, dist, dt, 1.0);
-            let (ns, off, _, _) = a.path.frenet_dir(pos, s + dist);
-            s = ns;
-            let dir = DVec2::from_angle(yaw);
-            let corners = Obb { center: pos, yaw, length: 2.0 * a.hl, width: 2.0 * a.hw }.corners_along(dir);
-            let found = a.path.frenet_many(corners, corners.map(|q| s + (q - pos).dot(fwd)));
-            for (sq, dq, beyond) in found {
-                if beyond > 0.0 || dq.abs() <= a.hw {
-                    continue;
-                }
-                let m = (sq - from).max(0.0) as usize;
-                if b.reach.len() <= m {
-                    b.reach.resize(m + 1, (0.0, 0.0));
-                }
-                let (r, l) = &mut b.reach[m];
-                if dq > 0.0 {
-                    *l = l.max(dq - a.hw);
-                } else {
-                    *r = r.max(-dq - a.hw);
-                }
-                b.widest = b.widest.max(dq.abs() - a.hw);
+        let (pos, yaw) = a.path.point(start, 0.0);
+        DryRun { actor, j, b, pos, yaw, s: start, fwd: DVec2::from_angle(yaw), live: true }
+    }
+
+    /// One step of the run (`live` turns false at its end).
+    #[inline]
+    fn step(&mut self, a: &Actor, dt: f64) {
+        let (j, from) = (self.j, self.b.from);
+        let v = a.path.cap(self.s).clamp(1.0, 15.0);
+        let k = pursuit(self.pos, self.fwd, a.path.point_fast(self.s + look_ahead(a, v), 0.0));
+        let dist = v * dt;
+        (self.pos, self.yaw) = steer(a, self.pos, self.yaw, k, dist, dt, 1.0);
+        let (pos, yaw, fwd) = (self.pos, self.yaw, self.fwd);
+        let (ns, off, _, _) = a.path.frenet_dir(pos, self.s + dist);
+        let s = ns;
+        self.s = s;
+        let dir = DVec2::from_angle(yaw);
+        let corners = Obb { center: pos, yaw, length: 2.0 * a.hl, width: 2.0 * a.hw }.corners_along(dir);
+        let found = a.path.frenet_many(corners, corners.map(|q| s + (q - pos).dot(fwd)));
+        let b = &mut self.b;
+        for (sq, dq, beyond) in found {
+            if beyond > 0.0 || dq.abs() <= a.hw {
+                continue;
             }
-            fwd = dir;
-            if (s > j.exit + a.hl && off.abs() < 0.05) || s >= a.path.length() - 1.0 {
-                break;
+            let m = (sq - from).max(0.0) as usize;
+            if b.reach.len() <= m {
+                b.reach.resize(m + 1, (0.0, 0.0));
             }
+            let (r, l) = &mut b.reach[m];
+            if dq > 0.0 {
+                *l = l.max(dq - a.hw);
+            } else {
+                *r = r.max(-dq - a.hw);
+            }
+            b.widest = b.widest.max(dq.abs() - a.hw);
         }
+        self.fwd = dir;
+        if (s > j.exit + a.hl && off.abs() < 0.05) || s >= a.path.length() - 1.0 {
+            self.live = false;
+        }
+    }
+
+    /// The bend, with its slices and spans.
+    fn finish(self, actors: &[Actor]) -> Bend {
+        let (a, mut b) = (&actors[self.actor], self.b);
         // Reaches within the band's margin are the band's business.
         for (m, &(r, l)) in b.reach.iter().enumerate() {
             if r > SLICE_MIN || l > SLICE_MIN {
@@ -986,9 +1034,7 @@ fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
             }
         }
         b.index();
-        let b = std::sync::Arc::new(b);
-        done.insert(key, b.clone());
-        a.bend = Some(b);
+        b
     }
 }
 
