@@ -824,6 +824,8 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
     // Many agents share a connector (background traffic on one lane): each pair of connectors
     // is sampled once.
     let mut profiles = std::collections::HashMap::new();
+    let mut zones_of: std::collections::HashMap<(usize, usize, u64, u64), Vec<(f64, f64, f64)>> =
+        std::collections::HashMap::new();
     for (n, &i) in js.iter().enumerate() {
         for &j in &js[n + 1..] {
             let (a, b) = (&actors[i], &actors[j]);
@@ -835,20 +837,17 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
             // A long box swings wide of its path in a turn (a bus's front corner sweeps into the
             // next lane): the zone widens by each box's off-tracking.
             let gap = a.hw + b.hw + 0.5 + off_tracking(a) + off_tracking(b);
-            let za = shared_zones(
-                map,
-                (ji.conn, jj.conn),
-                profile(&mut profiles, map, ji.conn, jj.conn, gap),
-                gap,
-                2.0 * a.hl,
-            );
-            let zb = shared_zones(
-                map,
-                (jj.conn, ji.conn),
-                profile(&mut profiles, map, jj.conn, ji.conn, gap),
-                gap,
-                2.0 * b.hl,
-            );
+            let mut zones = |x: usize, y: usize, join: f64| {
+                // A pure function of these (the profile's samples within `gap` are the same
+                // whatever reach it was taken to): pairs of agents on the same connectors share it.
+                let key = (x, y, gap.to_bits(), join.to_bits());
+                zones_of
+                    .entry(key)
+                    .or_insert_with(|| shared_zones(map, (x, y), profile(&mut profiles, map, x, y, gap), gap, join))
+                    .clone()
+            };
+            let za = zones(ji.conn, jj.conn, 2.0 * a.hl);
+            let zb = zones(jj.conn, ji.conn, 2.0 * b.hl);
             let entry = |j: Junction| j.exit - map.connectors[j.conn].path.length();
             let (ei, ej) = (entry(ji), entry(jj));
             let (hi, hj) = (a.hl, b.hl);
@@ -1157,7 +1156,8 @@ fn shared_zones(map: &Map, (a, b): (usize, usize), profile: &Profile, gap: f64, 
         }
     }
     for z in &mut zones {
-        let (p, _) = map.connectors[a].path.pose_at(0.5 * (z.0 + z.1));
+        // `pose_at`'s point, without the heading's arctangent.
+        let p = map.connectors[a].path.point_at(0.5 * (z.0 + z.1));
         z.2 = map.connectors[b].path.project(p).0;
     }
     zones
