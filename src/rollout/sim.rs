@@ -824,8 +824,7 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
     // Many agents share a connector (background traffic on one lane): each pair of connectors
     // is sampled once.
     let mut profiles = std::collections::HashMap::new();
-    let mut zones_of: std::collections::HashMap<(usize, usize, u64, u64), Vec<(f64, f64, f64)>> =
-        std::collections::HashMap::new();
+    let mut zones_of: std::collections::HashMap<(usize, usize, u64, u64), Zones> = std::collections::HashMap::new();
     for (n, &i) in js.iter().enumerate() {
         for &j in &js[n + 1..] {
             let (a, b) = (&actors[i], &actors[j]);
@@ -1141,11 +1140,15 @@ fn profile<'p>(
     &entry.1
 }
 
+/// `shared_zones`' answer: per stretch, its first and last arc length and where its middle
+/// projects onto the other connector.
+type Zones = Vec<(f64, f64, f64)>;
+
 /// The stretches of connector `a` (arc lengths along it) whose samples in `profile` lie within
 /// `gap` of the other path, those less than `join` apart taken as one; with each, where its
 /// middle projects onto `b`. Two paths can meet twice (a roundabout exit beside
 /// another's entry, then the ring).
-fn shared_zones(map: &Map, (a, b): (usize, usize), profile: &Profile, gap: f64, join: f64) -> Vec<(f64, f64, f64)> {
+fn shared_zones(map: &Map, (a, b): (usize, usize), profile: &Profile, gap: f64, join: f64) -> Zones {
     let mut zones: Vec<(f64, f64, f64)> = vec![];
     for &(sa, d, _) in profile {
         if d < gap {

@@ -264,7 +264,8 @@ pub(super) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
             if natural.is_some_and(|n| n <= fd) {
                 cost += 50.0;
             }
-            let plan = Plan { struck: k.st, rel_pos, rel_yaw, t_depart: fd as f64 * dt, t_impact: t_imp, frame: fi, delta };
+            let plan =
+                Plan { struck: k.st, rel_pos, rel_yaw, t_depart: fd as f64 * dt, t_impact: t_imp, frame: fi, delta };
             Some((cost, plan))
         }
     };
