@@ -231,6 +231,18 @@ impl Path {
         p + t.normalize_or(DVec2::X).perp() * d
     }
 
+    /// `point_fast(s, 0.0)`, bit for bit, without normalising the tangent: scaled by zero, the
+    /// unit tangent leaves only zeros whose signs are its components' (a positive finite factor
+    /// keeps them), and `normalize_or` takes its fallback exactly where the squared length is
+    /// not strictly between zero and infinity.
+    #[inline]
+    pub fn point_fast_on(&self, s: f64) -> DVec2 {
+        let (p, t) = self.at_vec(s);
+        let l2 = t.length_squared();
+        let n = if l2 > 0.0 && l2 < f64::INFINITY { t } else { DVec2::X };
+        p + n.perp() * 0.0
+    }
+
     /// Arc length and left offset of `p`, searched from `guess` by Newton steps along the
     /// tangent (O(1), good near the guess), how far beyond either end `p` lies, and the path
     /// heading there.
@@ -761,6 +773,25 @@ mod tests {
             }
         }
         assert!(n > 50, "points beyond the ends are covered: {n}");
+    }
+
+    /// `point_fast_on` is `point_fast(s, 0.0)` bit for bit, zeros' signs included: on paths
+    /// through the origin along both axes, and on ones whose tangents cannot be normalised.
+    #[test]
+    fn point_fast_on_is_point_fast_at_zero() {
+        let paths = [
+            Path::new(&[DVec2::new(-0.0, -20.0), DVec2::new(-0.0, 0.0), DVec2::new(20.0, 0.0), DVec2::new(20.0, 30.0)]),
+            Path::new(&[DVec2::new(-5.0, 5.0), DVec2::new(5.0, -5.0), DVec2::new(0.0, -0.0)]),
+            Path::new(&[DVec2::ONE]),
+            Path::new(&[DVec2::ZERO, DVec2::new(1e-160, 0.0), DVec2::new(0.0, 1e-170), DVec2::new(3.0, -0.0)]),
+        ];
+        let bits = |q: DVec2| (q.x.to_bits(), q.y.to_bits());
+        for p in &paths {
+            for k in -10..800 {
+                let s = k as f64 * 0.0625;
+                assert_eq!(bits(p.point_fast_on(s)), bits(p.point_fast(s, 0.0)), "{s}");
+            }
+        }
     }
 
     /// On a straight run, `frenet_dir` from any guess inside the run lands on the point's

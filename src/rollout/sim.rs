@@ -984,12 +984,11 @@ impl DryRun {
     fn step(&mut self, a: &Actor, dt: f64) {
         let (j, from) = (self.j, self.b.from);
         let v = a.path.cap(self.s).clamp(1.0, 15.0);
-        let k = pursuit(self.pos, self.fwd, a.path.point_fast(self.s + look_ahead(a, v), 0.0));
+        let k = pursuit(self.pos, self.fwd, a.path.point_fast_on(self.s + look_ahead(a, v)));
         let dist = v * dt;
         (self.pos, self.yaw) = steer(a, self.pos, self.yaw, k, dist, dt, 1.0);
         let (pos, yaw, fwd) = (self.pos, self.yaw, self.fwd);
-        let (ns, off, _, _) = a.path.frenet_dir(pos, self.s + dist);
-        let s = ns;
+        let [(s, off, _)] = a.path.frenet_many([pos], [self.s + dist]);
         self.s = s;
         let dir = DVec2::from_angle(yaw);
         let corners = Obb { center: pos, yaw, length: 2.0 * a.hl, width: 2.0 * a.hw }.corners_along(dir);
