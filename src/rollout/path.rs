@@ -143,6 +143,15 @@ impl Path {
         (self.len() - 1) as f64 * STEP
     }
 
+    /// An identity of the samples `at` reads for every arc length up to `hi`, where they are all
+    /// the route's shared ones (below `cut`, short of the end, so no clamp differs between
+    /// paths): the address of the route's grid. Paths held at the same time giving the same key
+    /// give the same `at(s)` for every `s <= hi`, bit for bit (a grid is not changed while a path
+    /// holds it: the resampler copies it to grow it).
+    pub fn shared_upto(&self, hi: f64) -> Option<usize> {
+        (hi / STEP + 2.0 <= self.cut as f64).then(|| Rc::as_ptr(&self.grid) as usize)
+    }
+
     /// Number of samples.
     #[inline]
     fn len(&self) -> usize {

@@ -825,6 +825,22 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
     // is sampled once.
     let mut profiles = std::collections::HashMap::new();
     let mut zones_of: std::collections::HashMap<(usize, usize, u64, u64), Zones> = std::collections::HashMap::new();
+    // `sweep_entry` reads the sweep, the other's box size and its route's points from `lo` to
+    // `hi`: where those points are its route's shared samples, agents on one route with one
+    // sweep ask the same question.
+    let mut entries: std::collections::HashMap<[u64; 6], Option<f64>> = std::collections::HashMap::new();
+    let mut entry_of = |a: &Actor, b: &Actor, lo: f64, hi: f64| -> Option<f64> {
+        let (Some(bend), Some(grid)) = (&a.bend, b.path.shared_upto(hi)) else { return sweep_entry(a, b, lo, hi) };
+        let key = [
+            std::sync::Arc::as_ptr(bend) as usize as u64,
+            grid as u64,
+            b.hl.to_bits(),
+            b.hw.to_bits(),
+            lo.to_bits(),
+            hi.to_bits(),
+        ];
+        *entries.entry(key).or_insert_with(|| sweep_entry(a, b, lo, hi))
+    };
     for (n, &i) in js.iter().enumerate() {
         for &j in &js[n + 1..] {
             let (a, b) = (&actors[i], &actors[j]);
@@ -885,14 +901,14 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
                 let kj0 = actors[j].crossings.len() - n_new;
                 if let Some(k) = k0 {
                     let enter = actors[i].crossings[k].enter;
-                    if let Some(s) = sweep_entry(&actors[j], &actors[i], ei - 2.0 * hi - 20.0, enter) {
+                    if let Some(s) = entry_of(&actors[j], &actors[i], ei - 2.0 * hi - 20.0, enter) {
                         actors[i].crossings[k].enter = s;
                         actors[j].crossings[kj0 + k - first].other_enter = s;
                     }
                 }
                 if let Some(k) = k1 {
                     let enter = actors[i].crossings[k].other_enter;
-                    if let Some(s) = sweep_entry(&actors[i], &actors[j], ej - 2.0 * hj - 20.0, enter) {
+                    if let Some(s) = entry_of(&actors[i], &actors[j], ej - 2.0 * hj - 20.0, enter) {
                         actors[i].crossings[k].other_enter = s;
                         actors[j].crossings[kj0 + k - first].enter = s;
                     }
