@@ -149,7 +149,7 @@ impl Path {
     /// give the same `at(s)` for every `s <= hi`, bit for bit (a grid is not changed while a path
     /// holds it: the resampler copies it to grow it).
     pub fn shared_upto(&self, hi: f64) -> Option<usize> {
-        (hi / STEP + 2.0 <= self.cut as f64).then(|| Rc::as_ptr(&self.grid) as usize)
+        (hi / STEP + 2.0 <= self.cut as f64).then_some(Rc::as_ptr(&self.grid) as usize)
     }
 
     /// Number of samples.
@@ -801,6 +801,38 @@ mod tests {
                 assert_eq!(bits(p.point_fast_on(s)), bits(p.point_fast(s, 0.0)), "{s}");
             }
         }
+    }
+
+    /// Paths on one route that give the same `shared_upto` key read the same points and headings
+    /// up to it, bit for bit (a grown grid is a copy, with a key of its own); a key is given only
+    /// as far as the shared samples reach, and paths resampled apart never share one.
+    #[test]
+    fn shared_upto_keys_equal_points() {
+        let mut pts = vec![DVec2::new(-40.0, 2.0), DVec2::new(0.0, 2.0)];
+        pts.extend((1..=30).map(|i| DVec2::new(0.0, 32.0) + DVec2::from_angle(-1.4 + i as f64 * 0.05) * 30.0));
+        let mut shared = Resampler::new(&pts);
+        let paths: Vec<Path> = [80.0, 30.0, 55.5, 1e9].iter().map(|&u| shared.path(u)).collect();
+        let alone = Resampler::new(&pts).path(80.0);
+        let bits = |(p, h): (DVec2, f64)| (p.x.to_bits(), p.y.to_bits(), h.to_bits());
+        let mut compared = 0;
+        for a in &paths {
+            assert!(a.shared_upto(a.length() + 1.0).is_none());
+            assert_ne!(a.shared_upto(-5.0), alone.shared_upto(-5.0));
+            for b in &paths {
+                for hi in [-3.0, 0.0, 10.0, 25.0, 26.3, 50.0, 77.0, 200.0] {
+                    if let (Some(x), Some(y)) = (a.shared_upto(hi), b.shared_upto(hi))
+                        && x == y
+                    {
+                        for k in 0..=200 {
+                            let s = hi - k as f64 * 0.37;
+                            assert_eq!(bits(a.at(s)), bits(b.at(s)), "{s} up to {hi}");
+                            compared += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(compared > 5000, "{compared}");
     }
 
     /// On a straight run, `frenet_dir` from any guess inside the run lands on the point's
