@@ -1409,6 +1409,8 @@ struct Sim<'a, 'b> {
     next: Vec<State>,
     /// Unit heading of every agent in `cur`: pair checks use dot and cross products, not trig.
     dirs: Vec<DVec2>,
+    /// The bits of the heading each of `dirs` was taken from.
+    dir_yaw: Vec<Option<u64>>,
     /// Per agent, this frame: `yield_state`, with the right-of-way rule's hold folded in.
     yielding: Vec<(Option<f64>, bool)>,
     /// Per agent, this frame: held by the right-of-way rule or at the kerb (`right_of_way`).
@@ -1490,6 +1492,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             dt,
             next: cur.clone(),
             dirs: cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect(),
+            dir_yaw: vec![],
             yielding: vec![(None, false); actors.len()],
             ruled: vec![false; actors.len()],
             held: vec![None; actors.len()],
@@ -1545,8 +1548,15 @@ impl<'a, 'b> Sim<'a, 'b> {
         }
         for f in self.first..out.frames {
             let t = (f - 1) as f64 * self.dt;
-            self.dirs.clear();
-            self.dirs.extend(self.cur.iter().map(|s| DVec2::from_angle(s.yaw)));
+            // An agent whose heading has not changed (bit for bit) keeps its unit heading: the
+            // same call on the same bits. Standing and straight-driving agents take no sine.
+            self.dirs.resize(self.cur.len(), DVec2::X);
+            self.dir_yaw.resize(self.cur.len(), None);
+            for ((d, y), st) in self.dirs.iter_mut().zip(&mut self.dir_yaw).zip(&self.cur) {
+                if *y != Some(st.yaw.to_bits()) {
+                    (*d, *y) = (DVec2::from_angle(st.yaw), Some(st.yaw.to_bits()));
+                }
+            }
             self.easing.clear();
             for (j, (o, b)) in self.cur.iter().zip(self.actors.iter()).enumerate() {
                 if o.triggered && matches!(b.lateral, Lat::Away { .. }) {
