@@ -59,11 +59,43 @@ impl Polyline {
             Ok(i) => i.min(n - 2),
             Err(i) => i.saturating_sub(1).min(n - 2),
         };
+        self.point_dir_on(i, s)
+    }
+
+    /// `point_dir_at`'s answer on segment `i` for a clamped `s`.
+    #[inline(always)]
+    fn point_dir_on(&self, i: usize, s: f64) -> (DVec2, DVec2) {
         let (a, b) = (self.points[i], self.points[i + 1]);
         let seg = self.s[i + 1] - self.s[i];
         let t = if seg > 0.0 { (s - self.s[i]) / seg } else { 0.0 };
         let d = b - a;
         (a + d * t, d)
+    }
+
+    /// `point_at` for arc lengths asked mostly in increasing order (sampling along the line):
+    /// where the arc lengths increase strictly (under `total_cmp`), the segment the bisection
+    /// finds is the last one starting at or before `s`, found here by walking forward from the
+    /// last answer's (`seg`; from the start where `s` lies before it). Else the bisection.
+    pub fn point_at_walk(&self, s: f64, seg: &mut Option<usize>, strict: bool) -> DVec2 {
+        let n = self.points.len();
+        if n < 2 || !strict {
+            return self.point_at(s);
+        }
+        let s = s.clamp(0.0, self.length());
+        let mut i = seg.unwrap_or(0).min(n - 1);
+        if self.s[i].total_cmp(&s).is_gt() {
+            i = 0;
+        }
+        while i + 1 < n && self.s[i + 1].total_cmp(&s).is_le() {
+            i += 1;
+        }
+        *seg = Some(i);
+        self.point_dir_on(i.min(n - 2), s).0
+    }
+
+    /// Whether the arc lengths increase strictly (under `total_cmp`), for `point_at_walk`.
+    pub fn strictly_increasing(&self) -> bool {
+        self.s.windows(2).all(|w| w[0].total_cmp(&w[1]).is_lt())
     }
 
     /// Point at arc length `s` shifted `offset` metres to the left of the direction of travel.
@@ -88,13 +120,26 @@ impl Polyline {
     /// offset (left positive). `project` keeps the first segment of least distance.
     #[inline(always)]
     fn project_on(&self, i: usize, p: DVec2) -> (f64, f64, f64) {
+        let foot = self.foot_on(i, p);
+        self.finish_on(i, p, foot, foot.0.sqrt())
+    }
+
+    /// `project_on`'s first half: the squared distance (`p.distance(q)` is its root), and what
+    /// `finish_on` needs (the foot's parameter, the segment's squared length and vector).
+    #[inline(always)]
+    fn foot_on(&self, i: usize, p: DVec2) -> (f64, f64, f64, DVec2) {
         let (a, b) = (self.points[i], self.points[i + 1]);
         let d = b - a;
         let len2 = d.length_squared();
         let t = if len2 > 0.0 { ((p - a).dot(d) / len2).clamp(0.0, 1.0) } else { 0.0 };
         let q = a + d * t;
-        let dist = p.distance(q);
-        let side = d.perp_dot(p - a).signum();
+        ((p - q).length_squared(), t, len2, d)
+    }
+
+    /// `project_on` from `foot_on` and the distance.
+    #[inline(always)]
+    fn finish_on(&self, i: usize, p: DVec2, (_, t, len2, d): (f64, f64, f64, DVec2), dist: f64) -> (f64, f64, f64) {
+        let side = d.perp_dot(p - self.points[i]).signum();
         (dist, self.s[i] + t * len2.sqrt(), side * dist)
     }
 
@@ -122,6 +167,9 @@ pub struct Projector<'a> {
     line: &'a Polyline,
     /// Per chunk of `CHUNK` segments, the bounding box of their points.
     boxes: Vec<(DVec2, DVec2)>,
+    /// Per run of `GROUP` chunks, the bounding box of their boxes: a point far from a run passes
+    /// over its chunks with one test.
+    groups: Vec<(DVec2, DVec2)>,
     /// The bounding box of every point.
     whole: (DVec2, DVec2),
     /// Every coordinate finite and within `FAR`, where `MARGIN` bounds the rounding.
@@ -130,6 +178,7 @@ pub struct Projector<'a> {
 
 impl<'a> Projector<'a> {
     const CHUNK: usize = 8;
+    const GROUP: usize = 8;
     /// Far above the rounding of distances between points within `FAR` (~1e-6 m).
     const MARGIN: f64 = 0.01;
     const FAR: f64 = 1e9;
@@ -140,12 +189,16 @@ impl<'a> Projector<'a> {
         let bound = |pts: &[DVec2]| {
             pts.iter().fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), &q| (lo.min(q), hi.max(q)))
         };
-        let boxes = (0..segs.div_ceil(Self::CHUNK))
+        let boxes: Vec<(DVec2, DVec2)> = (0..segs.div_ceil(Self::CHUNK))
             .map(|c| bound(&line.points[c * Self::CHUNK..((c + 1) * Self::CHUNK + 1).min(n)]))
+            .collect();
+        let groups = boxes
+            .chunks(Self::GROUP)
+            .map(|g| g.iter().fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), b| (lo.min(b.0), hi.max(b.1))))
             .collect();
         // Compared one by one: `max_element` would pass over a NaN.
         let tame = line.points.iter().all(|q| q.x.abs() < Self::FAR && q.y.abs() < Self::FAR);
-        Projector { line, boxes, whole: bound(&line.points), tame }
+        Projector { line, boxes, groups, whole: bound(&line.points), tame }
     }
 
     /// `self.line.project(p)`; `hint` is a segment to try first (the last answer's, for points
@@ -201,17 +254,47 @@ impl<'a> Projector<'a> {
             return (best, whole.sqrt() - Self::MARGIN);
         }
         let mut nearest_box = f64::INFINITY;
-        for (c, &b) in self.boxes.iter().enumerate() {
-            let d2 = away(b);
-            nearest_box = nearest_box.min(d2);
-            if d2 > bound * bound {
+        // Once a segment is found, one farther than it by the margin cannot be the first of
+        // least distance either (`project` keeps the first under `<`): the bound tightens, and
+        // a segment's own box (its two ends) is tested before its projection's division and
+        // roots.
+        let mut lim = bound;
+        let mut best_d2 = f64::INFINITY;
+        // A group's box holds its chunks' boxes, so its distance (the same monotone float
+        // operations on wider bounds) is no more than theirs: it stands in for them in the
+        // floor, and rules them all out when it is beyond the bound.
+        for (g, &gb) in self.groups.iter().enumerate() {
+            let d2 = away(gb);
+            if d2 > lim * lim {
+                nearest_box = nearest_box.min(d2);
                 continue;
             }
-            for i in c * Self::CHUNK..((c + 1) * Self::CHUNK).min(segs) {
-                let seg = self.line.project_on(i, p);
-                if seg.0 < best.0 {
-                    best = seg;
-                    *hint = i;
+            let first = g * Self::GROUP;
+            for (c, &b) in self.boxes[first..(first + Self::GROUP).min(self.boxes.len())].iter().enumerate() {
+                let c = first + c;
+                let d2 = away(b);
+                nearest_box = nearest_box.min(d2);
+                if d2 > lim * lim {
+                    continue;
+                }
+                for i in c * Self::CHUNK..((c + 1) * Self::CHUNK).min(segs) {
+                    let (a, e) = (self.line.points[i], self.line.points[i + 1]);
+                    if away((a.min(e), a.max(e))) > lim * lim {
+                        continue;
+                    }
+                    // A square above the best one has a root no smaller (the root is
+                    // monotone): it cannot be less, so neither root nor the rest is taken.
+                    let foot = self.line.foot_on(i, p);
+                    if foot.0 > best_d2 {
+                        continue;
+                    }
+                    let dist = foot.0.sqrt();
+                    if dist < best.0 {
+                        best = self.line.finish_on(i, p, foot, dist);
+                        best_d2 = foot.0;
+                        *hint = i;
+                        lim = lim.min(best.0 + Self::MARGIN);
+                    }
                 }
             }
         }
@@ -404,6 +487,26 @@ mod tests {
             }
         }
         assert!(pruned > 5000, "points far from the line are answered without projecting: {pruned}");
+    }
+
+    /// `point_at_walk` gives `point_at`'s bits for arc lengths in order, out of order, at and
+    /// beyond the ends, -0 and NaN; and falls back to it where arc lengths repeat.
+    #[test]
+    fn point_at_walk_is_point_at() {
+        let ring: Vec<DVec2> = (0..=120).map(|i| DVec2::from_angle(i as f64 * 0.05) * 18.0).collect();
+        let mut repeated = ring.clone();
+        repeated.insert(40, repeated[40]);
+        let mut asks: Vec<f64> = (0..=300).map(|k| k as f64 * 0.37 - 3.0).collect();
+        asks.extend([5.0, 2.5, 200.0, -0.0, 0.0, f64::NAN, -f64::NAN, 40.0, 18.0 * 0.05 * 7.0, 1e300, -1e300]);
+        for pts in [ring, repeated, vec![DVec2::ZERO, DVec2::X], vec![DVec2::ONE], vec![]] {
+            let l = Polyline::new(pts);
+            let strict = l.strictly_increasing();
+            let mut seg = None;
+            for &s in &asks {
+                let (a, b) = (l.point_at(s), l.point_at_walk(s, &mut seg, strict));
+                assert_eq!((a.x.to_bits(), a.y.to_bits()), (b.x.to_bits(), b.y.to_bits()), "{s}");
+            }
+        }
     }
 
     #[test]

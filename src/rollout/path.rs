@@ -143,6 +143,15 @@ impl Path {
         (self.len() - 1) as f64 * STEP
     }
 
+    /// An identity of the samples `at` reads for every arc length up to `hi`, where they are all
+    /// the route's shared ones (below `cut`, short of the end, so no clamp differs between
+    /// paths): the address of the route's grid. Paths held at the same time giving the same key
+    /// give the same `at(s)` for every `s <= hi`, bit for bit (a grid is not changed while a path
+    /// holds it: the resampler copies it to grow it).
+    pub fn shared_upto(&self, hi: f64) -> Option<usize> {
+        (hi / STEP + 2.0 <= self.cut as f64).then_some(Rc::as_ptr(&self.grid) as usize)
+    }
+
     /// Number of samples.
     #[inline]
     fn len(&self) -> usize {
@@ -153,6 +162,18 @@ impl Path {
     #[inline(always)]
     fn pick<T: Copy>(&self, i: usize, shared: &[T], own: &[T]) -> T {
         if i < self.cut { shared[i] } else { own[i - self.cut] }
+    }
+
+    /// Samples `i` and `i + 1` of a per-sample array: one test for where they lie, and one
+    /// bounds check, where both are the route's (most reads).
+    #[inline(always)]
+    fn pick2<T: Copy>(&self, i: usize, shared: &[T], own: &[T]) -> (T, T) {
+        if i + 1 < self.cut {
+            let w = &shared[i..i + 2];
+            (w[0], w[1])
+        } else {
+            (self.pick(i, shared, own), self.pick(i + 1, shared, own))
+        }
     }
 
     #[inline(always)]
@@ -175,7 +196,7 @@ impl Path {
         self.pick(i, &self.grid.curvature, &self.curvature)
     }
 
-    #[inline]
+    #[inline(always)]
     fn locate(&self, s: f64) -> (usize, f64) {
         // Through i64, not usize: the same values (below 2^63), but one instruction each way on
         // x86-64 where unsigned conversions take several, on the projections' dependent chain.
@@ -219,6 +240,18 @@ impl Path {
         p + t.normalize_or(DVec2::X).perp() * d
     }
 
+    /// `point_fast(s, 0.0)`, bit for bit, without normalising the tangent: scaled by zero, the
+    /// unit tangent leaves only zeros whose signs are its components' (a positive finite factor
+    /// keeps them), and `normalize_or` takes its fallback exactly where the squared length is
+    /// not strictly between zero and infinity.
+    #[inline]
+    pub fn point_fast_on(&self, s: f64) -> DVec2 {
+        let (p, t) = self.at_vec(s);
+        let l2 = t.length_squared();
+        let n = if l2 > 0.0 && l2 < f64::INFINITY { t } else { DVec2::X };
+        p + n.perp() * 0.0
+    }
+
     /// Arc length and left offset of `p`, searched from `guess` by Newton steps along the
     /// tangent (O(1), good near the guess), how far beyond either end `p` lies, and the path
     /// heading there.
@@ -252,6 +285,38 @@ impl Path {
         (s, off.dot(t.perp()), beyond, t.normalize_or(DVec2::X))
     }
 
+    /// `frenet_dir` of each point from its guess, without the tangent: the searches run side by
+    /// side, a Newton step of each per round, so that their dependent chains overlap. Each
+    /// takes the steps `frenet_dir` takes on the same values (one that has converged waits,
+    /// its step's result dropped), so each result is `frenet_dir`'s, bit for bit.
+    #[inline]
+    pub fn frenet_many<const N: usize>(&self, ps: [DVec2; N], guesses: [f64; N]) -> [(f64, f64, f64); N] {
+        let len = self.length();
+        let mut s = guesses.map(|g| g.clamp(0.0, len));
+        let mut along = [0.0; N];
+        let mut live = [true; N];
+        for _ in 0..4 {
+            if !live.contains(&true) {
+                break;
+            }
+            for k in 0..N {
+                let (q, t) = self.at_vec(s[k]);
+                let a = (ps[k] - q).dot(t);
+                let ns = (s[k] + a).clamp(0.0, len);
+                let done = (ns - s[k]).abs() < 0.02;
+                if live[k] {
+                    (along[k], s[k], live[k]) = (a, ns, !done);
+                }
+            }
+        }
+        std::array::from_fn(|k| {
+            let (q, t) = self.at_vec(s[k]);
+            let off = ps[k] - q;
+            let beyond = if s[k] <= 0.0 || s[k] >= len { along[k].abs().min(off.dot(t).abs()) } else { 0.0 };
+            (s[k], off.dot(t.perp()), beyond)
+        })
+    }
+
     /// The straight run of the path around arc length `s`, if `s` lies inside one at least a metre
     /// long.
     pub fn straight_run(&self, s: f64) -> Option<Line> {
@@ -268,10 +333,12 @@ impl Path {
         Some(Line { origin: self.pt(a), s0: a as f64 * STEP, dir: self.tan(a), lo, hi })
     }
 
-    #[inline]
+    #[inline(always)]
     fn at_vec(&self, s: f64) -> (DVec2, DVec2) {
         let (i, u) = self.locate(s);
-        (self.pt(i).lerp(self.pt(i + 1), u), self.tan(i).lerp(self.tan(i + 1), u))
+        let (p0, p1) = self.pick2(i, &self.grid.pts, &self.pts);
+        let (t0, t1) = self.pick2(i, &self.grid.tangent, &self.tangent);
+        (p0.lerp(p1, u), t0.lerp(t1, u))
     }
 }
 
@@ -685,6 +752,87 @@ mod tests {
                 assert_eq!(bits(a), bits(&Resampler::new(&pts).path(*u)), "kept, until {u}");
             }
         }
+    }
+
+    /// `frenet_many` is `frenet_dir` for each point, bit for bit: points on, beside and beyond
+    /// the path (both ends, where the search clamps), from near and far guesses, on a path that
+    /// reads its route's shared samples and its own.
+    #[test]
+    fn frenet_many_is_frenet_dir_each() {
+        let mut pts = vec![DVec2::new(-40.0, 2.0), DVec2::new(0.0, 2.0)];
+        pts.extend((1..=30).map(|i| DVec2::new(0.0, 32.0) + DVec2::from_angle(-1.4 + i as f64 * 0.05) * 30.0));
+        let mut shared = Resampler::new(&pts);
+        let _longer = shared.path(1e9);
+        let p = shared.path(70.0);
+        assert!(p.cut > 0 && p.cut < p.len(), "reads shared and own samples");
+        let bits = |(s, d, b): (f64, f64, f64)| [s.to_bits(), d.to_bits(), b.to_bits()];
+        let mut n = 0;
+        for k in 0..600 {
+            let along = k as f64 * 0.137 - 8.0;
+            let (q, h) = p.at(along);
+            let ps: [DVec2; 4] = std::array::from_fn(|c| {
+                q + DVec2::from_angle(h + c as f64 * 1.3) * (0.3 + (k % 9) as f64 * (1.0 + c as f64))
+            });
+            let guesses: [f64; 4] = std::array::from_fn(|c| along + ((k * 5 + c * 3) % 17) as f64 - 8.0);
+            let many = p.frenet_many(ps, guesses);
+            for c in 0..4 {
+                let (s, d, b, _) = p.frenet_dir(ps[c], guesses[c]);
+                assert_eq!(bits(many[c]), bits((s, d, b)), "{:?} from {}", ps[c], guesses[c]);
+                n += usize::from(b > 0.0);
+            }
+        }
+        assert!(n > 50, "points beyond the ends are covered: {n}");
+    }
+
+    /// `point_fast_on` is `point_fast(s, 0.0)` bit for bit, zeros' signs included: on paths
+    /// through the origin along both axes, and on ones whose tangents cannot be normalised.
+    #[test]
+    fn point_fast_on_is_point_fast_at_zero() {
+        let paths = [
+            Path::new(&[DVec2::new(-0.0, -20.0), DVec2::new(-0.0, 0.0), DVec2::new(20.0, 0.0), DVec2::new(20.0, 30.0)]),
+            Path::new(&[DVec2::new(-5.0, 5.0), DVec2::new(5.0, -5.0), DVec2::new(0.0, -0.0)]),
+            Path::new(&[DVec2::ONE]),
+            Path::new(&[DVec2::ZERO, DVec2::new(1e-160, 0.0), DVec2::new(0.0, 1e-170), DVec2::new(3.0, -0.0)]),
+        ];
+        let bits = |q: DVec2| (q.x.to_bits(), q.y.to_bits());
+        for p in &paths {
+            for k in -10..800 {
+                let s = k as f64 * 0.0625;
+                assert_eq!(bits(p.point_fast_on(s)), bits(p.point_fast(s, 0.0)), "{s}");
+            }
+        }
+    }
+
+    /// Paths on one route that give the same `shared_upto` key read the same points and headings
+    /// up to it, bit for bit (a grown grid is a copy, with a key of its own); a key is given only
+    /// as far as the shared samples reach, and paths resampled apart never share one.
+    #[test]
+    fn shared_upto_keys_equal_points() {
+        let mut pts = vec![DVec2::new(-40.0, 2.0), DVec2::new(0.0, 2.0)];
+        pts.extend((1..=30).map(|i| DVec2::new(0.0, 32.0) + DVec2::from_angle(-1.4 + i as f64 * 0.05) * 30.0));
+        let mut shared = Resampler::new(&pts);
+        let paths: Vec<Path> = [80.0, 30.0, 55.5, 1e9].iter().map(|&u| shared.path(u)).collect();
+        let alone = Resampler::new(&pts).path(80.0);
+        let bits = |(p, h): (DVec2, f64)| (p.x.to_bits(), p.y.to_bits(), h.to_bits());
+        let mut compared = 0;
+        for a in &paths {
+            assert!(a.shared_upto(a.length() + 1.0).is_none());
+            assert_ne!(a.shared_upto(-5.0), alone.shared_upto(-5.0));
+            for b in &paths {
+                for hi in [-3.0, 0.0, 10.0, 25.0, 26.3, 50.0, 77.0, 200.0] {
+                    if let (Some(x), Some(y)) = (a.shared_upto(hi), b.shared_upto(hi))
+                        && x == y
+                    {
+                        for k in 0..=200 {
+                            let s = hi - k as f64 * 0.37;
+                            assert_eq!(bits(a.at(s)), bits(b.at(s)), "{s} up to {hi}");
+                            compared += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(compared > 5000, "{compared}");
     }
 
     /// On a straight run, `frenet_dir` from any guess inside the run lands on the point's

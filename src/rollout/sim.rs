@@ -842,6 +842,23 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
     // Many agents share a connector (background traffic on one lane): each pair of connectors
     // is sampled once.
     let mut profiles = std::collections::HashMap::new();
+    let mut zones_of: std::collections::HashMap<(usize, usize, u64, u64), Zones> = std::collections::HashMap::new();
+    // `sweep_entry` reads the sweep, the other's box size and its route's points from `lo` to
+    // `hi`: where those points are its route's shared samples, agents on one route with one
+    // sweep ask the same question.
+    let mut entries: std::collections::HashMap<[u64; 6], Option<f64>> = std::collections::HashMap::new();
+    let mut entry_of = |a: &Actor, b: &Actor, lo: f64, hi: f64| -> Option<f64> {
+        let (Some(bend), Some(grid)) = (&a.bend, b.path.shared_upto(hi)) else { return sweep_entry(a, b, lo, hi) };
+        let key = [
+            std::sync::Arc::as_ptr(bend) as usize as u64,
+            grid as u64,
+            b.hl.to_bits(),
+            b.hw.to_bits(),
+            lo.to_bits(),
+            hi.to_bits(),
+        ];
+        *entries.entry(key).or_insert_with(|| sweep_entry(a, b, lo, hi))
+    };
     for (n, &i) in js.iter().enumerate() {
         for &j in &js[n + 1..] {
             let (a, b) = (&actors[i], &actors[j]);
@@ -853,20 +870,17 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
             // A long box swings wide of its path in a turn (a bus's front corner sweeps into the
             // next lane): the zone widens by each box's off-tracking.
             let gap = a.hw + b.hw + 0.5 + off_tracking(a) + off_tracking(b);
-            let za = shared_zones(
-                map,
-                (ji.conn, jj.conn),
-                profile(&mut profiles, map, ji.conn, jj.conn, gap),
-                gap,
-                2.0 * a.hl,
-            );
-            let zb = shared_zones(
-                map,
-                (jj.conn, ji.conn),
-                profile(&mut profiles, map, jj.conn, ji.conn, gap),
-                gap,
-                2.0 * b.hl,
-            );
+            let mut zones = |x: usize, y: usize, join: f64| {
+                // A pure function of these (the profile's samples within `gap` are the same
+                // whatever reach it was taken to): pairs of agents on the same connectors share it.
+                let key = (x, y, gap.to_bits(), join.to_bits());
+                zones_of
+                    .entry(key)
+                    .or_insert_with(|| shared_zones(map, (x, y), profile(&mut profiles, map, x, y, gap), gap, join))
+                    .clone()
+            };
+            let za = zones(ji.conn, jj.conn, 2.0 * a.hl);
+            let zb = zones(jj.conn, ji.conn, 2.0 * b.hl);
             let entry = |j: Junction| j.exit - map.connectors[j.conn].path.length();
             let (ei, ej) = (entry(ji), entry(jj));
             let (hi, hj) = (a.hl, b.hl);
@@ -905,14 +919,14 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
                 let kj0 = actors[j].crossings.len() - n_new;
                 if let Some(k) = k0 {
                     let enter = actors[i].crossings[k].enter;
-                    if let Some(s) = sweep_entry(&actors[j], &actors[i], ei - 2.0 * hi - 20.0, enter) {
+                    if let Some(s) = entry_of(&actors[j], &actors[i], ei - 2.0 * hi - 20.0, enter) {
                         actors[i].crossings[k].enter = s;
                         actors[j].crossings[kj0 + k - first].other_enter = s;
                     }
                 }
                 if let Some(k) = k1 {
                     let enter = actors[i].crossings[k].other_enter;
-                    if let Some(s) = sweep_entry(&actors[i], &actors[j], ej - 2.0 * hj - 20.0, enter) {
+                    if let Some(s) = entry_of(&actors[i], &actors[j], ej - 2.0 * hj - 20.0, enter) {
                         actors[i].crossings[k].other_enter = s;
                         actors[j].crossings[kj0 + k - first].enter = s;
                     }
@@ -937,19 +951,57 @@ fn off_tracking(a: &Actor) -> f64 {
 /// rejoined its path; each corner beyond the band is booked at its own place along the route.
 /// Runs sharing a connector, start, box and turning radius are done once.
 fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
-    let mut done: std::collections::HashMap<[u64; 6], std::sync::Arc<Bend>> = std::collections::HashMap::new();
-    for a in actors.iter_mut().filter(|a| a.vehicle) {
+    // The first vehicle with each key runs; later ones take its bend.
+    let mut runs: Vec<DryRun> = vec![];
+    let mut run_of: Vec<Option<usize>> = vec![None; actors.len()];
+    let mut keys: std::collections::HashMap<[u64; 6], usize> = std::collections::HashMap::new();
+    for (i, a) in actors.iter().enumerate().filter(|(_, a)| a.vehicle) {
         let Some(j) = a.junction else { continue };
         let entry = j.exit - map.connectors[j.conn].path.length();
         let start = (entry - 10.0).max(a.s0.min(entry));
         let key = [j.conn as u64, start.to_bits(), j.exit.to_bits(), a.hl.to_bits(), a.hw.to_bits(), a.r_min.to_bits()];
-        if let Some(b) = done.get(&key) {
-            a.bend = Some(b.clone());
-            continue;
+        run_of[i] = Some(*keys.entry(key).or_insert_with(|| {
+            runs.push(DryRun::new(map, i, a, j, start));
+            runs.len() - 1
+        }));
+    }
+    // Each run is a long chain of dependent steps: the runs take a step each in turn, so that
+    // their chains overlap. A run's steps read only its own state, so each is the run it
+    // would be alone.
+    let mut steps = 0;
+    while steps < 2000 && runs.iter().any(|r| r.live) {
+        for r in runs.iter_mut().filter(|r| r.live) {
+            r.step(&actors[r.actor], dt);
         }
+        steps += 1;
+    }
+    let bends: Vec<std::sync::Arc<Bend>> = runs.into_iter().map(|r| std::sync::Arc::new(r.finish(actors))).collect();
+    for (a, r) in actors.iter_mut().zip(run_of) {
+        if let Some(r) = r {
+            a.bend = Some(bends[r].clone());
+        }
+    }
+}
+
+/// One dry run of `assign_bends`: its vehicle (track index), junction, the bend it fills, and
+/// its state between steps.
+struct DryRun {
+    actor: usize,
+    j: Junction,
+    b: Bend,
+    pos: DVec2,
+    yaw: f64,
+    s: f64,
+    /// The unit heading of `yaw`, taken once per step: the corners' and the next step's.
+    fwd: DVec2,
+    live: bool,
+}
+
+impl DryRun {
+    fn new(map: &Map, actor: usize, a: &Actor, j: Junction, start: f64) -> DryRun {
         let (kl, kr) = junction_bend(map, &a.path, j);
         let from = start - 2.0 * a.hl - 5.0;
-        let mut b = Bend {
+        let b = Bend {
             from,
             reach: vec![],
             widest: sweep(a, kl.max(kr)),
@@ -957,41 +1009,50 @@ fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
             bounds: (DVec2::INFINITY, DVec2::NEG_INFINITY),
             spans: vec![],
         };
-        let (mut pos, mut yaw) = a.path.point(start, 0.0);
-        let mut s = start;
-        // The unit heading of `yaw`, taken once per step: the corners' and the next step's.
-        let mut fwd = DVec2::from_angle(yaw);
-        for _ in 0..2000 {
-            let v = a.path.cap(s).clamp(1.0, 15.0);
-            let k = pursuit(pos, fwd, a.path.point_fast(s + look_ahead(a, v), 0.0));
-            let dist = v * dt;
-            (pos, yaw) = steer(a, pos, yaw, k, dist, dt, 1.0);
-            let (ns, off, _, _) = a.path.frenet_dir(pos, s + dist);
-            s = ns;
-            let dir = DVec2::from_angle(yaw);
-            let corners = Obb { center: pos, yaw, length: 2.0 * a.hl, width: 2.0 * a.hw }.corners_along(dir);
-            for q in corners {
-                let (sq, dq, beyond, _) = a.path.frenet_dir(q, s + (q - pos).dot(fwd));
-                if beyond > 0.0 || dq.abs() <= a.hw {
-                    continue;
-                }
-                let m = (sq - from).max(0.0) as usize;
-                if b.reach.len() <= m {
-                    b.reach.resize(m + 1, (0.0, 0.0));
-                }
-                let (r, l) = &mut b.reach[m];
-                if dq > 0.0 {
-                    *l = l.max(dq - a.hw);
-                } else {
-                    *r = r.max(-dq - a.hw);
-                }
-                b.widest = b.widest.max(dq.abs() - a.hw);
+        let (pos, yaw) = a.path.point(start, 0.0);
+        DryRun { actor, j, b, pos, yaw, s: start, fwd: DVec2::from_angle(yaw), live: true }
+    }
+
+    /// One step of the run (`live` turns false at its end).
+    #[inline]
+    fn step(&mut self, a: &Actor, dt: f64) {
+        let (j, from) = (self.j, self.b.from);
+        let v = a.path.cap(self.s).clamp(1.0, 15.0);
+        let k = pursuit(self.pos, self.fwd, a.path.point_fast_on(self.s + look_ahead(a, v)));
+        let dist = v * dt;
+        (self.pos, self.yaw) = steer(a, self.pos, self.yaw, k, dist, dt, 1.0);
+        let (pos, yaw, fwd) = (self.pos, self.yaw, self.fwd);
+        let [(s, off, _)] = a.path.frenet_many([pos], [self.s + dist]);
+        self.s = s;
+        let dir = DVec2::from_angle(yaw);
+        let corners = Obb { center: pos, yaw, length: 2.0 * a.hl, width: 2.0 * a.hw }.corners_along(dir);
+        let found = a.path.frenet_many(corners, corners.map(|q| s + (q - pos).dot(fwd)));
+        let b = &mut self.b;
+        for (sq, dq, beyond) in found {
+            if beyond > 0.0 || dq.abs() <= a.hw {
+                continue;
             }
-            fwd = dir;
-            if (s > j.exit + a.hl && off.abs() < 0.05) || s >= a.path.length() - 1.0 {
-                break;
+            let m = (sq - from).max(0.0) as usize;
+            if b.reach.len() <= m {
+                b.reach.resize(m + 1, (0.0, 0.0));
             }
+            let (r, l) = &mut b.reach[m];
+            if dq > 0.0 {
+                *l = l.max(dq - a.hw);
+            } else {
+                *r = r.max(-dq - a.hw);
+            }
+            b.widest = b.widest.max(dq.abs() - a.hw);
         }
+        self.fwd = dir;
+        if (s > j.exit + a.hl && off.abs() < 0.05) || s >= a.path.length() - 1.0 {
+            self.live = false;
+        }
+    }
+
+    /// The bend, with its slices and spans.
+    fn finish(self, actors: &[Actor]) -> Bend {
+        let (a, mut b) = (&actors[self.actor], self.b);
         // Reaches within the band's margin are the band's business.
         for (m, &(r, l)) in b.reach.iter().enumerate() {
             if r > SLICE_MIN || l > SLICE_MIN {
@@ -1004,9 +1065,7 @@ fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
             }
         }
         b.index();
-        let b = std::sync::Arc::new(b);
-        done.insert(key, b.clone());
-        a.bend = Some(b);
+        b
     }
 }
 
@@ -1087,6 +1146,7 @@ fn profile<'p>(
         let n = (la / 0.5).ceil().max(1.0) as usize;
         let on_b = Projector::new(&cb.path);
         let mut hint = 0;
+        let (strict, mut seg) = (ca.path.strictly_increasing(), None);
         // A sample `x` along `a` from one at `floor` from `b` lies at least `floor - x` from it:
         // the samples up to where that reaches within `reach` (a margin short) are not taken.
         let mut far_until = f64::NEG_INFINITY;
@@ -1097,7 +1157,7 @@ fn profile<'p>(
                 if ca.from == cb.from || sa < far_until {
                     return (sa, f64::INFINITY, f64::NAN);
                 }
-                let (s, d) = match on_b.project_within(ca.path.point_at(sa), &mut hint, reach) {
+                let (s, d) = match on_b.project_within(ca.path.point_at_walk(sa, &mut seg, strict), &mut hint, reach) {
                     Ok(x) => x,
                     Err(floor) => {
                         far_until = sa + (floor - reach - 0.01);
@@ -1113,11 +1173,15 @@ fn profile<'p>(
     &entry.1
 }
 
+/// `shared_zones`' answer: per stretch, its first and last arc length and where its middle
+/// projects onto the other connector.
+type Zones = Vec<(f64, f64, f64)>;
+
 /// The stretches of connector `a` (arc lengths along it) whose samples in `profile` lie within
 /// `gap` of the other path, those less than `join` apart taken as one; with each, where its
 /// middle projects onto `b`. Two paths can meet twice (a roundabout exit beside
 /// another's entry, then the ring).
-fn shared_zones(map: &Map, (a, b): (usize, usize), profile: &Profile, gap: f64, join: f64) -> Vec<(f64, f64, f64)> {
+fn shared_zones(map: &Map, (a, b): (usize, usize), profile: &Profile, gap: f64, join: f64) -> Zones {
     let mut zones: Vec<(f64, f64, f64)> = vec![];
     for &(sa, d, _) in profile {
         if d < gap {
@@ -1128,7 +1192,8 @@ fn shared_zones(map: &Map, (a, b): (usize, usize), profile: &Profile, gap: f64, 
         }
     }
     for z in &mut zones {
-        let (p, _) = map.connectors[a].path.pose_at(0.5 * (z.0 + z.1));
+        // `pose_at`'s point, without the heading's arctangent.
+        let p = map.connectors[a].path.point_at(0.5 * (z.0 + z.1));
         z.2 = map.connectors[b].path.project(p).0;
     }
     zones
@@ -1362,6 +1427,8 @@ struct Sim<'a, 'b> {
     next: Vec<State>,
     /// Unit heading of every agent in `cur`: pair checks use dot and cross products, not trig.
     dirs: Vec<DVec2>,
+    /// The bits of the heading each of `dirs` was taken from.
+    dir_yaw: Vec<Option<u64>>,
     /// Per agent, this frame: `yield_state`, with the right-of-way rule's hold folded in.
     yielding: Vec<(Option<f64>, bool)>,
     /// Per agent, this frame: held by the right-of-way rule or at the kerb (`right_of_way`).
@@ -1443,6 +1510,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             dt,
             next: cur.clone(),
             dirs: cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect(),
+            dir_yaw: vec![],
             yielding: vec![(None, false); actors.len()],
             ruled: vec![false; actors.len()],
             held: vec![None; actors.len()],
@@ -1498,8 +1566,15 @@ impl<'a, 'b> Sim<'a, 'b> {
         }
         for f in self.first..out.frames {
             let t = (f - 1) as f64 * self.dt;
-            self.dirs.clear();
-            self.dirs.extend(self.cur.iter().map(|s| DVec2::from_angle(s.yaw)));
+            // An agent whose heading has not changed (bit for bit) keeps its unit heading: the
+            // same call on the same bits. Standing and straight-driving agents take no sine.
+            self.dirs.resize(self.cur.len(), DVec2::X);
+            self.dir_yaw.resize(self.cur.len(), None);
+            for ((d, y), st) in self.dirs.iter_mut().zip(&mut self.dir_yaw).zip(&self.cur) {
+                if *y != Some(st.yaw.to_bits()) {
+                    (*d, *y) = (DVec2::from_angle(st.yaw), Some(st.yaw.to_bits()));
+                }
+            }
             self.easing.clear();
             for (j, (o, b)) in self.cur.iter().zip(self.actors.iter()).enumerate() {
                 if o.triggered && matches!(b.lateral, Lat::Away { .. }) {

@@ -181,21 +181,30 @@ pub(super) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
     let lo = ((t_req - WINDOW_S) / dt).round().max(2.0) as usize;
     let hi = (((t_req + WINDOW_S) / dt).round() as usize).min(last);
     let lim = af.lim;
-    let mut best: Option<(f64, Plan)> = None;
     // Some 150 candidates share a few angles: each sine and cosine is taken once (the same
     // calls on the same arguments, so the same bits), the at-fault heading's per frame.
     let (rel_cos, rel_sin) = (rel_yaw.cos(), rel_yaw.sin());
     let mut af_dirs: Vec<Option<DVec2>> = vec![None; pa.len()];
-    for (fi, &struck_at) in ps.iter().enumerate().take(hi + 1).skip(lo) {
+    let mut per_frame: Vec<Option<(DVec2, DVec2, DVec2)>> = vec![None; ps.len()];
+    // The candidates, in the order the cost ranks ties in (by frame of impact, then lead time):
+    // those whose departure frame leaves at least three frames to the impact.
+    let cands: Vec<(usize, f64)> = (lo..ps.len().min(hi + 1))
+        .flat_map(|fi| TAUS.iter().map(move |&tau| (fi, tau)))
+        .filter(|&(fi, tau)| ((fi as f64 * dt - tau) / dt).round().max(0.0) as usize + 3 <= fi)
+        .collect();
+    // Candidate `c`'s cost and plan, unless `beaten` says its lower bound already loses.
+    let mut cost_of = |c: usize, beaten: &dyn Fn(f64) -> bool| -> Option<(f64, Plan)> {
+        let (fi, tau) = cands[c];
+        let struck_at = ps[fi];
         let t_imp = fi as f64 * dt;
-        let struck_dir = DVec2::from_angle(struck_at.yaw);
-        let (g0, _) = compose_turned(struck_at, struck_dir, rel_pos0, rel_yaw);
-        let struck_v = struck_dir * p1.speeds[k.st][fi];
-        for tau in [1.5, 2.0, 2.5, 3.0, 4.0] {
+        // Per frame of impact, once for its lead times.
+        let (struck_dir, g0, struck_v) = *per_frame[fi].get_or_insert_with(|| {
+            let struck_dir = DVec2::from_angle(struck_at.yaw);
+            let (g0, _) = compose_turned(struck_at, struck_dir, rel_pos0, rel_yaw);
+            (struck_dir, g0, struck_dir * p1.speeds[k.st][fi])
+        });
+        {
             let fd = ((t_imp - tau) / dt).round().max(0.0) as usize;
-            if fd + 3 > fi {
-                continue;
-            }
             let tau = (fi - fd) as f64 * dt;
             let s = pa[fd];
             let v = p1.speeds[k.af][fd];
@@ -221,10 +230,8 @@ pub(super) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
             // addition is monotone: this sum without the curvature's two terms is a lower bound
             // of the cost, bit for bit, and a candidate it puts at or above the best cannot
             // replace it (`cost < best`). The curvature (24 arctangents) is not computed then.
-            if let Some((b, _)) = &best
-                && lower_bound(t_imp, t_req, acc, lim, v_end, drift, natural.is_some_and(|n| n <= fd)) >= *b
-            {
-                continue;
+            if beaten(lower_bound(t_imp, t_req, acc, lim, v_end, drift, natural.is_some_and(|n| n <= fd))) {
+                return None;
             }
             let k_curve = curve.max_curvature();
             let lat = v.max(v_end).powi(2) * k_curve;
@@ -257,22 +264,40 @@ pub(super) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
             if natural.is_some_and(|n| n <= fd) {
                 cost += 50.0;
             }
-            if best.as_ref().is_none_or(|b| cost < b.0) {
-                let plan = Plan {
-                    struck: k.st,
-                    rel_pos,
-                    rel_yaw,
-                    t_depart: fd as f64 * dt,
-                    t_impact: t_imp,
-                    frame: fi,
-                    delta,
-                };
-                best = Some((cost, plan));
-            }
+            let plan =
+                Plan { struck: k.st, rel_pos, rel_yaw, t_depart: fd as f64 * dt, t_impact: t_imp, frame: fi, delta };
+            Some((cost, plan))
+        }
+    };
+    // The plan is the first candidate of least cost (the first one even at a NaN cost, which
+    // nothing after it beats), whatever order they are costed in. Costed nearest the requested
+    // time first, the best is soon low, and the lower bound passes over most of the rest
+    // without their curvature: one loses where its bound is above the best's cost, or equal to
+    // it and it comes later.
+    let (mut best, mut best_c) = match cands.first() {
+        Some(_) => (cost_of(0, &|_| false)?, 0),
+        None => return None,
+    };
+    if best.0.is_nan() {
+        return Some(best.1);
+    }
+    let mut order: Vec<usize> = (1..cands.len()).collect();
+    order.sort_by(|&x, &y| {
+        let off = |c: usize| (cands[c].0 as f64 * dt - t_req).abs();
+        off(x).total_cmp(&off(y))
+    });
+    for c in order {
+        let (b, bc) = (best.0, best_c);
+        let Some((cost, plan)) = cost_of(c, &|lb| lb > b || (lb == b && c > bc)) else { continue };
+        if cost < b || (cost == b && c < bc) {
+            (best, best_c) = ((cost, plan), c);
         }
     }
-    best.map(|b| b.1)
+    Some(best.1)
 }
+
+/// Lead times between an intercept's departure and its impact that `choose` tries, s.
+const TAUS: [f64; 5] = [1.5, 2.0, 2.5, 3.0, 4.0];
 
 /// `choose`'s cost of a candidate without its curvature terms (the lateral acceleration above the
 /// limit, the curve tighter than the car can steer) and its closing-speed term, all of them at
