@@ -949,17 +949,29 @@ fn off_tracking(a: &Actor) -> f64 {
 /// steered as `Sim::drive` steers (pure pursuit of its path, curvature bounded by its turning
 /// radius and yaw rate) at its path's curve speed, from 10 m before the junction until it has
 /// rejoined its path; each corner beyond the band is booked at its own place along the route.
-/// Runs sharing a connector, start, box and turning radius are done once.
+/// Runs sharing a connector, start, box, turning radius, limits and route length (the curve
+/// speeds it steers by brake toward the route's end) are done once.
 fn assign_bends(map: &Map, actors: &mut [Actor], dt: f64) {
     // The first vehicle with each key runs; later ones take its bend.
     let mut runs: Vec<DryRun> = vec![];
     let mut run_of: Vec<Option<usize>> = vec![None; actors.len()];
-    let mut keys: std::collections::HashMap<[u64; 6], usize> = std::collections::HashMap::new();
+    let mut keys: std::collections::HashMap<[u64; 10], usize> = std::collections::HashMap::new();
     for (i, a) in actors.iter().enumerate().filter(|(_, a)| a.vehicle) {
         let Some(j) = a.junction else { continue };
         let entry = j.exit - map.connectors[j.conn].path.length();
         let start = (entry - 10.0).max(a.s0.min(entry));
-        let key = [j.conn as u64, start.to_bits(), j.exit.to_bits(), a.hl.to_bits(), a.hw.to_bits(), a.r_min.to_bits()];
+        let key = [
+            j.conn as u64,
+            start.to_bits(),
+            j.exit.to_bits(),
+            a.hl.to_bits(),
+            a.hw.to_bits(),
+            a.r_min.to_bits(),
+            a.lim.yaw_rate.to_bits(),
+            a.lim.lat_acc.to_bits(),
+            a.lim.brake.to_bits(),
+            a.path.length().to_bits(),
+        ];
         run_of[i] = Some(*keys.entry(key).or_insert_with(|| {
             runs.push(DryRun::new(map, i, a, j, start));
             runs.len() - 1
