@@ -1455,3 +1455,29 @@ fn of_two_committed_cars_the_one_that_can_still_stop_gives_way() {
     assert!(slowest > 5.0, "the left-turner slowed to {slowest:.2} m/s");
     assert!(overlaps(t, &[]).is_empty());
 }
+
+/// A roundabout: a car already on the ring goes before one entering, and the one entering
+/// follows it in once it is past, instead of waiting till it has left the ring. First come,
+/// first served put the entering car first (it was nearer the stretch the two share), and the
+/// car on the ring stopped dead in the ring until the other had left it.
+#[test]
+fn entering_traffic_gives_way_to_the_ring_and_follows() {
+    let text = "scenario ring {\n seed 3\n duration 10 s\n rate 10 Hz\n egos vehicles\n \
+                road roundabout { lanes 1; lane_width 4.0 m; radius 18 m; speed_limit 30 km/h; sidewalks on }\n \
+                agent circ: sedan { at west.in[1], 1 m before stop_line; speed 6 m/s; goal { speed 6 m/s; turn left } }\n \
+                agent entering: sedan { at south.in[1], 14 m before stop_line; speed 6 m/s; goal { speed 6 m/s; turn straight } }\n}";
+    let f = front_of(text);
+    let t = &f.tracks;
+    let idx = |name: &str| t.agents.iter().position(|a| a.name == name).expect("agent");
+    let (circ, entering) = (idx("circ"), idx("entering"));
+    let slowest = (0..t.frames).map(|f| t.speeds[circ][f]).fold(f64::INFINITY, f64::min);
+    assert!(slowest > 4.5, "the car on the ring slowed to {slowest:.2} m/s");
+    // The entering car stands at its line (14 m ahead of its start) while the other passes.
+    let start = t.poses[entering][0];
+    let waited = (0..t.frames).find(|&f| t.speeds[entering][f] < 0.05).expect("the entering car never gives way");
+    let w = t.poses[entering][waited];
+    assert!(w.y - start.y < 14.0, "it stopped {:.1} m on, past its line", w.y - start.y);
+    let last = t.poses[entering][t.frames - 1];
+    assert!(last.y - start.y > 18.0, "it never entered: {:.1} m on", last.y - start.y);
+    assert!(overlaps(t, &[]).is_empty());
+}

@@ -207,7 +207,14 @@ pub(super) struct Crossing {
     pub other_leave: f64,
     /// One of the two is an emergency vehicle the other yields to (`Actor::yield_to`).
     pub emergency: bool,
+    /// The two paths run on together here, the same way (a merge, a roundabout's ring), rather
+    /// than cross: one that has gone in ahead is followed, not waited out.
+    pub merge: bool,
 }
+
+/// Two junction paths whose headings at a shared stretch differ by less than about 26 degrees
+/// run on together there (`Crossing::merge`).
+const MERGE_COS: f64 = 0.9;
 
 /// How far ahead of an emergency vehicle the junction is cleared: this many seconds at its
 /// speed, and at least `EMERGENCY_NEAR_M`.
@@ -889,6 +896,9 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
             for &(ai, ao, at) in &za {
                 let dist = |z: &(f64, f64, f64)| (z.0 - at).max(at - z.1).max(0.0);
                 let Some(&(bi, bo, _)) = zb.iter().min_by(|x, y| dist(x).total_cmp(&dist(y))) else { continue };
+                let (_, ha) = map.connectors[ji.conn].path.pose_at(0.5 * (ai + ao));
+                let (_, hb) = map.connectors[jj.conn].path.pose_at(at);
+                let merge = (ha - hb).cos() > MERGE_COS;
                 let ci = Crossing {
                     other: j,
                     enter: ei + ai - hi,
@@ -896,6 +906,7 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
                     other_enter: ej + bi - hj,
                     other_leave: ej + bo + hj,
                     emergency,
+                    merge,
                 };
                 let cj = Crossing {
                     other: i,
@@ -904,6 +915,7 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
                     other_enter: ci.enter,
                     other_leave: ci.leave,
                     emergency,
+                    merge,
                 };
                 actors[i].crossings.push(ci);
                 actors[j].crossings.push(cj);
@@ -2396,6 +2408,13 @@ impl<'a, 'b> Sim<'a, 'b> {
         }
         let (ri, ei, rem) = self.rank(i, c.enter, c.leave, t)?;
         let (rj, ej, _) = self.rank(c.other, c.other_enter, c.other_leave, t)?;
+        // Where the two run on together, one whose whole box is in the stretch is ahead of us
+        // there: car-following keeps our gap to it (a car entering a roundabout behind one
+        // circulating, or one circulating behind one that entered, used to wait till the other
+        // had left the ring).
+        if c.merge && self.cur[c.other].s >= c.other_enter + 2.0 * self.actors[c.other].hl {
+            return None;
+        }
         if ri == 1 && rj == 1 {
             return self.committed_gives_way(i, c);
         }
@@ -2403,7 +2422,14 @@ impl<'a, 'b> Sim<'a, 'b> {
             return None;
         }
         let (ni, nj) = (&self.actors[i].info.name, &self.actors[c.other].info.name);
-        let first = (rj, ej).partial_cmp(&(ri, ei)).is_some_and(|o| o.then(nj.cmp(ni)).is_lt());
+        // Of two approaching, one already past its line (circulating in a roundabout, turning
+        // inside a junction) goes before one still outside: entering traffic gives way.
+        let outside = |k: usize| {
+            let (a, st) = (&self.actors[k], &self.cur[k]);
+            a.junction.is_none_or(|j| j.stop - 0.3 - (st.s + a.hl) > -0.05)
+        };
+        let (oi, oj) = (outside(i), outside(c.other));
+        let first = (rj, oj, ej).partial_cmp(&(ri, oi, ei)).is_some_and(|o| o.then(nj.cmp(ni)).is_lt());
         // No need to hold for one that will have left the zone, at its present speed, a
         // `CLEAR_MARGIN_S` before we could reach it.
         let o = &self.cur[c.other];
