@@ -924,23 +924,24 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
             // stretch, that stretch begins there for the other (it holds clear of the loop).
             let n_new = actors[i].crossings.len() - first;
             if n_new > 0 {
-                let k0 = (first..first + n_new)
-                    .min_by(|&x, &y| actors[i].crossings[x].enter.total_cmp(&actors[i].crossings[y].enter));
-                let k1 = (first..first + n_new)
-                    .min_by(|&x, &y| actors[i].crossings[x].other_enter.total_cmp(&actors[i].crossings[y].other_enter));
                 let kj0 = actors[j].crossings.len() - n_new;
-                if let Some(k) = k0 {
-                    let enter = actors[i].crossings[k].enter;
-                    if let Some(s) = entry_of(&actors[j], &actors[i], ei - 2.0 * hi - 20.0, enter) {
+                // Ours moved back to their sweep, then theirs to ours.
+                for ours in [true, false] {
+                    let pick = |c: &Crossing| if ours { c.enter } else { c.other_enter };
+                    let (sweeper, mover, lo) =
+                        if ours { (j, i, ei - 2.0 * hi - 20.0) } else { (i, j, ej - 2.0 * hj - 20.0) };
+                    let cs = &actors[i].crossings;
+                    let Some(k) = (first..first + n_new).min_by(|&x, &y| pick(&cs[x]).total_cmp(&pick(&cs[y]))) else {
+                        continue;
+                    };
+                    let Some(s) = entry_of(&actors[sweeper], &actors[mover], lo, pick(&cs[k])) else { continue };
+                    let kj = kj0 + k - first;
+                    if ours {
                         actors[i].crossings[k].enter = s;
-                        actors[j].crossings[kj0 + k - first].other_enter = s;
-                    }
-                }
-                if let Some(k) = k1 {
-                    let enter = actors[i].crossings[k].other_enter;
-                    if let Some(s) = entry_of(&actors[i], &actors[j], ej - 2.0 * hj - 20.0, enter) {
+                        actors[j].crossings[kj].other_enter = s;
+                    } else {
                         actors[i].crossings[k].other_enter = s;
-                        actors[j].crossings[kj0 + k - first].enter = s;
+                        actors[j].crossings[kj].enter = s;
                     }
                 }
             }
