@@ -2443,8 +2443,8 @@ impl<'a, 'b> Sim<'a, 'b> {
     /// far its front may go. One that can stop short of the zone within its emergency braking
     /// gives way to one that cannot; of two that can, the later to reach it at its present
     /// speed (then the name), the same order seen from either side. Two cars 6 m before their
-    /// lines at 9 m/s, one going straight and one making a U-turn into the same lane, used to
-    /// drive into each other's way.
+    /// lines at 9 m/s, one going straight and one turning across it, were both let go: only
+    /// their car-following kept them apart, once the turner's sideways motion showed.
     fn committed_gives_way(&self, i: usize, c: &Crossing) -> Option<f64> {
         let short_of = |k: usize, enter: f64| {
             let (a, st) = (&self.actors[k], &self.cur[k]);
