@@ -2416,6 +2416,17 @@ impl<'a, 'b> Sim<'a, 'b> {
         if c.merge && self.cur[c.other].s >= c.other_enter + 2.0 * self.actors[c.other].hl {
             return None;
         }
+        // One clearing the junction for us (we are the emergency vehicle) does not hold for us
+        // (`yield_state`): we hold for it while we can, unless it is stopped for something else.
+        // Taking turns by the order below, an ambulance 6 m from its line went first, and the
+        // car clearing in front of it went too.
+        if c.emergency {
+            return match (ri, rj) {
+                (0, _) | (_, 3) => None,
+                (1, _) => self.short_of(i, c.enter).map(|(rem, _)| rem),
+                _ => (!self.gone(c, ei)).then_some(rem),
+            };
+        }
         if ri == 1 && rj == 1 {
             return self.committed_gives_way(i, c);
         }
@@ -2431,11 +2442,23 @@ impl<'a, 'b> Sim<'a, 'b> {
         };
         let (oi, oj) = (outside(i), outside(c.other));
         let first = (rj, oj, ej).partial_cmp(&(ri, oi, ei)).is_some_and(|o| o.then(nj.cmp(ni)).is_lt());
-        // No need to hold for one that will have left the zone, at its present speed, a
-        // `CLEAR_MARGIN_S` before we could reach it.
+        (first && !self.gone(c, ei)).then_some(rem)
+    }
+
+    /// No need to hold for the other of crossing `c` when it will have left the zone, at its
+    /// present speed, a `CLEAR_MARGIN_S` before we could reach it (`eta`).
+    fn gone(&self, c: &Crossing, eta: f64) -> bool {
         let o = &self.cur[c.other];
-        let gone = o.v > 0.5 && (c.other_leave - o.s) / o.v + CLEAR_MARGIN_S < ei;
-        (first && !gone).then_some(rem)
+        o.v > 0.5 && (c.other_leave - o.s) / o.v + CLEAR_MARGIN_S < eta
+    }
+
+    /// Whether agent `k` can still stop short of its zone from `enter` within its emergency
+    /// braking: then how far its front may go, and its time to the zone at its present speed.
+    fn short_of(&self, k: usize, enter: f64) -> Option<(f64, f64)> {
+        let (a, st) = (&self.actors[k], &self.cur[k]);
+        let rem = enter - 0.3 - st.s;
+        let can = rem > -0.05 && st.v * st.v <= 2.0 * a.lim.brake_max * rem.max(1e-3);
+        can.then_some((rem.max(0.0), (enter - st.s) / st.v.max(0.1)))
     }
 
     /// Between two vehicles both too close to hold at their lines (rank 1 each, so the rule
@@ -2446,14 +2469,8 @@ impl<'a, 'b> Sim<'a, 'b> {
     /// lines at 9 m/s, one going straight and one turning across it, were both let go: only
     /// their car-following kept them apart, once the turner's sideways motion showed.
     fn committed_gives_way(&self, i: usize, c: &Crossing) -> Option<f64> {
-        let short_of = |k: usize, enter: f64| {
-            let (a, st) = (&self.actors[k], &self.cur[k]);
-            let rem = enter - 0.3 - st.s;
-            let can = rem > -0.05 && st.v * st.v <= 2.0 * a.lim.brake_max * rem.max(1e-3);
-            can.then_some((rem.max(0.0), (enter - st.s) / st.v.max(0.1)))
-        };
-        let (rem, ti) = short_of(i, c.enter)?;
-        let first = match short_of(c.other, c.other_enter) {
+        let (rem, ti) = self.short_of(i, c.enter)?;
+        let first = match self.short_of(c.other, c.other_enter) {
             None => true,
             Some((_, tj)) => {
                 let (ni, nj) = (&self.actors[i].info.name, &self.actors[c.other].info.name);
