@@ -224,7 +224,19 @@ const EMERGENCY_NEAR_M: f64 = 30.0;
 /// to the stop line, it goes on and clears the junction.
 const YIELD_BRAKE: f64 = 0.75;
 
+/// Whether one at speed `v`, `rem` metres short of a mark (up to 5 cm past it counts as at it),
+/// can stop there braking at `brake`.
+fn can_stop(v: f64, rem: f64, brake: f64) -> bool {
+    rem > -0.05 && v * v / (2.0 * rem.max(1e-3)) <= brake
+}
+
 impl Actor {
+    /// How far its front, at `st`, is short of where it halts for its junction (0.3 m before
+    /// the stop line, else the junction entry); `None` without a junction.
+    fn to_line(&self, st: &State) -> Option<f64> {
+        self.junction.map(|j| j.stop - 0.3 - (st.s + self.hl))
+    }
+
     fn obb(&self, st: &State) -> Obb {
         Obb { center: st.pos, yaw: st.yaw, length: 2.0 * self.hl, width: 2.0 * self.hw }
     }
@@ -2307,8 +2319,8 @@ impl<'a, 'b> Sim<'a, 'b> {
             return None;
         }
         let to_zone = enter - 0.3 - st.s;
-        let rem = match a.junction {
-            Some(j) if j.stop - 0.3 - (st.s + a.hl) > -0.05 => (j.stop - 0.3 - (st.s + a.hl)).min(to_zone),
+        let rem = match a.to_line(st) {
+            Some(line) if line > -0.05 => line.min(to_zone),
             _ => to_zone,
         };
         if st.s >= enter || self.striking(i, t) {
@@ -2316,7 +2328,7 @@ impl<'a, 'b> Sim<'a, 'b> {
         }
         // Giving way may take up to the emergency braking: within the limits, and it leaves the
         // fewest pairs where neither can stop (both then go, and only the safety net is left).
-        if rem <= -0.05 || st.v * st.v / (2.0 * rem.max(1e-3)) > a.lim.brake_max {
+        if !can_stop(st.v, rem, a.lim.brake_max) {
             return Some((1, 0.0, rem));
         }
         let dist = (enter - st.s).max(0.0);
@@ -2436,10 +2448,7 @@ impl<'a, 'b> Sim<'a, 'b> {
         let (ni, nj) = (&self.actors[i].info.name, &self.actors[c.other].info.name);
         // Of two approaching, one already past its line (circulating in a roundabout, turning
         // inside a junction) goes before one still outside: entering traffic gives way.
-        let outside = |k: usize| {
-            let (a, st) = (&self.actors[k], &self.cur[k]);
-            a.junction.is_none_or(|j| j.stop - 0.3 - (st.s + a.hl) > -0.05)
-        };
+        let outside = |k: usize| self.actors[k].to_line(&self.cur[k]).is_none_or(|line| line > -0.05);
         let (oi, oj) = (outside(i), outside(c.other));
         let first = (rj, oj, ej).partial_cmp(&(ri, oi, ei)).is_some_and(|o| o.then(nj.cmp(ni)).is_lt());
         (first && !self.gone(c, ei)).then_some(rem)
@@ -2457,8 +2466,7 @@ impl<'a, 'b> Sim<'a, 'b> {
     fn short_of(&self, k: usize, enter: f64) -> Option<(f64, f64)> {
         let (a, st) = (&self.actors[k], &self.cur[k]);
         let rem = enter - 0.3 - st.s;
-        let can = rem > -0.05 && st.v * st.v <= 2.0 * a.lim.brake_max * rem.max(1e-3);
-        can.then_some((rem.max(0.0), (enter - st.s) / st.v.max(0.1)))
+        can_stop(st.v, rem, a.lim.brake_max).then_some((rem.max(0.0), (enter - st.s) / st.v.max(0.1)))
     }
 
     /// Between two vehicles both too close to hold at their lines (rank 1 each, so the rule
@@ -2490,7 +2498,7 @@ impl<'a, 'b> Sim<'a, 'b> {
         }
         let rem = kerb - (st.s + a.hl);
         let firm = if st.give_way { a.lim.brake_max } else { a.lim.brake };
-        if rem <= -0.05 || st.v * st.v / (2.0 * rem.max(1e-3)) > firm {
+        if !can_stop(st.v, rem, firm) {
             return None;
         }
         let end = a.path.length() - 2.0;
@@ -2551,7 +2559,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             return (None, false);
         }
         let rem = j.stop - 0.3 - (st.s + a.hl);
-        if rem > -0.05 && st.v * st.v / (2.0 * rem.max(1e-3)) <= YIELD_BRAKE * a.lim.brake_max {
+        if can_stop(st.v, rem, YIELD_BRAKE * a.lim.brake_max) {
             (Some(rem.max(0.0)), false)
         } else {
             (None, st.s - a.hl < j.exit)
