@@ -183,15 +183,6 @@ impl Bend {
         let (at, _) = self.slices.iter().find(|(s, q)| *s + 1.0 > lo && *s < hi && near(q) && q.overlaps(theirs))?;
         Some(*at)
     }
-
-    /// The route arc length of the first metre between `lo` and `hi` where the box reaches at
-    /// least `right` to the right or `left` to the left (either may be infinite: that side is
-    /// not asked about).
-    fn first_reach(&self, lo: f64, hi: f64, right: f64, left: f64) -> Option<f64> {
-        let (a, b) = self.metres(lo, hi)?;
-        let m = self.reach[a..=b].iter().position(|&(r, l)| r >= right || l >= left)?;
-        Some(self.from + a as f64 + m as f64)
-    }
 }
 
 /// The stretch that two vehicles' junction paths share, seen from one of them: route arc
@@ -1944,9 +1935,14 @@ impl<'a, 'b> Sim<'a, 'b> {
                 }
             }
             // One driving toward us in its lane beside our path meets us wherever our turn
-            // sweeps out over that lane between us and it (a bus's front corner swinging into
-            // the oncoming lane as it turns right): found only once there, it is on us. We hold
+            // sweeps out over its way between it and us (a bus's front corner swinging into the
+            // oncoming lane as it turns right): found only once there, it is on us. We hold
             // short of the first such metre, as of something standing there, till it has passed.
+            // Its way is its route ahead of it as far as it is from us: the lane beside our path
+            // where we stand is another lane once our path has turned (a bus turning right, its
+            // corner over the lane beside its approach, held for a car coming the other way on
+            // the street it turns into, braked hard, and let go again once that car was farther
+            // than its look-ahead, frame after frame).
             let (jlo, jhi) = (lj - ext_lat, lj + ext_lat);
             let beside = jlo >= cur_hi + margin || jhi <= cur_lo - margin;
             if a.vehicle
@@ -1957,12 +1953,20 @@ impl<'a, 'b> Sim<'a, 'b> {
                 && gap > 0.0
                 && let Some(bd) = &a.bend
             {
-                let left = if jlo >= cur_hi + margin { jlo - (st.d + a.hw + margin) } else { f64::INFINITY };
-                let right = if jhi <= cur_lo - margin { (st.d - a.hw - margin) - jhi } else { f64::INFINITY };
+                let (ahead, step) = (ds + a.hl, 2.0 * b.hl.max(1.0));
+                let mut hit: Option<f64> = None;
+                let mut k = 0.5 * step;
+                while k < ahead + step {
+                    let (p, h) = b.path.point(o.s + k, o.d);
+                    let way = Obb { center: p, yaw: h, length: 2.0 * b.hl + step, width: 2.0 * b.hw };
+                    if let Some(at) = bd.meets(&way, st.s, sj + ext_lon + a.hl) {
+                        hit = Some(hit.map_or(at, |h| h.min(at)));
+                    }
+                    k += step;
+                }
                 // Too close to hold short at a comfortable braking, we are committed (as to a
                 // junction zone, `zone_rank`): the other sees our box and keeps clear.
                 let short = |at: f64| at - st.s - a.hl - 0.5;
-                let hit = bd.first_reach(st.s + a.hl, sj, right, left);
                 if let Some(at) = hit.filter(|&at| st.v * st.v < 2.0 * lim.brake * short(at)) {
                     in_cur = true;
                     gap = gap.min(short(at));
@@ -1989,6 +1993,12 @@ impl<'a, 'b> Sim<'a, 'b> {
             }
             if !obstacle {
                 continue;
+            }
+            if std::env::var("DBGX").ok().and_then(|x| x.parse::<usize>().ok()) == Some(i) {
+                eprintln!(
+                    "   j {} ds {:.2} lj {:.2} extlat {:.2} band {:.2}..{:.2} lo-hi {:.2}..{:.2} in_cur {} swept {} gap {:.2} vlon {:.2} vlat {:.2}",
+                    j, ds, lj, ext_lat, band_lo, band_hi, lo, hi, in_cur, swept, gap, v_lon, v_lat
+                );
             }
             let s0 = if is_named { 2.0 } else { lim.min_gap };
             acc = acc.min(idm_interaction(st.v, v_lon.max(0.0), gap, s0, lim));
@@ -2042,6 +2052,12 @@ impl<'a, 'b> Sim<'a, 'b> {
         hard = hard.min(to_end);
 
         let acc = acc.clamp(-lim.brake_max, lim.accel);
+        if std::env::var("DBGX").ok().and_then(|x| x.parse::<usize>().ok()) == Some(i) {
+            eprintln!(
+                "t {:.1} {} off {:.2} yaw {:.3} s {:.2} d {:.2} v {:.2} acc {:.2} hard {:.3} yr {:?} row {:?} cand {:?}",
+                t, a.info.name, st.off, st.yaw, st.s, st.d, st.v, acc, hard, yield_rem, self.ruled[i], cand
+            );
+        }
         let mut v = (st.v + acc * dt).max(0.0);
         let mut adv = 0.5 * (st.v + v) * dt;
         if adv > hard.max(0.0) {
