@@ -1994,12 +1994,6 @@ impl<'a, 'b> Sim<'a, 'b> {
             if !obstacle {
                 continue;
             }
-            if std::env::var("DBGX").ok().and_then(|x| x.parse::<usize>().ok()) == Some(i) {
-                eprintln!(
-                    "   j {} ds {:.2} lj {:.2} extlat {:.2} band {:.2}..{:.2} lo-hi {:.2}..{:.2} in_cur {} swept {} gap {:.2} vlon {:.2} vlat {:.2}",
-                    j, ds, lj, ext_lat, band_lo, band_hi, lo, hi, in_cur, swept, gap, v_lon, v_lat
-                );
-            }
             let s0 = if is_named { 2.0 } else { lim.min_gap };
             acc = acc.min(idm_interaction(st.v, v_lon.max(0.0), gap, s0, lim));
             if v_lon < 0.5 {
@@ -2052,12 +2046,6 @@ impl<'a, 'b> Sim<'a, 'b> {
         hard = hard.min(to_end);
 
         let acc = acc.clamp(-lim.brake_max, lim.accel);
-        if std::env::var("DBGX").ok().and_then(|x| x.parse::<usize>().ok()) == Some(i) {
-            eprintln!(
-                "t {:.1} {} off {:.2} yaw {:.3} s {:.2} d {:.2} v {:.2} acc {:.2} hard {:.3} yr {:?} row {:?} cand {:?}",
-                t, a.info.name, st.off, st.yaw, st.s, st.d, st.v, acc, hard, yield_rem, self.ruled[i], cand
-            );
-        }
         let mut v = (st.v + acc * dt).max(0.0);
         let mut adv = 0.5 * (st.v + v) * dt;
         if adv > hard.max(0.0) {
