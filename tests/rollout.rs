@@ -1481,3 +1481,27 @@ fn entering_traffic_gives_way_to_the_ring_and_follows() {
     assert!(last.y - start.y > 18.0, "it never entered: {:.1} m on", last.y - start.y);
     assert!(overlaps(t, &[]).is_empty());
 }
+
+/// A striker never runs into a walker: where the only way to the car it is to meet head-on
+/// goes through a walker crossing that car's lane (turning back at 22 m/s, it saw the walker
+/// only once it had turned toward it, 4 m off), it slows for the walker along the course it
+/// would brake on, and the conflict is refused with E0205 naming the walker. Without the
+/// walker the same crash is staged.
+#[test]
+fn a_striker_slows_for_a_walker_on_its_course_and_the_refusal_names_it() {
+    let text = std::fs::read_to_string("tests/rollout-refused/striker-turning-back-onto-walker.scn").expect("case");
+    let front = |t: &str| {
+        let mut sources = rocc::source::SourceMap::default();
+        let s = rocc::check::check_text("t.scn", t, std::path::Path::new("."), &mut sources).expect("checks");
+        rocc::compile::front(s, None)
+    };
+    let Err(errs) = front(&text) else { panic!("not refused") };
+    assert_eq!(errs.iter().map(|d| d.code).collect::<Vec<_>>(), ["E0205"]);
+    let help = errs[0].help.as_deref().unwrap_or_default();
+    assert!(help.starts_with("`v0` slowed from") && help.contains("for `w0` in its way"), "{help}");
+    let start = text.find("    agent w0").expect("walker");
+    let end = start + text[start..].find("    }\n").expect("end") + 6;
+    let without = format!("{}{}", &text[..start], &text[end..]);
+    let f = front(&without).unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| &d.message).collect::<Vec<_>>()));
+    assert_eq!(f.tracks.impacts.len(), 1, "no crash staged without the walker");
+}

@@ -338,7 +338,8 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         // Pass 2 is pass 1 until a planned striker departs or a planned pair first overlaps:
         // those frames are copied, not simulated again.
         let start = pass2_start(&actors, &confs, &plans, &states, dt);
-        Sim::new(&actors, &confs, &plans, Some(&pass1), dt).resume(&pass1, &states, start).run(&mut out);
+        let blocked_by =
+            Sim::new(&actors, &confs, &plans, Some(&pass1), dt).resume(&pass1, &states, start).run(&mut out);
         // A staged crash that does not happen near its time is not silently dropped. (Without a
         // plan the at-fault agent is not ours to steer, e.g. a replayed track: nothing to check.)
         for (k, _) in confs.iter().zip(&plans).filter(|(_, p)| p.is_some()) {
@@ -356,11 +357,18 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
                         format!("the conflict between `{a}` and `{b}` cannot be staged at {t_req:.1} s: {what}"),
                     )
                     .label(k.c.span, "no contact near this time")
-                    .help(format!(
-                        "`{a}` must be able to reach `{b}` within {:.1} s of `at` at its limits: \
-                         start them closer, give them speeds that bring them together, or move `at`",
-                        stage::WINDOW_S
-                    )),
+                    .help(match blocked_by[k.af] {
+                        Some((j, t)) => format!(
+                            "`{a}` slowed from {t:.1} s for `{}` in its way (a striker never runs into a bystander): \
+                             start `{a}` where its way to `{b}` is clear, keep `{}` out of it, or move `at`",
+                            actors[j].info.name, actors[j].info.name
+                        ),
+                        None => format!(
+                            "`{a}` must be able to reach `{b}` within {:.1} s of `at` at its limits: \
+                             start them closer, give them speeds that bring them together, or move `at`",
+                            stage::WINDOW_S
+                        ),
+                    }),
                 );
             }
         }
@@ -1489,6 +1497,11 @@ struct Sim<'a, 'b> {
     /// `candidates`' output, and `Path::frenet_dir` of each, kept to reuse their allocations.
     cand: std::cell::RefCell<Vec<usize>>,
     proj: std::cell::RefCell<Vec<(f64, f64, f64, DVec2)>>,
+    /// A striker's braking course (`braking_course`), kept between frames for its capacity.
+    course: std::cell::RefCell<Vec<(f64, DVec2, f64)>>,
+    /// Per striker: the bystander that first held it back from its intercept speed, and when
+    /// (an E0205 names it).
+    blocked_by: std::cell::RefCell<Vec<Option<(usize, f64)>>>,
     /// `overlap_pairs`' boxes and output, kept likewise.
     sweep: Vec<(DVec2, DVec2, usize)>,
     pairs: Vec<(usize, usize)>,
@@ -1554,6 +1567,8 @@ impl<'a, 'b> Sim<'a, 'b> {
             max_radius: actors.iter().map(|a| a.radius).fold(0.0, f64::max),
             cand: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
             proj: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
+            course: std::cell::RefCell::new(Vec::with_capacity(COURSE_STEPS)),
+            blocked_by: std::cell::RefCell::new(vec![None; actors.len()]),
             sweep: Vec::with_capacity(actors.len()),
             pairs: vec![],
             cur,
@@ -1579,9 +1594,11 @@ impl<'a, 'b> Sim<'a, 'b> {
         self
     }
 
-    fn run(mut self, out: &mut Tracks) {
+    /// Run the frames into `out`; returns, per striker, the bystander that first held it back
+    /// (`blocked_by`).
+    fn run(mut self, out: &mut Tracks) -> Vec<Option<(usize, f64)>> {
         if out.frames == 0 {
-            return;
+            return self.blocked_by.into_inner();
         }
         match self.prefix {
             Some(done) => {
@@ -1641,6 +1658,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             std::mem::swap(&mut self.cur, &mut self.next);
             self.record(out);
         }
+        self.blocked_by.into_inner()
     }
 
     fn record(&mut self, out: &mut Tracks) {
@@ -2669,28 +2687,79 @@ impl<'a, 'b> Sim<'a, 'b> {
         for k in 0..=8 {
             let vk = v - (v - v_min) * k as f64 / 8.0;
             let next = step(vk);
-            if vk <= v_min || !self.strike_blocked(i, plan.struck, next.0, next.1, vk, next.2) {
+            if vk <= v_min {
                 pick = (vk, next);
                 break;
+            }
+            match self.strike_blocked(i, plan.struck, (next.0, next.1), vk, next.2, (g, gyaw)) {
+                None => {
+                    pick = (vk, next);
+                    break;
+                }
+                Some(j) if k == 0 => {
+                    self.blocked_by.borrow_mut()[i].get_or_insert((j, t));
+                }
+                Some(_) => {}
             }
         }
         let (v, (pos, yaw, _)) = pick;
         State { pos, yaw, v, ..st }
     }
 
+    /// Striker `i`'s poses, a step apart, were it to brake at its emergency braking from `pos`,
+    /// `yaw` and `v`, steering for its contact pose `goal` as `intercept` does, up to the
+    /// contact (`left` metres on): the time from now, and the pose. A curve re-planned every
+    /// step and a heading that turns no faster than the car can is not the curve it plans: at
+    /// speed the car runs wide of it.
+    fn braking_course(
+        &self,
+        i: usize,
+        (pos, yaw): (DVec2, f64),
+        v: f64,
+        left: f64,
+        goal: (DVec2, f64),
+        out: &mut Vec<(f64, DVec2, f64)>,
+    ) {
+        let (a, dt) = (&self.actors[i], self.dt);
+        out.clear();
+        let (mut st, mut went, mut t) = (State { pos, yaw, v, ..self.cur[i] }, 0.0, 0.0);
+        while st.v > 0.0 && went < left && out.len() < COURSE_STEPS {
+            let v2 = (st.v - a.lim.brake_max * dt).max(0.0);
+            let adv = (0.5 * (st.v + v2) * dt).min(left - went);
+            let curve = Hermite::new(st.pos, st.yaw, goal.0, goal.1);
+            let aim = if curve.length() <= 3.0 * adv { goal.0 } else { curve.at(adv, goal.1).0 };
+            (st.pos, st.yaw) =
+                self.advance(a, &st, pursuit(st.pos, DVec2::from_angle(st.yaw), aim), adv, stage::STRIKE_YAW);
+            st.v = v2;
+            went += adv;
+            t += dt;
+            out.push((t, st.pos, st.yaw));
+        }
+    }
+
     /// Whether striker `i` at `pos`, `yaw` and speed `v`, `left` metres short of its contact pose,
     /// would be inside a bystander's stopping envelope (its box stretched ahead by the distance it
     /// needs to stop at its emergency braking), or have its own envelope (up to the contact pose)
     /// reach a bystander's. A bystander following the striker is left to its own safe speed.
-    fn strike_blocked(&self, i: usize, struck: usize, pos: DVec2, yaw: f64, v: f64, left: f64) -> bool {
+    fn strike_blocked(
+        &self,
+        i: usize,
+        struck: usize,
+        (pos, yaw): (DVec2, f64),
+        v: f64,
+        left: f64,
+        goal: (DVec2, f64),
+    ) -> Option<usize> {
         let a = &self.actors[i];
+        let mut course = self.course.borrow_mut();
+        let mut built = false;
         let envelope = |c: DVec2, yaw: f64, hl: f64, hw: f64, ext: f64| {
             let dir = DVec2::from_angle(yaw);
             Obb { center: c + dir * (0.5 * ext), yaw, length: 2.0 * hl + ext, width: 2.0 * hw }
         };
         let own_ext = (v * v / (2.0 * a.lim.brake_max) + SAFE_MARGIN).min(left);
         let mine = envelope(pos, yaw, a.hl, a.hw, own_ext);
-        (0..self.actors.len()).any(|j| {
+        (0..self.actors.len()).find(|&j| {
             if j == i || j == struck || self.exempt(i, j) {
                 return false;
             }
@@ -2701,6 +2770,23 @@ impl<'a, 'b> Sim<'a, 'b> {
             }
             let theirs_box = b.obb(o);
             if mine.overlaps(&theirs_box) {
+                return true;
+            }
+            // Along the course we would brake on, not only straight on, against where it will
+            // be by then at its present speed: a striker turning back at 22 m/s around the car
+            // it is to meet saw a walker stepping into that car's lane only once it had turned
+            // toward it, 4 m off.
+            let vel = self.dirs[j] * o.v;
+            if !b.vehicle && !built {
+                self.braking_course(i, (pos, yaw), v, left, goal, &mut course);
+                built = true;
+            }
+            if !b.vehicle
+                && course.iter().any(|&(t, p, h)| {
+                    let ours = Obb { center: p, yaw: h, length: 2.0 * a.hl + SAFE_MARGIN, width: 2.0 * a.hw };
+                    ours.overlaps(&Obb { center: theirs_box.center + vel * t, ..theirs_box })
+                })
+            {
                 return true;
             }
             // Already ahead of it in its lane and heading its way: it follows us, at its own
@@ -2874,6 +2960,9 @@ impl<'a, 'b> Sim<'a, 'b> {
 /// The first centre arc length from `from` (to within a quarter metre, never past the
 /// true one) at which the box of `a`, stretched across its path to the offsets `band`,
 /// meets `theirs`, following its path up to `to`.
+/// At most this many steps of a striker's braking course (`Sim::braking_course`).
+const COURSE_STEPS: usize = 40;
+
 fn band_meets(a: &Actor, from: f64, to: f64, band: (f64, f64), theirs: &Obb) -> Option<f64> {
     let (mid, width) = (0.5 * (band.0 + band.1), band.1 - band.0);
     // The box for every centre position in [s, s + step].
