@@ -1505,3 +1505,22 @@ fn a_striker_slows_for_a_walker_on_its_course_and_the_refusal_names_it() {
     let f = front(&without).unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| &d.message).collect::<Vec<_>>()));
     assert_eq!(f.tracks.impacts.len(), 1, "no crash staged without the walker");
 }
+
+/// A car told to `stop behind` a motorcycle that makes a U-turn queues behind it while it turns,
+/// and no longer once it comes back the other way in the next lane: it then drives on at its
+/// limits. It used to keep the motorcycle as its leader there, closing at 14 m/s, and brake to
+/// a dead stop at -27.6 m/s2.
+#[test]
+fn a_leader_that_turns_back_is_no_longer_queued_behind() {
+    let text = std::fs::read_to_string("tests/rollout-cases/queued-behind-a-u-turn.scn").expect("case");
+    let t = &front_of(&text).tracks;
+    let idx = |name: &str| t.agents.iter().position(|a| a.name == name).expect("agent");
+    let (moto, car) = (idx("v0"), idx("v1"));
+    let dt = 1.0 / t.rate;
+    let worst = (1..t.frames).map(|f| (t.speeds[car][f - 1] - t.speeds[car][f]) / dt).fold(0.0, f64::max);
+    assert!(worst <= 8.0 + 1e-6, "the car braked at {worst:.1} m/s2");
+    // The motorcycle does turn back, and the car passes it going the other way.
+    let back = (0..t.frames).any(|f| t.poses[moto][f].yaw.sin() > 0.9);
+    assert!(back, "the motorcycle never turned back");
+    assert!(overlaps(t, &[]).is_empty());
+}

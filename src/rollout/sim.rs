@@ -1807,9 +1807,11 @@ impl<'a, 'b> Sim<'a, 'b> {
             let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
             let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
             // The one we queue behind, while it is on our way: once a vehicle has turned off,
-            // more than a lane from our path, there is no queue to keep (its projection onto our
-            // route then says nothing of a gap). A walker or an animal on the verge stays named.
-            let is_named = named == Some(j) && (!b.vehicle || lj.abs() - ext_lat < a.hw + 3.0);
+            // more than a lane from our path, or turned back toward us (a U-turn), there is no
+            // queue to keep (its projection onto our route then says nothing of a gap; a car
+            // queued behind a motorcycle's U-turn braked at -27 m/s2 for it coming back in the
+            // next lane). A walker or an animal on the verge stays named.
+            let is_named = named == Some(j) && (!b.vehicle || (lj.abs() - ext_lat < a.hw + 3.0 && cr > -0.5));
             if beyond > 0.5 && !is_named {
                 continue;
             }
