@@ -1763,6 +1763,15 @@ impl<'a, 'b> Sim<'a, 'b> {
         let fwd = self.dirs[i];
         let look = st.v * st.v / (2.0 * lim.brake) + 2.5 * st.v + 15.0;
         let mut acc = idm_free(st.v, v_des, lim, dt);
+        // Over the curve-speed profile (it falls toward each bend at the comfortable braking),
+        // brake down onto it: IDM's free term alone brakes about 0.5 m/s2 when 5% over, and a
+        // motorcycle entering its U-turn a fifth over ran 1.7 m wide into the next lane.
+        if a.vehicle {
+            let cap_next = a.path.cap(st.s + st.v * dt);
+            if st.v > cap_next {
+                acc = acc.min(((cap_next - st.v) / dt).max(-lim.brake));
+            }
+        }
         let mut hard = f64::INFINITY;
         let mut side_blocked = false;
         // Walkers beside each other on converging lines (side by side on a curve's sidewalk):
