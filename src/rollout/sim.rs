@@ -2787,18 +2787,18 @@ impl<'a, 'b> Sim<'a, 'b> {
             // be by then at its present speed: a striker turning back at 22 m/s around the car
             // it is to meet saw a walker stepping into that car's lane only once it had turned
             // toward it, 4 m off.
-            let vel = self.dirs[j] * o.v;
-            if !b.vehicle && !built {
-                self.braking_course(i, (pos, yaw), v, left, goal, &mut course);
-                built = true;
-            }
-            if !b.vehicle
-                && course.iter().any(|&(t, p, h)| {
+            if !b.vehicle {
+                if !built {
+                    self.braking_course(i, (pos, yaw), v, left, goal, &mut course);
+                    built = true;
+                }
+                let vel = self.dirs[j] * o.v;
+                if course.iter().any(|&(t, p, h)| {
                     let ours = Obb { center: p, yaw: h, length: 2.0 * a.hl + SAFE_MARGIN, width: 2.0 * a.hw };
                     ours.overlaps(&Obb { center: theirs_box.center + vel * t, ..theirs_box })
-                })
-            {
-                return true;
+                }) {
+                    return true;
+                }
             }
             // Already ahead of it in its lane and heading its way: it follows us, at its own
             // safe speed. Cutting in from beside is not following.
@@ -2968,12 +2968,12 @@ impl<'a, 'b> Sim<'a, 'b> {
     }
 }
 
-/// The first centre arc length from `from` (to within a quarter metre, never past the
-/// true one) at which the box of `a`, stretched across its path to the offsets `band`,
-/// meets `theirs`, following its path up to `to`.
 /// At most this many steps of a striker's braking course (`Sim::braking_course`).
 const COURSE_STEPS: usize = 40;
 
+/// The first centre arc length from `from` (to within a quarter metre, never past the
+/// true one) at which the box of `a`, stretched across its path to the offsets `band`,
+/// meets `theirs`, following its path up to `to`.
 fn band_meets(a: &Actor, from: f64, to: f64, band: (f64, f64), theirs: &Obb) -> Option<f64> {
     let (mid, width) = (0.5 * (band.0 + band.1), band.1 - band.0);
     // The box for every centre position in [s, s + step].
