@@ -226,12 +226,8 @@ pub fn on_coded_sides(
     af_local: [f64; 2],
     af_size: [f64; 3],
 ) -> Result<(), String> {
-    if impact != Impact::Object && struck_side != point {
-        return Err(format!(
-            "the contact is on the struck box's {} side, not {}",
-            point_name(struck_side),
-            point_name(point)
-        ));
+    if let Some(why) = crate::rollout::wrong_struck_side(impact, point, struck_side) {
+        return Err(format!("the contact is on the struck box's {why}"));
     }
     let (x, y) = (af_local[0], af_local[1]);
     let ok = match face {

@@ -303,14 +303,19 @@ Place the agent on a lane that reaches a junction offering the turn, or change t
     },
     Code {
         code: "E0205",
-        title: "conflict makes no contact near its time",
+        title: "conflict makes no contact near its time, or not as asked",
         explanation: "A `conflict` is staged by steering the at-fault agent, within its motion limits, into\n\
 the struck agent so that they touch within 1.5 s of `at` (mid-clip without `at`). When the two\n\
 are too far apart for that, or their motion keeps them apart, the crash would be silently missing\n\
-from the clip; instead `rocc check` and `rocc compile` report it at the conflict. The at-fault\n\
-agent is reckless toward the struck agent only: it slows for any other agent in its way (a\n\
-walker on the course it would brake on, a car whose stopping distance it would cut into), and\n\
-when that makes it miss, the help names that agent.\n
+from the clip; instead `rocc check` and `rocc compile` report it at the conflict. The same goes\n\
+for a crash that happens but not as written: the contact must lie on the struck agent's `point`\n\
+side (the thirds of each face of its box; any face of a struck object) and on the at-fault\n\
+agent's striking face (its front, or its side for a `sideswipe`): a `rear_end` on `rear` that\n\
+the struck car, its way blocked by the striker, drives into front first is refused, not\n\
+labelled a rear-end. The at-fault agent is reckless toward the struck agent only: it slows for\n\
+any other agent in its way (a walker on the course it would brake on, a car whose stopping\n\
+distance it would cut into, a car coming the other way), and when that makes it miss, the help\n\
+names the agent that held it back longest.\n
     agent a: sedan { at west.in[1], 50 m before center; speed 30 km/h }
     agent b: sedan { at west.in[1], 50 m after center; speed 30 km/h }
     conflict { at_fault a; struck b; impact rear_end; point rear; at 0.5 s }   // error: 100 m apart\n\n\

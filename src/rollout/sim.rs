@@ -344,8 +344,41 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         // plan the at-fault agent is not ours to steer, e.g. a replayed track: nothing to check.)
         for (k, _) in confs.iter().zip(&plans).filter(|(_, p)| p.is_some()) {
             let t_req = stage::requested_time(&k.c, dt, frames, c.duration);
-            let hit = out.impacts.iter().find(|r| r.conflict == k.index).map(|r| r.frame as f64 * dt);
-            if hit.is_none_or(|t| (t - t_req).abs() > stage::WINDOW_S + 0.5 * dt) {
+            let rec = out.impacts.iter().find(|r| r.conflict == k.index);
+            let hit = rec.map(|r| r.frame as f64 * dt);
+            // Nor one that lands elsewhere than asked: a `rear_end` on `rear` that the struck
+            // car, blocked by its striker standing in its lane, drives into front first is not
+            // the crash the file describes, and its labels would say it is.
+            let off = rec.and_then(|r| {
+                let size = out.agents[r.at_fault].size;
+                stage::wrong_struck_side(k.c.impact, k.c.point, r.struck_side)
+                    .map(|why| format!("`{}` is struck on its {why}", actors[k.st].info.name))
+                    .or_else(|| stage::off_striking_face(k.c.impact, r.at_fault_local, size))
+            });
+            let in_time = |t: f64| (t - t_req).abs() <= stage::WINDOW_S + 0.5 * dt;
+            if let (Some(t), Some(why)) = (hit.filter(|&t| in_time(t)), off) {
+                let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
+                errs.push(
+                    Diagnostic::error(
+                        "E0205",
+                        format!("the conflict between `{a}` and `{b}` cannot be staged as asked: at {t:.1} s {why}"),
+                    )
+                    .label(k.c.span, "the crash lands elsewhere")
+                    .help(match blocked_by[k.af] {
+                        Some((j, t)) => format!(
+                            "`{a}` slowed from {t:.1} s for `{}` in its way (a striker never runs into a bystander), \
+                             and the two met otherwise: start `{a}` where its way to `{b}` is clear, keep `{}` out of it, or move `at`",
+                            actors[j].info.name, actors[j].info.name
+                        ),
+                        None => format!(
+                            "start `{a}` where its striking face can come at that side of `{b}` (behind it in its lane for \
+                             `rear_end`, toward it for `head_on`), or ask for the side it can reach"
+                        ),
+                    }),
+                );
+                continue;
+            }
+            if !hit.is_some_and(in_time) {
                 let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
                 let what = match hit {
                     Some(t) => format!("they first touch at {t:.1} s"),
@@ -1501,7 +1534,9 @@ struct Sim<'a, 'b> {
     course: std::cell::RefCell<Vec<(f64, DVec2, f64)>>,
     /// Per striker: the bystander that first held it back from its intercept speed, and when
     /// (an E0205 names it).
-    blocked_by: std::cell::RefCell<Vec<Option<(usize, f64)>>>,
+    /// Per striker, each bystander that held it back at full speed: when first, and for how
+    /// many frames.
+    blocked_by: std::cell::RefCell<Vec<Vec<(usize, f64, u32)>>>,
     /// `overlap_pairs`' boxes and output, kept likewise.
     sweep: Vec<(DVec2, DVec2, usize)>,
     pairs: Vec<(usize, usize)>,
@@ -1568,7 +1603,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             cand: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
             proj: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
             course: std::cell::RefCell::new(Vec::with_capacity(COURSE_STEPS)),
-            blocked_by: std::cell::RefCell::new(vec![None; actors.len()]),
+            blocked_by: std::cell::RefCell::new(vec![Vec::new(); actors.len()]),
             sweep: Vec::with_capacity(actors.len()),
             pairs: vec![],
             cur,
@@ -1594,11 +1629,11 @@ impl<'a, 'b> Sim<'a, 'b> {
         self
     }
 
-    /// Run the frames into `out`; returns, per striker, the bystander that first held it back
-    /// (`blocked_by`).
+    /// Run the frames into `out`; returns, per striker, the bystander that held it back longest,
+    /// and from when (`blocked_by`): a car it slowed for once, in passing, did not make it miss.
     fn run(mut self, out: &mut Tracks) -> Vec<Option<(usize, f64)>> {
         if out.frames == 0 {
-            return self.blocked_by.into_inner();
+            return self.held_longest();
         }
         match self.prefix {
             Some(done) => {
@@ -1658,7 +1693,15 @@ impl<'a, 'b> Sim<'a, 'b> {
             std::mem::swap(&mut self.cur, &mut self.next);
             self.record(out);
         }
-        self.blocked_by.into_inner()
+        self.held_longest()
+    }
+
+    fn held_longest(self) -> Vec<Option<(usize, f64)>> {
+        let longest = |held: Vec<(usize, f64, u32)>| {
+            // The first of equals: the list is in order of first hold.
+            held.into_iter().rev().max_by_key(|h| h.2).map(|(j, t, _)| (j, t))
+        };
+        self.blocked_by.into_inner().into_iter().map(longest).collect()
     }
 
     fn record(&mut self, out: &mut Tracks) {
@@ -2708,7 +2751,11 @@ impl<'a, 'b> Sim<'a, 'b> {
                     break;
                 }
                 Some(j) if k == 0 => {
-                    self.blocked_by.borrow_mut()[i].get_or_insert((j, t));
+                    let mut held = self.blocked_by.borrow_mut();
+                    match held[i].iter_mut().find(|h| h.0 == j) {
+                        Some(h) => h.2 += 1,
+                        None => held[i].push((j, t, 1)),
+                    }
                 }
                 Some(_) => {}
             }
@@ -2775,7 +2822,7 @@ impl<'a, 'b> Sim<'a, 'b> {
                 return false;
             }
             let (b, o) = (&self.actors[j], &self.cur[j]);
-            let r = a.radius + b.radius + own_ext + o.v * o.v / (2.0 * b.lim.brake_max) + SAFE_MARGIN;
+            let r = a.radius + b.radius + own_ext + o.v * o.v / (2.0 * b.lim.brake_max) + o.v * self.dt + SAFE_MARGIN;
             if pos.distance_squared(o.pos) > r * r {
                 return false;
             }
@@ -2800,9 +2847,41 @@ impl<'a, 'b> Sim<'a, 'b> {
                     return true;
                 }
             }
+            // Coming the other way: the gap closes from both ends, so neither stopping distance
+            // alone says whether it can stop short of where we will stand (we stop at the
+            // contact, latched). Our braking course, held at its end, against where it will be
+            // braking at its emergency braking from one step on: a bus swerving into the
+            // oncoming lane at 20 m/s to sideswipe a car left the car coming the other way 1.3 m
+            // to stop in from 5 m/s.
+            let fwd = self.dirs[j];
+            if b.vehicle && o.v > 0.05 && DVec2::from_angle(yaw).dot(fwd) < -0.5 && fwd.dot(pos - o.pos) > 0.0 {
+                if !built {
+                    self.braking_course(i, (pos, yaw), v, left, goal, &mut course);
+                    built = true;
+                }
+                let dt = self.dt;
+                let stop = o.v / b.lim.brake_max;
+                let went = |t: f64| {
+                    let tb = (t - dt).clamp(0.0, stop);
+                    o.v * t.min(dt) + o.v * tb - 0.5 * b.lim.brake_max * tb * tb
+                };
+                let last = course.last().map_or((pos, yaw), |&(_, p, h)| (p, h));
+                let steps = ((dt + stop) / dt).ceil() as usize + 1;
+                // Along its route, not straight on: on a curve a car in the next lane, taken
+                // straight on over its stopping distance, crosses into ours.
+                let off = o.pos - b.path.point(o.s, o.d).0;
+                if (1..=steps.max(course.len())).any(|k| {
+                    let (p, h) = course.get(k - 1).map_or(last, |&(_, p, h)| (p, h));
+                    let ours = Obb { center: p, yaw: h, length: 2.0 * a.hl + SAFE_MARGIN, width: 2.0 * a.hw };
+                    let (q, qh) = b.path.point(o.s + went(k as f64 * dt), o.d);
+                    ours.overlaps(&Obb { center: q + off, yaw: qh, ..theirs_box })
+                }) {
+                    return true;
+                }
+            }
             // Already ahead of it in its lane and heading its way: it follows us, at its own
             // safe speed. Cutting in from beside is not following.
-            let (fwd, now) = (self.dirs[j], self.cur[i].pos - o.pos);
+            let now = self.cur[i].pos - o.pos;
             let follows =
                 now.dot(fwd) > b.hl && fwd.perp_dot(now).abs() < a.hw + b.hw && DVec2::from_angle(yaw).dot(fwd) > 0.7;
             if follows || o.v < 0.05 {

@@ -383,6 +383,28 @@ pub fn contact_centroid(a: &Obb, b: &Obb) -> Option<DVec2> {
 
 /// Which side of a box (length, width) a point in its frame lies on: each face is cut in thirds;
 /// the outer thirds of the faces are corners.
+/// Why a latched contact is not on the side the conflict asked for, if it is not ("front, not
+/// its rear_left"): the struck box's side (thirds of each face, `side_of`) must be `point`,
+/// except for a struck object, which is turned to face the striker and has no side of its own.
+pub fn wrong_struck_side(impact: Impact, point: Point, struck_side: Point) -> Option<String> {
+    let name = |p: Point| crate::check::scenario::POINTS.iter().find(|x| x.1 == p).map_or("front", |x| x.0);
+    (impact != Impact::Object && struck_side != point)
+        .then(|| format!("{}, not its {}", name(struck_side), name(point)))
+}
+
+/// Why the striker did not touch with its natural striking face, if it did not: its front
+/// (the front third of its box, a front corner included, as `side_of` divides a box), or
+/// for a sideswipe one of its sides (the left or right third).
+pub fn off_striking_face(impact: Impact, af_local: [f64; 2], af_size: [f64; 3]) -> Option<String> {
+    let sector = side_of(DVec2::new(af_local[0], af_local[1]), af_size[0], af_size[1]);
+    let (on, face) = match impact {
+        Impact::Sideswipe => (!matches!(sector, Point::Front | Point::Rear), "side"),
+        _ => (matches!(sector, Point::Front | Point::FrontLeft | Point::FrontRight), "front"),
+    };
+    let (x, y) = (af_local[0], af_local[1]);
+    (!on).then(|| format!("the striker touches at ({x:.2}, {y:.2}) m of its box, not with its {face}"))
+}
+
 pub fn side_of(local: DVec2, length: f64, width: f64) -> Point {
     let u = local.x / (length / 2.0);
     let v = local.y / (width / 2.0);

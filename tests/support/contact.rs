@@ -16,24 +16,32 @@ pub fn obb(t: &Tracks, a: usize, f: usize) -> Obb {
 }
 
 /// The contact, measured by sampling: the mean of at-fault box points inside the struck box, in
-/// the struck frame and in the at-fault frame.
+/// the struck frame and in the at-fault frame. A sliver thinner than the sampling step (a bus's
+/// step is 15 cm) is sampled again, eight times finer.
 pub fn measured_contact(t: &Tracks, af: usize, st: usize, f: usize) -> (DVec2, DVec2) {
     let (a, b) = (obb(t, af, f), obb(t, st, f));
-    let (mut sum, mut n) = (DVec2::ZERO, 0);
-    for i in 0..=80 {
-        for j in 0..=40 {
-            let q = DVec2::new((i as f64 / 80.0 - 0.5) * a.length, (j as f64 / 40.0 - 0.5) * a.width);
-            let w = a.center + q.rotate(DVec2::from_angle(a.yaw));
-            let l = (w - b.center).rotate(DVec2::from_angle(-b.yaw));
-            if l.x.abs() < b.length / 2.0 && l.y.abs() < b.width / 2.0 {
-                sum += w;
-                n += 1;
+    for (nl, nw) in [(80, 40), (640, 320)] {
+        let (mut sum, mut n) = (DVec2::ZERO, 0);
+        for i in 0..=nl {
+            for j in 0..=nw {
+                let q = DVec2::new((i as f64 / nl as f64 - 0.5) * a.length, (j as f64 / nw as f64 - 0.5) * a.width);
+                let w = a.center + q.rotate(DVec2::from_angle(a.yaw));
+                let l = (w - b.center).rotate(DVec2::from_angle(-b.yaw));
+                if l.x.abs() < b.length / 2.0 && l.y.abs() < b.width / 2.0 {
+                    sum += w;
+                    n += 1;
+                }
             }
         }
+        if n > 0 {
+            let w = sum / n as f64;
+            return (
+                (w - b.center).rotate(DVec2::from_angle(-b.yaw)),
+                (w - a.center).rotate(DVec2::from_angle(-a.yaw)),
+            );
+        }
     }
-    assert!(n > 0, "no contact at frame {f}");
-    let w = sum / n as f64;
-    ((w - b.center).rotate(DVec2::from_angle(-b.yaw)), (w - a.center).rotate(DVec2::from_angle(-a.yaw)))
+    panic!("no contact at frame {f}");
 }
 
 /// Thirds of each face, as in the language reference: outer thirds are corners.
