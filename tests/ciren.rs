@@ -119,7 +119,7 @@ fn check_contact(imp: &Imported, stated: &[(String, Part)]) -> Tracks {
     let t = front.tracks;
     let rec = t.impacts.first().unwrap_or_else(|| panic!("{}: no impact", imp.crash.id));
     let (af, st, f) = (rec.at_fault, rec.struck, rec.frame);
-    let (in_struck, in_af) = measured_contact(&t, af, st, f);
+    let (in_struck, in_af) = measured_contact(&t, af, st, f).expect("contact at the latched frame");
     let mut checked = 0;
     for (name, p) in stated {
         let Some(i) = t.agents.iter().position(|a| &a.name == name) else { continue };

@@ -343,7 +343,7 @@ fn check_conflict(specs: Vec<Spec>, map: &Map, impact: Impact, point: Point, at:
     let f = rec.frame;
     let when = f as f64 / t.rate;
     assert!((when - at).abs() <= 1.0, "{impact:?} {point:?}: impact at {when} s, asked {at}");
-    let (in_struck, in_af) = measured_contact(&t, 0, 1, f);
+    let (in_struck, in_af) = measured_contact(&t, 0, 1, f).expect("contact at the latched frame");
     let s = t.agents[1].size;
     assert_eq!(sector(in_struck, s[0], s[1]), point, "{impact:?}: contact {in_struck} on the struck box");
     assert_eq!(rec.struck_side, point);
@@ -1355,7 +1355,10 @@ fn generated_scene_holds(text: &str) -> Result<(), TestCaseError> {
     };
     for r in &t.impacts {
         let c = &f.concrete.conflicts[r.conflict];
-        let (in_struck, in_af) = measured_contact(t, r.at_fault, r.struck, r.frame);
+        let contact = measured_contact(t, r.at_fault, r.struck, r.frame);
+        let Some((in_struck, in_af)) = contact else {
+            return Err(TestCaseError::fail(format!("{text}\nno overlap at the latched frame {}", r.frame)));
+        };
         prop_assert!(
             c.impact == Impact::Object || lands(in_struck, t.agents[r.struck].size, &|p| p == c.point),
             "{text}\n{:?} lands at {in_struck} of the struck box, not {:?}",

@@ -23,8 +23,6 @@ pub struct Staging {
 /// The striker's lags tried (s), in order; each with every impact time of `TIMES`.
 const LAGS: [f64; 6] = [0.0, 0.5, 1.0, -0.5, 1.5, 2.0];
 const TIMES: [f64; 5] = [4.0, 3.5, 4.5, 3.0, 5.0];
-/// A latched contact shallower than this is a graze, not the coded impact (m).
-const MIN_DEPTH: f64 = 0.05;
 
 /// What the verified staging did.
 #[derive(Clone, Debug, PartialEq)]
@@ -279,7 +277,7 @@ pub fn stage(c: &Crash) -> Result<Staged, Vec<Diagnostic>> {
             continue;
         };
         let size = front.tracks.agents[rec.at_fault].size;
-        if rec.depth < MIN_DEPTH {
+        if rec.depth < crate::rollout::MIN_DEPTH {
             last = format!("only a {:.2} m graze at {} s", rec.depth, num(t));
             continue;
         }

@@ -310,9 +310,11 @@ are too far apart for that, or their motion keeps them apart, the crash would be
 from the clip; instead `rocc check` and `rocc compile` report it at the conflict. The same goes\n\
 for a crash that happens but not as written: the contact must lie on the struck agent's `point`\n\
 side (the thirds of each face of its box; any face of a struck object) and on the at-fault\n\
-agent's striking face (its front, or its side for a `sideswipe`): a `rear_end` on `rear` that\n\
-the struck car, its way blocked by the striker, drives into front first is refused, not\n\
-labelled a rear-end. The at-fault agent is reckless toward the struck agent only: it slows for\n\
+agent's striking face (its front, or its side for a `sideswipe`), at least 5 cm deep: a\n\
+`rear_end` on `rear` that the struck car, its way blocked by the striker, drives into front\n\
+first is refused, not labelled a rear-end, and so is a 3 mm graze. A staging that fails is\n\
+planned again with its impact away from the times already tried, up to three times, before\n\
+this error, which then says what the first plan (nearest `at`) did. The at-fault agent is reckless toward the struck agent only: it slows for\n\
 any other agent in its way (a walker on the course it would brake on, a car whose stopping\n\
 distance it would cut into, a car coming the other way), and when that makes it miss, the help\n\
 names the agent that held it back longest.\n

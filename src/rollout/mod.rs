@@ -36,7 +36,7 @@ mod stage;
 mod traffic;
 
 pub use sim::KEY_SNAP_S;
-pub use stage::{contact_centroid, off_striking_face, side_of, wrong_struck_side};
+pub use stage::{MIN_DEPTH, contact_centroid, off_striking_face, side_of, wrong_struck_side};
 
 use crate::check::scenario::{Class, Motion, Point};
 use crate::diag::Diagnostic;

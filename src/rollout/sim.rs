@@ -333,32 +333,99 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         let mut pass1 = empty_tracks(&actors, c.rate, frames);
         let mut states = Vec::with_capacity(frames);
         Sim::new(&actors, &confs, &[], None, dt).keep_states(&mut states).run(&mut pass1);
-        let plans: Vec<Option<Plan>> =
-            confs.iter().map(|k| stage::choose(k, &actors, &pass1, dt, c.duration)).collect();
-        // Pass 2 is pass 1 until a planned striker departs or a planned pair first overlaps:
-        // those frames are copied, not simulated again.
-        let start = pass2_start(&actors, &confs, &plans, &states, dt);
-        let blocked_by =
-            Sim::new(&actors, &confs, &plans, Some(&pass1), dt).resume(&pass1, &states, start).run(&mut out);
-        // A staged crash that does not happen near its time is not silently dropped. (Without a
-        // plan the at-fault agent is not ours to steer, e.g. a replayed track: nothing to check.)
-        for (k, _) in confs.iter().zip(&plans).filter(|(_, p)| p.is_some()) {
-            let t_req = stage::requested_time(&k.c, dt, frames, c.duration);
-            let rec = out.impacts.iter().find(|r| r.conflict == k.index);
-            let hit = rec.map(|r| r.frame as f64 * dt);
-            // Nor one that lands elsewhere than asked: a `rear_end` on `rear` that the struck
-            // car, blocked by its striker standing in its lane, drives into front first is not
-            // the crash the file describes, and its labels would say it is.
-            let off = rec.and_then(|r| {
-                let size = out.agents[r.at_fault].size;
-                stage::wrong_struck_side(k.c.impact, k.c.point, r.struck_side)
-                    .map(|why| format!("`{}` is struck on its {why}", actors[k.st].info.name))
-                    .or_else(|| stage::off_striking_face(k.c.impact, r.at_fault_local, size))
-            });
-            let in_time = |t: f64| (t - t_req).abs() <= stage::WINDOW_S + 0.5 * dt;
-            if let (Some(t), Some(why)) = (hit.filter(|&t| in_time(t)), off) {
-                let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
-                errs.push(
+        // A staging that misses or lands elsewhere than asked, or that has the overlap safety
+        // net stop someone dead, is planned again away from the impact times tried (the plan
+        // nearest the request may be the one a bystander spoils), up to `RESTAGE` times. The
+        // first attempt that lands every crash as asked with everyone inside their limits is
+        // kept; if none does, the first attempt (the plans nearest the request) stands: its
+        // tracks, or its errors.
+        let mut avoid: Vec<Vec<f64>> = vec![Vec::new(); confs.len()];
+        let mut first: Option<(Tracks, Vec<(usize, Diagnostic)>)> = None;
+        let mut plans: Vec<Option<Plan>> =
+            confs.iter().map(|k| stage::choose(k, &actors, &pass1, dt, c.duration, &[])).collect();
+        for attempt in 0..=RESTAGE {
+            // Pass 2 is pass 1 until a planned striker departs or a planned pair first
+            // overlaps: those frames are copied, not simulated again.
+            let start = pass2_start(&actors, &confs, &plans, &states, dt);
+            out = empty_tracks(&actors, c.rate, frames);
+            let report =
+                Sim::new(&actors, &confs, &plans, Some(&pass1), dt).resume(&pass1, &states, start).run(&mut out);
+            let failed = staging_errors(&actors, &confs, &plans, &out, &report.blocked_by, (dt, frames, c.duration));
+            if failed.is_empty() && report.hard_stops == 0 {
+                break;
+            }
+            // Plan again the conflicts that failed; where none did, every one.
+            let redo: Vec<usize> =
+                if failed.is_empty() { (0..confs.len()).collect() } else { failed.iter().map(|f| f.0).collect() };
+            if attempt == 0 {
+                // The tracks are kept only when they are the answer should nothing do better.
+                first = Some((if failed.is_empty() { out.clone() } else { empty_tracks(&actors, c.rate, 0) }, failed));
+            }
+            let mut replanned = false;
+            if attempt < RESTAGE {
+                for ki in redo {
+                    let Some(tried) = plans[ki].as_ref().map(|p| p.t_impact) else { continue };
+                    avoid[ki].push(tried);
+                    if let Some(p) = stage::choose(&confs[ki], &actors, &pass1, dt, c.duration, &avoid[ki]) {
+                        plans[ki] = Some(p);
+                        replanned = true;
+                    }
+                }
+            }
+            if !replanned {
+                let (tracks, failed) = first.take().expect("the first attempt is kept");
+                if failed.is_empty() {
+                    out = tracks;
+                }
+                errs.extend(failed.into_iter().map(|(_, d)| d));
+                break;
+            }
+        }
+    }
+    check_turns(map, &actors, &confs, &out, &mut errs);
+    if !errs.is_empty() {
+        return Err(errs);
+    }
+    Ok(out)
+}
+
+/// How many times a staging that fails is planned again (`stage::choose` away from the impact
+/// times already tried) before E0205.
+const RESTAGE: usize = 3;
+
+/// E0205 for each planned conflict whose crash does not happen near its time, or lands
+/// elsewhere than asked, with its index into `confs`. (Without a plan the at-fault agent is not
+/// ours to steer, e.g. a replayed track: nothing to check.)
+fn staging_errors(
+    actors: &[Actor],
+    confs: &[Conf],
+    plans: &[Option<Plan>],
+    out: &Tracks,
+    blocked_by: &[Option<(usize, f64)>],
+    (dt, frames, duration): (f64, usize, f64),
+) -> Vec<(usize, Diagnostic)> {
+    let mut errs = vec![];
+    for (ki, (k, _)) in confs.iter().zip(plans).enumerate().filter(|(_, (_, p))| p.is_some()) {
+        let t_req = stage::requested_time(&k.c, dt, frames, duration);
+        let rec = out.impacts.iter().find(|r| r.conflict == k.index);
+        let hit = rec.map(|r| r.frame as f64 * dt);
+        // Nor one that lands elsewhere than asked: a `rear_end` on `rear` that the struck
+        // car, blocked by its striker standing in its lane, drives into front first is not
+        // the crash the file describes, and its labels would say it is.
+        let off = rec.and_then(|r| {
+            let size = out.agents[r.at_fault].size;
+            if r.depth < stage::MIN_DEPTH {
+                return Some(format!("they only graze, {:.3} m deep", r.depth));
+            }
+            stage::wrong_struck_side(k.c.impact, k.c.point, r.struck_side)
+                .map(|why| format!("`{}` is struck on its {why}", actors[k.st].info.name))
+                .or_else(|| stage::off_striking_face(k.c.impact, r.at_fault_local, size))
+        });
+        let in_time = |t: f64| (t - t_req).abs() <= stage::WINDOW_S + 0.5 * dt;
+        if let (Some(t), Some(why)) = (hit.filter(|&t| in_time(t)), off) {
+            let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
+            errs.push((
+                    ki,
                     Diagnostic::error(
                         "E0205",
                         format!("the conflict between `{a}` and `{b}` cannot be staged as asked: at {t:.1} s {why}"),
@@ -375,42 +442,38 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
                              `rear_end`, toward it for `head_on`), or ask for the side it can reach"
                         ),
                     }),
-                );
-                continue;
-            }
-            if !hit.is_some_and(in_time) {
-                let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
-                let what = match hit {
-                    Some(t) => format!("they first touch at {t:.1} s"),
-                    None => "they never touch".to_string(),
-                };
-                errs.push(
-                    Diagnostic::error(
-                        "E0205",
-                        format!("the conflict between `{a}` and `{b}` cannot be staged at {t_req:.1} s: {what}"),
-                    )
-                    .label(k.c.span, "no contact near this time")
-                    .help(match blocked_by[k.af] {
-                        Some((j, t)) => format!(
-                            "`{a}` slowed from {t:.1} s for `{}` in its way (a striker never runs into a bystander): \
+                ));
+            continue;
+        }
+        if !hit.is_some_and(in_time) {
+            let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
+            let what = match hit {
+                Some(t) => format!("they first touch at {t:.1} s"),
+                None => "they never touch".to_string(),
+            };
+            errs.push((
+                ki,
+                Diagnostic::error(
+                    "E0205",
+                    format!("the conflict between `{a}` and `{b}` cannot be staged at {t_req:.1} s: {what}"),
+                )
+                .label(k.c.span, "no contact near this time")
+                .help(match blocked_by[k.af] {
+                    Some((j, t)) => format!(
+                        "`{a}` slowed from {t:.1} s for `{}` in its way (a striker never runs into a bystander): \
                              start `{a}` where its way to `{b}` is clear, keep `{}` out of it, or move `at`",
-                            actors[j].info.name, actors[j].info.name
-                        ),
-                        None => format!(
-                            "`{a}` must be able to reach `{b}` within {:.1} s of `at` at its limits: \
+                        actors[j].info.name, actors[j].info.name
+                    ),
+                    None => format!(
+                        "`{a}` must be able to reach `{b}` within {:.1} s of `at` at its limits: \
                              start them closer, give them speeds that bring them together, or move `at`",
-                            stage::WINDOW_S
-                        ),
-                    }),
-                );
-            }
+                        stage::WINDOW_S
+                    ),
+                }),
+            ));
         }
     }
-    check_turns(map, &actors, &confs, &out, &mut errs);
-    if !errs.is_empty() {
-        return Err(errs);
-    }
-    Ok(out)
+    errs
 }
 
 /// How far a turning vehicle's wheels may stray off the drivable surface in its junction, m:
@@ -1537,6 +1600,9 @@ struct Sim<'a, 'b> {
     /// Per striker, each bystander that held it back at full speed: when first, and for how
     /// many frames.
     blocked_by: std::cell::RefCell<Vec<Vec<(usize, f64, u32)>>>,
+    /// Moves the overlap safety net undid at a speed the agent could not have braked from
+    /// within its limits in one step.
+    hard_stops: usize,
     /// `overlap_pairs`' boxes and output, kept likewise.
     sweep: Vec<(DVec2, DVec2, usize)>,
     pairs: Vec<(usize, usize)>,
@@ -1546,6 +1612,14 @@ struct Sim<'a, 'b> {
     first: usize,
     /// Frames `..first` of the output, copied by `run`.
     prefix: Option<&'b Tracks>,
+}
+
+/// What a run saw besides its tracks.
+struct Report {
+    /// Per striker, the bystander that held it back longest at full speed, and from when.
+    blocked_by: Vec<Option<(usize, f64)>>,
+    /// Moves the overlap safety net undid beyond the mover's braking limit (`Sim::hard_stops`).
+    hard_stops: usize,
 }
 
 impl<'a, 'b> Sim<'a, 'b> {
@@ -1604,6 +1678,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             proj: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
             course: std::cell::RefCell::new(Vec::with_capacity(COURSE_STEPS)),
             blocked_by: std::cell::RefCell::new(vec![Vec::new(); actors.len()]),
+            hard_stops: 0,
             sweep: Vec::with_capacity(actors.len()),
             pairs: vec![],
             cur,
@@ -1631,7 +1706,7 @@ impl<'a, 'b> Sim<'a, 'b> {
 
     /// Run the frames into `out`; returns, per striker, the bystander that held it back longest,
     /// and from when (`blocked_by`): a car it slowed for once, in passing, did not make it miss.
-    fn run(mut self, out: &mut Tracks) -> Vec<Option<(usize, f64)>> {
+    fn run(mut self, out: &mut Tracks) -> Report {
         if out.frames == 0 {
             return self.held_longest();
         }
@@ -1696,12 +1771,15 @@ impl<'a, 'b> Sim<'a, 'b> {
         self.held_longest()
     }
 
-    fn held_longest(self) -> Vec<Option<(usize, f64)>> {
+    fn held_longest(self) -> Report {
         let longest = |held: Vec<(usize, f64, u32)>| {
             // The first of equals: the list is in order of first hold.
             held.into_iter().rev().max_by_key(|h| h.2).map(|(j, t, _)| (j, t))
         };
-        self.blocked_by.into_inner().into_iter().map(longest).collect()
+        Report {
+            blocked_by: self.blocked_by.into_inner().into_iter().map(longest).collect(),
+            hard_stops: self.hard_stops,
+        }
     }
 
     fn record(&mut self, out: &mut Tracks) {
@@ -2942,6 +3020,9 @@ impl<'a, 'b> Sim<'a, 'b> {
                     let (nk, ck) = (self.next[k], self.cur[k]);
                     let moved = nk.pos != ck.pos || nk.yaw != ck.yaw;
                     if matches!(self.actors[k].drive, Drive::Mover) && moved {
+                        if self.cur[k].v > self.actors[k].lim.brake_max * self.dt + 1e-6 {
+                            self.hard_stops += 1;
+                        }
                         self.next[k] = State { v: 0.0, ..self.cur[k] };
                         changed = true;
                     }
