@@ -314,10 +314,11 @@ agent's striking face (its front, or its side for a `sideswipe`), at least 5 cm 
 `rear_end` on `rear` that the struck car, its way blocked by the striker, drives into front\n\
 first is refused, not labelled a rear-end, and so is a 3 mm graze. A staging that fails is\n\
 planned again with its impact away from the times already tried, up to three times, before\n\
-this error, which then says what the first plan (nearest `at`) did. The at-fault agent is reckless toward the struck agent only: it slows for\n\
-any other agent in its way (a walker on the course it would brake on, a car whose stopping\n\
-distance it would cut into, a car coming the other way), and when that makes it miss, the help\n\
-names the agent that held it back longest.\n
+this error, which then says what the first plan (nearest `at`) did. The at-fault agent is\n\
+reckless toward the struck agent only: it slows for any other agent in its way (a walker on\n\
+the course it would brake on, a car whose stopping distance it would cut into, a car coming\n\
+the other way), and when that makes it miss, the help names the agent that held it back\n\
+longest.\n
     agent a: sedan { at west.in[1], 50 m before center; speed 30 km/h }
     agent b: sedan { at west.in[1], 50 m after center; speed 30 km/h }
     conflict { at_fault a; struck b; impact rear_end; point rear; at 0.5 s }   // error: 100 m apart\n\n\
