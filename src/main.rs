@@ -1320,7 +1320,7 @@ fn ciren_import(inputs: Vec<Result<PathBuf, Diagnostic>>, out: &Path, safe: bool
                             if k.impact == rocc::check::scenario::Impact::Object {
                                 String::new()
                             } else {
-                                format!(", {} side", rocc::ciren::crash::point_name(imp.staged.struck_side))
+                                format!(", {} side", imp.staged.struck_side.name())
                             },
                             imp.staged.time
                         );

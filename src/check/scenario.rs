@@ -444,6 +444,13 @@ pub const POINTS: [(&str, Point); 8] = [
     ("rear_left", Point::RearLeft),
     ("rear_right", Point::RearRight),
 ];
+impl Point {
+    /// The `.scn` name (`front_left`).
+    pub fn name(self) -> &'static str {
+        POINTS.iter().find(|x| x.1 == self).map_or("front", |x| x.0)
+    }
+}
+
 pub const TURNS: [(&str, Turn); 4] =
     [("left", Turn::Left), ("right", Turn::Right), ("straight", Turn::Straight), ("u_turn", Turn::UTurn)];
 pub const SIDES: [(&str, Side); 2] = [("left", Side::Left), ("right", Side::Right)];

@@ -247,11 +247,6 @@ impl Crash {
     }
 }
 
-/// The rocc point name of a side.
-pub fn point_name(p: Point) -> &'static str {
-    crate::check::scenario::POINTS.iter().find(|x| x.1 == p).map(|x| x.0).unwrap_or("front")
-}
-
 /// The rocc impact name.
 pub fn impact_name(i: Impact) -> &'static str {
     crate::check::scenario::IMPACTS.iter().find(|x| x.1 == i).map(|x| x.0).unwrap_or("angle")

@@ -6,7 +6,7 @@
 //! timings are tried in a fixed order and the first whose latched contact is on the coded sides
 //! is kept, so the result is deterministic and never unverified.
 
-use super::crash::{Crash, Face, Manoeuvre, Side, Template, VehicleDesc, impact_name, point_name};
+use super::crash::{Crash, Face, Manoeuvre, Side, Template, VehicleDesc, impact_name};
 use crate::check::scenario::{Impact, Point};
 use crate::diag::Diagnostic;
 use crate::source::SourceMap;
@@ -205,7 +205,7 @@ pub fn emit(c: &Crash, st: Staging) -> String {
     let _ = writeln!(out, "        at_fault {}", k.at_fault);
     let _ = writeln!(out, "        struck {}", k.struck);
     let _ = writeln!(out, "        impact {}", impact_name(k.impact));
-    let _ = writeln!(out, "        point {}", point_name(k.point));
+    let _ = writeln!(out, "        point {}", k.point.name());
     let _ = writeln!(out, "        at {} s", num(st.t_impact));
     let _ = writeln!(out, "    }}");
     out.push_str("}\n");
@@ -310,7 +310,7 @@ pub fn stage(c: &Crash) -> Result<Staged, Vec<Diagnostic>> {
                 c.conflict.at_fault,
                 c.conflict.face.name(),
                 c.conflict.struck,
-                point_name(c.conflict.point)
+                c.conflict.point.name()
             ),
         )
         .help("nothing is written for this case; `rocc explain E0805` lists what the staging can and cannot do"),

@@ -12,8 +12,7 @@
 
 use super::case::read_capped;
 use super::crash::{
-    Compass, ConflictDesc, Crash, Face, Manoeuvre, RoadDesc, Template, VehicleDesc, approach_arm, man_word, point_name,
-    stem_turn,
+    Compass, ConflictDesc, Crash, Face, Manoeuvre, RoadDesc, Template, VehicleDesc, approach_arm, man_word, stem_turn,
 };
 use super::record::{TURN_KMH, kind_for};
 use crate::check::scenario::{Impact, Point};
@@ -568,7 +567,7 @@ fn map(cx: &mut Ctx, root: &Value, path: &Path) -> Result<Crash, Vec<Diagnostic>
                         if hand_left { "left" } else { "right" },
                         other,
                         face.name(),
-                        point_name(point)
+                        point.name()
                     );
                     cx.warn("point_of_impact", msg.clone());
                     conflict_notes.push(format!("Ambiguous: {msg}."));
@@ -637,7 +636,7 @@ fn map(cx: &mut Ctx, root: &Value, path: &Path) -> Result<Crash, Vec<Diagnostic>
         conflict_notes.push(format!(
             "at_fault_vehicle is Vehicle_{at_fault_no}: its manoeuvre is kept as its goal; rocc's `at_fault` is the striking v{striker}, whose {} meets v{struck}'s {} side.",
             face.name(),
-            point_name(point)
+            point.name()
         ));
     } else {
         conflict_notes.push(format!("at_fault_vehicle Vehicle_{at_fault_no} strikes with its {}.", face.name()));

@@ -340,7 +340,9 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         // kept; if none does, the first attempt (the plans nearest the request) stands: its
         // tracks, or its errors.
         let mut avoid: Vec<Vec<f64>> = vec![Vec::new(); confs.len()];
-        let mut first: Option<(Tracks, Vec<(usize, Diagnostic)>)> = None;
+        // The first attempt's tracks (only where they are the answer should nothing do
+        // better: its crashes landed) and its errors.
+        let (mut first_tracks, mut first_failed) = (None, Vec::new());
         let mut plans: Vec<Option<Plan>> =
             confs.iter().map(|k| stage::choose(k, &actors, &pass1, dt, c.duration, &[])).collect();
         for attempt in 0..=RESTAGE {
@@ -358,8 +360,8 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
             let redo: Vec<usize> =
                 if failed.is_empty() { (0..confs.len()).collect() } else { failed.iter().map(|f| f.0).collect() };
             if attempt == 0 {
-                // The tracks are kept only when they are the answer should nothing do better.
-                first = Some((if failed.is_empty() { out.clone() } else { empty_tracks(&actors, c.rate, 0) }, failed));
+                first_tracks = failed.is_empty().then(|| out.clone());
+                first_failed = failed;
             }
             let mut replanned = false;
             if attempt < RESTAGE {
@@ -373,11 +375,10 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
                 }
             }
             if !replanned {
-                let (tracks, failed) = first.take().expect("the first attempt is kept");
-                if failed.is_empty() {
+                if let Some(tracks) = first_tracks {
                     out = tracks;
                 }
-                errs.extend(failed.into_iter().map(|(_, d)| d));
+                errs.extend(first_failed.into_iter().map(|(_, d)| d));
                 break;
             }
         }
@@ -422,56 +423,50 @@ fn staging_errors(
                 .or_else(|| stage::off_striking_face(k.c.impact, r.at_fault_local, size))
         });
         let in_time = |t: f64| (t - t_req).abs() <= stage::WINDOW_S + 0.5 * dt;
-        if let (Some(t), Some(why)) = (hit.filter(|&t| in_time(t)), off) {
-            let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
-            errs.push((
-                    ki,
-                    Diagnostic::error(
-                        "E0205",
-                        format!("the conflict between `{a}` and `{b}` cannot be staged as asked: at {t:.1} s {why}"),
-                    )
-                    .label(k.c.span, "the crash lands elsewhere")
-                    .help(match blocked_by[k.af] {
-                        Some((j, t)) => format!(
-                            "`{a}` slowed from {t:.1} s for `{}` in its way (a striker never runs into a bystander), \
-                             and the two met otherwise: start `{a}` where its way to `{b}` is clear, keep `{}` out of it, or move `at`",
-                            actors[j].info.name, actors[j].info.name
-                        ),
-                        None => format!(
-                            "start `{a}` where its striking face can come at that side of `{b}` (behind it in its lane for \
-                             `rear_end`, toward it for `head_on`), or ask for the side it can reach"
-                        ),
-                    }),
-                ));
-            continue;
-        }
-        if !hit.is_some_and(in_time) {
-            let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
-            let what = match hit {
-                Some(t) => format!("they first touch at {t:.1} s"),
-                None => "they never touch".to_string(),
-            };
-            errs.push((
-                ki,
-                Diagnostic::error(
-                    "E0205",
-                    format!("the conflict between `{a}` and `{b}` cannot be staged at {t_req:.1} s: {what}"),
+        let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
+        // What went wrong, its label, how the help joins a bystander's name to its advice, and
+        // the help when no bystander held the striker back.
+        let (what, label, met, unhindered) = match (hit.filter(|&t| in_time(t)), off) {
+            (Some(_), None) => continue,
+            (Some(t), Some(why)) => (
+                format!("cannot be staged as asked: at {t:.1} s {why}"),
+                "the crash lands elsewhere",
+                ", and the two met otherwise:",
+                format!(
+                    "start `{a}` where its striking face can come at that side of `{b}` (behind it in its lane for \
+                     `rear_end`, toward it for `head_on`), or ask for the side it can reach"
+                ),
+            ),
+            (None, _) => (
+                match hit {
+                    Some(t) => format!("cannot be staged at {t_req:.1} s: they first touch at {t:.1} s"),
+                    None => format!("cannot be staged at {t_req:.1} s: they never touch"),
+                },
+                "no contact near this time",
+                ":",
+                format!(
+                    "`{a}` must be able to reach `{b}` within {:.1} s of `at` at its limits: \
+                     start them closer, give them speeds that bring them together, or move `at`",
+                    stage::WINDOW_S
+                ),
+            ),
+        };
+        let help = match blocked_by[k.af] {
+            Some((j, t)) => {
+                let by = &actors[j].info.name;
+                format!(
+                    "`{a}` slowed from {t:.1} s for `{by}` in its way (a striker never runs into a bystander){met} \
+                     start `{a}` where its way to `{b}` is clear, keep `{by}` out of it, or move `at`"
                 )
-                .label(k.c.span, "no contact near this time")
-                .help(match blocked_by[k.af] {
-                    Some((j, t)) => format!(
-                        "`{a}` slowed from {t:.1} s for `{}` in its way (a striker never runs into a bystander): \
-                             start `{a}` where its way to `{b}` is clear, keep `{}` out of it, or move `at`",
-                        actors[j].info.name, actors[j].info.name
-                    ),
-                    None => format!(
-                        "`{a}` must be able to reach `{b}` within {:.1} s of `at` at its limits: \
-                             start them closer, give them speeds that bring them together, or move `at`",
-                        stage::WINDOW_S
-                    ),
-                }),
-            ));
-        }
+            }
+            None => unhindered,
+        };
+        errs.push((
+            ki,
+            Diagnostic::error("E0205", format!("the conflict between `{a}` and `{b}` {what}"))
+                .label(k.c.span, label)
+                .help(help),
+        ));
     }
     errs
 }

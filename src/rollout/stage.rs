@@ -398,9 +398,8 @@ pub fn contact_centroid(a: &Obb, b: &Obb) -> Option<DVec2> {
 /// its rear_left"): the struck box's side (thirds of each face, `side_of`) must be `point`,
 /// except for a struck object, which is turned to face the striker and has no side of its own.
 pub fn wrong_struck_side(impact: Impact, point: Point, struck_side: Point) -> Option<String> {
-    let name = |p: Point| crate::check::scenario::POINTS.iter().find(|x| x.1 == p).map_or("front", |x| x.0);
     (impact != Impact::Object && struck_side != point)
-        .then(|| format!("{}, not its {}", name(struck_side), name(point)))
+        .then(|| format!("{}, not its {}", struck_side.name(), point.name()))
 }
 
 /// Why the striker did not touch with its natural striking face, if it did not: its front
