@@ -228,6 +228,15 @@ impl Actor {
         self.junction.map(|j| j.stop - 0.3 - (st.s + self.hl))
     }
 
+    /// Whether one clearing a junction for an emergency vehicle goes on past this vehicle,
+    /// predicted to cross its way: it gives the junction to the emergency vehicle too (held at
+    /// its line, or clearing), or it is still outside its junction, where the right-of-way rule
+    /// holds it. Not one turning inside the junction that nothing holds: a car going straight to
+    /// clear for an ambulance drove into a U-turn's loop at 7 m/s.
+    fn cleared_past(&self, st: &State) -> bool {
+        self.vehicle && (!self.yield_to.is_empty() || self.to_line(st).is_none_or(|line| line > -0.05))
+    }
+
     fn obb(&self, st: &State) -> Obb {
         Obb { center: st.pos, yaw: st.yaw, length: 2.0 * self.hl, width: 2.0 * self.hw }
     }
@@ -1419,12 +1428,23 @@ struct Near {
     hw: f64,
     /// Holding at its stop line for an emergency vehicle (`Sim::yield_state`).
     gives_way: bool,
-    vehicle: bool,
+    /// A vehicle that one clearing a junction for an emergency vehicle does not wait for
+    /// (`Actor::cleared_past`).
+    cleared_past: bool,
 }
 
 impl Near {
     fn new(st: &State, a: &Actor, dir: DVec2, gives_way: bool) -> Near {
-        Near { pos: st.pos, dir, v: st.v, radius: a.radius, hl: a.hl, hw: a.hw, gives_way, vehicle: a.vehicle }
+        Near {
+            pos: st.pos,
+            dir,
+            v: st.v,
+            radius: a.radius,
+            hl: a.hl,
+            hw: a.hw,
+            gives_way,
+            cleared_past: a.cleared_past(st),
+        }
     }
 }
 
@@ -1988,8 +2008,12 @@ impl<'a, 'b> Sim<'a, 'b> {
             // straight before the bend: found only once in the bend, it may be too close to stop
             // for within our limits. Only outward: in a left bend the corners reach out to the
             // right, while on the inside the middle of the box's side is its innermost point (a
-            // car waiting beside the lane a bus turns into is not in its way).
-            let in_sweep = o.v < 0.5 || self.yielding[j].0.is_some() || cr < -0.5;
+            // car waiting beside the lane a bus turns into is not in its way). One going our way
+            // at under half our speed is caught up with in the sweep: it counts as standing (a
+            // bus slowing for walkers counted only below 0.5 m/s, and the bus turning in behind
+            // it was stopped dead).
+            let in_sweep =
+                o.v < 0.5 || self.yielding[j].0.is_some() || cr < -0.5 || (v_lon > 0.0 && v_lon < 0.5 * st.v);
             let (mut band_lo, mut band_hi) = (cur_lo - margin, cur_hi + margin);
             if a.vehicle && in_sweep && gap > 0.0 {
                 let (k0, k1) = (a.path.curvature(sj), a.path.curvature(sj - a.hl));
@@ -2124,9 +2148,14 @@ impl<'a, 'b> Sim<'a, 'b> {
             // vehicles: vehicles yield to them, which keeps the two from waiting on each other.
             // One holding at its stop line for an emergency vehicle stays out of the junction;
             // one clearing the junction for it has the right of way over predicted vehicles
-            // crossing (they yield to it), so the two never wait on each other; not over a
-            // walker, who steps off the kerb in front of any car that could stop for them.
-            let gives_way = self.yielding[j].0.is_some() || (clearing && b.vehicle);
+            // (`Actor::cleared_past`), so the two never wait on each other; not over a walker,
+            // who steps off the kerb in front of any car that could stop for them.
+            // Nor over one that will have crossed our band a second before we get there.
+            let crossed_first = || {
+                let out = if v_lat > 0.0 { hi - (lj - ext_lat) } else { lj + ext_lat - lo };
+                out / v_lat.abs().max(0.1) + 1.0 < gap.max(0.0) / st.v.max(1.0)
+            };
+            let gives_way = self.yielding[j].0.is_some() || (clearing && (b.cleared_past(o) || crossed_first()));
             if !obstacle && a.vehicle && v_lat.abs() > 0.3 && !gives_way {
                 // A walker or an animal heading for the road gets two more seconds of slack:
                 // drivers brake for someone stepping off the kerb, not only for someone already
@@ -2156,11 +2185,15 @@ impl<'a, 'b> Sim<'a, 'b> {
                 // slows and lets the other draw away; it is not stopped dead. Nor is anyone for
                 // one alongside (no gap ahead to keep: stopping dead opens none, a car passing
                 // close by in the lane we edge toward goes by all the same).
+                // The 0.2 m kept short of it is a margin, not a wall: where it lets the step stay
+                // within the braking limit, the step may use it, short of touching (a box
+                // swinging into the band left 0.1 m less than the limit's shortest step).
                 let keep = gap - 0.2 + lead_move;
+                let shortest = (st.v * dt - 0.5 * lim.brake_max * dt * dt).max(0.0);
                 hard = hard.min(if a.vehicle && gap > 0.0 {
-                    keep
+                    keep.max(shortest.min(gap + lead_move - 0.02))
                 } else {
-                    keep.max((st.v * dt - 0.5 * lim.brake_max * dt * dt).max(0.0))
+                    keep.max(shortest)
                 });
                 acc = acc.min(self.safe_acc(i, j, gap, v_lon, t));
             }
@@ -2319,7 +2352,8 @@ impl<'a, 'b> Sim<'a, 'b> {
                 let aside = l_line - ext_lat > c.hi + LINE_EPS || l_line + ext_lat < c.lo - LINE_EPS;
                 // Nor would it be predicted to cut across (see `obstacle` in `drive`).
                 let v_lat = b.v * sr;
-                let steady = !a.vehicle || v_lat.abs() < 0.3 - LINE_EPS || b.gives_way || (c.clearing && b.vehicle);
+                let steady =
+                    !a.vehicle || v_lat.abs() < 0.3 - LINE_EPS || b.gives_way || (c.clearing && b.cleared_past);
                 if behind || too_far || (aside && steady) {
                     return false;
                 }
@@ -2381,7 +2415,7 @@ impl<'a, 'b> Sim<'a, 'b> {
         ix.collect(lo, hi, l_lo, l_hi, &mut sub);
         if a.vehicle {
             // Clearing the junction for an emergency vehicle, we predict walkers only.
-            sub.extend(ix.crossing.iter().filter(|&&j| !c.clearing || !self.near[j].vehicle));
+            sub.extend(ix.crossing.iter().filter(|&&j| !c.clearing || !self.near[j].cleared_past));
         }
         sub.extend(c.named.filter(|&j| j < self.near.len()));
         sub.sort_unstable();
@@ -2400,6 +2434,13 @@ impl<'a, 'b> Sim<'a, 'b> {
         let b = a.lim.brake_max;
         let lead = &self.actors[j];
         let mut lead_stop = if v_lon <= 0.0 { 0.0 } else { v_lon * v_lon / (2.0 * lead.lim.brake_max) };
+        // A vehicle coming toward us in our band (a bus turning across the corner our own turn
+        // swings over) closes the gap while both brake: it comes on by its own emergency stop,
+        // taken a step late. Counted as standing, it closed 0.7 m a frame on a bus that then
+        // had to stop at 13 m/s2. Staged pairs and their partners keep their plans.
+        if v_lon < -0.5 && lead.vehicle && !lead.in_conflict && !a.in_conflict {
+            lead_stop = v_lon * dt - v_lon * v_lon / (2.0 * lead.lim.brake_max);
+        }
         if lead.in_conflict
             && let Some(p) = self.crash_partner(j, t)
         {
