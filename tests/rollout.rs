@@ -1618,3 +1618,20 @@ fn a_leader_that_turns_back_is_no_longer_queued_behind() {
     assert!(back, "the motorcycle never turned back");
     assert!(overlaps(t, &[]).is_empty());
 }
+
+/// A staging whose every plan has the overlap guard stop the striker dead (a motorcycle's
+/// intercept through a car standing at its line, from 19.8 m/s) is refused, naming the car, not
+/// output with the stop in it.
+#[test]
+fn a_staging_only_the_overlap_guard_keeps_apart_is_refused() {
+    let text =
+        std::fs::read_to_string("tests/rollout-refused/motorcycle-striker-through-standing-car.scn").expect("case");
+    let mut sources = rocc::source::SourceMap::default();
+    let s = rocc::check::check_text("t.scn", &text, std::path::Path::new("."), &mut sources).expect("checks");
+    let Err(errs) = rocc::compile::front(s, None) else { panic!("staged with the striker stopped dead") };
+    assert_eq!(errs.len(), 1);
+    let (msg, help) = (&errs[0].message, errs[0].help.as_deref().unwrap_or_default());
+    assert_eq!(errs[0].code, "E0205");
+    assert!(msg.contains("`v0` would run into `traffic_1` and is stopped dead"), "{msg}");
+    assert!(help.contains("background traffic"), "{help}");
+}

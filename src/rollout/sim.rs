@@ -351,7 +351,7 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         let mut avoid: Vec<Vec<f64>> = vec![Vec::new(); confs.len()];
         // The first attempt's tracks (only where they are the answer should nothing do
         // better: its crashes landed) and its errors.
-        let (mut first_tracks, mut first_failed) = (None, Vec::new());
+        let (mut first_tracks, mut first_failed, mut first_hard) = (None, Vec::new(), None);
         let mut plans: Vec<Option<Plan>> =
             confs.iter().map(|k| stage::choose(k, &actors, &pass1, dt, c.duration, &[])).collect();
         for attempt in 0..=RESTAGE {
@@ -371,6 +371,7 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
             if attempt == 0 {
                 first_tracks = failed.is_empty().then(|| out.clone());
                 first_failed = failed;
+                first_hard = report.first_hard;
             }
             let mut replanned = false;
             if attempt < RESTAGE {
@@ -384,8 +385,16 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
                 }
             }
             if !replanned {
-                if let Some(tracks) = first_tracks {
-                    out = tracks;
+                // Landed, but only with the safety net stopping one of a staged pair dead: the
+                // crash is not driven within the limits (a motorcycle striker's intercept ran
+                // through a car standing at its line, and it was stopped from 19.8 m/s).
+                let pair_stopped = first_hard.and_then(|(k, other, t)| {
+                    confs.iter().position(|c| c.af == k || c.st == k).map(|ki| (ki, k, other, t))
+                });
+                match (first_tracks, pair_stopped) {
+                    (Some(_), Some((ki, k, other, t))) => errs.push(stopped_dead(&actors, &confs[ki], k, other, t)),
+                    (Some(tracks), None) => out = tracks,
+                    (None, _) => {}
                 }
                 errs.extend(first_failed.into_iter().map(|(_, d)| d));
                 break;
@@ -478,6 +487,29 @@ fn staging_errors(
         ));
     }
     errs
+}
+
+/// E0205 for a staging whose every plan has the overlap safety net stop agent `k` of the pair
+/// dead at `t` (beyond its braking), short of running into `other`.
+fn stopped_dead(actors: &[Actor], k: &Conf, stopped: usize, other: usize, t: f64) -> Diagnostic {
+    let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
+    let (x, y) = (&actors[stopped].info.name, &actors[other].info.name);
+    Diagnostic::error(
+        "E0205",
+        format!(
+            "the conflict between `{a}` and `{b}` cannot be staged within the agents' limits: at {t:.1} s `{x}` \
+             would run into `{y}` and is stopped dead"
+        ),
+    )
+    .label(k.c.span, "every plan tried stops an agent beyond its braking")
+    .help(format!(
+        "keep `{y}` out of the way `{x}` takes ({}), start `{a}` where its way to `{b}` is clear, or move `at`",
+        if actors[other].info.background {
+            "it is background traffic: lower `density`, or change the scenario's `seed`"
+        } else {
+            "start it elsewhere, or give it another goal"
+        }
+    ))
 }
 
 /// How far a turning vehicle's wheels may stray off the drivable surface in its junction, m:
@@ -1618,6 +1650,10 @@ struct Sim<'a, 'b> {
     /// Moves the overlap safety net undid at a speed the agent could not have braked from
     /// within its limits in one step.
     hard_stops: usize,
+    /// The first of those: the agent stopped, the one it would have run into, and when.
+    first_hard: Option<(usize, usize, f64)>,
+    /// The frame being simulated.
+    frame: usize,
     /// `overlap_pairs`' boxes and output, kept likewise.
     sweep: Vec<(DVec2, DVec2, usize)>,
     pairs: Vec<(usize, usize)>,
@@ -1635,6 +1671,8 @@ struct Report {
     blocked_by: Vec<Option<(usize, f64)>>,
     /// Moves the overlap safety net undid beyond the mover's braking limit (`Sim::hard_stops`).
     hard_stops: usize,
+    /// The first of them (`Sim::first_hard`).
+    first_hard: Option<(usize, usize, f64)>,
 }
 
 impl<'a, 'b> Sim<'a, 'b> {
@@ -1694,6 +1732,8 @@ impl<'a, 'b> Sim<'a, 'b> {
             course: std::cell::RefCell::new(Vec::with_capacity(COURSE_STEPS)),
             blocked_by: std::cell::RefCell::new(vec![Vec::new(); actors.len()]),
             hard_stops: 0,
+            first_hard: None,
+            frame: 0,
             sweep: Vec::with_capacity(actors.len()),
             pairs: vec![],
             cur,
@@ -1736,6 +1776,7 @@ impl<'a, 'b> Sim<'a, 'b> {
         }
         for f in self.first..out.frames {
             let t = (f - 1) as f64 * self.dt;
+            self.frame = f;
             // An agent whose heading has not changed (bit for bit) keeps its unit heading: the
             // same call on the same bits. Standing and straight-driving agents take no sine.
             self.dirs.resize(self.cur.len(), DVec2::X);
@@ -1794,6 +1835,7 @@ impl<'a, 'b> Sim<'a, 'b> {
         Report {
             blocked_by: self.blocked_by.into_inner().into_iter().map(longest).collect(),
             hard_stops: self.hard_stops,
+            first_hard: self.first_hard,
         }
     }
 
@@ -3058,6 +3100,8 @@ impl<'a, 'b> Sim<'a, 'b> {
                     if matches!(self.actors[k].drive, Drive::Mover) && moved {
                         if self.cur[k].v > self.actors[k].lim.brake_max * self.dt + 1e-6 {
                             self.hard_stops += 1;
+                            let other = if k == i { j } else { i };
+                            self.first_hard.get_or_insert((k, other, self.frame as f64 * self.dt));
                         }
                         self.next[k] = State { v: 0.0, ..self.cur[k] };
                         changed = true;
