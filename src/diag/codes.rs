@@ -319,8 +319,8 @@ reckless toward the struck agent only: it slows for any other agent in its way (
 the course it would brake on, a car whose stopping distance it would cut into, a car coming\n\
 the other way), and when that makes it miss, the help names the agent that held it back\n\
 longest. Nor may a staging have one of the pair stopped dead, beyond its braking, short of\n\
-another agent (by the last-resort overlap guard): when every plan tried does, it is refused,\n\
-naming the agent it would have run into.\n
+another agent (by the last-resort overlap guard): when the first plan does and no plan tried\n\
+does better, it is refused, naming the agent it would have run into.\n
     agent a: sedan { at west.in[1], 50 m before center; speed 30 km/h }
     agent b: sedan { at west.in[1], 50 m after center; speed 30 km/h }
     conflict { at_fault a; struck b; impact rear_end; point rear; at 0.5 s }   // error: 100 m apart\n\n\

@@ -362,7 +362,7 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
             let report =
                 Sim::new(&actors, &confs, &plans, Some(&pass1), dt).resume(&pass1, &states, start).run(&mut out);
             let failed = staging_errors(&actors, &confs, &plans, &out, &report.blocked_by, (dt, frames, c.duration));
-            if failed.is_empty() && report.hard_stops == 0 {
+            if failed.is_empty() && report.first_hard.is_none() {
                 break;
             }
             // Plan again the conflicts that failed; where none did, every one.
@@ -501,7 +501,7 @@ fn stopped_dead(actors: &[Actor], k: &Conf, stopped: usize, other: usize, t: f64
              would run into `{y}` and is stopped dead"
         ),
     )
-    .label(k.c.span, "every plan tried stops an agent beyond its braking")
+    .label(k.c.span, "no plan tried stages it within everyone's braking")
     .help(format!(
         "keep `{y}` out of the way `{x}` takes ({}), start `{a}` where its way to `{b}` is clear, or move `at`",
         if actors[other].info.background {
@@ -1642,18 +1642,13 @@ struct Sim<'a, 'b> {
     proj: std::cell::RefCell<Vec<(f64, f64, f64, DVec2)>>,
     /// A striker's braking course (`braking_course`), kept between frames for its capacity.
     course: std::cell::RefCell<Vec<(f64, DVec2, f64)>>,
-    /// Per striker: the bystander that first held it back from its intercept speed, and when
-    /// (an E0205 names it).
     /// Per striker, each bystander that held it back at full speed: when first, and for how
     /// many frames.
     blocked_by: std::cell::RefCell<Vec<Vec<(usize, f64, u32)>>>,
-    /// Moves the overlap safety net undid at a speed the agent could not have braked from
-    /// within its limits in one step.
-    hard_stops: usize,
-    /// The first of those: the agent stopped, the one it would have run into, and when.
+    /// The first move the overlap safety net undid at a speed the agent could not have braked
+    /// from within its limits in one step: the agent stopped, the one it would have run into,
+    /// and when.
     first_hard: Option<(usize, usize, f64)>,
-    /// The frame being simulated.
-    frame: usize,
     /// `overlap_pairs`' boxes and output, kept likewise.
     sweep: Vec<(DVec2, DVec2, usize)>,
     pairs: Vec<(usize, usize)>,
@@ -1669,9 +1664,8 @@ struct Sim<'a, 'b> {
 struct Report {
     /// Per striker, the bystander that held it back longest at full speed, and from when.
     blocked_by: Vec<Option<(usize, f64)>>,
-    /// Moves the overlap safety net undid beyond the mover's braking limit (`Sim::hard_stops`).
-    hard_stops: usize,
-    /// The first of them (`Sim::first_hard`).
+    /// The first move the overlap safety net undid beyond the mover's braking limit
+    /// (`Sim::first_hard`).
     first_hard: Option<(usize, usize, f64)>,
 }
 
@@ -1731,9 +1725,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             proj: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
             course: std::cell::RefCell::new(Vec::with_capacity(COURSE_STEPS)),
             blocked_by: std::cell::RefCell::new(vec![Vec::new(); actors.len()]),
-            hard_stops: 0,
             first_hard: None,
-            frame: 0,
             sweep: Vec::with_capacity(actors.len()),
             pairs: vec![],
             cur,
@@ -1776,7 +1768,6 @@ impl<'a, 'b> Sim<'a, 'b> {
         }
         for f in self.first..out.frames {
             let t = (f - 1) as f64 * self.dt;
-            self.frame = f;
             // An agent whose heading has not changed (bit for bit) keeps its unit heading: the
             // same call on the same bits. Standing and straight-driving agents take no sine.
             self.dirs.resize(self.cur.len(), DVec2::X);
@@ -1819,7 +1810,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             for i in 0..self.actors.len() {
                 self.next[i] = self.step(i, t, f);
             }
-            self.resolve_overlaps();
+            self.resolve_overlaps(f);
             self.latch(f, out);
             std::mem::swap(&mut self.cur, &mut self.next);
             self.record(out);
@@ -1834,7 +1825,6 @@ impl<'a, 'b> Sim<'a, 'b> {
         };
         Report {
             blocked_by: self.blocked_by.into_inner().into_iter().map(longest).collect(),
-            hard_stops: self.hard_stops,
             first_hard: self.first_hard,
         }
     }
@@ -1951,6 +1941,8 @@ impl<'a, 'b> Sim<'a, 'b> {
             }
         }
         let mut hard = f64::INFINITY;
+        // The least this step can advance braking at the limit.
+        let shortest = (st.v * dt - 0.5 * lim.brake_max * dt * dt).max(0.0);
         let mut side_blocked = false;
         // Walkers beside each other on converging lines (side by side on a curve's sidewalk):
         // each steps away from the other (sum of sides, -1 right, +1 left).
@@ -2231,7 +2223,6 @@ impl<'a, 'b> Sim<'a, 'b> {
                 // within the braking limit, the step may use it, short of touching (a box
                 // swinging into the band left 0.1 m less than the limit's shortest step).
                 let keep = gap - 0.2 + lead_move;
-                let shortest = (st.v * dt - 0.5 * lim.brake_max * dt * dt).max(0.0);
                 hard = hard.min(if a.vehicle && gap > 0.0 {
                     keep.max(shortest.min(gap + lead_move - 0.02))
                 } else {
@@ -2252,12 +2243,10 @@ impl<'a, 'b> Sim<'a, 'b> {
             acc = acc.min(stop_law(st.v, rem, lim, dt));
             // A stop target is a goal, not an obstacle: one closer than the braking distance is
             // overrun by what the brakes cannot absorb, never met by braking past the limit.
-            let shortest = (st.v * dt - 0.5 * lim.brake_max * dt * dt).max(0.0);
             hard = hard.min(rem.max(shortest));
         }
         if let Some(rem) = yield_rem {
             acc = acc.min(stop_law(st.v, rem, lim, dt));
-            let shortest = (st.v * dt - 0.5 * lim.brake_max * dt * dt).max(0.0);
             hard = hard.min(rem.max(shortest));
         }
         // Do not run off the end of the path (a walker's crossing ends there): slow down onto it.
@@ -3056,8 +3045,9 @@ impl<'a, 'b> Sim<'a, 'b> {
     }
 
     /// Undo moves until no two boxes overlap (conflict pairs excepted). Undoing every move
-    /// restores the previous frame, which had no overlap, so this always ends.
-    fn resolve_overlaps(&mut self) {
+    /// restores the previous frame, which had no overlap, so this always ends. `f` is the frame
+    /// being simulated.
+    fn resolve_overlaps(&mut self, f: usize) {
         let n = self.actors.len();
         let pairs = self.overlap_pairs();
         // Each pass undoes at least one turn or move: two per agent at most.
@@ -3099,9 +3089,8 @@ impl<'a, 'b> Sim<'a, 'b> {
                     let moved = nk.pos != ck.pos || nk.yaw != ck.yaw;
                     if matches!(self.actors[k].drive, Drive::Mover) && moved {
                         if self.cur[k].v > self.actors[k].lim.brake_max * self.dt + 1e-6 {
-                            self.hard_stops += 1;
                             let other = if k == i { j } else { i };
-                            self.first_hard.get_or_insert((k, other, self.frame as f64 * self.dt));
+                            self.first_hard.get_or_insert((k, other, f as f64 * self.dt));
                         }
                         self.next[k] = State { v: 0.0, ..self.cur[k] };
                         changed = true;
