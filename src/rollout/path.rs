@@ -266,6 +266,14 @@ impl Path {
     /// `frenet` with the path's unit tangent instead of its heading angle (no trigonometry).
     #[inline]
     pub fn frenet_dir(&self, p: DVec2, guess: f64) -> (f64, f64, f64, DVec2) {
+        let (s, off, beyond, t, _) = self.newton(p, guess);
+        (s, off, beyond, t)
+    }
+
+    /// `frenet_dir`, and how far `p` still lies along the tangent from the point found (about
+    /// zero once the steps have settled).
+    #[inline]
+    fn newton(&self, p: DVec2, guess: f64) -> (f64, f64, f64, DVec2, f64) {
         let len = self.length();
         let mut s = guess.clamp(0.0, len);
         let mut along = 0.0;
@@ -282,7 +290,101 @@ impl Path {
         let (q, t) = self.at_vec(s);
         let off = p - q;
         let beyond = if s <= 0.0 || s >= len { along.abs().min(off.dot(t).abs()) } else { 0.0 };
-        (s, off.dot(t.perp()), beyond, t.normalize_or(DVec2::X))
+        let unit = t.normalize_or(DVec2::X);
+        (s, off.dot(t.perp()), beyond, unit, off.dot(unit))
+    }
+
+    /// `frenet_dir`, unless its Newton steps have not settled (`p` still more than a metre
+    /// along the tangent from the point found, as near a U-turn's loop, where every point has
+    /// several feet on the path and the steps swing between the loop's legs, ending anywhere):
+    /// then `p`'s feet on the stretch `[from, to]` are searched, and the first at or past
+    /// `ahead` within `reach` to either side is taken, else the first within reach, else the
+    /// nearest. A car standing inside our loop lies beside the leg we are on and ahead on the
+    /// leg coming back: the one ahead is the one to brake for.
+    #[inline]
+    pub fn frenet_near(
+        &self,
+        p: DVec2,
+        guess: f64,
+        window: (f64, f64),
+        ahead: f64,
+        reach: f64,
+    ) -> (f64, f64, f64, DVec2) {
+        let (s, lat, beyond, t, rest) = self.newton(p, guess);
+        let found = (s, lat, beyond, t);
+        if beyond > 0.0 || rest.abs() <= 1.0 {
+            return found;
+        }
+        self.feet(p, found, window, ahead, reach)
+    }
+
+    /// `frenet_near`'s search of the feet: rare, kept out of line so that the settled case
+    /// stays as lean as `frenet_dir`.
+    #[cold]
+    #[inline(never)]
+    fn feet(
+        &self,
+        p: DVec2,
+        found: (f64, f64, f64, DVec2),
+        (from, to): (f64, f64),
+        ahead: f64,
+        reach: f64,
+    ) -> (f64, f64, f64, DVec2) {
+        let (from, to) = (from.max(0.0), to.min(self.length()));
+        if to - from < STEP {
+            return found;
+        }
+        // The feet: where the component of `p - q` along the tangent turns from ahead to behind
+        // between two samples, and the stretch's ends where it points outward.
+        let foot = |s: f64| {
+            let (q, t) = self.at_vec(s);
+            let t = t.normalize_or(DVec2::X);
+            let off = p - q;
+            (s, off.dot(t.perp()), off.dot(t), t)
+        };
+        let n = ((to - from) / STEP).ceil() as usize;
+        let mut best: [Option<(f64, f64, f64, DVec2)>; 3] = [None; 3];
+        let mut take = |cand: (f64, f64, f64, DVec2)| {
+            if cand.1.abs() <= reach {
+                if cand.0 >= ahead && best[0].is_none() {
+                    best[0] = Some(cand);
+                }
+                if best[1].is_none() {
+                    best[1] = Some(cand);
+                }
+            }
+            let dist = |c: &(f64, f64, f64, DVec2)| c.1.hypot(c.2);
+            if best[2].as_ref().is_none_or(|b| dist(&cand) < dist(b)) {
+                best[2] = Some(cand);
+            }
+        };
+        let mut prev = foot(from);
+        if prev.2 < 0.0 {
+            take(prev);
+        }
+        for k in 1..=n {
+            let next = foot((from + k as f64 * STEP).min(to));
+            if prev.2 > 0.0 && next.2 <= 0.0 {
+                // Linear between the two samples, then one Newton step from there.
+                let u = prev.2 / (prev.2 - next.2);
+                let s0 = prev.0 + (next.0 - prev.0) * u;
+                let f0 = foot(s0);
+                take(foot((s0 + f0.2).clamp(prev.0, next.0)));
+            }
+            prev = next;
+        }
+        if prev.2 > 0.0 {
+            take(prev);
+        }
+        match best[0].or(best[1]).or(best[2]) {
+            Some((s, lat, along, t)) => {
+                // An end of the stretch that is not an end of the path is no foot: `p` lies
+                // beyond it as it would beyond the path's.
+                let end = (s <= from && along < 0.0) || (s >= to && along > 0.0);
+                (s, lat, if end { along.abs() } else { 0.0 }, t)
+            }
+            None => found,
+        }
     }
 
     /// `frenet_dir` of each point from its guess, without the tangent: the searches run side by
@@ -752,6 +854,49 @@ mod tests {
                 assert_eq!(bits(a), bits(&Resampler::new(&pts).path(*u)), "kept, until {u}");
             }
         }
+    }
+
+    /// Near a U-turn's loop the Newton search may end anywhere, a point 18 m off reported a
+    /// quarter metre off (seed 649): `frenet_near` then finds the point's true feet, and of a
+    /// point between the loop's legs it takes the foot ahead.
+    #[test]
+    fn frenet_near_settles_what_newton_does_not() {
+        let r = 2.5;
+        let mut pts: Vec<DVec2> = (0..=40).map(|k| DVec2::new(r, -40.0 + k as f64)).collect();
+        pts.extend((1..36).map(|k| DVec2::from_angle(k as f64 * std::f64::consts::PI / 36.0) * r));
+        pts.extend((0..=40).map(|k| DVec2::new(-r, -k as f64)));
+        let p = Path::new(&pts);
+        let len = p.length();
+        let resid = |q: DVec2, (s, _, _, t): (f64, f64, f64, DVec2)| (q - p.at_vec(s).0).dot(t).abs();
+        let far = DVec2::new(0.5, 20.0);
+        let mut unsettled = 0;
+        for k in 0..80 {
+            let guess = 30.0 + k as f64 * 0.2;
+            let newton = p.frenet_dir(far, guess);
+            unsettled += usize::from(newton.2 == 0.0 && resid(far, newton) > 1.0);
+            let near = p.frenet_near(far, guess, (guess - 20.0, guess + 40.0), guess, 8.0);
+            assert!(resid(far, near) < 0.05, "from {guess}: {near:?}");
+            // None within reach: the nearest foot, the loop's apex 17.5 m below.
+            assert!(near.2 == 0.0 && (near.1.abs() - 17.5).abs() < 0.2, "from {guess}: {near:?}");
+        }
+        assert!(unsettled > 0, "no guess leaves Newton unsettled: the fallback is not exercised");
+        // Between the legs, 5 m below the loop, seen from 2 m further up the leg coming in: the
+        // foot on the leg going back out, not the one behind.
+        let mid = DVec2::new(0.0, -5.0);
+        let at = 38.0;
+        let out_leg = 40.0 + std::f64::consts::PI * r;
+        let mut unsettled = 0;
+        for k in 0..80 {
+            let guess = at + k as f64 * 0.1;
+            let newton = p.frenet_dir(mid, guess);
+            if resid(mid, newton) <= 1.0 {
+                continue;
+            }
+            unsettled += 1;
+            let foot = p.frenet_near(mid, guess, (at - 10.0, at + 30.0), at, 8.0);
+            assert!(foot.0 > out_leg && foot.0 < len && (foot.1.abs() - r).abs() < 0.05, "from {guess}: {foot:?}");
+        }
+        assert!(unsettled > 0, "no guess leaves Newton unsettled between the legs");
     }
 
     /// `frenet_many` is `frenet_dir` for each point, bit for bit: points on, beside and beyond

@@ -1637,7 +1637,7 @@ struct Sim<'a, 'b> {
     subset: std::cell::RefCell<Vec<usize>>,
     /// The largest bounding radius of any agent.
     max_radius: f64,
-    /// `candidates`' output, and `Path::frenet_dir` of each, kept to reuse their allocations.
+    /// `candidates`' output, and `Path::frenet_near` of each, kept to reuse their allocations.
     cand: std::cell::RefCell<Vec<usize>>,
     proj: std::cell::RefCell<Vec<(f64, f64, f64, DVec2)>>,
     /// A striker's braking course (`braking_course`), kept between frames for its capacity.
@@ -1975,9 +1975,15 @@ impl<'a, 'b> Sim<'a, 'b> {
         // on its own).
         let mut proj = self.proj.borrow_mut();
         proj.clear();
+        // Where the Newton search does not settle (near a U-turn's loop), the first foot ahead
+        // of our centre within the corridor's reach, searched over the stretch anyone could
+        // meet us on (`Path::frenet_near`): an unsettled projection put a car crossing 18 m
+        // from an ambulance's loop a quarter metre off its path, and stopped it dead (seed 649).
+        let window = (st.s - a.hl - 2.0 * self.max_radius, st.s + a.hl + look + 2.0 * self.max_radius);
+        let reach = c_lo.abs().max(c_hi.abs()) + self.max_radius;
         proj.extend(cand.iter().map(|&j| {
             let p = self.cur[j].pos;
-            a.path.frenet_dir(p, st.s + (p - st.pos).dot(fwd))
+            a.path.frenet_near(p, st.s + (p - st.pos).dot(fwd), window, st.s, reach)
         }));
         for (&j, &(sj, lj, beyond, th)) in cand.iter().zip(proj.iter()) {
             let (o, b) = (&self.cur[j], &self.actors[j]);
@@ -2018,7 +2024,9 @@ impl<'a, 'b> Sim<'a, 'b> {
                     }
                 }
             }
-            if !a.vehicle && !b.vehicle && st.v > 0.1 && ds.abs() < a.hl + ext_lon {
+            // Also one about to walk: stopped by the overlap guard as it set off beside another,
+            // a walker that stepped aside only once moving never moved again (seed 1237).
+            if !a.vehicle && !b.vehicle && (st.v > 0.1 || (active && v_des > 0.1)) && ds.abs() < a.hl + ext_lon {
                 let rel = lj - st.d;
                 if rel.abs() - ext_lat - a.hw < WALK_CLEAR {
                     aside -= rel.signum();
@@ -2061,18 +2069,24 @@ impl<'a, 'b> Sim<'a, 'b> {
             // holding at its line, also where it will stand there (rolling up to it, it was found
             // only once inside). Laid out in the straight frame at the other's projection, a
             // U-turn's loop reached over cars holding well clear of it.
+            // Also one whose centre is ahead of ours but whose box the straight frame puts beside
+            // us: in a turn our box heads elsewhere than the path at its projection, and a car
+            // standing in an ambulance's wide U-turn, or a bus's nose in the lane another bus
+            // turns across, lay straight ahead of the box and beside the path (seeds 522, 331).
+            // The slices are then searched at least two box lengths on.
             let mut swept = false;
+            let sweep_hi = (sj + ext_lon + a.hl + 2.0 * b.hl).max(st.s + 2.0 * (a.hl + b.hl) + 5.0);
             if !in_cur
                 && a.vehicle
                 && in_sweep
-                && gap > 0.0
+                && ds > 0.0
                 && let Some(bd) = &a.bend
                 && let Some(at) = self.yielding[j]
                     .0
                     .map(|rem| State { pos: o.pos + self.dirs[j] * rem, ..*o })
                     .into_iter()
                     .chain([*o])
-                    .filter_map(|q| bd.meets(&b.obb(&q), st.s, sj + ext_lon + a.hl + 2.0 * b.hl))
+                    .filter_map(|q| bd.meets(&b.obb(&q), st.s, sweep_hi))
                     .reduce(f64::min)
                     // One still moving, too close to stop for within our braking: we are
                     // committed (as to a junction zone), and it sees our box.
