@@ -2071,9 +2071,9 @@ impl<'a, 'b> Sim<'a, 'b> {
             // U-turn's loop reached over cars holding well clear of it.
             // Also one whose centre is ahead of ours but whose box the straight frame puts beside
             // us: in a turn our box heads elsewhere than the path at its projection, and a car
-            // standing in an ambulance's wide U-turn, or a bus's nose in the lane another bus
-            // turns across, lay straight ahead of the box and beside the path (seeds 522, 331).
-            // The slices are then searched at least two box lengths on.
+            // standing across an ambulance's wide U-turn lay straight ahead of the box and 6 m
+            // beside the path (seed 522). The slices are then searched at least two box lengths
+            // on.
             let mut swept = false;
             let sweep_hi = (sj + ext_lon + a.hl + 2.0 * b.hl).max(st.s + 2.0 * (a.hl + b.hl) + 5.0);
             if !in_cur
