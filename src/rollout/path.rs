@@ -343,19 +343,21 @@ impl Path {
             (s, off.dot(t.perp()), off.dot(t), t)
         };
         let n = ((to - from) / STEP).ceil() as usize;
-        let mut best: [Option<(f64, f64, f64, DVec2)>; 3] = [None; 3];
-        let mut take = |cand: (f64, f64, f64, DVec2)| {
+        // Feet are (arc length, left offset, along the tangent, unit tangent), taken in order of
+        // arc length: the first within reach at or past `ahead`, the first within reach, and
+        // the nearest.
+        type Foot = (f64, f64, f64, DVec2);
+        let (mut first_ahead, mut first, mut nearest): (Option<Foot>, Option<Foot>, Option<Foot>) = (None, None, None);
+        let mut take = |cand: Foot| {
             if cand.1.abs() <= reach {
-                if cand.0 >= ahead && best[0].is_none() {
-                    best[0] = Some(cand);
+                if cand.0 >= ahead {
+                    first_ahead.get_or_insert(cand);
                 }
-                if best[1].is_none() {
-                    best[1] = Some(cand);
-                }
+                first.get_or_insert(cand);
             }
-            let dist = |c: &(f64, f64, f64, DVec2)| c.1.hypot(c.2);
-            if best[2].as_ref().is_none_or(|b| dist(&cand) < dist(b)) {
-                best[2] = Some(cand);
+            let dist = |c: &Foot| c.1.hypot(c.2);
+            if nearest.as_ref().is_none_or(|b| dist(&cand) < dist(b)) {
+                nearest = Some(cand);
             }
         };
         let mut prev = foot(from);
@@ -376,7 +378,7 @@ impl Path {
         if prev.2 > 0.0 {
             take(prev);
         }
-        match best[0].or(best[1]).or(best[2]) {
+        match first_ahead.or(first).or(nearest) {
             Some((s, lat, along, t)) => {
                 // An end of the stretch that is not an end of the path is no foot: `p` lies
                 // beyond it as it would beyond the path's.

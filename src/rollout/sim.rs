@@ -489,8 +489,9 @@ fn staging_errors(
     errs
 }
 
-/// E0205 for a staging whose every plan has the overlap safety net stop agent `k` of the pair
-/// dead at `t` (beyond its braking), short of running into `other`.
+/// E0205 for a staging whose first plan has the overlap safety net stop agent `stopped` of the
+/// pair `k` dead at `t` (beyond its braking), short of running into `other`, and that no
+/// re-planned one betters.
 fn stopped_dead(actors: &[Actor], k: &Conf, stopped: usize, other: usize, t: f64) -> Diagnostic {
     let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
     let (x, y) = (&actors[stopped].info.name, &actors[other].info.name);
