@@ -344,6 +344,25 @@ ignored by the controller, so it is an error. A replayed track is not judged.\n
     agent b: sedan { at west.in[1], 10 m before center }     // fine: ahead on a's lane",
     },
     Code {
+        code: "E0207",
+        title: "two vehicles placed with no order to cross",
+        explanation: "Vehicles whose junction paths cross take turns: one holds short of the stretch the two\n\
+paths share while the other crosses. Two placed so near that stretch, and so fast, that neither can\n\
+stop short of it within emergency braking (8 m/s2 for a car or bus) are judged at the start on\n\
+their boxes, laid along their paths as they steer through the junction: if one can give way,\n\
+braking that hard while the other goes on at its placed speed, without the boxes meeting, it\n\
+does so. If neither can, and braking both they still meet, or stop each in the other's way, no\n\
+order keeps them apart, and `rocc check` reports both, with when each would be struck. A\n\
+vehicle with `start after`, or one whose stop goal lies short of the stretch, can hold and is\n\
+not judged; nor is a conflict pair.\n
+    road four_way { lanes 1; speed_limit 50 km/h }
+    agent a: sedan { at south.in[1], 5 m before stop_line; speed 14 m/s; goal { turn straight } }
+    agent b: sedan { at west.in[1], 2 m before stop_line; speed 14 m/s; goal { turn straight } }   // error
+    agent a: sedan { at south.in[1], 25 m before stop_line; speed 14 m/s; goal { turn straight } } // fine\n\n\
+Start one further back or slower, or delay it with `start after`. To stage the crash the two are\n\
+headed for, write a `conflict`.",
+    },
+    Code {
         code: "E0301",
         title: "unknown ego",
         explanation: "`rocc compile --ego NAME` names an agent the scenario does not declare, or one that cannot\n\

@@ -86,6 +86,8 @@ pub(super) struct Actor {
     /// Emergency vehicles (track indices) whose junction path crosses this agent's: while one
     /// approaches or is inside the junction, this agent holds at its stop line.
     pub yield_to: Vec<usize>,
+    /// Where a placed agent is declared (`None` for background traffic).
+    pub span: Option<crate::source::Span>,
     /// A vehicle's `turn` goal and its span: `check_turns` refuses a turn whose swept box leaves
     /// the road.
     pub turn_goal: Option<(Turn, crate::source::Span)>,
@@ -126,6 +128,8 @@ pub(super) struct Bend {
     /// `reach`'s widest over every run of `2^k` metres from each metre, for `k` from 1
     /// (`index`): `within` is asked per agent per frame over up to the look-ahead.
     pub spans: Vec<Vec<(f64, f64)>>,
+    /// The run's box centre, step by step: route arc length, position, heading (`Bend::pose`).
+    pub poses: Vec<(f64, DVec2, f64)>,
 }
 
 impl Bend {
@@ -170,6 +174,15 @@ impl Bend {
         }
     }
 
+    /// The box centre's pose in the run where its centre is at route arc length `s`, `None`
+    /// outside the run.
+    fn pose(&self, s: f64) -> Option<(DVec2, f64)> {
+        let k = self.poses.partition_point(|q| q.0 <= s);
+        let (p, q) = (self.poses.get(k.checked_sub(1)?)?, self.poses.get(k)?);
+        let t = (s - p.0) / (q.0 - p.0);
+        Some((p.1.lerp(q.1, t), p.2 + wrap_angle(q.2 - p.2) * t))
+    }
+
     /// The route arc length of the first metre from `lo` to `hi` whose slice meets `theirs`.
     fn meets(&self, theirs: &Obb, lo: f64, hi: f64) -> Option<f64> {
         let ((min, max), c, r) = (self.bounds, theirs.center, 0.5 * theirs.length.hypot(theirs.width));
@@ -196,6 +209,15 @@ pub(super) struct Crossing {
     /// The other agent's zone on the other's route.
     pub other_enter: f64,
     pub other_leave: f64,
+    /// Where the zone begins for each of the two before a sweep moved it back (`enter` and
+    /// `other_enter` start where one's sweep first reaches over the other's approach): where
+    /// their paths themselves come within reach of each other (`order_crossings`).
+    pub meet: f64,
+    pub other_meet: f64,
+    /// Set where the two are placed too near `meet` for either to stop short of it and only one
+    /// order keeps them apart (`order_crossings`): `Some(true)` when this agent gives way, braking
+    /// as hard as it may, `Some(false)` when the other does; the rule's order otherwise.
+    pub placed_yield: Option<bool>,
     /// One of the two is an emergency vehicle the other yields to (`Actor::yield_to`).
     pub emergency: bool,
     /// The two paths run on together here, the same way (a merge, a roundabout's ring), rather
@@ -335,6 +357,10 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
     assign_bends(map, &mut actors, dt);
     assign_yields(map, &mut actors, &confs);
     assign_crossings(map, &mut actors, &confs);
+    order_crossings(&mut actors, &mut errs);
+    if !errs.is_empty() {
+        return Err(errs);
+    }
     let mut out = empty_tracks(&actors, c.rate, frames);
     if confs.is_empty() {
         Sim::new(&actors, &confs, &[], None, dt).run(&mut out);
@@ -690,6 +716,7 @@ fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Class, drive:
         emergency: false,
         junction: None,
         yield_to: vec![],
+        span: None,
         turn_goal: None,
         crossings: vec![],
         kerb: None,
@@ -726,6 +753,7 @@ fn build_actor(
         return base_actor(info, p.pose, p.motion, p.class, Drive::Static);
     };
     let mut a = base_actor(info, p.pose, p.motion, p.class, Drive::Mover);
+    a.span = Some(p.span);
     a.emergency = a.vehicle && is_emergency(c, &p.kind);
     let pos = DVec2::new(p.pose.x, p.pose.y);
     let goal = ca.goal.as_ref();
@@ -1049,6 +1077,9 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
                     leave: ei + ao + hi,
                     other_enter: ej + bi - hj,
                     other_leave: ej + bo + hj,
+                    meet: ei + ai - hi,
+                    other_meet: ej + bi - hj,
+                    placed_yield: None,
                     emergency,
                     merge,
                 };
@@ -1058,6 +1089,9 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
                     leave: ci.other_leave,
                     other_enter: ci.enter,
                     other_leave: ci.leave,
+                    meet: ci.other_meet,
+                    other_meet: ci.meet,
+                    placed_yield: None,
                     emergency,
                     merge,
                 };
@@ -1094,6 +1128,144 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
     for &i in &js {
         actors[i].approach = actors[i].junction.map(|j| map.connectors[j.conn].from);
     }
+}
+
+/// Two vehicles placed so near where their junction paths meet, and so fast, that neither can
+/// stop short of the stretch they share (`Crossing::meet`) within its emergency braking: the
+/// right-of-way rule then has nobody to hold (both are in or at their zone), and only the
+/// overlap safety net would part them (two buses 6 m before their lines at 9 m/s, turning
+/// across each other, were stopped dead from 9 m/s). Whichever of them can give way, braking as
+/// hard as it may while the other goes on at its placed speed, without their boxes meeting,
+/// does so (`Crossing::placed_yield`, where only one can). Where neither can, and braking both
+/// they still meet or stand each in the other's way, no order keeps them apart: E0207. A
+/// vehicle whose start is delayed, or whose stop goal lies short of the stretch, can hold; a
+/// merge is followed, not crossed.
+fn order_crossings(actors: &mut [Actor], errs: &mut Vec<Diagnostic>) {
+    let holds = |a: &Actor, meet: f64| {
+        !matches!(a.drive, Drive::Mover)
+            || a.start > 1e-9
+            || matches!(a.stop, StopGoal::Front(sf) | StopGoal::Centre(sf) if sf < meet + a.hl)
+    };
+    let mut set = vec![];
+    for (i, a) in actors.iter().enumerate() {
+        for (k, c) in a.crossings.iter().enumerate().filter(|(_, c)| c.other > i && !c.merge) {
+            let b = &actors[c.other];
+            if holds(a, c.meet)
+                || holds(b, c.other_meet)
+                || can_stop(a.v0, c.meet - 0.3 - a.s0, a.lim.brake_max)
+                || can_stop(b.v0, c.other_meet - 0.3 - b.s0, b.lim.brake_max)
+            {
+                continue;
+            }
+            // When `y` gives way: the first contact with `o` going on at its placed speed, or
+            // none if it does not touch `y` at that speed or at any share it may brake down to.
+            let gives_way = |y: &Actor, o: &Actor, leave: f64| {
+                let first = first_contact(y, o, 1.0, leave)?;
+                GO_ON_KEEP[1..].iter().all(|&keep| first_contact(y, o, keep, leave).is_some()).then_some(first)
+            };
+            let (ta, tb) = (gives_way(a, b, c.other_leave), gives_way(b, a, c.leave));
+            match (ta, tb) {
+                (None, Some(_)) => set.push((i, k, true)),
+                (Some(_), None) => set.push((i, k, false)),
+                (None, None) => {}
+                (Some(ta), Some(tb)) => {
+                    let both = first_contact(a, b, 0.0, f64::INFINITY);
+                    if both.is_some() || standoff(a, b, (c.leave, c.other_leave)) {
+                        errs.push(no_order(a, b, [ta, tb], both));
+                    }
+                }
+            }
+        }
+    }
+    for (i, k, yields) in set {
+        let c = &mut actors[i].crossings[k];
+        c.placed_yield = Some(yields);
+        let (j, enter, leave) = (c.other, c.enter, c.leave);
+        let theirs =
+            actors[j].crossings.iter_mut().find(|x| x.other == i && x.other_enter == enter && x.other_leave == leave);
+        if let Some(x) = theirs {
+            x.placed_yield = Some(!yields);
+        }
+    }
+}
+
+/// The first time at which `y`, braking at its emergency limit along its path from its placed
+/// pose, is touched by `o`, which brakes as hard down to `keep` times its placed speed and goes
+/// on at that along its own (`keep` 0: it brakes to a stand) while its centre is short of
+/// `leave` on its route, within `ORDER_HORIZON_S`; boxes laid as `box_at` lays them.
+fn first_contact(y: &Actor, o: &Actor, keep: f64, leave: f64) -> Option<f64> {
+    let dt = 0.05;
+    // Arc length after `t` braking at the emergency limit from `v0` down to `v1`, then at `v1`.
+    let s_at = |a: &Actor, v1: f64, t: f64| {
+        let (b, v0) = (a.lim.brake_max, a.v0);
+        let tb = (v0 - v1) / b;
+        a.s0 + if t < tb { v0 * t - 0.5 * b * t * t } else { (v0 * v0 - v1 * v1) / (2.0 * b) + v1 * (t - tb) }
+    };
+    let vo = keep * o.v0;
+    // Braking both to a stand, nothing moves once both stand.
+    let until = if keep > 0.0 { ORDER_HORIZON_S } else { (y.v0 / y.lim.brake_max).max(o.v0 / o.lim.brake_max) + dt };
+    (1..)
+        .map(|k| k as f64 * dt)
+        .take_while(|&t| t <= until && s_at(o, vo, t - dt) <= leave)
+        .find(|&t| box_at(y, s_at(y, 0.0, t)).overlaps(&box_at(o, s_at(o, vo, t))))
+}
+
+/// The speeds, as shares of its placed speed, down to which one that goes on may brake while
+/// the other gives way (`order_crossings`).
+const GO_ON_KEEP: [f64; 4] = [1.0, 0.75, 0.5, 0.25];
+
+/// Whether `x` and `y`, both braked to a stand as in `first_contact` without touching, stand
+/// each in the other's way: neither can go on along its path until its centre is past its
+/// `leave` without its box meeting the other's, standing.
+fn standoff(x: &Actor, y: &Actor, (lx, ly): (f64, f64)) -> bool {
+    let stand = |a: &Actor| a.s0 + a.v0 * a.v0 / (2.0 * a.lim.brake_max);
+    let (sx, sy) = (stand(x), stand(y));
+    let blocked = |a: &Actor, from: f64, to: f64, theirs: &Obb| {
+        let n = ((to - from) / 0.25).ceil().max(0.0) as usize;
+        (0..=n).any(|k| box_at(a, from + k as f64 * 0.25).overlaps(theirs))
+    };
+    blocked(x, sx, lx, &box_at(y, sy)) && blocked(y, sy, ly, &box_at(x, sx))
+}
+
+/// The box of vehicle `a` with its centre at route arc length `s`: through its junction where
+/// its dry run steered it (`Bend::pose`); elsewhere on its path, at its placed offset.
+fn box_at(a: &Actor, s: f64) -> Obb {
+    let (center, yaw) = a.bend.as_ref().and_then(|b| b.pose(s)).unwrap_or_else(|| a.path.point(s, a.d0));
+    Obb { center, yaw, length: 2.0 * a.hl, width: 2.0 * a.hw }
+}
+
+/// How long `first_contact` follows one that goes on, s.
+const ORDER_HORIZON_S: f64 = 10.0;
+
+fn no_order(a: &Actor, b: &Actor, [ta, tb]: [f64; 2], both: Option<f64>) -> Diagnostic {
+    let (x, y) = (&a.info.name, &b.info.name);
+    let mut d = Diagnostic::error(
+        "E0207",
+        format!(
+            "`{x}` and `{y}` start too close to where their junction paths meet for either to give way to the other"
+        ),
+    );
+    for (k, t) in [(a, ta), (b, tb)] {
+        if let Some(span) = k.span {
+            d = d.label(
+                span,
+                format!(
+                    "`{}` cannot stop short of where the paths meet: giving way, braking as hard as it may, it is struck at {t:.1} s",
+                    k.info.name
+                ),
+            );
+        }
+    }
+    let both = match both {
+        Some(t) => format!("with both braking as hard as they may, they meet at {t:.1} s"),
+        None => "with both braking as hard as they may, each stands in the other's way".to_string(),
+    };
+    let fix = if [a, b].iter().any(|k| k.info.background) {
+        "one of them is background traffic: lower `density`, or change the scenario's `seed`; or start the placed one further back or slower"
+    } else {
+        "start one of them further back or slower, so that it can hold while the other crosses, or delay it with `start after`; to stage their crash, write a `conflict`"
+    };
+    d.help(format!("{both}; {fix}"))
 }
 
 /// How far `a`'s box reaches out of its path's lane band anywhere through its junction
@@ -1170,15 +1342,17 @@ impl DryRun {
     fn new(map: &Map, actor: usize, a: &Actor, j: Junction, start: f64) -> DryRun {
         let (kl, kr) = junction_bend(map, &a.path, j);
         let from = start - 2.0 * a.hl - 5.0;
-        let b = Bend {
+        let mut b = Bend {
             from,
             reach: vec![],
             widest: sweep(a, kl.max(kr)),
             slices: vec![],
             bounds: (DVec2::INFINITY, DVec2::NEG_INFINITY),
             spans: vec![],
+            poses: vec![],
         };
         let (pos, yaw) = a.path.point(start, 0.0);
+        b.poses.push((start, pos, yaw));
         DryRun { actor, j, b, pos, yaw, s: start, fwd: DVec2::from_angle(yaw), live: true }
     }
 
@@ -1197,6 +1371,10 @@ impl DryRun {
         let corners = Obb { center: pos, yaw, length: 2.0 * a.hl, width: 2.0 * a.hw }.corners_along(dir);
         let found = a.path.frenet_many(corners, corners.map(|q| s + (q - pos).dot(fwd)));
         let b = &mut self.b;
+        // Arc lengths are kept increasing for `Bend::pose`'s search.
+        if b.poses.last().is_none_or(|q| s > q.0) {
+            b.poses.push((s, pos, yaw));
+        }
         for (sq, dq, beyond) in found {
             if beyond > 0.0 || dq.abs() <= a.hw {
                 continue;
@@ -2657,6 +2835,10 @@ impl<'a, 'b> Sim<'a, 'b> {
         }
         let (ri, ei, rem) = self.rank(i, c.enter, c.leave, t)?;
         let (rj, ej, _) = self.rank(c.other, c.other_enter, c.other_leave, t)?;
+        // Placed with one order only (`order_crossings`): it holds till the other has left.
+        if let Some(yields) = c.placed_yield {
+            return yields.then_some(rem);
+        }
         // Where the two run on together, one whose whole box is in the stretch is ahead of us
         // there: car-following keeps our gap to it (a car entering a roundabout behind one
         // circulating, or one circulating behind one that entered, used to wait till the other
