@@ -350,11 +350,11 @@ ignored by the controller, so it is an error. A replayed track is not judged.\n
 paths share while the other crosses. Two placed so near that stretch, and so fast, that neither can\n\
 stop short of it within emergency braking (8 m/s2 for a car or bus) are judged at the start on\n\
 their boxes, laid along their paths as they steer through the junction: if one can give way,\n\
-braking that hard while the other goes on at its placed speed, without the boxes meeting, it\n\
-does so. If neither can, and braking both they still meet, or stop each in the other's way, no\n\
-order keeps them apart, and `rocc check` reports both, with when each would be struck. A\n\
-vehicle with `start after`, or one whose stop goal lies short of the stretch, can hold and is\n\
-not judged; nor is a conflict pair.\n
+braking that hard while the other goes on at its placed speed (or slowed to a quarter, half or\n\
+three quarters of it), without the boxes meeting, it does so. If neither can, and braking both\n\
+they still meet, or stop each in the other's way, no order keeps them apart, and `rocc check`\n\
+reports both, with when each would be struck. A vehicle with `start after`, or one whose stop\n\
+goal lies short of the stretch, can hold and is not judged; nor is a conflict pair.\n
     road four_way { lanes 1; speed_limit 50 km/h }
     agent a: sedan { at south.in[1], 5 m before stop_line; speed 14 m/s; goal { turn straight } }
     agent b: sedan { at west.in[1], 2 m before stop_line; speed 14 m/s; goal { turn straight } }   // error

@@ -86,13 +86,13 @@ pub(super) struct Actor {
     /// Emergency vehicles (track indices) whose junction path crosses this agent's: while one
     /// approaches or is inside the junction, this agent holds at its stop line.
     pub yield_to: Vec<usize>,
-    /// Where a placed agent is declared (`None` for background traffic).
+    /// Where a placed agent is declared (`None` for background traffic): E0204's and E0207's
+    /// label.
     pub span: Option<crate::source::Span>,
-    /// A vehicle's `turn` goal and its span: `check_turns` refuses a turn whose swept box leaves
-    /// the road.
-    pub turn_goal: Option<(Turn, crate::source::Span)>,
+    /// A vehicle's `turn` goal: `check_turns` refuses a turn whose swept box leaves the road.
+    pub turn_goal: Option<Turn>,
     /// Vehicles whose junction path crosses or merges into this one's (`assign_crossings`): who
-    /// enters the shared zone first is settled by the right-of-way rule (`Sim::crossing_hold`).
+    /// enters the shared zone first is settled by the right-of-way rule (`Sim::gives_way`).
     pub crossings: Vec<Crossing>,
     /// A walker's `cross` goal: the arc length along its walk where its front reaches the road,
     /// where it waits for a gap (`Sim::kerb_hold`); `None` for everyone else and for walkers in
@@ -580,7 +580,7 @@ fn check_turns(map: &Map, actors: &[Actor], confs: &[Conf], out: &Tracks, errs: 
             .fold(f64::INFINITY, f64::min)
     };
     for (i, a) in actors.iter().enumerate() {
-        let (Some((turn, span)), Some(j)) = (a.turn_goal, a.junction) else { continue };
+        let (Some(turn), Some(span), Some(j)) = (a.turn_goal, a.span, a.junction) else { continue };
         if confs.iter().any(|k| k.af == i || k.st == i) {
             continue;
         }
@@ -804,7 +804,7 @@ fn build_actor(
                 // A turn tighter than the kind can steer (a bus's U-turn on a narrow junction)
                 // would leave the road: refused, not driven wide.
                 if let (Some(t), Some(j)) = (turn, a.junction) {
-                    a.turn_goal = Some((t, ca.span));
+                    a.turn_goal = Some(t);
                     let k = junction_curvature(map, &a.path, j);
                     if k * a.r_min > TURN_SLACK {
                         fail(
@@ -1135,8 +1135,9 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
 /// right-of-way rule then has nobody to hold (both are in or at their zone), and only the
 /// overlap safety net would part them (two buses 6 m before their lines at 9 m/s, turning
 /// across each other, were stopped dead from 9 m/s). Whichever of them can give way, braking as
-/// hard as it may while the other goes on at its placed speed, without their boxes meeting,
-/// does so (`Crossing::placed_yield`, where only one can). Where neither can, and braking both
+/// hard as it may while the other goes on at its placed speed or slowed to a share of it
+/// (`GO_ON_KEEP`), without their boxes meeting, does so (`Crossing::placed_yield`, where only
+/// one can). Where neither can, and braking both
 /// they still meet or stand each in the other's way, no order keeps them apart: E0207. A
 /// vehicle whose start is delayed, or whose stop goal lies short of the stretch, can hold; a
 /// merge is followed, not crossed.
