@@ -165,7 +165,7 @@ impl Background {
 
         let mut items: Vec<BgItem> = Vec::new();
         let clear_of_road = |o: &Obb| {
-            let o = Obb { length: o.length + 2.0 * p.margin, width: o.width + 2.0 * p.margin, ..*o };
+            let o = o.grown(p.margin);
             let c = o.corners();
             // Samples along the inflated outline every <= 1 m, and the centre.
             for e in 0..4 {

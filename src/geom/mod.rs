@@ -324,6 +324,11 @@ impl Obb {
         [self.center + f + l, self.center - f + l, self.center - f - l, self.center + f - l]
     }
 
+    /// The box grown by `m` all round.
+    pub fn grown(&self, m: f64) -> Obb {
+        Obb { length: self.length + 2.0 * m, width: self.width + 2.0 * m, ..*self }
+    }
+
     /// Separating-axis test; boxes that only touch do not overlap.
     pub fn overlaps(&self, o: &Obb) -> bool {
         let (a, b) = (self.corners(), o.corners());

@@ -183,6 +183,20 @@ impl Bend {
         Some((p.1.lerp(q.1, t), p.2 + wrap_angle(q.2 - p.2) * t))
     }
 
+    /// The first route arc length from `lo` to `hi` at which the run's box of vehicle `a`
+    /// (whose run it is) meets `theirs`, at the run's steps.
+    fn touches(&self, a: &Actor, theirs: &Obb, lo: f64, hi: f64) -> Option<f64> {
+        let k = self.poses.partition_point(|q| q.0 < lo);
+        let (length, width) = (2.0 * a.hl, 2.0 * a.hw);
+        let reach = 0.5 * (length.hypot(width) + theirs.length.hypot(theirs.width));
+        self.poses[k..]
+            .iter()
+            .take_while(|q| q.0 <= hi)
+            .filter(|q| q.1.distance_squared(theirs.center) < reach * reach)
+            .find(|q| Obb { center: q.1, yaw: q.2, length, width }.overlaps(theirs))
+            .map(|q| q.0)
+    }
+
     /// The route arc length of the first metre from `lo` to `hi` whose slice meets `theirs`.
     fn meets(&self, theirs: &Obb, lo: f64, hi: f64) -> Option<f64> {
         let ((min, max), c, r) = (self.bounds, theirs.center, 0.5 * theirs.length.hypot(theirs.width));
@@ -211,7 +225,8 @@ pub(super) struct Crossing {
     pub other_leave: f64,
     /// Where the zone begins for each of the two before a sweep moved it back (`enter` and
     /// `other_enter` start where one's sweep first reaches over the other's approach): where
-    /// their paths themselves come within reach of each other (`order_crossings`).
+    /// their paths themselves come within reach of each other. Short of it one that can halt
+    /// is not inside (`Sim::zone_rank`).
     pub meet: f64,
     pub other_meet: f64,
     /// Set where the two are placed too near `meet` for either to stop short of it and only one
@@ -228,6 +243,10 @@ pub(super) struct Crossing {
 /// Two junction paths whose headings at a shared stretch differ by less than about 26 degrees
 /// run on together there (`Crossing::merge`).
 const MERGE_COS: f64 = 0.9;
+
+/// Two paths running the same way count as one merging into the other only where they come
+/// this near: one lane (a ring a car enters), not two lanes side by side.
+const JOIN_M: f64 = 1.0;
 
 /// How far ahead of an emergency vehicle the junction is cleared: this many seconds at its
 /// speed, and at least `EMERGENCY_NEAR_M`.
@@ -1065,12 +1084,17 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
             let (hi, hj) = (a.hl, b.hl);
             let first = actors[i].crossings.len();
             // Each stretch of ours goes with the stretch of theirs that its middle lies beside.
-            for &(ai, ao, at) in &za {
-                let dist = |z: &(f64, f64, f64)| (z.0 - at).max(at - z.1).max(0.0);
-                let Some(&(bi, bo, _)) = zb.iter().min_by(|x, y| dist(x).total_cmp(&dist(y))) else { continue };
+            for &(ai, ao, at, closest) in &za {
+                let dist = |z: &(f64, f64, f64, f64)| (z.0 - at).max(at - z.1).max(0.0);
+                let Some(&(bi, bo, ..)) = zb.iter().min_by(|x, y| dist(x).total_cmp(&dist(y))) else { continue };
                 let (_, ha) = map.connectors[ji.conn].path.pose_at(0.5 * (ai + ao));
                 let (_, hb) = map.connectors[jj.conn].path.pose_at(at);
-                let merge = (ha - hb).cos() > MERGE_COS;
+                // Run on together: the same way, and into one lane. Two turning the same way
+                // from side by side lanes into side by side lanes run the same way but apart,
+                // and a long one's swing reaches over the other's lane: car-following along
+                // our path does not see one in the next lane (a bus turning right behind a
+                // sedan turning right beside it met the sedan's tail), so the two take turns.
+                let merge = (ha - hb).cos() > MERGE_COS && closest < JOIN_M;
                 let ci = Crossing {
                     other: j,
                     enter: ei + ai - hi,
@@ -1131,13 +1155,14 @@ fn assign_crossings(map: &Map, actors: &mut [Actor], confs: &[Conf]) {
 }
 
 /// Two vehicles placed so near where their junction paths meet, and so fast, that neither can
-/// stop short of the stretch they share (`Crossing::meet`) within its emergency braking: the
-/// right-of-way rule then has nobody to hold (both are in or at their zone), and only the
-/// overlap safety net would part them (two buses 6 m before their lines at 9 m/s, turning
-/// across each other, were stopped dead from 9 m/s). Whichever of them can give way, braking as
-/// hard as it may while the other goes on at its placed speed or slowed to a share of it
-/// (`GO_ON_KEEP`), without their boxes meeting, does so (`Crossing::placed_yield`, where only
-/// one can). Where neither can, and braking both
+/// stop short of its zone (`Crossing::enter`, which the other's sweep may move back from where
+/// the paths come near) within its emergency braking: the right-of-way rule then has nobody to
+/// hold (both are in or at their zone), and only the overlap safety net would part them (two
+/// buses 6 m before their lines at 9 m/s, turning across each other, were stopped dead from
+/// 9 m/s). Whichever of them can give way, braking as hard as it may while the other goes on at
+/// its placed speed or slowed to a share of it (`GO_ON_KEEP`), without their boxes (grown by
+/// `SWEEP_MARGIN`) meeting, does so (`Crossing::placed_yield`); where both can, the one clear
+/// at every share, else the later to the paths' meeting. Where neither can, and braking both
 /// they still meet or stand each in the other's way, no order keeps them apart: E0207. A
 /// vehicle whose start is delayed, or whose stop goal lies short of the stretch, can hold; a
 /// merge is followed, not crossed.
@@ -1153,8 +1178,8 @@ fn order_crossings(actors: &mut [Actor], errs: &mut Vec<Diagnostic>) {
             let b = &actors[c.other];
             if holds(a, c.meet)
                 || holds(b, c.other_meet)
-                || can_stop(a.v0, c.meet - 0.3 - a.s0, a.lim.brake_max)
-                || can_stop(b.v0, c.other_meet - 0.3 - b.s0, b.lim.brake_max)
+                || can_stop(a.v0, c.enter - 0.3 - a.s0, a.lim.brake_max)
+                || can_stop(b.v0, c.other_enter - 0.3 - b.s0, b.lim.brake_max)
             {
                 continue;
             }
@@ -1165,14 +1190,47 @@ fn order_crossings(actors: &mut [Actor], errs: &mut Vec<Diagnostic>) {
                 GO_ON_KEEP[1..].iter().all(|&keep| first_contact(y, o, keep, leave).is_some()).then_some(first)
             };
             let (ta, tb) = (gives_way(a, b, c.other_leave), gives_way(b, a, c.leave));
+            let later = |x: &Actor, meet: f64| (meet - x.s0).max(0.0) / x.v0.max(0.1);
             match (ta, tb) {
                 (None, Some(_)) => set.push((i, k, true)),
                 (Some(_), None) => set.push((i, k, false)),
-                (None, None) => {}
+                // Either may give way: the one that stays clear whatever share of its speed the
+                // other keeps, else the later to reach where the paths meet (then the name). Left
+                // to the rule, one placed in the other's sweep short of the stretch counted as
+                // inside, and an SUV beside a bus turning from the next lane went with it and met
+                // its swinging tail.
+                (None, None) => {
+                    let clear = |y: &Actor, o: &Actor, leave: f64| {
+                        GO_ON_KEEP.iter().all(|&keep| first_contact(y, o, keep, leave).is_none())
+                    };
+                    let a_yields = match (clear(a, b, c.other_leave), clear(b, a, c.leave)) {
+                        (true, false) => true,
+                        (false, true) => false,
+                        _ => later(a, c.meet)
+                            .total_cmp(&later(b, c.other_meet))
+                            .then_with(|| a.info.name.cmp(&b.info.name))
+                            .is_gt(),
+                    };
+                    set.push((i, k, a_yields));
+                }
+                // Neither can give way while the other goes on: both brake, and where they then
+                // stand clear of each other, the one not standing in the other's way goes first
+                // (its car-following holds it short of the other where it must); left unordered,
+                // two buses side by side turning away from each other both went, and each one's
+                // tail swung into the other.
                 (Some(ta), Some(tb)) => {
                     let both = first_contact(a, b, 0.0, f64::INFINITY);
-                    if both.is_some() || standoff(a, b, (c.leave, c.other_leave)) {
-                        errs.push(no_order(a, b, [ta, tb], both));
+                    match (both, standoff(a, b, (c.leave, c.other_leave))) {
+                        (Some(_), _) | (None, (true, true)) => errs.push(no_order(a, b, [ta, tb], both)),
+                        (None, (a_blocked, b_blocked)) => {
+                            let a_yields = a_blocked
+                                || (!b_blocked
+                                    && later(a, c.meet)
+                                        .total_cmp(&later(b, c.other_meet))
+                                        .then_with(|| a.info.name.cmp(&b.info.name))
+                                        .is_gt());
+                            set.push((i, k, a_yields));
+                        }
                     }
                 }
             }
@@ -1208,24 +1266,24 @@ fn first_contact(y: &Actor, o: &Actor, keep: f64, leave: f64) -> Option<f64> {
     (1..)
         .map(|k| k as f64 * dt)
         .take_while(|&t| t <= until && s_at(o, vo, t - dt) <= leave)
-        .find(|&t| box_at(y, s_at(y, 0.0, t)).overlaps(&box_at(o, s_at(o, vo, t))))
+        .find(|&t| box_at(y, s_at(y, 0.0, t)).overlaps(&box_at(o, s_at(o, vo, t)).grown(SWEEP_MARGIN)))
 }
 
 /// The speeds, as shares of its placed speed, down to which one that goes on may brake while
 /// the other gives way (`order_crossings`).
 const GO_ON_KEEP: [f64; 4] = [1.0, 0.75, 0.5, 0.25];
 
-/// Whether `x` and `y`, both braked to a stand as in `first_contact` without touching, stand
-/// each in the other's way: neither can go on along its path until its centre is past its
-/// `leave` without its box meeting the other's, standing.
-fn standoff(x: &Actor, y: &Actor, (lx, ly): (f64, f64)) -> bool {
+/// Where `x` and `y` are both braked to a stand as in `first_contact` without touching: whether
+/// each stands in the other's way, `x` unable to go on along its path until its centre is past
+/// `lx` without its box meeting `y`'s, standing (and `y` past `ly`). Both: a standoff.
+fn standoff(x: &Actor, y: &Actor, (lx, ly): (f64, f64)) -> (bool, bool) {
     let stand = |a: &Actor| a.s0 + a.v0 * a.v0 / (2.0 * a.lim.brake_max);
     let (sx, sy) = (stand(x), stand(y));
     let blocked = |a: &Actor, from: f64, to: f64, theirs: &Obb| {
         let n = ((to - from) / 0.25).ceil().max(0.0) as usize;
         (0..=n).any(|k| box_at(a, from + k as f64 * 0.25).overlaps(theirs))
     };
-    blocked(x, sx, lx, &box_at(y, sy)) && blocked(y, sy, ly, &box_at(x, sx))
+    (blocked(x, sx, lx, &box_at(y, sy)), blocked(y, sy, ly, &box_at(x, sx)))
 }
 
 /// The box of vehicle `a` with its centre at route arc length `s`: through its junction where
@@ -1234,6 +1292,16 @@ fn box_at(a: &Actor, s: f64) -> Obb {
     let (center, yaw) = a.bend.as_ref().and_then(|b| b.pose(s)).unwrap_or_else(|| a.path.point(s, a.d0));
     Obb { center, yaw, length: 2.0 * a.hl, width: 2.0 * a.hw }
 }
+
+/// How far a box is grown all round where it is tested against a dry run's boxes
+/// (`first_contact`, `Bend::touches`): a vehicle driven at other speeds than its dry run's
+/// steers a few centimetres off it, and a bus's tail, clearing a car standing beside its turn by
+/// a centimetre in the run, met it in the drive.
+const SWEEP_MARGIN: f64 = 0.3;
+
+/// `SWEEP_MARGIN` for the sweep's slices (`Bend::slices`), which already stretch each metre's
+/// box over the widest reach there.
+const SLICE_MARGIN: f64 = 0.1;
 
 /// How long `first_contact` follows one that goes on, s.
 const ORDER_HORIZON_S: f64 = 10.0;
@@ -1521,21 +1589,24 @@ fn profile<'p>(
     &entry.1
 }
 
-/// `shared_zones`' answer: per stretch, its first and last arc length and where its middle
-/// projects onto the other connector.
-type Zones = Vec<(f64, f64, f64)>;
+/// `shared_zones`' answer: per stretch, its first and last arc length, where its middle
+/// projects onto the other connector, and how near the other path comes within it.
+type Zones = Vec<(f64, f64, f64, f64)>;
 
 /// The stretches of connector `a` (arc lengths along it) whose samples in `profile` lie within
 /// `gap` of the other path, those less than `join` apart taken as one; with each, where its
 /// middle projects onto `b`. Two paths can meet twice (a roundabout exit beside
 /// another's entry, then the ring).
 fn shared_zones(map: &Map, (a, b): (usize, usize), profile: &Profile, gap: f64, join: f64) -> Zones {
-    let mut zones: Vec<(f64, f64, f64)> = vec![];
+    let mut zones: Zones = vec![];
     for &(sa, d, _) in profile {
         if d < gap {
             match zones.last_mut() {
-                Some(z) if sa - z.1 <= join => z.1 = sa,
-                _ => zones.push((sa, sa, 0.0)),
+                Some(z) if sa - z.1 <= join => {
+                    z.1 = sa;
+                    z.3 = z.3.min(d);
+                }
+                _ => zones.push((sa, sa, 0.0, d)),
             }
         }
     }
@@ -1674,6 +1745,9 @@ struct Corridor {
     clearing: bool,
     /// The agent it queues behind.
     named: Option<usize>,
+    /// How far behind its centre along a straight run an agent is still kept: its tail may
+    /// swing over one beside it in a bend within reach (`Bend::touches`), else 0.
+    back: f64,
 }
 
 /// How far inside the look-ahead's bounds `candidate` counts an agent on a straight run, m.
@@ -2121,6 +2195,10 @@ impl<'a, 'b> Sim<'a, 'b> {
             }
         }
         let mut hard = f64::INFINITY;
+        // How far our centre may go before our tail, swinging in the bend ahead, meets one
+        // standing beside us (`Bend::touches`), and how far on that is looked for.
+        let mut tail_rem = f64::INFINITY;
+        let sweep_to = st.s + 2.0 * a.hl + look;
         // The least this step can advance braking at the limit.
         let shortest = (st.v * dt - 0.5 * lim.brake_max * dt * dt).max(0.0);
         let mut side_blocked = false;
@@ -2141,14 +2219,18 @@ impl<'a, 'b> Sim<'a, 'b> {
         // Our sweep through the junction ahead (`Bend`, read in the loop below at each one's
         // place) and the reach of the corner test for turned boxes there widen the band in which
         // `candidates` may not pass anyone over.
-        let (c_lo, c_hi) = match &a.bend {
+        let (c_lo, c_hi, back) = match &a.bend {
             Some(b) => match b.within(st.s - 2.0, st.s + a.hl + look + self.max_radius + 2.0) {
-                (0.0, 0.0) => (lo, hi),
-                (r, l) => (lo.min(st.d - a.hw - margin - r) - 1.5, hi.max(st.d + a.hw + margin + l) + 1.5),
+                (0.0, 0.0) => (lo, hi, 0.0),
+                (r, l) => (
+                    lo.min(st.d - a.hw - margin - r) - 1.5,
+                    hi.max(st.d + a.hw + margin + l) + 1.5,
+                    a.hl + self.max_radius,
+                ),
             },
-            None => (lo, hi),
+            None => (lo, hi, 0.0),
         };
-        let corridor = Corridor { look, lo: c_lo, hi: c_hi, holding: d_next == st.d, line, clearing, named };
+        let corridor = Corridor { look, lo: c_lo, hi: c_hi, holding: d_next == st.d, line, clearing, named, back };
         self.candidates(i, &corridor, &mut cand);
         // Their projections onto our route first, in a loop of their own: each is a chain of
         // dependent steps, and independent chains overlap there (below, every decision waits
@@ -2213,6 +2295,41 @@ impl<'a, 'b> Sim<'a, 'b> {
                 }
             }
             if ds <= 0.0 {
+                // Standing beside us where our tail will swing over it in the bend ahead (a bus
+                // turning right from the outer of two lanes, a bus standing in the inner one):
+                // the slices, laid where the corners project, put the hit behind our front, and
+                // we turned into it. Found on the dry run's boxes, our centre goes no further
+                // than its last place clear of it.
+                // Also where one still rolling will stand: holding (at its line, short of a
+                // zone) or at its stop goal (a car stopping at its line beside a bus that had
+                // set off was found standing in the tail's way only once the bus could no
+                // longer stop short).
+                let stands = || {
+                    let goal = match b.stop {
+                        StopGoal::Front(sf) if sf - b.hl > o.s => Some(sf - b.hl),
+                        StopGoal::Centre(sc) if sc > o.s => Some(sc),
+                        _ => None,
+                    };
+                    [
+                        (o.v < 0.5).then(|| b.obb(o)),
+                        self.yielding[j].0.map(|rem| b.obb(&State { pos: o.pos + self.dirs[j] * rem, ..*o })),
+                        goal.map(|sc| {
+                            let (pos, yaw) = b.path.point(sc, o.d);
+                            b.obb(&State { pos, yaw, ..*o })
+                        }),
+                    ]
+                };
+                if a.vehicle
+                    && ds > -(a.hl + b.hl)
+                    && let Some(bd) = &a.bend
+                    && let Some(at) = stands()
+                        .iter()
+                        .flatten()
+                        .filter_map(|q| bd.touches(a, &q.grown(SWEEP_MARGIN), st.s, sweep_to))
+                        .reduce(f64::min)
+                {
+                    tail_rem = tail_rem.min(at - st.s - 0.2);
+                }
                 continue;
             }
             let gap = ds - a.hl - ext_lon;
@@ -2266,7 +2383,7 @@ impl<'a, 'b> Sim<'a, 'b> {
                     .map(|rem| State { pos: o.pos + self.dirs[j] * rem, ..*o })
                     .into_iter()
                     .chain([*o])
-                    .filter_map(|q| bd.meets(&b.obb(&q), st.s, sweep_hi))
+                    .filter_map(|q| bd.meets(&b.obb(&q).grown(SLICE_MARGIN), st.s, sweep_hi))
                     .reduce(f64::min)
                     // One still moving, too close to stop for within our braking: we are
                     // committed (as to a junction zone), and it sees our box.
@@ -2439,7 +2556,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             // overrun by what the brakes cannot absorb, never met by braking past the limit.
             hard = hard.min(rem.max(shortest));
         }
-        if let Some(rem) = yield_rem {
+        for rem in yield_rem.into_iter().chain((tail_rem < f64::INFINITY).then_some(tail_rem)) {
             acc = acc.min(stop_law(st.v, rem, lim, dt));
             hard = hard.min(rem.max(shortest));
         }
@@ -2572,7 +2689,7 @@ impl<'a, 'b> Sim<'a, 'b> {
                 let (cr, sr) = (b.dir.dot(ln.dir), ln.dir.perp_dot(b.dir));
                 let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
                 let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
-                let behind = s_line - st.s < -LINE_EPS;
+                let behind = s_line - st.s < -LINE_EPS - c.back;
                 let too_far = s_line - st.s - a.hl - ext_lon > look + LINE_EPS;
                 let aside = l_line - ext_lat > c.hi + LINE_EPS || l_line + ext_lat < c.lo - LINE_EPS;
                 // Nor would it be predicted to cut across (see `obstacle` in `drive`).
@@ -2632,7 +2749,7 @@ impl<'a, 'b> Sim<'a, 'b> {
         // Inside the run `candidate` keeps an agent only where it is not behind, not beyond the
         // look-ahead (its extents are within `rmax`), and beside our band, or moving across.
         let (o_along, o_across) = (ln.origin.dot(ln.dir), ln.dir.perp_dot(ln.origin));
-        let lo = st.s - ln.s0 + o_along - LINE_EPS - m;
+        let lo = st.s - ln.s0 + o_along - LINE_EPS - m - c.back;
         let hi = st.s - ln.s0 + o_along + a.hl + rmax + c.look + LINE_EPS + m;
         let (l_lo, l_hi) = (c.lo - rmax - LINE_EPS - m + o_across, c.hi + rmax + LINE_EPS + m + o_across);
         let mut sub = self.subset.borrow_mut();
@@ -2718,11 +2835,12 @@ impl<'a, 'b> Sim<'a, 'b> {
         hold
     }
 
-    /// Agent `i`'s standing toward its shared zone `(enter, leave)`: its rank (0 inside, 1 too
+    /// Agent `i`'s standing toward its shared zone `(enter, leave)` (`Crossing::meet` where the
+    /// paths come near, `enter` moved back from it by the other's sweep): its rank (0 inside, 1 too
     /// close to stop, 2 approaching, 3 stopped by anything but this rule) and its time to the
     /// zone; `None` once it has left the zone, or when it means to stop short of it. Also how
     /// far its front may go while it holds (stop line, else short of the zone).
-    fn zone_rank(&self, i: usize, enter: f64, leave: f64, t: f64) -> Option<(u8, f64, f64)> {
+    fn zone_rank(&self, i: usize, enter: f64, meet: f64, leave: f64, t: f64) -> Option<(u8, f64, f64)> {
         let (a, st) = (&self.actors[i], &self.cur[i]);
         if st.s > leave || st.frozen || st.stopped {
             return None;
@@ -2738,7 +2856,12 @@ impl<'a, 'b> Sim<'a, 'b> {
             Some(line) if line > -0.05 => line.min(to_zone),
             _ => to_zone,
         };
-        if st.s >= enter || self.striking(i, t) {
+        // Short of where the paths come near (`meet`), in the stretch the other's sweep moved
+        // the zone's start back over, one that can halt where it is holds there: a van placed
+        // standing at its line beside a bus turning from the next lane, its nose in the reach
+        // of the bus's swinging tail, counted as inside, set off and met the tail.
+        let rem = if st.s >= enter && st.s < meet { rem.max(0.0) } else { rem };
+        if st.s >= meet || (st.s >= enter && !can_stop(st.v, rem, a.lim.brake_max)) || self.striking(i, t) {
             return Some((0, 0.0, rem));
         }
         // Giving way may take up to the emergency braking: within the limits, and it leaves the
@@ -2756,20 +2879,20 @@ impl<'a, 'b> Sim<'a, 'b> {
         Some((rank, eta, rem.max(0.0)))
     }
 
-    /// `zone_rank(i, enter, leave, t)`, taken once per frame for each of `i`'s crossings (the
+    /// `zone_rank(i, enter, meet, leave, t)`, taken once per frame for each of `i`'s crossings (the
     /// zone with these bounds): what it reads (`cur`, `behind`, the emergency holds) is settled
     /// before the right-of-way rule runs, and `ranks` is cleared each frame.
-    fn rank(&self, i: usize, enter: f64, leave: f64, t: f64) -> Rank {
+    fn rank(&self, i: usize, enter: f64, meet: f64, leave: f64, t: f64) -> Rank {
         let same = |c: &Crossing| c.enter.to_bits() == enter.to_bits() && c.leave.to_bits() == leave.to_bits();
         let Some(k) = self.actors[i].crossings.iter().position(same) else {
-            return self.zone_rank(i, enter, leave, t);
+            return self.zone_rank(i, enter, meet, leave, t);
         };
         let slot = self.cross_at[i] + k;
         if let Some(r) = self.ranks.borrow()[slot] {
-            debug_assert_eq!(r, self.zone_rank(i, enter, leave, t), "stale zone rank for agent {i}");
+            debug_assert_eq!(r, self.zone_rank(i, enter, meet, leave, t), "stale zone rank for agent {i}");
             return r;
         }
-        let r = self.zone_rank(i, enter, leave, t);
+        let r = self.zone_rank(i, enter, meet, leave, t);
         self.ranks.borrow_mut()[slot] = Some(r);
         r
     }
@@ -2834,8 +2957,8 @@ impl<'a, 'b> Sim<'a, 'b> {
         if c.emergency && !(self.actors[i].emergency && self.yielding[c.other].1) {
             return None;
         }
-        let (ri, ei, rem) = self.rank(i, c.enter, c.leave, t)?;
-        let (rj, ej, _) = self.rank(c.other, c.other_enter, c.other_leave, t)?;
+        let (ri, ei, rem) = self.rank(i, c.enter, c.meet, c.leave, t)?;
+        let (rj, ej, _) = self.rank(c.other, c.other_enter, c.other_meet, c.other_leave, t)?;
         // Placed with one order only (`order_crossings`): it holds till the other has left.
         if let Some(yields) = c.placed_yield {
             return yields.then_some(rem);
@@ -3608,6 +3731,7 @@ mod tests {
                     line: Some(line),
                     clearing: k == 1 && i % 2 == 0,
                     named: (k == 2).then_some((i * 7 + 3) % n),
+                    back: if k == 1 { 8.0 } else { 0.0 },
                 };
                 let mut got = vec![];
                 sim.candidates(i, &c, &mut got);
