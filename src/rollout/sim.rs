@@ -2448,6 +2448,27 @@ impl<'a, 'b> Sim<'a, 'b> {
                     }
                 }
             }
+            // One standing beside the band where it projects, square to our path there, but
+            // reaching over it where the path bends before it: a bus that overran its line
+            // stands with its nose in the arc of a car turning left past it, and lay one lane
+            // over on the street the car turns into (the car met the nose at 5.8 m/s).
+            if !in_cur
+                && !swept
+                && !is_named
+                && a.vehicle
+                && o.v < 0.5
+                && gap > 0.0
+                && lj - ext_lat < band_hi + 2.0
+                && lj + ext_lat > band_lo - 2.0
+            {
+                let reach = (sj + ext_lon + a.hl + 1.0).min(a.path.length());
+                if a.path.straight_run(st.s).is_none_or(|ln| ln.hi < reach)
+                    && let Some(s_hit) = band_meets(a, st.s, reach, (cur_lo, cur_hi), &b.obb(o))
+                {
+                    in_cur = true;
+                    gap = s_hit - st.s;
+                }
+            }
             // One driving toward us in its lane beside our path meets us wherever our turn
             // sweeps out over its way between it and us (a bus's front corner swinging into the
             // oncoming lane as it turns right): found only once there, it is on us. We hold
