@@ -229,9 +229,9 @@ pub(super) struct Crossing {
     /// is not inside (`Sim::zone_rank`).
     pub meet: f64,
     pub other_meet: f64,
-    /// Set where the two are placed too near `meet` for either to stop short of it and only one
-    /// order keeps them apart (`order_crossings`): `Some(true)` when this agent gives way, braking
-    /// as hard as it may, `Some(false)` when the other does; the rule's order otherwise.
+    /// Set where the two are placed too near their zones for either to stop short of its own
+    /// (`order_crossings`): `Some(true)` when this agent gives way, braking as hard as it may,
+    /// `Some(false)` when the other does; the rule's order otherwise.
     pub placed_yield: Option<bool>,
     /// One of the two is an emergency vehicle the other yields to (`Actor::yield_to`).
     pub emergency: bool,
@@ -1190,7 +1190,11 @@ fn order_crossings(actors: &mut [Actor], errs: &mut Vec<Diagnostic>) {
                 GO_ON_KEEP[1..].iter().all(|&keep| first_contact(y, o, keep, leave).is_some()).then_some(first)
             };
             let (ta, tb) = (gives_way(a, b, c.other_leave), gives_way(b, a, c.leave));
+            // Whether `a` is the later to where the paths meet at its placed speed (then the name).
             let later = |x: &Actor, meet: f64| (meet - x.s0).max(0.0) / x.v0.max(0.1);
+            let a_later = || {
+                later(a, c.meet).total_cmp(&later(b, c.other_meet)).then_with(|| a.info.name.cmp(&b.info.name)).is_gt()
+            };
             match (ta, tb) {
                 (None, Some(_)) => set.push((i, k, true)),
                 (Some(_), None) => set.push((i, k, false)),
@@ -1206,10 +1210,7 @@ fn order_crossings(actors: &mut [Actor], errs: &mut Vec<Diagnostic>) {
                     let a_yields = match (clear(a, b, c.other_leave), clear(b, a, c.leave)) {
                         (true, false) => true,
                         (false, true) => false,
-                        _ => later(a, c.meet)
-                            .total_cmp(&later(b, c.other_meet))
-                            .then_with(|| a.info.name.cmp(&b.info.name))
-                            .is_gt(),
+                        _ => a_later(),
                     };
                     set.push((i, k, a_yields));
                 }
@@ -1223,12 +1224,7 @@ fn order_crossings(actors: &mut [Actor], errs: &mut Vec<Diagnostic>) {
                     match (both, standoff(a, b, (c.leave, c.other_leave))) {
                         (Some(_), _) | (None, (true, true)) => errs.push(no_order(a, b, [ta, tb], both)),
                         (None, (a_blocked, b_blocked)) => {
-                            let a_yields = a_blocked
-                                || (!b_blocked
-                                    && later(a, c.meet)
-                                        .total_cmp(&later(b, c.other_meet))
-                                        .then_with(|| a.info.name.cmp(&b.info.name))
-                                        .is_gt());
+                            let a_yields = a_blocked || (!b_blocked && a_later());
                             set.push((i, k, a_yields));
                         }
                     }
@@ -2312,7 +2308,7 @@ impl<'a, 'b> Sim<'a, 'b> {
                     };
                     [
                         (o.v < 0.5).then(|| b.obb(o)),
-                        self.yielding[j].0.map(|rem| b.obb(&State { pos: o.pos + self.dirs[j] * rem, ..*o })),
+                        self.held_at(j).map(|q| b.obb(&q)),
                         goal.map(|sc| {
                             let (pos, yaw) = b.path.point(sc, o.d);
                             b.obb(&State { pos, yaw, ..*o })
@@ -2378,9 +2374,8 @@ impl<'a, 'b> Sim<'a, 'b> {
                 && in_sweep
                 && ds > 0.0
                 && let Some(bd) = &a.bend
-                && let Some(at) = self.yielding[j]
-                    .0
-                    .map(|rem| State { pos: o.pos + self.dirs[j] * rem, ..*o })
+                && let Some(at) = self
+                    .held_at(j)
                     .into_iter()
                     .chain([*o])
                     .filter_map(|q| bd.meets(&b.obb(&q).grown(SLICE_MARGIN), st.s, sweep_hi))
@@ -2439,13 +2434,20 @@ impl<'a, 'b> Sim<'a, 'b> {
             // projection misplaces it (a bus driving straight past our right turn lies in the
             // band there, and clear of it on the road): our band is laid along the path itself,
             // a metre at a time, and only a box it meets counts, from where it first meets it.
-            if in_cur && !swept && !is_named && sr.abs() > 0.05 {
+            // How far on our band is laid for it, where our path bends before that.
+            let bend_reach = || {
                 let reach = (sj + ext_lon + a.hl + 1.0).min(a.path.length());
-                if a.path.straight_run(st.s).is_none_or(|ln| ln.hi < reach) {
-                    match band_meets(a, st.s, reach, (band_lo, band_hi), &b.obb(o)) {
-                        Some(s_hit) => gap = s_hit - st.s,
-                        None => in_cur = false,
-                    }
+                a.path.straight_run(st.s).is_none_or(|ln| ln.hi < reach).then_some(reach)
+            };
+            if in_cur
+                && !swept
+                && !is_named
+                && sr.abs() > 0.05
+                && let Some(reach) = bend_reach()
+            {
+                match band_meets(a, st.s, reach, (band_lo, band_hi), &b.obb(o)) {
+                    Some(s_hit) => gap = s_hit - st.s,
+                    None => in_cur = false,
                 }
             }
             // One standing beside the band where it projects, square to our path there, but
@@ -2460,14 +2462,11 @@ impl<'a, 'b> Sim<'a, 'b> {
                 && gap > 0.0
                 && lj - ext_lat < band_hi + 2.0
                 && lj + ext_lat > band_lo - 2.0
+                && let Some(reach) = bend_reach()
+                && let Some(s_hit) = band_meets(a, st.s, reach, (cur_lo, cur_hi), &b.obb(o))
             {
-                let reach = (sj + ext_lon + a.hl + 1.0).min(a.path.length());
-                if a.path.straight_run(st.s).is_none_or(|ln| ln.hi < reach)
-                    && let Some(s_hit) = band_meets(a, st.s, reach, (cur_lo, cur_hi), &b.obb(o))
-                {
-                    in_cur = true;
-                    gap = s_hit - st.s;
-                }
+                in_cur = true;
+                gap = s_hit - st.s;
             }
             // One driving toward us in its lane beside our path meets us wherever our turn
             // sweeps out over its way between it and us (a bus's front corner swinging into the
@@ -3110,6 +3109,13 @@ impl<'a, 'b> Sim<'a, 'b> {
     /// turning radius and by `yaw_scale` times its class yaw rate at the step's mean speed.
     fn advance(&self, a: &Actor, st: &State, k: f64, dist: f64, yaw_scale: f64) -> (DVec2, f64) {
         steer(a, st.pos, st.yaw, k, dist, self.dt, yaw_scale)
+    }
+
+    /// Where agent `j`, holding (at its line, short of a zone), will stand: as now, its front
+    /// moved on to where it holds.
+    fn held_at(&self, j: usize) -> Option<State> {
+        let o = &self.cur[j];
+        self.yielding[j].0.map(|rem| State { pos: o.pos + self.dirs[j] * rem, ..*o })
     }
 
     /// How agent `i` gives the junction to an emergency vehicle on a crossing path: short of the
