@@ -1294,14 +1294,13 @@ proptest! {
     #[test]
     fn generated_scenes_on_every_template(g in gen_scene()) {
         let text = scene_text(&g);
-        generated_scene_holds(&text, true)?;
+        generated_scene_holds(&text)?;
     }
 }
 
 /// The properties every generated scene must have (see `generated_scenes_on_every_template`);
-/// a scene the checker or the staging refuses is rejected, not failed. `long_excused`: whether
-/// a long vehicle's braking beyond the limit next to another is excused (see below).
-fn generated_scene_holds(text: &str, long_excused: bool) -> Result<(), TestCaseError> {
+/// a scene the checker or the staging refuses is rejected, not failed.
+fn generated_scene_holds(text: &str) -> Result<(), TestCaseError> {
     let text = text.to_string();
     let mut sources = rocc::source::SourceMap::default();
     let checked = rocc::check::check_text("gen.scn", &text, std::path::Path::new("."), &mut sources);
@@ -1410,11 +1409,10 @@ fn generated_scene_holds(text: &str, long_excused: bool) -> Result<(), TestCaseE
         })
         .collect();
     let strikers: Vec<usize> = t.impacts.iter().map(|r| r.at_fault).collect();
-    // The braking bound holds everywhere but in two situations the controller does not
-    // foresee (README, Rollout "Limits"): a staged striker meeting a bystander on its way,
-    // and the tail of a long vehicle (10 m or more) swinging out in a turn onto one beside
-    // it. Only a frame at which (or just before which) the braking agent is within 1 m of
-    // another and either of the two is a striker or such a long vehicle is excused.
+    // The braking bound holds everywhere but in the one situation the controller does not
+    // foresee (README, Rollout "Limits"): a staged striker meeting a bystander on its way.
+    // Only a frame at which (or just before which) the braking agent is within 1 m of another
+    // and either of the two is a striker is excused.
     let near = |i: usize, f: usize, k: usize| {
         [f - 1, f].iter().any(|&g| {
             let mut o = obb(t, k, g);
@@ -1423,9 +1421,8 @@ fn generated_scene_holds(text: &str, long_excused: bool) -> Result<(), TestCaseE
             o.overlaps(&obb(t, i, g))
         })
     };
-    let long = |k: usize| long_excused && t.agents[k].motion == Motion::Vehicle && t.agents[k].size[0] >= 10.0;
-    let special = |k: usize| strikers.contains(&k) || long(k);
-    let excused = |i: usize, f: usize| (0..n).any(|k| k != i && (special(i) || special(k)) && near(i, f, k));
+    let striker = |k: usize| strikers.contains(&k);
+    let excused = |i: usize, f: usize| (0..n).any(|k| k != i && (striker(i) || striker(k)) && near(i, f, k));
     // A broken bound fails with the scene's text, as the other properties do, so that the
     // minimal case can be kept as a regression scene.
     let kinematics = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
@@ -1477,7 +1474,7 @@ fn generated_regression_scenes() {
     assert!(files.len() >= 10 || dir.is_some(), "{files:?}");
     for p in files {
         let text = std::fs::read_to_string(&p).expect("read");
-        if let Err(e) = generated_scene_holds(&text, false) {
+        if let Err(e) = generated_scene_holds(&text) {
             panic!("{}: {e}", p.display());
         }
     }

@@ -2191,9 +2191,10 @@ impl<'a, 'b> Sim<'a, 'b> {
             }
         }
         let mut hard = f64::INFINITY;
-        // How far our centre may go before our tail, swinging in the bend ahead, meets one
-        // standing beside us (`Bend::touches`), and how far on that is looked for.
-        let mut tail_rem = f64::INFINITY;
+        // How far our centre may go before our box on its run through the bend ahead meets one
+        // standing (`Bend::touches`): beside us, where our tail swings, or ahead where the
+        // slices miss it; and how far on that is looked for beside us.
+        let mut touch_rem = f64::INFINITY;
         let sweep_to = st.s + 2.0 * a.hl + look;
         // The least this step can advance braking at the limit.
         let shortest = (st.v * dt - 0.5 * lim.brake_max * dt * dt).max(0.0);
@@ -2324,7 +2325,7 @@ impl<'a, 'b> Sim<'a, 'b> {
                         .filter_map(|q| bd.touches(a, &q.grown(SWEEP_MARGIN), st.s, sweep_to))
                         .reduce(f64::min)
                 {
-                    tail_rem = tail_rem.min(at - st.s - 0.2);
+                    touch_rem = touch_rem.min(at - st.s - 0.2);
                 }
                 continue;
             }
@@ -2387,6 +2388,19 @@ impl<'a, 'b> Sim<'a, 'b> {
                 in_cur = true;
                 swept = true;
                 gap = at - st.s - a.hl;
+            }
+            // Standing where the sweep's slices miss it: laid a metre each along the path, they
+            // lose the corner of a nose swinging round a tight U-turn loop (a sedan's, over the
+            // front of a bus at its stop line, seed 161). The run's own boxes are exact; met
+            // there, we go no further than the last pose clear of it, as for our tail.
+            if !in_cur
+                && !swept
+                && a.vehicle
+                && o.v < 0.5
+                && let Some(bd) = &a.bend
+                && let Some(at) = bd.touches(a, &b.obb(o).grown(SLICE_MARGIN), st.s, sweep_hi)
+            {
+                touch_rem = touch_rem.min(at - st.s - 0.2);
             }
             // A box turned across our path (a long vehicle turning beside us): its extents along
             // and across the path put corners where it has none. Only the part of it inside our
@@ -2576,7 +2590,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             // overrun by what the brakes cannot absorb, never met by braking past the limit.
             hard = hard.min(rem.max(shortest));
         }
-        for rem in yield_rem.into_iter().chain((tail_rem < f64::INFINITY).then_some(tail_rem)) {
+        for rem in yield_rem.into_iter().chain((touch_rem < f64::INFINITY).then_some(touch_rem)) {
             acc = acc.min(stop_law(st.v, rem, lim, dt));
             hard = hard.min(rem.max(shortest));
         }
@@ -2616,7 +2630,10 @@ impl<'a, 'b> Sim<'a, 'b> {
         let l_d = look_ahead(a, v);
         let horizon = l_d / v.max(1.0);
         let d_look = if side_blocked {
-            st.d
+            // Where the body is, when it lags the reference: aimed at the reference, a bus held
+            // 0.1 m short of it kept crabbing toward the car passing in the lane it had been
+            // moving into, its nose swinging 0.4 m over (on a curve, seed 129).
+            st.off
         } else if let Some(tg) = target {
             a.d0 + (tg - a.d0) * quintic((phase + horizon / dur).min(1.0))
         } else if let Some(tg) = pass_target {
@@ -3001,7 +3018,11 @@ impl<'a, 'b> Sim<'a, 'b> {
                 _ => (!self.gone(c, ei)).then_some(rem),
             };
         }
-        if ri == 1 && rj == 1 {
+        // Too near our line to hold there, but the other is inside, or as near: we still give
+        // way short of the zone where we can. Let go because the bus beside it was already
+        // inside, a motorcycle 6 m before its line at 8.8 m/s, turning right with it, met the
+        // bus's swinging front (seed 338).
+        if ri == 1 && rj <= 1 {
             return self.committed_gives_way(i, c);
         }
         if ri <= 1 {
@@ -3031,8 +3052,9 @@ impl<'a, 'b> Sim<'a, 'b> {
         can_stop(st.v, rem, a.lim.brake_max).then_some((rem.max(0.0), (enter - st.s) / st.v.max(0.1)))
     }
 
-    /// Between two vehicles both too close to hold at their lines (rank 1 each, so the rule
-    /// above lets both go): whether `i` still gives way, short of the zone itself, and then how
+    /// Of a vehicle too close to hold at its line (rank 1) and one as close or already inside
+    /// (rank 1 or 0; the rule above lets both go): whether `i` still gives way, short of the
+    /// zone itself, and then how
     /// far its front may go. One that can stop short of the zone within its emergency braking
     /// gives way to one that cannot; of two that can, the later to reach it at its present
     /// speed (then the name), the same order seen from either side. Two cars 6 m before their
