@@ -2174,7 +2174,18 @@ impl<'a, 'b> Sim<'a, 'b> {
         let goal_d = target.filter(|&tg| st.phase < 1.0 || (st.d - tg).abs() > 1e-3).or(pass_target).unwrap_or(st.d);
         // The band the box occupies now: a steering vehicle lags its reference offset.
         let (cur_lo, cur_hi) = (st.d.min(st.off) - a.hw, st.d.max(st.off) + a.hw);
-        let (lo, hi) = (cur_lo.min(goal_d - a.hw) - margin, cur_hi.max(goal_d + a.hw) + margin);
+        // Turned off the path while it moves sideways, our nose reaches out of that band on the
+        // side it points: a bus easing into the inner lane at 0.12 rad put its front corner on
+        // the centre line, into the nose of an oncoming bus doing the same (seed 654).
+        let (nose_lo, nose_hi) = match target {
+            Some(_) if a.vehicle => {
+                let th = wrap_angle(st.yaw - a.path.point(st.s, st.off).1);
+                let reach = (a.hl * th.sin().abs() - a.hw * (1.0 - th.cos())).max(0.0);
+                if th > 0.0 { (0.0, reach) } else { (reach, 0.0) }
+            }
+            _ => (0.0, 0.0),
+        };
+        let (lo, hi) = (cur_lo.min(goal_d - a.hw) - margin - nose_lo, cur_hi.max(goal_d + a.hw) + margin + nose_hi);
 
         // Half done once the profile and the body itself are half way over.
         let half_done = st.phase >= 0.5 && target.is_none_or(|tg| (st.off - a.d0).abs() >= 0.5 * (tg - a.d0).abs());
@@ -2350,7 +2361,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             // it was stopped dead).
             let in_sweep =
                 o.v < 0.5 || self.yielding[j].0.is_some() || cr < -0.5 || (v_lon > 0.0 && v_lon < 0.5 * st.v);
-            let (mut band_lo, mut band_hi) = (cur_lo - margin, cur_hi + margin);
+            let (mut band_lo, mut band_hi) = (cur_lo - margin - nose_lo, cur_hi + margin + nose_hi);
             if a.vehicle && in_sweep && gap > 0.0 {
                 let (k0, k1) = (a.path.curvature(sj), a.path.curvature(sj - a.hl));
                 band_lo -= swing(a.hl, k0.max(k1).max(0.0));
@@ -2630,9 +2641,10 @@ impl<'a, 'b> Sim<'a, 'b> {
         let l_d = look_ahead(a, v);
         let horizon = l_d / v.max(1.0);
         let d_look = if side_blocked {
-            // Where the body is, when it lags the reference: aimed at the reference, a bus held
-            // 0.1 m short of it kept crabbing toward the car passing in the lane it had been
-            // moving into, its nose swinging 0.4 m over (on a curve, seed 129).
+            // Where the body is, not the held reference: aimed at that, a bus 0.1 m short of it
+            // kept crabbing toward the car passing in the lane it had been moving into, its
+            // nose 0.4 m over (on a curve, seed 129), and one 0.05 m past it steered back, its
+            // tail swinging out at the car following in that lane (seed 104).
             st.off
         } else if let Some(tg) = target {
             a.d0 + (tg - a.d0) * quintic((phase + horizon / dur).min(1.0))
@@ -3054,12 +3066,12 @@ impl<'a, 'b> Sim<'a, 'b> {
 
     /// Of a vehicle too close to hold at its line (rank 1) and one as close or already inside
     /// (rank 1 or 0; the rule above lets both go): whether `i` still gives way, short of the
-    /// zone itself, and then how
-    /// far its front may go. One that can stop short of the zone within its emergency braking
-    /// gives way to one that cannot; of two that can, the later to reach it at its present
-    /// speed (then the name), the same order seen from either side. Two cars 6 m before their
-    /// lines at 9 m/s, one going straight and one turning across it, were both let go: only
-    /// their car-following kept them apart, once the turner's sideways motion showed.
+    /// zone itself, and then how far its front may go. One that can stop short of the zone
+    /// within its emergency braking gives way to one that cannot; of two that can, the later to
+    /// reach it at its present speed (then the name), the same order seen from either side.
+    /// Two cars 6 m before their lines at 9 m/s, one going straight and one turning across it,
+    /// were both let go: only their car-following kept them apart, once the turner's sideways
+    /// motion showed.
     fn committed_gives_way(&self, i: usize, c: &Crossing) -> Option<f64> {
         let (rem, ti) = self.short_of(i, c.enter)?;
         let first = match self.short_of(c.other, c.other_enter) {
