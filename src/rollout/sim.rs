@@ -130,6 +130,8 @@ pub(super) struct Bend {
     pub spans: Vec<Vec<(f64, f64)>>,
     /// The run's box centre, step by step: route arc length, position, heading (`Bend::pose`).
     pub poses: Vec<(f64, DVec2, f64)>,
+    /// The bounding box of the run's boxes (lower and upper corners; `touches`).
+    pub run_bounds: (DVec2, DVec2),
 }
 
 impl Bend {
@@ -186,6 +188,10 @@ impl Bend {
     /// The first route arc length from `lo` to `hi` at which the run's box of vehicle `a`
     /// (whose run it is) meets `theirs`, at the run's steps.
     fn touches(&self, a: &Actor, theirs: &Obb, lo: f64, hi: f64) -> Option<f64> {
+        let ((min, max), c, r) = (self.run_bounds, theirs.center, 0.5 * theirs.length.hypot(theirs.width));
+        if c.x + r < min.x || c.x - r > max.x || c.y + r < min.y || c.y - r > max.y {
+            return None;
+        }
         let k = self.poses.partition_point(|q| q.0 < lo);
         let (length, width) = (2.0 * a.hl, 2.0 * a.hw);
         let reach = 0.5 * (length.hypot(width) + theirs.length.hypot(theirs.width));
@@ -318,6 +324,15 @@ const CLEAR_MARGIN_S: f64 = 1.0;
 const SAFE_MARGIN: f64 = 0.5;
 /// Largest angle between a vehicle's heading and its lane while it moves sideways (rad).
 const MAX_SLIP: f64 = 0.25;
+/// How far a long vehicle's ends may swing out of its lane while it moves sideways (m): its
+/// box turns about its centre, so at `MAX_SLIP` a bus's tail swung 0.9 m the other way.
+const END_SWING: f64 = 0.65;
+
+/// The tangent of the largest angle between vehicle `a`'s heading and its lane while it moves
+/// sideways: `MAX_SLIP`, or less where its ends would swing out further than `END_SWING`.
+fn slip_tan(a: &Actor) -> f64 {
+    MAX_SLIP.tan().min(END_SWING / a.hl)
+}
 /// The least reach beyond the band a junction sweep's slice is kept for (`Bend::slices`), m:
 /// the vehicle band's margin in `Sim::drive`.
 const SLICE_MIN: f64 = 0.25;
@@ -1415,6 +1430,7 @@ impl DryRun {
             bounds: (DVec2::INFINITY, DVec2::NEG_INFINITY),
             spans: vec![],
             poses: vec![],
+            run_bounds: (DVec2::INFINITY, DVec2::NEG_INFINITY),
         };
         let (pos, yaw) = a.path.point(start, 0.0);
         b.poses.push((start, pos, yaw));
@@ -1475,6 +1491,10 @@ impl DryRun {
                 }
                 b.slices.push((b.from + m as f64, slice));
             }
+        }
+        let half = a.hl.hypot(a.hw);
+        for &(_, p, _) in &b.poses {
+            b.run_bounds = (b.run_bounds.0.min(p - half), b.run_bounds.1.max(p + half));
         }
         b.index();
         b
@@ -2160,7 +2180,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             // A vehicle drifts sideways only as fast as its heading can follow (below 3 m/s the
             // bound stays at its 3 m/s value, so a car creeping in a queue still changes lane):
             // a slow lane change takes longer than its nominal duration instead of crabbing.
-            let max_step = st.v.max(3.0) * MAX_SLIP.tan() * dt;
+            let max_step = st.v.max(3.0) * slip_tan(a) * dt;
             d_next = st.d + (d_next - st.d).clamp(-max_step, max_step);
             // Nor does the reference run ahead of the box: a car creeping at walking pace would
             // otherwise finish its lane change on paper, seconds before its body has moved, and
@@ -2653,11 +2673,11 @@ impl<'a, 'b> Sim<'a, 'b> {
         } else {
             d_next
         };
-        let slip = v.max(3.0) * MAX_SLIP.tan() * horizon;
+        let slip = v.max(3.0) * slip_tan(a) * horizon;
         let d_look = d_next + (d_look - d_next).clamp(-slip, slip);
         // Aimed no steeper than the slip angle from where the body is (a creeping car noses out
         // gently instead of turning broadside into the next lane).
-        let reach = l_d * MAX_SLIP.tan();
+        let reach = l_d * slip_tan(a);
         let d_look = d_look.clamp(d_next.min(st.off - reach), d_next.max(st.off + reach));
         let aim = a.path.point_fast(st.s + l_d, d_look);
         let k = pursuit(st.pos, self.dirs[i], aim);
