@@ -2333,11 +2333,15 @@ impl<'a, 'b> Sim<'a, 'b> {
                 // set off was found standing in the tail's way only once the bus could no
                 // longer stop short).
                 let stands = || {
+                    // At the latest: where its braking limit halts it, past a goal it cannot
+                    // stop short of (a van at 9.8 m/s 6 m before its line, seed 819).
                     let goal = match b.stop {
-                        StopGoal::Front(sf) if sf - b.hl > o.s => Some(sf - b.hl),
-                        StopGoal::Centre(sc) if sc > o.s => Some(sc),
+                        StopGoal::Front(sf) => Some(sf - b.hl),
+                        StopGoal::Centre(sc) => Some(sc),
                         _ => None,
-                    };
+                    }
+                    .map(|g| g.max(o.s + o.v * o.v / (2.0 * b.lim.brake_max)))
+                    .filter(|&g| g > o.s);
                     [
                         (o.v < 0.5).then(|| b.obb(o)),
                         self.held_at(j).map(|q| b.obb(&q)),
