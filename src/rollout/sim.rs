@@ -188,8 +188,7 @@ impl Bend {
     /// The first route arc length from `lo` to `hi` at which the run's box of vehicle `a`
     /// (whose run it is) meets `theirs`, at the run's steps.
     fn touches(&self, a: &Actor, theirs: &Obb, lo: f64, hi: f64) -> Option<f64> {
-        let ((min, max), c, r) = (self.run_bounds, theirs.center, 0.5 * theirs.length.hypot(theirs.width));
-        if c.x + r < min.x || c.x - r > max.x || c.y + r < min.y || c.y - r > max.y {
+        if clear_of(self.run_bounds, theirs) {
             return None;
         }
         let k = self.poses.partition_point(|q| q.0 < lo);
@@ -205,10 +204,10 @@ impl Bend {
 
     /// The route arc length of the first metre from `lo` to `hi` whose slice meets `theirs`.
     fn meets(&self, theirs: &Obb, lo: f64, hi: f64) -> Option<f64> {
-        let ((min, max), c, r) = (self.bounds, theirs.center, 0.5 * theirs.length.hypot(theirs.width));
-        if c.x + r < min.x || c.x - r > max.x || c.y + r < min.y || c.y - r > max.y {
+        if clear_of(self.bounds, theirs) {
             return None;
         }
+        let (c, r) = (theirs.center, 0.5 * theirs.length.hypot(theirs.width));
         let near = |q: &Obb| {
             let rq = r + 0.5 * q.length.hypot(q.width);
             q.center.distance_squared(c) < rq * rq
@@ -216,6 +215,13 @@ impl Bend {
         let (at, _) = self.slices.iter().find(|(s, q)| *s + 1.0 > lo && *s < hi && near(q) && q.overlaps(theirs))?;
         Some(*at)
     }
+}
+
+/// Whether box `theirs`, within its circumscribed circle, lies wholly outside the axis-aligned
+/// `(lower, upper)` corners `bounds`: then nothing inside them can meet it.
+fn clear_of((min, max): (DVec2, DVec2), theirs: &Obb) -> bool {
+    let (c, r) = (theirs.center, 0.5 * theirs.length.hypot(theirs.width));
+    c.x + r < min.x || c.x - r > max.x || c.y + r < min.y || c.y - r > max.y
 }
 
 /// The stretch that two vehicles' junction paths share, seen from one of them: route arc
