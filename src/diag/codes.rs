@@ -320,7 +320,13 @@ the course it would brake on, a car whose stopping distance it would cut into, a
 the other way), and when that makes it miss, the help names the agent that held it back\n\
 longest. Nor may a staging have one of the pair stopped dead, beyond its braking, short of\n\
 another agent (by the last-resort overlap guard): when the first plan does and no plan tried\n\
-does better, it is refused, naming the agent it would have run into.\n
+does better, it is refused, naming the agent it would have run into. Nor may it make anyone\n\
+brake beyond their limit (8 m/s2 for a car) within 1 m of the striker: a striker cutting across\n\
+a lane a few metres ahead of a car, or turning back across the lane of one coming the other\n\
+way, leaves it no room its brakes could stop it in. Other agents brake for where a striker\n\
+will stand (its contact pose, where the crash stops it dead), not only for where it is; when\n\
+that is not enough under any plan tried, the error names who would have to brake, how hard,\n\
+and for whom.\n
     agent a: sedan { at west.in[1], 50 m before center; speed 30 km/h }
     agent b: sedan { at west.in[1], 50 m after center; speed 30 km/h }
     conflict { at_fault a; struck b; impact rear_end; point rear; at 0.5 s }   // error: 100 m apart\n\n\

@@ -417,7 +417,7 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         let mut avoid: Vec<Vec<f64>> = vec![Vec::new(); confs.len()];
         // The first attempt's tracks (only where they are the answer should nothing do
         // better: its crashes landed) and its errors.
-        let (mut first_tracks, mut first_failed, mut first_hard) = (None, Vec::new(), None);
+        let (mut first_tracks, mut first_failed, mut first_hard, mut first_forced) = (None, Vec::new(), None, None);
         let mut plans: Vec<Option<Plan>> =
             confs.iter().map(|k| stage::choose(k, &actors, &pass1, dt, c.duration, &[])).collect();
         for attempt in 0..=RESTAGE {
@@ -428,7 +428,8 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
             let report =
                 Sim::new(&actors, &confs, &plans, Some(&pass1), dt).resume(&pass1, &states, start).run(&mut out);
             let failed = staging_errors(&actors, &confs, &plans, &out, &report.blocked_by, (dt, frames, c.duration));
-            if failed.is_empty() && report.first_hard.is_none() {
+            let forced = forced_braking(&actors, &confs, &plans, &out);
+            if failed.is_empty() && report.first_hard.is_none() && forced.is_none() {
                 break;
             }
             // Plan again the conflicts that failed; where none did, every one.
@@ -438,6 +439,7 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
                 first_tracks = failed.is_empty().then(|| out.clone());
                 first_failed = failed;
                 first_hard = report.first_hard;
+                first_forced = forced;
             }
             let mut replanned = false;
             if attempt < RESTAGE {
@@ -457,10 +459,11 @@ pub(super) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
                 let pair_stopped = first_hard.and_then(|(k, other, t)| {
                     confs.iter().position(|c| c.af == k || c.st == k).map(|ki| (ki, k, other, t))
                 });
-                match (first_tracks, pair_stopped) {
-                    (Some(_), Some((ki, k, other, t))) => errs.push(stopped_dead(&actors, &confs[ki], k, other, t)),
-                    (Some(tracks), None) => out = tracks,
-                    (None, _) => {}
+                match (first_tracks, pair_stopped, first_forced) {
+                    (Some(_), Some((ki, k, other, t)), _) => errs.push(stopped_dead(&actors, &confs[ki], k, other, t)),
+                    (Some(_), None, Some(f)) => errs.push(forced_error(&actors, &confs, f)),
+                    (Some(tracks), None, None) => out = tracks,
+                    (None, ..) => {}
                 }
                 errs.extend(first_failed.into_iter().map(|(_, d)| d));
                 break;
@@ -553,6 +556,78 @@ fn staging_errors(
         ));
     }
     errs
+}
+
+/// Within this of a striker (box to box, m), an agent braking beyond its limit is braking for
+/// the staged crash.
+const FORCED_NEAR_M: f64 = 1.0;
+
+/// A staged crash that makes someone brake beyond their limit: what the controller cannot
+/// foresee of a striker that leaves its goal at speed (one cutting across a lane a few metres
+/// ahead of a car, one swerving into a lane that a motorcycle is setting off in), measured on
+/// the tracks. The first frame at which an agent's speed falls faster than its `brake_max`
+/// while its box is within `FORCED_NEAR_M` of another's, either of the two a striker (the pair
+/// up to their latched frame, where the crash stops them dead): the conflict, the braking
+/// agent, the other, the time and the deceleration.
+fn forced_braking(
+    actors: &[Actor],
+    confs: &[Conf],
+    plans: &[Option<Plan>],
+    out: &Tracks,
+) -> Option<(usize, usize, usize, f64, f64)> {
+    let dt = 1.0 / out.rate;
+    let staged = |k: usize| confs.iter().zip(plans).position(|(c, p)| p.is_some() && c.af == k);
+    let bx = |k: usize, f: usize| {
+        let (p, s) = (out.poses[k][f], out.agents[k].size);
+        Obb { center: DVec2::new(p.x, p.y), yaw: p.yaw, length: s[0], width: s[1] }.grown(0.5 * FORCED_NEAR_M)
+    };
+    let mut first: Option<(usize, usize, usize, f64, f64)> = None;
+    for (i, a) in actors.iter().enumerate() {
+        let end = out.impacts.iter().filter(|r| r.at_fault == i || r.struck == i).map(|r| r.frame).min();
+        let end = end.unwrap_or(out.frames).min(first.map_or(out.frames, |f| (f.3 / dt).round() as usize));
+        for f in 1..end {
+            let acc = (out.speeds[i][f] - out.speeds[i][f - 1]) / dt;
+            if acc >= -a.lim.brake_max - 1e-6 {
+                continue;
+            }
+            let near = (0..actors.len()).find_map(|k| {
+                let ki = staged(i).or(staged(k)).filter(|_| k != i)?;
+                [f - 1, f].iter().any(|&g| bx(i, g).overlaps(&bx(k, g))).then_some((ki, k))
+            });
+            if let Some((ki, k)) = near {
+                first = Some((ki, i, k, f as f64 * dt, acc));
+                break;
+            }
+        }
+    }
+    first
+}
+
+/// E0205 for a staging whose every plan makes someone brake beyond their limit for the crash
+/// (`forced_braking`).
+fn forced_error(actors: &[Actor], confs: &[Conf], (ki, x, y, t, acc): (usize, usize, usize, f64, f64)) -> Diagnostic {
+    let k = &confs[ki];
+    let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
+    let (xn, yn) = (&actors[x].info.name, &actors[y].info.name);
+    let by = if x == k.af { y } else { x };
+    Diagnostic::error(
+        "E0205",
+        format!(
+            "the conflict between `{a}` and `{b}` cannot be staged within the agents' limits: at {t:.1} s `{xn}` \
+             would have to brake at {:.1} m/s2 for `{yn}` (its limit is {:.1})",
+            -acc, actors[x].lim.brake_max
+        ),
+    )
+    .label(k.c.span, "no plan tried stages it within everyone's braking")
+    .help(format!(
+        "keep `{}` out of the way `{a}` takes ({}), start `{a}` where its way to `{b}` is clear, or move `at`",
+        actors[by].info.name,
+        if actors[by].info.background {
+            "it is background traffic: lower `density`, or change the scenario's `seed`"
+        } else {
+            "start it elsewhere, or give it another goal"
+        }
+    ))
 }
 
 /// E0205 for a staging whose first plan has the overlap safety net stop agent `stopped` of the
@@ -2589,9 +2664,17 @@ impl<'a, 'b> Sim<'a, 'b> {
                 continue;
             }
             let s0 = if is_named { 2.0 } else { lim.min_gap };
-            acc = acc.min(idm_interaction(st.v, v_lon.max(0.0), gap, s0, lim));
+            // A striker coming at us does not stop for us: it comes on to its target, where the
+            // latch stops it. Braking for it where it is now, a motorcycle met a bus overtaking
+            // into its lane at 18 m/s and stopped at 13 m/s2. The reach only slows us: where we
+            // may still move (`hard`) is where it is.
+            let acc_gap = match self.strike_reach(j, t) {
+                Some(reach) if v_lon < -0.5 && !a.in_conflict => gap - reach,
+                _ => gap,
+            };
+            acc = acc.min(idm_interaction(st.v, v_lon.max(0.0), acc_gap, s0, lim));
             if v_lon < 0.5 {
-                acc = acc.min(stop_law(st.v, gap - s0, lim, dt));
+                acc = acc.min(stop_law(st.v, acc_gap - s0, lim, dt));
             }
             // Only into the band's margin (a standing car's corner at arm's length from our
             // side, the band's edge shifting by millimetres as we steer): brake for it, but no
@@ -2614,7 +2697,27 @@ impl<'a, 'b> Sim<'a, 'b> {
                 } else {
                     keep.max(shortest)
                 });
-                acc = acc.min(self.safe_acc(i, j, gap, v_lon, t));
+                acc = acc.min(self.safe_acc(i, j, acc_gap, v_lon, t));
+            } else if gap > 0.0 && !a.in_conflict && self.crash_partner(j, t).is_some() {
+                // One about to crash, cutting into our lane ahead, stops dead where it meets its
+                // partner: a bus overtaking a car at 19 m/s stood across its lane 2 m ahead of
+                // it, which had followed it as a lead at that speed (-19 m/s2).
+                acc = acc.min(self.safe_acc(i, j, acc_gap, v_lon, t));
+            }
+        }
+        // A striker stops dead where it meets its target (the latch): there it stands in our
+        // way, though it only passes through our band now. A bus overtaking a car at 19 m/s cut
+        // diagonally into the lane of another 4.7 m ahead of it and stood there, 2 m on (-19
+        // m/s2). Ahead of us only: one already where it will stand moves on out of its way.
+        if a.vehicle && !a.in_conflict {
+            for c in self.confs {
+                let Some((g, gyaw, moves)) = self.strike_pose(c.af, t) else { continue };
+                let b = &self.actors[c.af];
+                let there = Obb { center: g, yaw: gyaw, length: 2.0 * b.hl + moves, width: 2.0 * b.hw };
+                let to = (st.s + look + 2.0 * a.hl).min(a.path.length());
+                if let Some(s_hit) = band_meets(a, st.s + 0.5, to, (lo, hi), &there) {
+                    acc = acc.min(stop_law(st.v, s_hit - st.s - lim.min_gap, lim, dt));
+                }
             }
         }
         let mut stop_rem = None;
@@ -2885,6 +2988,26 @@ impl<'a, 'b> Sim<'a, 'b> {
                 _ => None,
             }
         })
+    }
+
+    /// How far striker `j`, on its intercept now, may still come before it touches its target:
+    /// to its contact pose taken on the target where it is, and as far again as the target may
+    /// move by the planned impact.
+    fn strike_reach(&self, j: usize, t: f64) -> Option<f64> {
+        let (g, _, moves) = self.strike_pose(j, t)?;
+        Some(self.cur[j].pos.distance(g) + moves)
+    }
+
+    /// Striker `j`'s contact pose, on its intercept now, taken on its target where it is, and
+    /// how far the target may still move by the planned impact.
+    fn strike_pose(&self, j: usize, t: f64) -> Option<(DVec2, f64, f64)> {
+        if !self.striking(j, t) {
+            return None;
+        }
+        let plan = self.plans[self.striker[j]?].as_ref()?;
+        let so = &self.cur[plan.struck];
+        let (g, gyaw) = stage::compose(Pose { x: so.pos.x, y: so.pos.y, yaw: so.yaw }, plan.rel_pos, plan.rel_yaw);
+        Some((g, gyaw, so.v * (plan.t_impact - t).max(0.0)))
     }
 
     /// Whether agent `i` is a striker on its intercept now (it follows its plan, not the rules).
@@ -3779,6 +3902,75 @@ mod tests {
                 base_actor(info, Pose { x: 0.0, y: 0.0, yaw: 0.0 }, Motion::Vehicle, Class::Vehicle, Drive::Mover)
             })
             .collect()
+    }
+
+    /// A striker `a0` (staged against `a2`) passing `a1`; `a1` slows by `drop` m/s in one frame
+    /// with its box `gap` m from the striker's. `forced_braking` names `a1` exactly when the drop
+    /// is beyond its 8 m/s2 and the boxes are within 1 m; the striker's own stop dead at its
+    /// latched frame is the crash, not braking.
+    #[test]
+    fn forced_braking_is_braking_beyond_the_limit_next_to_a_striker() {
+        use crate::check::scenario::{Conflict, Impact, Point};
+        let case = |drop: f64, gap: f64| {
+            let actors = random_boxes(3, 0.0, &mut lcg(7));
+            let (frames, dt) = (10, 0.1);
+            let mut out = empty_tracks(&actors, 1.0 / dt, frames);
+            for f in 0..frames {
+                let (l0, l1) = (actors[0].info.size[0], actors[1].info.size[0]);
+                out.poses[0].push(Pose { x: 0.0, y: 0.0, yaw: 0.0 });
+                out.poses[1].push(Pose { x: 0.5 * (l0 + l1) + gap, y: 0.0, yaw: 0.0 });
+                out.poses[2].push(Pose { x: -20.0, y: 0.0, yaw: 0.0 });
+                out.speeds[0].push(if f < 8 { 5.0 } else { 0.0 });
+                out.speeds[1].push(if f < 5 { 5.0 } else { 5.0 - drop });
+                out.speeds[2].push(0.0);
+            }
+            out.impacts.push(ImpactRecord {
+                conflict: 0,
+                frame: 8,
+                at_fault: 0,
+                struck: 2,
+                point_world: [0.0; 2],
+                at_fault_local: [0.0; 2],
+                struck_local: [0.0; 2],
+                struck_side: Point::Rear,
+                depth: 0.25,
+            });
+            let c = Conflict {
+                at_fault: 0,
+                struck: 2,
+                impact: Impact::RearEnd,
+                point: Point::Rear,
+                at: None,
+                span: Default::default(),
+            };
+            let confs = [Conf { index: 0, af: 0, st: 2, c }];
+            let plan = Plan {
+                struck: 2,
+                rel_pos: DVec2::ZERO,
+                rel_yaw: 0.0,
+                t_depart: 0.0,
+                t_impact: 0.8,
+                frame: 8,
+                delta: 0.25,
+            };
+            forced_braking(&actors, &confs, &[Some(plan)], &out).map(|f| (f, forced_error(&actors, &confs, f)))
+        };
+        let Some(((k, who, by, t, acc), d)) = case(1.5, 0.5) else { panic!("15 m/s2 beside the striker passed") };
+        assert_eq!((k, who, by), (0, 1, 0));
+        assert!((t - 0.5).abs() < 1e-9 && (acc + 15.0).abs() < 1e-6, "{t} {acc}");
+        assert_eq!(d.code, "E0205");
+        assert!(
+            d.message.contains("at 0.5 s `a1` would have to brake at 15.0 m/s2 for `a0` (its limit is 8.0)"),
+            "{}",
+            d.message
+        );
+        assert!(
+            d.help.as_deref().is_some_and(|h| h.starts_with("keep `a1` out of the way `a0` takes")),
+            "{:?}",
+            d.help
+        );
+        assert!(case(1.5, 1.2).is_none(), "1.2 m from the striker is not its doing");
+        assert!(case(0.75, 0.5).is_none(), "7.5 m/s2 is within the limit");
     }
 
     /// `candidates` through the along index must give exactly the agents (and order) of the scan
