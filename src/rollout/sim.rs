@@ -619,15 +619,22 @@ fn forced_error(actors: &[Actor], confs: &[Conf], (ki, x, y, t, acc): (usize, us
         ),
     )
     .label(k.c.span, "no plan tried stages it within everyone's braking")
-    .help(format!(
-        "keep `{}` out of the way `{a}` takes ({}), start `{a}` where its way to `{b}` is clear, or move `at`",
+    .help(keep_out(actors, k, by, k.af))
+}
+
+/// The help of a staging refused for agent `by` in the way of `mover`.
+fn keep_out(actors: &[Actor], k: &Conf, by: usize, mover: usize) -> String {
+    let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
+    format!(
+        "keep `{}` out of the way `{}` takes ({}), start `{a}` where its way to `{b}` is clear, or move `at`",
         actors[by].info.name,
+        actors[mover].info.name,
         if actors[by].info.background {
             "it is background traffic: lower `density`, or change the scenario's `seed`"
         } else {
             "start it elsewhere, or give it another goal"
         }
-    ))
+    )
 }
 
 /// E0205 for a staging whose first plan has the overlap safety net stop agent `stopped` of the
@@ -644,14 +651,7 @@ fn stopped_dead(actors: &[Actor], k: &Conf, stopped: usize, other: usize, t: f64
         ),
     )
     .label(k.c.span, "no plan tried stages it within everyone's braking")
-    .help(format!(
-        "keep `{y}` out of the way `{x}` takes ({}), start `{a}` where its way to `{b}` is clear, or move `at`",
-        if actors[other].info.background {
-            "it is background traffic: lower `density`, or change the scenario's `seed`"
-        } else {
-            "start it elsewhere, or give it another goal"
-        }
-    ))
+    .help(keep_out(actors, k, other, stopped))
 }
 
 /// How far a turning vehicle's wheels may stray off the drivable surface in its junction, m:
@@ -2668,10 +2668,8 @@ impl<'a, 'b> Sim<'a, 'b> {
             // latch stops it. Braking for it where it is now, a motorcycle met a bus overtaking
             // into its lane at 18 m/s and stopped at 13 m/s2. The reach only slows us: where we
             // may still move (`hard`) is where it is.
-            let acc_gap = match self.strike_reach(j, t) {
-                Some(reach) if v_lon < -0.5 && !a.in_conflict => gap - reach,
-                _ => gap,
-            };
+            let reach = if v_lon < -0.5 && !a.in_conflict { self.strike_reach(j, t) } else { None };
+            let acc_gap = reach.map_or(gap, |r| gap - r);
             acc = acc.min(idm_interaction(st.v, v_lon.max(0.0), acc_gap, s0, lim));
             if v_lon < 0.5 {
                 acc = acc.min(stop_law(st.v, acc_gap - s0, lim, dt));
