@@ -2697,9 +2697,10 @@ impl<'a, 'b> Sim<'a, 'b> {
                 });
                 acc = acc.min(self.safe_acc(i, j, acc_gap, v_lon, t));
             } else if gap > 0.0 && !a.in_conflict && self.crash_partner(j, t).is_some() {
-                // One about to crash, cutting into our lane ahead, stops dead where it meets its
-                // partner: a bus overtaking a car at 19 m/s stood across its lane 2 m ahead of
-                // it, which had followed it as a lead at that speed (-19 m/s2).
+                // One about to crash, only predicted into our lane ahead, stops dead where it
+                // meets its partner: followed as a lead at its speed, it leaves us no room. On
+                // its own this did not mend the bus that cut into a car's lane 4.7 m ahead and
+                // stood there (-19 m/s2): the striker's contact pose below did.
                 acc = acc.min(self.safe_acc(i, j, acc_gap, v_lon, t));
             }
         }
