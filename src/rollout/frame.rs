@@ -6,7 +6,7 @@ use crate::place::Pose;
 use crate::rollout::Tracks;
 use crate::rollout::agent::initial;
 use crate::rollout::agent::{Actor, Conf, Drive, Lat, State};
-use crate::rollout::drive::neighbours::{AlongIndex, Near};
+use crate::rollout::drive::neighbours::{AlongIndexes, Near};
 use crate::rollout::junction::right_of_way::Rank;
 use crate::rollout::kinematics::{replay, steer};
 use crate::rollout::staging::plan::Plan;
@@ -44,29 +44,14 @@ pub(crate) struct Sim<'a, 'b> {
     /// there, with their indices (`queue_heads`).
     pub(crate) approach_slot: Vec<Option<usize>>,
     pub(crate) lane_least: Vec<[(f64, usize); 2]>,
-    /// Per agent: where its crossings start in `ranks`; and per crossing, this frame, its
-    /// `zone_rank` once asked for (`rank`): each pair's rule asks for both of its zones' ranks
-    /// from either side.
+    /// Per agent: where its crossings start in `Scratch::ranks`.
     pub(crate) cross_at: Vec<usize>,
-    pub(crate) ranks: std::cell::RefCell<Vec<Option<Rank>>>,
     /// This frame: agents easing aside (`away_from`, triggered), for `pass_offset`.
     pub(crate) easing: Vec<usize>,
     /// Per agent, this frame: what `candidates` reads, packed.
     pub(crate) near: Vec<Near>,
-    /// This frame: everyone placed along and across each straight-run direction `candidates`
-    /// asked about (`AlongIndex`), built on the first ask; and the agents one ask yields.
-    pub(crate) along: std::cell::RefCell<Vec<AlongIndex>>,
-    pub(crate) subset: std::cell::RefCell<Vec<usize>>,
     /// The largest bounding radius of any agent.
     pub(crate) max_radius: f64,
-    /// `candidates`' output, and `Path::frenet_near` of each, kept to reuse their allocations.
-    pub(crate) cand: std::cell::RefCell<Vec<usize>>,
-    pub(crate) proj: std::cell::RefCell<Vec<(f64, f64, f64, DVec2)>>,
-    /// A striker's braking course (`braking_course`), kept between frames for its capacity.
-    pub(crate) course: std::cell::RefCell<Vec<(f64, DVec2, f64)>>,
-    /// Per striker, each bystander that held it back at full speed: when first, and for how
-    /// many frames.
-    pub(crate) blocked_by: std::cell::RefCell<Vec<Vec<(usize, f64, u32)>>>,
     /// The first move the overlap safety net undid at a speed the agent could not have braked
     /// from within its limits in one step: the agent stopped, the one it would have run into,
     /// and when.
@@ -80,6 +65,39 @@ pub(crate) struct Sim<'a, 'b> {
     pub(crate) first: usize,
     /// Frames `..first` of the output, copied by `run`.
     pub(crate) prefix: Option<&'b Tracks>,
+}
+
+/// What the agents' steps may write while the frame's states are read: buffers kept for their
+/// allocations, and what strikers record of who held them back. Everything else a step reads is
+/// `Sim`, immutable while the frame's steps run, so that each agent's next state depends on the
+/// previous frame alone.
+pub(crate) struct Scratch {
+    /// Per crossing (from `Sim::cross_at`), this frame: its `zone_rank` once asked for
+    /// (`Sim::rank`): each pair's rule asks for both of its zones' ranks from either side.
+    pub(crate) ranks: Vec<Option<Rank>>,
+    /// This frame: the along indexes `candidates` built, and the agents one ask yields.
+    pub(crate) index: AlongIndexes,
+    /// `candidates`' output, and `Path::frenet_near` of each.
+    pub(crate) cand: Vec<usize>,
+    pub(crate) proj: Vec<(f64, f64, f64, DVec2)>,
+    /// A striker's braking course (`braking_course`).
+    pub(crate) course: Vec<(f64, DVec2, f64)>,
+    /// Per striker, each bystander that held it back at full speed: when first, and for how
+    /// many frames.
+    pub(crate) blocked_by: Vec<Vec<(usize, f64, u32)>>,
+}
+
+impl Scratch {
+    pub(crate) fn new(agents: usize, crossings: usize) -> Scratch {
+        Scratch {
+            ranks: vec![None; crossings],
+            index: AlongIndexes { along: vec![], subset: Vec::with_capacity(agents) },
+            cand: Vec::with_capacity(agents + 1),
+            proj: Vec::with_capacity(agents + 1),
+            course: Vec::with_capacity(COURSE_STEPS),
+            blocked_by: vec![Vec::new(); agents],
+        }
+    }
 }
 
 /// What a run saw besides its tracks.
@@ -128,7 +146,6 @@ impl<'a, 'b> Sim<'a, 'b> {
                 Some(*n - a.crossings.len())
             })
             .collect();
-        let crossings = actors.iter().map(|a| a.crossings.len()).sum();
         Sim {
             actors,
             confs,
@@ -148,16 +165,9 @@ impl<'a, 'b> Sim<'a, 'b> {
             approach_slot,
             lane_least: vec![[(f64::INFINITY, usize::MAX); 2]; lanes.len()],
             cross_at,
-            ranks: std::cell::RefCell::new(vec![None; crossings]),
             easing: Vec::with_capacity(actors.len()),
             near: Vec::with_capacity(actors.len()),
-            along: std::cell::RefCell::new(vec![]),
-            subset: std::cell::RefCell::new(Vec::with_capacity(actors.len())),
             max_radius: actors.iter().map(|a| a.radius).fold(0.0, f64::max),
-            cand: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
-            proj: std::cell::RefCell::new(Vec::with_capacity(actors.len() + 1)),
-            course: std::cell::RefCell::new(Vec::with_capacity(COURSE_STEPS)),
-            blocked_by: std::cell::RefCell::new(vec![Vec::new(); actors.len()]),
             first_hard: None,
             sweep: Vec::with_capacity(actors.len()),
             pairs: vec![],
@@ -187,8 +197,9 @@ impl<'a, 'b> Sim<'a, 'b> {
     /// Run the frames into `out`; returns, per striker, the bystander that held it back longest,
     /// and from when (`blocked_by`): a car it slowed for once, in passing, did not make it miss.
     pub(crate) fn run(mut self, out: &mut Tracks) -> Report {
+        let mut sc = Scratch::new(self.actors.len(), self.actors.iter().map(|a| a.crossings.len()).sum());
         if out.frames == 0 {
-            return self.held_longest();
+            return self.held_longest(sc);
         }
         match self.prefix {
             Some(done) => {
@@ -222,9 +233,9 @@ impl<'a, 'b> Sim<'a, 'b> {
                 self.yielding[i] = self.yield_state(i);
             }
             self.queue_heads();
-            self.ranks.get_mut().fill(None);
+            sc.ranks.fill(None);
             for i in 0..self.actors.len() {
-                let rule = self.right_of_way(i, t);
+                let rule = self.right_of_way(&mut sc.ranks, i, t);
                 self.ruled[i] = rule.is_some();
                 self.held[i] = match (self.yielding[i].0, rule) {
                     (Some(x), Some(y)) => Some(x.min(y)),
@@ -239,27 +250,24 @@ impl<'a, 'b> Sim<'a, 'b> {
             for ((st, a), (&dir, y)) in self.cur.iter().zip(self.actors).zip(self.dirs.iter().zip(&self.yielding)) {
                 self.near.push(Near::new(st, a, dir, y.0.is_some()));
             }
-            self.along.get_mut().clear();
+            sc.index.along.clear();
             for i in 0..self.actors.len() {
-                self.next[i] = self.step(i, t, f);
+                self.next[i] = self.step(&mut sc, i, t, f);
             }
             self.resolve_overlaps(f);
             self.latch(f, out);
             std::mem::swap(&mut self.cur, &mut self.next);
             self.record(out);
         }
-        self.held_longest()
+        self.held_longest(sc)
     }
 
-    pub(crate) fn held_longest(self) -> Report {
+    pub(crate) fn held_longest(self, sc: Scratch) -> Report {
         let longest = |held: Vec<(usize, f64, u32)>| {
             // The first of equals: the list is in order of first hold.
             held.into_iter().rev().max_by_key(|h| h.2).map(|(j, t, _)| (j, t))
         };
-        Report {
-            blocked_by: self.blocked_by.into_inner().into_iter().map(longest).collect(),
-            first_hard: self.first_hard,
-        }
+        Report { blocked_by: sc.blocked_by.into_iter().map(longest).collect(), first_hard: self.first_hard }
     }
 
     pub(crate) fn record(&mut self, out: &mut Tracks) {
@@ -279,7 +287,7 @@ impl<'a, 'b> Sim<'a, 'b> {
     }
 
     /// The state of agent `i` at `t + dt`, from everyone's state at `t` (frame `f - 1`).
-    pub(crate) fn step(&self, i: usize, t: f64, f: usize) -> State {
+    pub(crate) fn step(&self, sc: &mut Scratch, i: usize, t: f64, f: usize) -> State {
         let a = &self.actors[i];
         let st = self.cur[i];
         match &a.drive {
@@ -290,8 +298,8 @@ impl<'a, 'b> Sim<'a, 'b> {
             }
             Drive::Mover if st.frozen => State { v: 0.0, ..st },
             Drive::Mover => match self.striker[i].and_then(|k| self.plans[k].as_ref().map(|p| (k, p))) {
-                Some((k, plan)) if t >= plan.t_depart - 1e-9 && !self.latched[k] => self.intercept(i, plan, t, f),
-                _ => self.drive(i, t),
+                Some((k, plan)) if t >= plan.t_depart - 1e-9 && !self.latched[k] => self.intercept(sc, i, plan, t, f),
+                _ => self.drive(sc, i, t),
             },
         }
     }

@@ -12,7 +12,7 @@ use crate::rollout::agent::{Lat, State, StopGoal};
 use crate::rollout::drive::follow::{idm_free, stop_law};
 use crate::rollout::drive::neighbours::Corridor;
 use crate::rollout::drive::pair::{Constraint, Step};
-use crate::rollout::frame::Sim;
+use crate::rollout::frame::{Scratch, Sim};
 use crate::rollout::kinematics::{band_meets, look_ahead, pursuit, quintic, slip_tan, turn_toward};
 use glam::DVec2;
 
@@ -49,7 +49,7 @@ impl Sim<'_, '_> {
     /// the curve-speed cap, bounded by every agent in its way (each a `Constraint`, folded by
     /// `min`), by strikers' contact poses ahead, its stop goals, holds and the end of its path;
     /// then its body moved.
-    pub(crate) fn drive(&self, i: usize, t: f64) -> State {
+    pub(crate) fn drive(&self, sc: &mut Scratch, i: usize, t: f64) -> State {
         let (a, st, dt) = (&self.actors[i], self.cur[i], self.dt);
         let lim = a.lim;
         if st.stopped {
@@ -127,7 +127,7 @@ impl Sim<'_, '_> {
             named,
             clearing,
         };
-        let way = self.in_the_way(&s);
+        let way = self.in_the_way(sc, &s);
         acc = acc.min(way.acc).min(self.strikers_ahead(&s));
         hard = hard.min(way.hard);
         let Constraint { touch_rem, side_blocked, aside, .. } = way;
@@ -224,7 +224,7 @@ impl Sim<'_, '_> {
     }
 
     /// Every agent in the way of step `s`, each one's `Constraint` folded.
-    fn in_the_way(&self, s: &Step) -> Constraint {
+    fn in_the_way(&self, sc: &mut Scratch, s: &Step) -> Constraint {
         let Step { i, a, st, d_next, lo, hi, margin, look, named, clearing, .. } = *s;
         let fwd = self.dirs[i];
         // On a straight stretch of our route, an agent's route coordinates are its coordinates
@@ -232,7 +232,6 @@ impl Sim<'_, '_> {
         // projection (the pair loop's main cost). Only when holding our offset: lateral moves
         // look at everyone alongside.
         let line = if d_next == st.d { a.path.straight_run(st.s) } else { None };
-        let mut cand = self.cand.borrow_mut();
         // Our sweep through the junction ahead (`Bend`, read in the loop below at each one's
         // place) and the reach of the corner test for turned boxes there widen the band in which
         // `candidates` may not pass anyone over.
@@ -248,12 +247,11 @@ impl Sim<'_, '_> {
             None => (lo, hi, 0.0),
         };
         let corridor = Corridor { look, lo: c_lo, hi: c_hi, holding: d_next == st.d, line, clearing, named, back };
-        self.candidates(i, &corridor, &mut cand);
+        self.candidates(i, &corridor, &mut sc.index, &mut sc.cand);
         // Their projections onto our route first, in a loop of their own: each is a chain of
         // dependent steps, and independent chains overlap there (below, every decision waits
         // on its own).
-        let mut proj = self.proj.borrow_mut();
-        proj.clear();
+        sc.proj.clear();
         // Where the Newton search does not settle (near a U-turn's loop), the first foot ahead of
         // our centre within the corridor's reach, searched over the stretch anyone could meet us on
         // (`Path::frenet_near`): an unsettled projection put a car crossing 18 m from an
@@ -261,11 +259,11 @@ impl Sim<'_, '_> {
         // (tests/rollout-cases/ambulance-u-turn-crossing-car-off-loop.scn).
         let window = (st.s - a.hl - 2.0 * self.max_radius, st.s + a.hl + look + 2.0 * self.max_radius);
         let reach = c_lo.abs().max(c_hi.abs()) + self.max_radius;
-        proj.extend(cand.iter().map(|&j| {
+        sc.proj.extend(sc.cand.iter().map(|&j| {
             let p = self.cur[j].pos;
             a.path.frenet_near(p, st.s + (p - st.pos).dot(fwd), window, st.s, reach)
         }));
-        cand.iter().zip(proj.iter()).fold(Constraint::FREE, |c, (&j, &at)| c.and(self.constraint(s, j, at)))
+        sc.cand.iter().zip(sc.proj.iter()).fold(Constraint::FREE, |c, (&j, &at)| c.and(self.constraint(s, j, at)))
     }
 
     // A striker stops dead where it meets its target (the latch): there it stands in our

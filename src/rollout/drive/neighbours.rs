@@ -74,6 +74,13 @@ pub(crate) const ALONG_BIN: f64 = 2.0;
 
 /// Every agent's place along (`pos . dir`) and across (`dir x pos`) one direction, in bins
 /// across it, each sorted along: the agents near a stretch of a straight run are a few ranges.
+/// This frame's along indexes, one per straight-run direction `candidates` asked about, built on
+/// the first ask; and the agents one ask yields (`Sim::corridor_subset`).
+pub(crate) struct AlongIndexes {
+    pub(crate) along: Vec<AlongIndex>,
+    pub(crate) subset: Vec<usize>,
+}
+
 pub(crate) struct AlongIndex {
     pub(crate) key: (u64, u64),
     /// The first bin across, and where each bin's agents start in `along` / `agent`.
@@ -162,14 +169,14 @@ impl Sim<'_, '_> {
     /// so a grid finds nearly everyone; but on a straight run the corridor is a thin strip along
     /// it: with many agents, those to test come from `AlongIndex` (`corridor_subset`), in index
     /// order, the same ones the scan of everyone keeps.
-    pub(crate) fn candidates(&self, i: usize, c: &Corridor, out: &mut Vec<usize>) {
+    pub(crate) fn candidates(&self, i: usize, c: &Corridor, ix: &mut AlongIndexes, out: &mut Vec<usize>) {
         out.clear();
         let me = (i, &self.actors[i], &self.cur[i], self.dirs[i]);
         if self.near.len() >= ALONG_MIN_AGENTS
             && let Some(ln) = c.line
-            && self.corridor_subset(i, c, ln)
+            && self.corridor_subset(i, c, ln, ix)
         {
-            for &j in self.subset.borrow().iter() {
+            for &j in &ix.subset {
                 if self.candidate(me, c, j) {
                     out.push(j);
                 }
@@ -247,7 +254,7 @@ impl Sim<'_, '_> {
     /// `named`. `false` (subset unset) where that cannot be bounded: the run ending within
     /// reach ahead or close behind (there `candidate` does not use the run), a lateral move, or
     /// coordinates beyond `ALONG_FAR`.
-    pub(crate) fn corridor_subset(&self, i: usize, c: &Corridor, ln: Line) -> bool {
+    pub(crate) fn corridor_subset(&self, i: usize, c: &Corridor, ln: Line, ixs: &mut AlongIndexes) -> bool {
         const FAR: f64 = ALONG_FAR;
         let (a, st) = (&self.actors[i], &self.cur[i]);
         let rmax = self.max_radius;
@@ -269,7 +276,7 @@ impl Sim<'_, '_> {
         if !c.holding || !inside || !sizes.iter().all(|x| x.abs() < FAR) {
             return false;
         }
-        let mut along = self.along.borrow_mut();
+        let along = &mut ixs.along;
         let key = (ln.dir.x.to_bits(), ln.dir.y.to_bits());
         let k = match along.iter().position(|x| x.key == key) {
             Some(k) => k,
@@ -288,9 +295,9 @@ impl Sim<'_, '_> {
         let lo = st.s - ln.s0 + o_along - LINE_EPS - m - c.back;
         let hi = st.s - ln.s0 + o_along + a.hl + rmax + c.look + LINE_EPS + m;
         let (l_lo, l_hi) = (c.lo - rmax - LINE_EPS - m + o_across, c.hi + rmax + LINE_EPS + m + o_across);
-        let mut sub = self.subset.borrow_mut();
+        let sub = &mut ixs.subset;
         sub.clear();
-        ix.collect(lo, hi, l_lo, l_hi, &mut sub);
+        ix.collect(lo, hi, l_lo, l_hi, sub);
         if a.vehicle {
             // Clearing the junction for an emergency vehicle, we predict walkers only.
             sub.extend(ix.crossing.iter().filter(|&&j| !c.clearing || !self.near[j].cleared_past));
@@ -322,6 +329,7 @@ mod tests {
         }
         let road = Path::straight(DVec2::new(-300.0, 40.0), 0.37, 3000.0);
         let mut sim = Sim::new(&actors, &[], &[], None, 0.1);
+        let mut ix = AlongIndexes { along: vec![], subset: vec![] };
         for k in 0..n {
             let s = 500.0 + 700.0 * rnd();
             let lat = (rnd() - 0.5) * 40.0;
@@ -352,13 +360,13 @@ mod tests {
                     back: if k == 1 { 8.0 } else { 0.0 },
                 };
                 let mut got = vec![];
-                sim.candidates(i, &c, &mut got);
+                sim.candidates(i, &c, &mut ix, &mut got);
                 let me = (i, ai, &sim.cur[i], sim.dirs[i]);
                 let mut want: Vec<usize> = (0..n).filter(|&j| sim.candidate(me, &c, j)).collect();
                 want.extend(c.named.filter(|&j| j != i));
                 assert_eq!(got, want, "agent {i}, look {look}");
                 asked += 1;
-                indexed += usize::from(sim.corridor_subset(i, &c, line));
+                indexed += usize::from(sim.corridor_subset(i, &c, line, &mut ix));
             }
         }
         assert!(indexed * 10 > asked * 9, "the index answered {indexed} of {asked}");

@@ -25,7 +25,7 @@ impl Sim<'_, '_> {
     /// The right-of-way rule for agent `i`: how far its front may still go (to its stop line, or
     /// short of the zone it shares with another vehicle's junction path) while it gives way, or,
     /// for a walker about to cross, to the kerb while no vehicle could stop for it comfortably.
-    pub(crate) fn right_of_way(&self, i: usize, t: f64) -> Option<f64> {
+    pub(crate) fn right_of_way(&self, ranks: &mut [Option<Rank>], i: usize, t: f64) -> Option<f64> {
         let (a, st) = (&self.actors[i], &self.cur[i]);
         if st.frozen || st.stopped || !matches!(a.drive, Drive::Mover) || self.striking(i, t) {
             return None;
@@ -35,7 +35,7 @@ impl Sim<'_, '_> {
         }
         let mut hold: Option<f64> = None;
         for c in &a.crossings {
-            if let Some(rem) = self.gives_way(i, c, t) {
+            if let Some(rem) = self.gives_way(ranks, i, c, t) {
                 hold = Some(hold.map_or(rem, |h: f64| h.min(rem)));
             }
         }
@@ -89,18 +89,18 @@ impl Sim<'_, '_> {
     /// `zone_rank(i, enter, meet, leave, t)`, taken once per frame for each of `i`'s crossings (the
     /// zone with these bounds): what it reads (`cur`, `behind`, the emergency holds) is settled
     /// before the right-of-way rule runs, and `ranks` is cleared each frame.
-    pub(crate) fn rank(&self, i: usize, enter: f64, meet: f64, leave: f64, t: f64) -> Rank {
+    pub(crate) fn rank(&self, ranks: &mut [Option<Rank>], i: usize, enter: f64, meet: f64, leave: f64, t: f64) -> Rank {
         let same = |c: &Crossing| c.enter.to_bits() == enter.to_bits() && c.leave.to_bits() == leave.to_bits();
         let Some(k) = self.actors[i].crossings.iter().position(same) else {
             return self.zone_rank(i, enter, meet, leave, t);
         };
         let slot = self.cross_at[i] + k;
-        if let Some(r) = self.ranks.borrow()[slot] {
+        if let Some(r) = ranks[slot] {
             debug_assert_eq!(r, self.zone_rank(i, enter, meet, leave, t), "stale zone rank for agent {i}");
             return r;
         }
         let r = self.zone_rank(i, enter, meet, leave, t);
-        self.ranks.borrow_mut()[slot] = Some(r);
+        ranks[slot] = Some(r);
         r
     }
 
@@ -157,15 +157,15 @@ impl Sim<'_, '_> {
     /// the same seen from either side, so exactly one of two waiting agents goes first: inside
     /// the zone goes before too close to stop, before approaching, before stopped by something
     /// else (so nobody waits for a car that waits for something else); the earlier arrival next.
-    pub(crate) fn gives_way(&self, i: usize, c: &Crossing, t: f64) -> Option<f64> {
+    pub(crate) fn gives_way(&self, ranks: &mut [Option<Rank>], i: usize, c: &Crossing, t: f64) -> Option<f64> {
         // Between an emergency vehicle and one yielding to it, the yield (`yield_state`) rules;
         // but one already too far into the junction to hold when the emergency vehicle came near
         // is clearing it, and the emergency vehicle takes its turn with it by this rule.
         if c.emergency && !(self.actors[i].emergency && self.yielding[c.other].1) {
             return None;
         }
-        let (ri, ei, rem) = self.rank(i, c.enter, c.meet, c.leave, t)?;
-        let (rj, ej, _) = self.rank(c.other, c.other_enter, c.other_meet, c.other_leave, t)?;
+        let (ri, ei, rem) = self.rank(ranks, i, c.enter, c.meet, c.leave, t)?;
+        let (rj, ej, _) = self.rank(ranks, c.other, c.other_enter, c.other_meet, c.other_leave, t)?;
         // Placed with one order only (`order_crossings`): it holds till the other has left.
         if let Some(yields) = c.placed_yield {
             return yields.then_some(rem);

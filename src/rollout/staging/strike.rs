@@ -5,13 +5,24 @@ use crate::geom::{Obb, wrap_angle};
 use crate::place::Pose;
 use crate::rollout::agent::State;
 use crate::rollout::drive::follow::SAFE_MARGIN;
-use crate::rollout::frame::Sim;
+use crate::rollout::frame::{Scratch, Sim};
 use crate::rollout::kinematics::pursuit;
 use crate::rollout::path::Hermite;
 use crate::rollout::staging::plan;
 use crate::rollout::staging::plan::Plan;
 use crate::rollout::{ImpactRecord, Tracks};
 use glam::DVec2;
+
+/// A striker's trial step in its intercept: where it would be and how fast, how far short of its
+/// contact pose, and that pose.
+#[derive(Clone, Copy)]
+pub(crate) struct Trial {
+    pub pos: DVec2,
+    pub yaw: f64,
+    pub v: f64,
+    pub left: f64,
+    pub goal: (DVec2, f64),
+}
 
 /// At most this many steps of a striker's braking course (`Sim::braking_course`).
 pub(crate) const COURSE_STEPS: usize = 40;
@@ -60,7 +71,7 @@ impl Sim<'_, '_> {
     /// One step of an at-fault agent's intercept: a Hermite curve from where it is to the pose
     /// that makes contact, re-planned every frame against the struck agent's predicted pose,
     /// traversed with the constant acceleration that arrives at the impact time.
-    pub(crate) fn intercept(&self, i: usize, plan: &Plan, t: f64, f: usize) -> State {
+    pub(crate) fn intercept(&self, sc: &mut Scratch, i: usize, plan: &Plan, t: f64, f: usize) -> State {
         let (a, st, dt) = (&self.actors[i], self.cur[i], self.dt);
         let lim = a.lim;
         let so = self.cur[plan.struck];
@@ -108,18 +119,16 @@ impl Sim<'_, '_> {
                 pick = (vk, next);
                 break;
             }
-            match self.strike_blocked(i, plan.struck, (next.0, next.1), vk, next.2, (g, gyaw)) {
+            let trial = Trial { pos: next.0, yaw: next.1, v: vk, left: next.2, goal: (g, gyaw) };
+            match self.strike_blocked(&mut sc.course, i, plan.struck, trial) {
                 None => {
                     pick = (vk, next);
                     break;
                 }
-                Some(j) if k == 0 => {
-                    let mut held = self.blocked_by.borrow_mut();
-                    match held[i].iter_mut().find(|h| h.0 == j) {
-                        Some(h) => h.2 += 1,
-                        None => held[i].push((j, t, 1)),
-                    }
-                }
+                Some(j) if k == 0 => match sc.blocked_by[i].iter_mut().find(|h| h.0 == j) {
+                    Some(h) => h.2 += 1,
+                    None => sc.blocked_by[i].push((j, t, 1)),
+                },
                 Some(_) => {}
             }
         }
@@ -127,20 +136,13 @@ impl Sim<'_, '_> {
         State { pos, yaw, v, ..st }
     }
 
-    /// Striker `i`'s poses, a step apart, were it to brake at its emergency braking from `pos`,
-    /// `yaw` and `v`, steering for its contact pose `goal` as `intercept` does, up to the
+    /// Striker `i`'s poses, a step apart, were it to brake at its emergency braking from its
+    /// `trial` pose and speed, steering for its contact pose as `intercept` does, up to the
     /// contact (`left` metres on): the time from now, and the pose. A curve re-planned every
     /// step and a heading that turns no faster than the car can is not the curve it plans: at
     /// speed the car runs wide of it.
-    pub(crate) fn braking_course(
-        &self,
-        i: usize,
-        (pos, yaw): (DVec2, f64),
-        v: f64,
-        left: f64,
-        goal: (DVec2, f64),
-        out: &mut Vec<(f64, DVec2, f64)>,
-    ) {
+    pub(crate) fn braking_course(&self, i: usize, trial: Trial, out: &mut Vec<(f64, DVec2, f64)>) {
+        let Trial { pos, yaw, v, left, goal } = trial;
         let (a, dt) = (&self.actors[i], self.dt);
         out.clear();
         let (mut st, mut went, mut t) = (State { pos, yaw, v, ..self.cur[i] }, 0.0, 0.0);
@@ -158,21 +160,19 @@ impl Sim<'_, '_> {
         }
     }
 
-    /// Whether striker `i` at `pos`, `yaw` and speed `v`, `left` metres short of its contact pose,
+    /// Whether striker `i` at its `trial` pose and speed, `left` metres short of its contact pose,
     /// would be inside a bystander's stopping envelope (its box stretched ahead by the distance it
     /// needs to stop at its emergency braking), or have its own envelope (up to the contact pose)
     /// reach a bystander's. A bystander following the striker is left to its own safe speed.
     pub(crate) fn strike_blocked(
         &self,
+        course: &mut Vec<(f64, DVec2, f64)>,
         i: usize,
         struck: usize,
-        (pos, yaw): (DVec2, f64),
-        v: f64,
-        left: f64,
-        goal: (DVec2, f64),
+        trial: Trial,
     ) -> Option<usize> {
+        let Trial { pos, yaw, v, left, .. } = trial;
         let a = &self.actors[i];
-        let mut course = self.course.borrow_mut();
         let mut built = false;
         let envelope = |c: DVec2, yaw: f64, hl: f64, hw: f64, ext: f64| {
             let dir = DVec2::from_angle(yaw);
@@ -199,7 +199,7 @@ impl Sim<'_, '_> {
             // toward it, 4 m off.
             if !b.vehicle {
                 if !built {
-                    self.braking_course(i, (pos, yaw), v, left, goal, &mut course);
+                    self.braking_course(i, trial, course);
                     built = true;
                 }
                 let vel = self.dirs[j] * o.v;
@@ -219,7 +219,7 @@ impl Sim<'_, '_> {
             let fwd = self.dirs[j];
             if b.vehicle && o.v > 0.05 && DVec2::from_angle(yaw).dot(fwd) < -0.5 && fwd.dot(pos - o.pos) > 0.0 {
                 if !built {
-                    self.braking_course(i, (pos, yaw), v, left, goal, &mut course);
+                    self.braking_course(i, trial, course);
                     built = true;
                 }
                 let dt = self.dt;
