@@ -9,6 +9,7 @@ use crate::rollout::agent::{Actor, Conf, Drive, Lat, State};
 use crate::rollout::drive::neighbours::{AlongIndexes, Near};
 use crate::rollout::junction::right_of_way::Rank;
 use crate::rollout::kinematics::{replay, steer};
+use crate::rollout::path::Foot;
 use crate::rollout::staging::plan::Plan;
 use crate::rollout::staging::strike::COURSE_STEPS;
 use glam::DVec2;
@@ -55,7 +56,7 @@ pub(crate) struct Sim<'a, 'b> {
     /// The first move the overlap safety net undid at a speed the agent could not have braked
     /// from within its limits in one step: the agent stopped, the one it would have run into,
     /// and when.
-    pub(crate) first_hard: Option<(usize, usize, f64)>,
+    pub(crate) first_hard: Option<HardStop>,
     /// `overlap_pairs`' boxes and output, kept likewise.
     pub(crate) sweep: Vec<(DVec2, DVec2, usize)>,
     pub(crate) pairs: Vec<(usize, usize)>,
@@ -79,7 +80,7 @@ pub(crate) struct Scratch {
     pub(crate) index: AlongIndexes,
     /// `candidates`' output, and `Path::frenet_near` of each.
     pub(crate) cand: Vec<usize>,
-    pub(crate) proj: Vec<(f64, f64, f64, DVec2)>,
+    pub(crate) proj: Vec<Foot<DVec2>>,
     /// A striker's braking course (`braking_course`).
     pub(crate) course: Vec<(f64, DVec2, f64)>,
     /// Per striker, each bystander that held it back at full speed: when first, and for how
@@ -100,13 +101,22 @@ impl Scratch {
     }
 }
 
+/// A move the overlap safety net undid at a speed the agent could not have braked from within its
+/// limits in one step: the agent stopped, the one it would have run into, and when.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct HardStop {
+    pub agent: usize,
+    pub other: usize,
+    pub t: f64,
+}
+
 /// What a run saw besides its tracks.
 pub(crate) struct Report {
     /// Per striker, the bystander that held it back longest at full speed, and from when.
     pub(crate) blocked_by: Vec<Option<(usize, f64)>>,
     /// The first move the overlap safety net undid beyond the mover's braking limit
     /// (`Sim::first_hard`).
-    pub(crate) first_hard: Option<(usize, usize, f64)>,
+    pub(crate) first_hard: Option<HardStop>,
 }
 
 pub(crate) fn empty_tracks(actors: &[Actor], rate: f64, frames: usize) -> Tracks {
