@@ -4,14 +4,13 @@
 
 use crate::place::Pose;
 use crate::rollout::Tracks;
+use crate::rollout::agent::Rank;
 use crate::rollout::agent::initial;
 use crate::rollout::agent::{Actor, Conf, Drive, Lat, State};
-use crate::rollout::drive::neighbours::{AlongIndexes, Near};
-use crate::rollout::junction::right_of_way::Rank;
+use crate::rollout::drive::index::{AlongIndexes, Near};
 use crate::rollout::kinematics::{replay, steer};
 use crate::rollout::path::Foot;
 use crate::rollout::staging::plan::Plan;
-use crate::rollout::staging::strike::COURSE_STEPS;
 use glam::DVec2;
 
 pub(crate) struct Sim<'a, 'b> {
@@ -67,6 +66,9 @@ pub(crate) struct Sim<'a, 'b> {
     /// Frames `..first` of the output, copied by `run`.
     pub(crate) prefix: Option<&'b Tracks>,
 }
+
+/// At most this many steps of a striker's braking course (`Sim::braking_course`).
+pub(crate) const COURSE_STEPS: usize = 40;
 
 /// What the agents' steps may write while the frame's states are read: buffers kept for their
 /// allocations, and what strikers record of who held them back. Everything else a step reads is

@@ -4,6 +4,7 @@
 //! step.
 
 pub(crate) mod follow;
+pub(crate) mod index;
 pub(crate) mod neighbours;
 pub(crate) mod pair;
 

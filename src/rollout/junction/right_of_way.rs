@@ -2,6 +2,7 @@
 //! whom, who holds for an emergency vehicle, and when a walker waits at the kerb.
 
 use crate::rollout::agent::{Crossing, Drive, State, StopGoal};
+use crate::rollout::agent::{Rank, ZoneRank};
 use crate::rollout::frame::Sim;
 use crate::rollout::kinematics::can_stop;
 use crate::rollout::path::Foot;
@@ -18,20 +19,6 @@ pub(crate) const YIELD_BRAKE: f64 = 0.75;
 /// Time margin by which a vehicle with the right of way must have left a shared zone before
 /// one giving way to it arrives there for that one not to hold, s.
 pub(crate) const CLEAR_MARGIN_S: f64 = 1.0;
-
-/// `Sim::zone_rank`'s answer.
-pub(crate) type Rank = Option<ZoneRank>;
-
-/// An agent's standing toward a zone it shares (`Sim::zone_rank`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct ZoneRank {
-    /// 0 inside, 1 too close to stop, 2 approaching, 3 stopped by anything but this rule.
-    pub order: u8,
-    /// Its time to the zone, s.
-    pub eta: f64,
-    /// How far its front may go while it holds, m.
-    pub rem: f64,
-}
 
 impl Sim<'_, '_> {
     /// The right-of-way rule for agent `i`: how far its front may still go (to its stop line, or
