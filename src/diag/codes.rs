@@ -20,8 +20,9 @@ pub const CODES: &[Code] = &[
         code: "E0001",
         title: "syntax error",
         explanation: "The file does not follow the grammar of the `.scn` language. The error points at the\n\
-first token the parser could not accept; when a block was left open, the label also shows\n\
-where it was opened.\n
+first token the parser could not accept. When a block was left open, it points at the `{` that\n\
+is never closed and shows where the next statement begins, or which `}` (indented for an\n\
+enclosing block) was taken as the block's end.\n
     agent ego: sedan { at west.in[1], 20 m before center     // `}` missing here
     agent other: sedan { ... }\n\n\
 Close every `{` with `}`. Statements are separated by newlines or `;`.",
@@ -237,7 +238,7 @@ motion so that the rest of the agent (its goal, its placement) stays valid whate
         explanation: "`point` is the side of the struck agent that the crash hits, and the impact type says\n\
 how the two meet, so not every pair fits. The at-fault agent strikes with its front in a rear-end,\n\
 a head-on and an angle crash, and with its side in a sideswipe. The table (struck agent's sides\n\
-as DSL.md names them):\n
+as `point` names them):\n
     impact rear_end     point rear | rear_left | rear_right
     impact head_on      point front | front_left | front_right
     impact angle        point left | right | front_left | front_right | rear_left | rear_right
@@ -440,7 +441,8 @@ FILE.scn ... -o edited.scn`) and compile that.\n
         title: "unreadable occupancy frame",
         explanation: "`rocc eval occ` reads occupancy frames as a dense `.npy` of shape (400, 400, 32) (rocc's\n\
 uint8 output, or nuPlan-Occ's dense grid in any integer dtype) or as a sparse `.npz` whose array\n\
-is (N, 4) rows of [i, j, k, label] (unlisted voxels are free). Labels are 0..=8 (SPEC.md).\n
+is (N, 4) rows of [i, j, k, label] (unlisted voxels are free). Labels are 0..=8 (docs/output.md\n\
+lists them).\n
     $ rocc eval occ --pred pred/ --gt gt/    // error if a frame is (200, 200, 16) or holds label 12",
     },
     Code {
@@ -720,8 +722,8 @@ case record, 1 MiB for a SAFE extraction; the size is checked before reading), o
 UTF-8 text. Nothing is written for that input; the other inputs of the batch go on and the
 exit status is 1.
 
-    rocc ciren import ../shared/ciren/100237 -o scn/       # a case directory
-    rocc ciren import ../shared/ciren -o scn/              # every case below a directory",
+    rocc ciren import ciren/100237 -o scn/   # a case directory
+    rocc ciren import ciren/ -o scn/         # every case below a directory",
     },
     Code {
         code: "E0801",
@@ -742,7 +744,7 @@ an `Events/EventSum` row with `AreaOfDamage`, `Contacted` and `ContactedAreaOfDa
 refine the scene (speeds, lane counts, directions) are not required: their defaults are
 warnings (E0807).
 
-    rocc ciren import ../shared/ciren/100237 -o scn/   # error if the record has no EventSum rows",
+    rocc ciren import ciren/100237 -o scn/   # error if the record has no EventSum rows",
     },
     Code {
         code: "E0803",
@@ -766,7 +768,7 @@ strikes with a front or a side), a fixed object rocc has no kind for (ditch, emb
 a side impact with a tree, a T-junction approached from its missing leg, or a SAFE extraction
 with one vehicle or more than two.
 
-    rocc ciren import ../shared/ciren/100412 -o scn/   # error: the case codes a rollover",
+    rocc ciren import ciren/100412 -o scn/   # error: the case codes a rollover",
     },
     Code {
         code: "E0805",
@@ -779,7 +781,7 @@ attempt did. Nothing is written. Typical cause: an impact the rollout meets squa
 between vehicles whose paths do not let the striker reach the struck side, e.g. a vehicle hit
 on its side by oncoming traffic after it spun.
 
-    rocc ciren import ../shared/ciren/100237 -o scn/   # error: contact landed on the struck vehicle's front, not its right side",
+    rocc ciren import ciren/100237 -o scn/   # error: contact landed on the struck vehicle's front, not its right side",
     },
     Code {
         code: "E0806",
@@ -787,7 +789,7 @@ on its side by oncoming traffic after it spun.
         explanation: "A CIREN record codes several events (a second contact, a sideslap); rocc stages one
 conflict per scenario, the first-ranked event. This warning names each event left out.
 
-    rocc ciren import ../shared/ciren/100237 -o scn/   # warning: event 2 (V1 left side by V2 front) not staged",
+    rocc ciren import ciren/100237 -o scn/   # warning: event 2 (V1 left side by V2 front) not staged",
     },
     Code {
         code: "E0807",
@@ -818,7 +820,7 @@ struck) or `and` (head-on), where PART is front, rear/back, left side, right sid
 disk is full), or two inputs of one batch have the same case id and would write the same
 file. Files are written under a temporary name and renamed, so nothing partial is left.
 
-    rocc ciren import ../shared/ciren -o /read-only/   # error: permission denied",
+    rocc ciren import ciren/ -o /read-only/   # error: permission denied",
     },
     Code {
         code: "E0850",
@@ -827,7 +829,7 @@ file. Files are written under a temporary name and renamed, so nothing partial i
 sketch: `sketch.jpeg` (CIREN case folders), `Sketch.jpg` (SAFE extraction folders), or\n\
 `sketch.jpg`, `Sketch.jpeg`, `sketch.png`, `Sketch.png`. The path is not a directory, or none of\n\
 these files is there or readable. Nothing is sent to the model.\n
-    rocc ciren extract ../shared/ciren/100237 -o 100237.scn --endpoint ... --model ...",
+    rocc ciren extract ciren/100237 -o 100237.scn --endpoint ... --model ...",
     },
     Code {
         code: "E0851",
@@ -837,7 +839,7 @@ these files is there or readable. Nothing is sent to the model.\n
 there is no report, from `Summary.txt`. Neither file exists, the report has no `Summary`\n\
 element, or the summary is empty. Coded records without a narrative go through\n\
 `rocc ciren import` instead.\n
-    rocc ciren extract ../shared/ciren/100237 -o 100237.scn ...   # error if Summary is empty and there is no Summary.txt",
+    rocc ciren extract ciren/100237 -o 100237.scn ...   # error if Summary is empty and there is no Summary.txt",
     },
     Code {
         code: "E0852",
@@ -887,7 +889,7 @@ again with a stronger model, or use the coded record (`rocc ciren import`).\n
         title: "no usable conflict from the model",
         explanation: "The conflict call (temperature 0) must answer one JSON object naming agents of the\n\
 extracted scene: `{\"at_fault\": \"v2\", \"struck\": \"v1\", \"impact\": \"angle\", \"point\": \"right\", \"at\": 3}`\n\
-(a DSL `conflict { ... }` block is accepted too). The reply held no such object, named a party\n\
+(a `.scn` `conflict { ... }` block is accepted too). The reply held no such object, named a party\n\
 the scene lacks, used a word outside the impact or point vocabulary, or the scene with the\n\
 merged conflict failed to check (for instance, the at-fault vehicle cannot reach the struck one);\n\
 `--max-repairs` further conflict calls did not fix it. The scene itself is never re-generated.\n\
@@ -901,7 +903,7 @@ Nothing is written to `-o`; the last merged attempt (or the bare scene) is kept 
         explanation: "`--examples DIR` replaces the worked examples shown to the model with every `.scn` file of\n\
 DIR. Each must pass `rocc check` and carry a `conflict` block (the conflict call's examples are\n\
 derived from it). The directory could not be read, holds no `.scn` file, or one file fails.\n
-    rocc ciren extract ../shared/ciren/100237 -o 100237.scn --examples my_examples/ ...   # error if a file has no conflict block",
+    rocc ciren extract ciren/100237 -o 100237.scn --examples my_examples/ ...   # error if a file has no conflict block",
     },
     Code {
         code: "E0901",
@@ -937,8 +939,8 @@ a tensor is missing, has another shape, or is not part of the model. Usual cause
 not the one the weights were trained with (use the `.ron` `rocc train` wrote beside them), or the\n\
 file is an autoencoder checkpoint where a generator is needed (`--backend grounded` needs\n\
 `generator.bpk`). Safetensors files must name tensors by burn's module paths\n\
-(`decoder.transformer.layers.0.mha.query.weight`, ...); `rocc train` can export one\n\
-(README, \"Training the grounded backend\").
+(`decoder.transformer.layers.0.mha.query.weight`, ...); `rocc train --safetensors` writes a\n\
+reference file with every name.
 
     rocc compile FILE -o out --backend grounded --weights paper/generator.bpk   // error if the
     // weights were trained with configs/cpu-small.ron: pass the matching config beside them",
@@ -1000,4 +1002,27 @@ with `--backend procedural`, or `--device wgpu|cuda` on a build without the `gpu
 pub fn lookup(code: &str) -> Option<&'static Code> {
     let code = code.trim().to_ascii_uppercase();
     CODES.iter().find(|c| c.code == code)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A reader of `rocc explain` has the repository at most: a file it cites is a page under
+    /// `docs/`, never a reference file kept beside the repository or a section of another page.
+    #[test]
+    fn explanations_cite_only_files_users_have() {
+        for c in CODES {
+            let text = c.explanation;
+            assert!(!text.contains("shared/"), "{}: cites a reference folder users do not have", c.code);
+            assert!(!text.contains("README"), "{}: cites the README instead of a docs page", c.code);
+            for (i, _) in text.match_indices(".md") {
+                let path_char = |ch: char| ch.is_ascii_alphanumeric() || "/_-".contains(ch);
+                let start =
+                    text[..i].char_indices().rev().take_while(|(_, ch)| path_char(*ch)).last().map_or(i, |(j, _)| j);
+                let file = &text[start..i + 3];
+                assert!(file.starts_with("docs/"), "{}: cites `{file}`, which users do not have", c.code);
+            }
+        }
+    }
 }
