@@ -722,8 +722,8 @@ case record, 1 MiB for a SAFE extraction; the size is checked before reading), o
 UTF-8 text. Nothing is written for that input; the other inputs of the batch go on and the
 exit status is 1.
 
-    rocc ciren import ciren/100237 -o scn/   # a case directory
-    rocc ciren import ciren/ -o scn/         # every case below a directory",
+    rocc ciren import ciren/100237 -o scn/       # a case directory
+    rocc ciren import ciren -o scn/              # every case below a directory",
     },
     Code {
         code: "E0801",
@@ -820,7 +820,7 @@ struck) or `and` (head-on), where PART is front, rear/back, left side, right sid
 disk is full), or two inputs of one batch have the same case id and would write the same
 file. Files are written under a temporary name and renamed, so nothing partial is left.
 
-    rocc ciren import ciren/ -o /read-only/   # error: permission denied",
+    rocc ciren import ciren -o /read-only/   # error: permission denied",
     },
     Code {
         code: "E0850",
