@@ -96,14 +96,15 @@ fn shared_invalid_examples_fail_with_the_described_error() {
         assert!(d.span().is_some(), "{file}: diagnostic has no span");
         insta::assert_snapshot!(format!("invalid_shared_{file}"), render_all(&diags, &sources));
     }
-    // The parse error points at the statement after the unclosed block (line 6), not at EOF,
-    // and labels the `{` that was left open (line 5).
+    // The parse error points at the `{` that was left open (line 5), not at EOF, and labels the
+    // statement after the unclosed block (line 6).
     let path = root().join("tests/fixtures/examples/invalid/syntax_error.scn");
     let (r, sources) = check_named(&path);
     let d = &r.expect_err("fails")[0];
     let file = d.labels[0].span.file;
-    assert_eq!(sources.line_col(file, d.labels[0].span.start as usize).0, 6);
-    assert_eq!(sources.line_col(file, d.labels[1].span.start as usize).0, 5);
+    assert_eq!(sources.line_col(file, d.labels[0].span.start as usize).0, 5);
+    assert_eq!(&sources.text(file)[d.labels[0].span.range()], "{");
+    assert_eq!(sources.line_col(file, d.labels[1].span.start as usize).0, 6);
 }
 
 #[test]

@@ -107,7 +107,7 @@ impl Checker {
                             dim.name()
                         ),
                     )
-                    .help(format!("{what} needs {}{}", dim.units(), unit_hint(dim, got)))
+                    .help(format!("{what} needs {}{}", dim.units(), units::hint(dim, got, v)))
             };
             self.err(d);
             return None;
@@ -138,11 +138,16 @@ impl Checker {
     fn bounded(&mut self, v: &ast::Value, dim: Dim, what: &str, min: f64, max: f64, shown: &str) -> Option<Dist> {
         let d = self.quantity(v, dim, what)?;
         if d.lo() < min || d.hi() > max {
-            self.err(
-                Diagnostic::error("E0103", format!("{what} is out of range"))
-                    .label(v.span, format!("must be within {shown}"))
-                    .help(format!("{what} must be within {shown}")),
-            );
+            let mut e = Diagnostic::error("E0103", format!("{what} is out of range"))
+                .label(v.span, format!("must be within {shown}"))
+                .help(format!("{what} must be within {shown}"));
+            if let Some(meant) = units::slip(v, dim, min, max, shown) {
+                let written = crate::syntax::fmt::val(v);
+                e = e.and_help(format!(
+                    "did you mean `{meant}`? `{written}` is far outside, so the unit looks like a slip"
+                ));
+            }
+            self.err(e);
             return None;
         }
         Some(d)
@@ -1532,17 +1537,6 @@ pub fn points_for(impact: Impact) -> &'static [Point] {
         Impact::HeadOn => &[Front, FrontLeft, FrontRight],
         Impact::Angle | Impact::Sideswipe => &[Left, Right, FrontLeft, FrontRight, RearLeft, RearRight],
         Impact::Pedestrian | Impact::Object => &[Front, Rear, Left, Right, FrontLeft, FrontRight, RearLeft, RearRight],
-    }
-}
-
-/// A hint naming the likely intended unit ("`5 m` is a length: did you mean `5 m/s`?").
-fn unit_hint(want: Dim, got: Dim) -> &'static str {
-    match (want, got) {
-        (Dim::Speed, Dim::Length) => "; a bare `m` is a length — did you mean `m/s`?",
-        (Dim::Length, Dim::Speed) => "; `m/s` is a speed — did you mean `m`?",
-        (Dim::Time, Dim::Length) => "; `m` is metres, `ms` milliseconds, `s` seconds",
-        (Dim::Angle, _) => "; headings are angles, e.g. `90 deg`",
-        _ => "",
     }
 }
 

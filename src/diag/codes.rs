@@ -20,8 +20,9 @@ pub const CODES: &[Code] = &[
         code: "E0001",
         title: "syntax error",
         explanation: "The file does not follow the grammar of the `.scn` language. The error points at the\n\
-first token the parser could not accept; when a block was left open, the label also shows\n\
-where it was opened.\n
+first token the parser could not accept. When a block was left open, it points at the `{` that\n\
+is never closed and shows where the next statement begins, or which `}` (indented for an\n\
+enclosing block) was taken as the block's end.\n
     agent ego: sedan { at west.in[1], 20 m before center     // `}` missing here
     agent other: sedan { ... }\n\n\
 Close every `{` with `}`. Statements are separated by newlines or `;`.",
@@ -237,7 +238,7 @@ motion so that the rest of the agent (its goal, its placement) stays valid whate
         explanation: "`point` is the side of the struck agent that the crash hits, and the impact type says\n\
 how the two meet, so not every pair fits. The at-fault agent strikes with its front in a rear-end,\n\
 a head-on and an angle crash, and with its side in a sideswipe. The table (struck agent's sides\n\
-as DSL.md names them):\n
+as `point` names them):\n
     impact rear_end     point rear | rear_left | rear_right
     impact head_on      point front | front_left | front_right
     impact angle        point left | right | front_left | front_right | rear_left | rear_right
@@ -440,7 +441,8 @@ FILE.scn ... -o edited.scn`) and compile that.\n
         title: "unreadable occupancy frame",
         explanation: "`rocc eval occ` reads occupancy frames as a dense `.npy` of shape (400, 400, 32) (rocc's\n\
 uint8 output, or nuPlan-Occ's dense grid in any integer dtype) or as a sparse `.npz` whose array\n\
-is (N, 4) rows of [i, j, k, label] (unlisted voxels are free). Labels are 0..=8 (SPEC.md).\n
+is (N, 4) rows of [i, j, k, label] (unlisted voxels are free). Labels are 0..=8 (docs/output.md\n\
+lists them).\n
     $ rocc eval occ --pred pred/ --gt gt/    // error if a frame is (200, 200, 16) or holds label 12",
     },
     Code {
@@ -887,7 +889,7 @@ again with a stronger model, or use the coded record (`rocc ciren import`).\n
         title: "no usable conflict from the model",
         explanation: "The conflict call (temperature 0) must answer one JSON object naming agents of the\n\
 extracted scene: `{\"at_fault\": \"v2\", \"struck\": \"v1\", \"impact\": \"angle\", \"point\": \"right\", \"at\": 3}`\n\
-(a DSL `conflict { ... }` block is accepted too). The reply held no such object, named a party\n\
+(a `.scn` `conflict { ... }` block is accepted too). The reply held no such object, named a party\n\
 the scene lacks, used a word outside the impact or point vocabulary, or the scene with the\n\
 merged conflict failed to check (for instance, the at-fault vehicle cannot reach the struck one);\n\
 `--max-repairs` further conflict calls did not fix it. The scene itself is never re-generated.\n\
@@ -937,8 +939,8 @@ a tensor is missing, has another shape, or is not part of the model. Usual cause
 not the one the weights were trained with (use the `.ron` `rocc train` wrote beside them), or the\n\
 file is an autoencoder checkpoint where a generator is needed (`--backend grounded` needs\n\
 `generator.bpk`). Safetensors files must name tensors by burn's module paths\n\
-(`decoder.transformer.layers.0.mha.query.weight`, ...); `rocc train` can export one\n\
-(README, \"Training the grounded backend\").
+(`decoder.transformer.layers.0.mha.query.weight`, ...); `rocc train --safetensors` writes a\n\
+reference file with every name.
 
     rocc compile FILE -o out --backend grounded --weights paper/generator.bpk   // error if the
     // weights were trained with configs/cpu-small.ron: pass the matching config beside them",
@@ -1000,4 +1002,27 @@ with `--backend procedural`, or `--device wgpu|cuda` on a build without the `gpu
 pub fn lookup(code: &str) -> Option<&'static Code> {
     let code = code.trim().to_ascii_uppercase();
     CODES.iter().find(|c| c.code == code)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A reader of `rocc explain` has the repository at most: a file it cites is a page under
+    /// `docs/`, never a reference file kept beside the repository or a section of another page.
+    #[test]
+    fn explanations_cite_only_files_users_have() {
+        for c in CODES {
+            let text = c.explanation;
+            assert!(!text.contains("shared/"), "{}: cites a reference folder users do not have", c.code);
+            assert!(!text.contains("README"), "{}: cites the README instead of a docs page", c.code);
+            for (i, _) in text.match_indices(".md") {
+                let path_char = |ch: char| ch.is_ascii_alphanumeric() || "/_-".contains(ch);
+                let start =
+                    text[..i].char_indices().rev().take_while(|(_, ch)| path_char(*ch)).last().map_or(i, |(j, _)| j);
+                let file = &text[start..i + 3];
+                assert!(file.starts_with("docs/"), "{}: cites `{file}`, which users do not have", c.code);
+            }
+        }
+    }
 }

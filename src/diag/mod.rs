@@ -29,6 +29,8 @@ pub struct Diagnostic {
     pub severity: Severity,
     pub message: String,
     pub labels: Vec<Label>,
+    /// What to do about it: one hint a line, the main one first (`and_help` adds a line). Kept
+    /// as one string so that a `Diagnostic` stays small enough to return by value.
     pub help: Option<String>,
 }
 
@@ -48,6 +50,20 @@ impl Diagnostic {
     pub fn help(mut self, text: impl Into<String>) -> Self {
         self.help = Some(text.into());
         self
+    }
+    /// A further hint, rendered on a line of its own after the others: where two things are
+    /// worth saying (close the block; and where the statement after it begins).
+    pub fn and_help(mut self, text: impl Into<String>) -> Self {
+        let text = text.into();
+        self.help = Some(match self.help.take() {
+            Some(help) => format!("{help}\n{text}"),
+            None => text,
+        });
+        self
+    }
+    /// Every hint, the main one first.
+    pub fn hints(&self) -> impl Iterator<Item = &str> {
+        self.help.iter().flat_map(|h| h.lines())
     }
     pub fn is_error(&self) -> bool {
         self.severity == Severity::Error
@@ -222,9 +238,11 @@ pub fn osa_distance(a: &str, b: &str) -> usize {
     prev[b.len()]
 }
 
-/// The closest candidate within an edit distance that scales with the word's length.
+/// The closest candidate within an edit distance of a third of the word's length (at least
+/// one): a slip of a letter or two, never a word that merely shares some letters (`lights` is
+/// three edits from `height`, half the word, and gets no suggestion).
 pub fn suggest<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
-    let limit = (word.chars().count() / 3).max(1) + usize::from(word.len() > 5);
+    let limit = (word.chars().count() / 3).max(1);
     candidates
         .into_iter()
         .filter(|c| *c != word)
@@ -263,5 +281,25 @@ mod tests {
         assert_eq!(osa_distance("", "abc"), 3);
         assert_eq!(suggest("agnet", ["agent", "object", "row"]), Some("agent"));
         assert_eq!(suggest("laens", ["lanes", "length"]), Some("lanes"));
+    }
+
+    #[test]
+    fn unrelated_words_get_no_suggestion() {
+        assert_eq!(osa_distance("lights", "height"), 3);
+        assert_eq!(suggest("lights", ["at", "speed", "length", "width", "height", "goal", "track"]), None);
+        assert_eq!(suggest("colour", ["color", "motion"]), Some("color"));
+        assert_eq!(suggest("speeed", ["speed", "seed"]), Some("speed"));
+    }
+
+    #[test]
+    fn further_hints_render_one_a_line_after_the_first() {
+        let mut sources = SourceMap::default();
+        let file = sources.add("t.scn", "scenario s {}\n");
+        let d = Diagnostic::error("E0001", "m").label(Span::new(file, 0, 8), "here").help("first").and_help("second");
+        assert_eq!(d.hints().collect::<Vec<_>>(), ["first", "second"]);
+        let text = d.render_plain(&sources);
+        let (first, second) = (text.find("help: first").expect("first"), text.find("second").expect("second"));
+        assert!(first < second && text[first..second].matches('\n').count() == 1, "{text}");
+        assert_eq!(d.to_json(&sources)["help"], "first\nsecond");
     }
 }

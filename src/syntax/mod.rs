@@ -2,6 +2,7 @@
 //! diagnostic. Also the formatter (`fmt`), which prints an AST back in canonical layout.
 
 pub mod ast;
+mod error;
 pub mod fmt;
 mod parse;
 
