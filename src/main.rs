@@ -499,7 +499,7 @@ fn main() -> ExitCode {
                     return ExitCode::FAILURE;
                 }
             };
-            let static_bev = match static_bev.as_deref().map(rocc::import::StaticBev::load).transpose() {
+            let static_bev = match static_bev.as_deref().map(rocc::compile::StaticBev::load).transpose() {
                 Ok(s) => s,
                 Err(d) => {
                     print_diags(&[d], &SourceMap::default(), MessageFormat::Human);
@@ -954,7 +954,7 @@ fn text(sentence: &str, out: &Path, args: TextArgs) -> ExitCode {
         let t = out.with_extension("transcript.json");
         let v = run.transcript(sentence, &opts);
         let bytes = serde_json::to_vec_pretty(&v).expect("a JSON value serialises");
-        match rocc::output::write_atomic(&t, |w| std::io::Write::write_all(w, &bytes)) {
+        match rocc::files::write_atomic(&t, |w| std::io::Write::write_all(w, &bytes)) {
             Ok(_) => eprintln!("transcript: {}", t.display()),
             Err(e) => eprintln!("error[E0401]: cannot write {}: {e}", t.display()),
         }
@@ -963,7 +963,7 @@ fn text(sentence: &str, out: &Path, args: TextArgs) -> ExitCode {
     let repairs = run.attempts.len().saturating_sub(1);
     match outcome {
         llm::Outcome::Accepted { text } => {
-            if let Err(e) = rocc::output::write_atomic(out, |w| std::io::Write::write_all(w, text.as_bytes())) {
+            if let Err(e) = rocc::files::write_atomic(out, |w| std::io::Write::write_all(w, text.as_bytes())) {
                 print_diags(
                     &[Diagnostic::error("E0401", format!("cannot write {}: {e}", out.display()))],
                     &SourceMap::default(),
@@ -977,7 +977,7 @@ fn text(sentence: &str, out: &Path, args: TextArgs) -> ExitCode {
             ExitCode::SUCCESS
         }
         llm::Outcome::Rejected { text, diags, sources } => {
-            let kept = rocc::output::write_atomic(&rejected, |w| std::io::Write::write_all(w, text.as_bytes()));
+            let kept = rocc::files::write_atomic(&rejected, |w| std::io::Write::write_all(w, text.as_bytes()));
             // Re-check under the kept file's name so the spans point into it.
             let mut named = SourceMap::default();
             let shown = match &kept {
@@ -1009,7 +1009,7 @@ fn text(sentence: &str, out: &Path, args: TextArgs) -> ExitCode {
             print_diags(&[d], &SourceMap::default(), human);
             // A failure mid-repair still leaves the last checked attempt to look at.
             if let Some(last) = run.attempts.last()
-                && rocc::output::write_atomic(&rejected, |w| std::io::Write::write_all(w, last.as_bytes())).is_ok()
+                && rocc::files::write_atomic(&rejected, |w| std::io::Write::write_all(w, last.as_bytes())).is_ok()
             {
                 eprintln!("the last attempt is kept in {}", rejected.display());
             }
@@ -1120,14 +1120,14 @@ fn ciren_extract(case_dir: &Path, out: &Path, examples: Option<&Path>, args: Tex
         let t = out.with_extension("transcript.json");
         let v = run.transcript(&case, &opts, seed.unwrap_or_else(|| extract::default_seed(&case.id)));
         let bytes = serde_json::to_vec_pretty(&v).expect("a JSON value serialises");
-        match rocc::output::write_atomic(&t, |w| std::io::Write::write_all(w, &bytes)) {
+        match rocc::files::write_atomic(&t, |w| std::io::Write::write_all(w, &bytes)) {
             Ok(_) => eprintln!("transcript: {}", t.display()),
             Err(e) => eprintln!("error[E0401]: cannot write {}: {e}", t.display()),
         }
     }
     let requests = run.exchanges.len();
     let keep = |text: &str, diags: Vec<Diagnostic>, sources: SourceMap| -> Result<(), String> {
-        let kept = rocc::output::write_atomic(&rejected, |w| std::io::Write::write_all(w, text.as_bytes()));
+        let kept = rocc::files::write_atomic(&rejected, |w| std::io::Write::write_all(w, text.as_bytes()));
         // Re-check under the kept file's name so the spans point into it; a kept file that
         // checks (a scene without a usable conflict) shows the original diagnostics.
         let mut named = SourceMap::default();
@@ -1152,7 +1152,7 @@ fn ciren_extract(case_dir: &Path, out: &Path, examples: Option<&Path>, args: Tex
     };
     match outcome {
         Outcome::Accepted { text } => {
-            if let Err(e) = rocc::output::write_atomic(out, |w| std::io::Write::write_all(w, text.as_bytes())) {
+            if let Err(e) = rocc::files::write_atomic(out, |w| std::io::Write::write_all(w, text.as_bytes())) {
                 return fail(
                     Diagnostic::error("E0401", format!("cannot write {}: {e}", out.display())),
                     &SourceMap::default(),
@@ -1201,7 +1201,7 @@ fn ciren_extract(case_dir: &Path, out: &Path, examples: Option<&Path>, args: Tex
             // A failure mid-way still leaves the last attempt to look at.
             let last = run.merged.last().or(run.scene.as_ref()).or(run.attempts.last());
             if let Some(last) = last
-                && rocc::output::write_atomic(&rejected, |w| std::io::Write::write_all(w, last.as_bytes())).is_ok()
+                && rocc::files::write_atomic(&rejected, |w| std::io::Write::write_all(w, last.as_bytes())).is_ok()
             {
                 eprintln!("the last attempt is kept in {}", rejected.display());
             }
@@ -1232,7 +1232,8 @@ fn explain(code: Option<&str>) -> ExitCode {
 }
 
 fn import_boxes(file: &Path, conv: ConventionArg, out: &Path, static_bev: Option<&Path>) -> ExitCode {
-    use rocc::import::{Convention, StaticBev, import_boxes, scenario_name};
+    use rocc::compile::StaticBev;
+    use rocc::import::{Convention, import_boxes, scenario_name};
     let conv = match conv {
         ConventionArg::Nuscenes => Convention::NuScenes,
         ConventionArg::Mmdet3d => Convention::Mmdet3d,
@@ -1252,7 +1253,7 @@ fn import_boxes(file: &Path, conv: ConventionArg, out: &Path, static_bev: Option
             if let Some(p) = static_bev {
                 text = format!("// Map layers: compile with `--static-bev {}`.\n{text}", p.display());
             }
-            if let Err(e) = rocc::output::write_atomic(out, |w| std::io::Write::write_all(w, text.as_bytes())) {
+            if let Err(e) = rocc::files::write_atomic(out, |w| std::io::Write::write_all(w, text.as_bytes())) {
                 let d = Diagnostic::error("E0401", format!("cannot write `{}`: {e}", out.display()))
                     .help("check the directory exists and is writable");
                 print_diags(&[d], &sources, MessageFormat::Human);
@@ -1408,7 +1409,7 @@ fn edit(
         match rocc::edit::edit_scn(target, &edits, &mut sources) {
             Ok(text) => {
                 let dest = out.unwrap_or(target);
-                match rocc::output::write_atomic(dest, |w| std::io::Write::write_all(w, text.as_bytes())) {
+                match rocc::files::write_atomic(dest, |w| std::io::Write::write_all(w, text.as_bytes())) {
                     Ok(_) => {
                         eprintln!("edited {} -> {}", target.display(), dest.display());
                         ExitCode::SUCCESS

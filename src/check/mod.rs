@@ -2,6 +2,7 @@
 //! Out: `scenario::Scenario` — names resolved, units converted to SI, domain rules enforced —
 //! or every diagnostic found (the checker keeps going after an error to report them all).
 
+pub mod classes;
 pub mod load;
 pub mod scenario;
 pub mod units;

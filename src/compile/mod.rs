@@ -10,11 +10,13 @@
 
 pub mod batch;
 mod clip;
+mod static_bev;
 
 pub use clip::{
     ClipInput, ClipReport, FrameSource, Render, clip_dir, clip_seed, compile_clip, edited_clip, frame_boxes,
     render_clip,
 };
+pub use static_bev::StaticBev;
 
 use crate::backend::Mode;
 use crate::check::scenario::Scenario;
@@ -61,7 +63,7 @@ pub struct Options {
     /// Recompile clips whose manifest says they are complete.
     pub force: bool,
     /// A recorded BEV whose static and divider layers replace the map's (`--static-bev`).
-    pub static_bev: Option<crate::import::StaticBev>,
+    pub static_bev: Option<StaticBev>,
     /// Which occupancy backend runs (`--backend`).
     pub backend: OccBackend,
 }
