@@ -5,6 +5,7 @@
 pub mod classes;
 pub mod load;
 pub mod scenario;
+pub mod summary;
 pub mod units;
 
 use crate::diag::{Diagnostic, did_you_mean};

@@ -27,6 +27,7 @@ use crate::road::{self, Map};
 use crate::rollout::{Tracks, rollout};
 use crate::sample::{Concrete, sample};
 use serde::{Deserialize, Serialize};
+use std::path::Path;
 
 /// How far `rocc compile` goes. Each stage includes the ones before it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
@@ -74,6 +75,25 @@ pub enum OccBackend {
     #[default]
     Procedural,
     Grounded(std::sync::Arc<crate::backend::grounded::Grounded>),
+}
+
+impl OccBackend {
+    /// The backend `--backend` names: `grounded` loads `weights` (with `config`, by default the
+    /// `.ron` beside them); the procedural one takes neither (E0908 if given them).
+    pub fn select(grounded: bool, weights: Option<&Path>, config: Option<&Path>) -> Result<OccBackend, Diagnostic> {
+        match (grounded, weights) {
+            (false, None) if config.is_none() => Ok(OccBackend::Procedural),
+            (false, _) => Err(Diagnostic::error(
+                "E0908",
+                "`--weights` and `--grounded-config` apply to `--backend grounded` only",
+            )
+            .help("add `--backend grounded`, or drop the weights options for the procedural backend")),
+            (true, None) => Err(Diagnostic::error("E0901", "`--backend grounded` needs `--weights FILE`")
+                .help("train weights with `rocc train generator ...` (README: \"Training the grounded backend\")")),
+            (true, Some(w)) => crate::backend::grounded::Grounded::load(w, config)
+                .map(|g| OccBackend::Grounded(std::sync::Arc::new(g))),
+        }
+    }
 }
 
 impl std::fmt::Debug for OccBackend {

@@ -352,6 +352,21 @@ pub fn train(opts: &TrainOptions) -> Result<TrainReport, Diagnostic> {
     }
 }
 
+/// Write a stage's trained `weights` (`.bpk`) again as `.safetensors` beside them; returns that
+/// file.
+pub fn export_safetensors(stage: Stage, config: &GroundedConfig, weights: &Path) -> Result<PathBuf, Diagnostic> {
+    use crate::backend::grounded::{cpu, save_safetensors};
+    let st = weights.with_extension("safetensors");
+    let res = match stage {
+        Stage::Autoencoder => save_safetensors(&load_weights(Autoencoder::new(config, &cpu()), weights)?, &st),
+        Stage::Generator => save_safetensors(&load_weights(Generator::new(config, &cpu()), weights)?, &st),
+    };
+    res.map_err(|e| {
+        Diagnostic::error("E0906", format!("cannot write `{}`: {e}", st.display())).help("check the output directory")
+    })?;
+    Ok(st)
+}
+
 fn run<M: Net>(
     opts: &TrainOptions,
     init: impl FnOnce(M, &Device) -> Result<(M, bool), Diagnostic>,
