@@ -28,7 +28,7 @@ enum Cmd {
         #[command(subcommand)]
         what: cli::import::ImportCmd,
     },
-    /// Recreate NHTSA CIREN crashes as scenarios: `rocc ciren import ../shared/ciren -o scn/`.
+    /// Recreate NHTSA CIREN crashes as scenarios: `rocc ciren import cases/ -o scn/`.
     Ciren {
         #[command(subcommand)]
         what: cli::ciren::CirenCmd,

@@ -1,4 +1,4 @@
-//! `rocc ciren`: snapshots of the generated scenario of every shared CIREN case and SAFE
+//! `rocc ciren`: snapshots of the generated scenario of every bundled CIREN case (`tests/fixtures/`) and SAFE
 //! extraction; the staged contact measured on the rolled-out boxes against the source's own
 //! statement of the damaged parts (CIREN: `external.csv`, SAFE: `point_of_impact`); bad inputs
 //! (malformed, missing, unknown, non-UTF-8, huge) give diagnostics and write nothing while the
@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 
 fn dirs(root: &str, want_dir: bool) -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(root)
-        .expect("shared data")
+        .expect("test fixtures")
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| {
             if want_dir { p.join("crash_report.xml").is_file() } else { p.extension().is_some_and(|e| e == "json") }
@@ -42,8 +42,8 @@ fn snapshot_text(r: &Result<Imported, Vec<rocc::diag::Diagnostic>>, sources: &So
 }
 
 #[test]
-fn every_shared_ciren_case_imports_as_snapshotted() {
-    let cases = dirs("../shared/ciren", true);
+fn every_bundled_ciren_case_imports_as_snapshotted() {
+    let cases = dirs("tests/fixtures/ciren-cases", true);
     assert_eq!(cases.len(), 6);
     for p in cases {
         let mut sources = SourceMap::default();
@@ -67,7 +67,7 @@ fn the_vlm_worked_examples_are_the_importers_output() {
     for f in files {
         let id = f.file_stem().and_then(|n| n.to_str()).expect("utf-8 name").to_string();
         let mut sources = SourceMap::default();
-        let imp = ciren::import_case(&Path::new("../shared/ciren").join(&id), &mut sources)
+        let imp = ciren::import_case(&Path::new("tests/fixtures/ciren-cases").join(&id), &mut sources)
             .unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
         let shown = std::fs::read_to_string(&f).expect("readable example");
         assert_eq!(shown, imp.staged.text, "{} differs from `rocc ciren import` output", f.display());
@@ -75,8 +75,8 @@ fn the_vlm_worked_examples_are_the_importers_output() {
 }
 
 #[test]
-fn every_shared_safe_extraction_imports_as_snapshotted() {
-    let files = dirs("../shared/safe", false);
+fn every_bundled_safe_extraction_imports_as_snapshotted() {
+    let files = dirs("tests/fixtures/safe", false);
     assert_eq!(files.len(), 8);
     for p in files {
         let mut sources = SourceMap::default();
@@ -152,7 +152,7 @@ fn check_contact(imp: &Imported, stated: &[(String, Part)]) -> Tracks {
 
 #[test]
 fn ciren_contacts_land_on_the_sides_in_external_csv() {
-    for p in dirs("../shared/ciren", true) {
+    for p in dirs("tests/fixtures/ciren-cases", true) {
         let mut sources = SourceMap::default();
         let imp = ciren::import_case(&p, &mut sources).unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
         // external.csv: one row per vehicle in sketch colour order (red = V1, blue = V2).
@@ -177,7 +177,7 @@ fn ciren_contacts_land_on_the_sides_in_external_csv() {
 
 #[test]
 fn safe_contacts_land_on_the_parts_in_point_of_impact() {
-    for p in dirs("../shared/safe", false) {
+    for p in dirs("tests/fixtures/safe", false) {
         let mut sources = SourceMap::default();
         let imp = ciren::import_safe(&p, &mut sources).unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
         let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&p).expect("read")).expect("json");
@@ -274,9 +274,9 @@ fn a_huge_file_is_refused_before_it_is_read() {
 fn the_batch_goes_on_past_bad_cases_and_writes_nothing_for_them() {
     let out = tmp("batch");
     let status = std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
-        .args(["ciren", "import", "../shared/ciren/100237", "tests/fixtures/ciren/malformed.xml"])
+        .args(["ciren", "import", "tests/fixtures/ciren-cases/100237", "tests/fixtures/ciren/malformed.xml"])
         .args(["tests/fixtures/ciren/rollover.xml", "tests/fixtures/ciren/not_utf8.xml", "no/such/case"])
-        .args(["../shared/ciren/117021", "-o"])
+        .args(["tests/fixtures/ciren-cases/117021", "-o"])
         .arg(&out)
         .output()
         .expect("run rocc");
@@ -296,7 +296,9 @@ fn the_batch_goes_on_past_bad_cases_and_writes_nothing_for_them() {
 #[test]
 fn a_case_and_its_safe_extraction_import_side_by_side() {
     let out = tmp("both");
-    for (sub, input) in [("import", "../shared/ciren/117021"), ("import-safe", "../shared/safe/117021.json")] {
+    for (sub, input) in
+        [("import", "tests/fixtures/ciren-cases/117021"), ("import-safe", "tests/fixtures/safe/117021.json")]
+    {
         let st = std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
             .args(["ciren", sub, input, "-o"])
             .arg(&out)
@@ -321,7 +323,7 @@ fn generated_files_check_format_and_are_deterministic() {
     let out = tmp("det");
     let run = || {
         std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
-            .args(["ciren", "import-safe", "../shared/safe/117330.json", "../shared/safe/121520.json", "-o"])
+            .args(["ciren", "import-safe", "tests/fixtures/safe/117330.json", "tests/fixtures/safe/121520.json", "-o"])
             .arg(&out)
             .status()
             .expect("run rocc")

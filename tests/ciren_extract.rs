@@ -15,14 +15,11 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
 
-fn shared(rel: &str) -> PathBuf {
-    for root in ["../shared", "/work/shared"] {
-        let p = Path::new(root).join(rel);
-        if p.exists() {
-            return p;
-        }
-    }
-    panic!("../shared/{rel} not found")
+/// A bundled case: `ciren/<id>` or `safe/<id>` under `tests/fixtures/`.
+fn fixture(rel: &str) -> PathBuf {
+    let (kind, id) = rel.split_once('/').expect("kind/id");
+    let dir = if kind == "ciren" { "ciren-cases" } else { kind };
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures").join(dir).join(id)
 }
 
 fn tmp(name: &str) -> PathBuf {
@@ -55,7 +52,7 @@ fn opts(url: &str, server: Server) -> Options {
 }
 
 fn case_100237() -> Case {
-    extract::read_case(&shared("ciren/100237")).unwrap_or_else(|e| panic!("{}", e.diag.message))
+    extract::read_case(&fixture("ciren/100237")).unwrap_or_else(|e| panic!("{}", e.diag.message))
 }
 
 fn run(case: &Case, o: &Options, dir: &Path) -> (Outcome, extract::Run) {
@@ -118,7 +115,7 @@ fn scene_request_carries_the_sketch_summary_and_examples_and_the_conflict_call_i
     let user_text = text_of(user);
     assert!(user_text.contains("the front of V2 struck the right side of V1 in a T-type configuration"), "{user_text}");
     assert!(!user_text.contains("  "), "whitespace runs collapsed");
-    let sketch = std::fs::read(shared("ciren/100237/sketch.jpeg")).unwrap();
+    let sketch = std::fs::read(fixture("ciren/100237/sketch.jpeg")).unwrap();
     assert_eq!(images_of(user), vec![format!("data:image/jpeg;base64,{}", rocc::llm::base64(&sketch))]);
     assert_eq!(user["content"][1]["type"], "image_url", "text part first, then the image part");
     assert!(reqs[0]["structured_outputs"]["grammar"].as_str().unwrap().contains("root ::= file"));
@@ -251,8 +248,8 @@ fn an_unreachable_server_is_e0601() {
 #[test]
 fn case_files_are_checked_before_anything_is_sent() {
     let code = |dir: &Path| extract::read_case(dir).map(|_| "ok").unwrap_or_else(|e| e.diag.code);
-    let sketch = std::fs::read(shared("ciren/100237/sketch.jpeg")).unwrap();
-    let report = std::fs::read(shared("ciren/100237/crash_report.xml")).unwrap();
+    let sketch = std::fs::read(fixture("ciren/100237/sketch.jpeg")).unwrap();
+    let report = std::fs::read(fixture("ciren/100237/crash_report.xml")).unwrap();
 
     assert_eq!(code(Path::new("/nonexistent/case")), "E0850");
     let d = tmp("nosketch");
@@ -296,7 +293,7 @@ fn case_files_are_checked_before_anything_is_sent() {
     assert!(at.starts_with("&bogus;"), "the label points at the entity: {at}");
 
     // The SAFE folders: Sketch.jpg and Summary.txt.
-    let safe = extract::read_case(&shared("safe/109204")).unwrap();
+    let safe = extract::read_case(&fixture("safe/109204")).unwrap();
     assert_eq!(safe.id, "109204");
     assert!(safe.sketch.ends_with("Sketch.jpg") && safe.summary_from.ends_with("Summary.txt"));
     assert!(safe.image.data_url.starts_with("data:image/jpeg;base64,/9j/"));
@@ -322,7 +319,7 @@ fn cli_writes_a_file_that_checks_and_a_transcript_without_the_image() {
     let dir = tmp("cli-ok");
     let out = dir.join("100237.scn");
     let fake = serve(vec![chat(SCENE), chat(CONFLICT)]);
-    let st = extract_cli(&shared("ciren/100237"), &out, &fake.url, &["--transcript", "--api-key", "sk-secret"]);
+    let st = extract_cli(&fixture("ciren/100237"), &out, &fake.url, &["--transcript", "--api-key", "sk-secret"]);
     let err = String::from_utf8_lossy(&st.stderr);
     assert!(st.status.success(), "{err}");
     assert!(err.contains(BLOCK), "{err}");
@@ -343,7 +340,7 @@ fn cli_garbage_scene_is_repaired_then_fails_with_the_attempt_kept() {
     let dir = tmp("cli-garbage");
     let out = dir.join("100237.scn");
     let fake = serve(vec![chat("I see a drawing of two cars."), chat("Sorry, I cannot write files."), chat("no")]);
-    let st = extract_cli(&shared("ciren/100237"), &out, &fake.url, &["--max-repairs", "2"]);
+    let st = extract_cli(&fixture("ciren/100237"), &out, &fake.url, &["--max-repairs", "2"]);
     let err = String::from_utf8_lossy(&st.stderr);
     assert_eq!(st.status.code(), Some(1), "{err}");
     assert!(err.contains("E0610") && err.contains("E0856"), "{err}");
@@ -361,7 +358,7 @@ fn cli_garbage_conflict_fails_with_e0857_and_keeps_the_scene() {
     let dir = tmp("cli-conflict");
     let out = dir.join("100237.scn");
     let fake = serve(vec![chat(SCENE), chat("V2 hit V1."), chat("{\"point\": \"right\"}")]);
-    let st = extract_cli(&shared("ciren/100237"), &out, &fake.url, &["--max-repairs", "1"]);
+    let st = extract_cli(&fixture("ciren/100237"), &out, &fake.url, &["--max-repairs", "1"]);
     let err = String::from_utf8_lossy(&st.stderr);
     assert_eq!(st.status.code(), Some(1), "{err}");
     assert!(err.contains("E0857") && err.contains("no at_fault, struck, impact"), "{err}");
@@ -381,7 +378,7 @@ fn cli_case_errors_exit_non_zero_before_any_request() {
     assert!(!err.contains("E0601"), "no request was made: {err}");
     assert!(!dir.join("x.scn").exists());
     let st = extract_cli(
-        &shared("ciren/100237"),
+        &fixture("ciren/100237"),
         &dir.join("x.scn"),
         "http://127.0.0.1:9/v1",
         &["--examples", "/nonexistent"],
@@ -419,7 +416,7 @@ fn real_llamacpp_server_without_a_projector_refuses_the_sketch_clearly() {
     let st = rocc(&[
         "ciren",
         "extract",
-        shared("ciren/100237").to_str().unwrap(),
+        fixture("ciren/100237").to_str().unwrap(),
         "-o",
         out.to_str().unwrap(),
         "--server",

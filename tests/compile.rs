@@ -172,7 +172,7 @@ fn a_failing_file_does_not_stop_the_batch() {
     let inputs = vec![
         root().join("tests/invalid/unknown_kind.scn"),
         root().join("scenarios/replayed_cut_in.scn"),
-        root().join("../shared/examples/invalid/overlap.scn"),
+        root().join("tests/fixtures/examples/invalid/overlap.scn"),
     ];
     for p in &inputs {
         assert!(p.is_file(), "{} missing", p.display());
@@ -229,7 +229,7 @@ fn bad_egos_frames_and_duplicate_names_are_diagnosed() {
     assert!(r.failures[0].diags[0].help.as_deref().unwrap_or("").contains("`ego`"), "suggests the right name");
     let r = batch::run(&input, &out, &opts(Stage::Bev, "0..999"), true);
     assert_eq!(r.failures[0].diags[0].code, "E0302");
-    let twice = vec![root().join("scenarios/car_u_turn.scn"), root().join("../shared/examples/car_u_turn.scn")];
+    let twice = vec![root().join("scenarios/car_u_turn.scn"), root().join("tests/fixtures/examples/car_u_turn.scn")];
     let r = batch::run(&twice, &out, &Options { previews: false, ..opts(Stage::Bev, "0") }, true);
     assert_eq!((r.clips.len(), r.failures.len()), (1, 1));
     assert_eq!(r.failures[0].diags[0].code, "E0303");
@@ -237,7 +237,7 @@ fn bad_egos_frames_and_duplicate_names_are_diagnosed() {
 
 #[test]
 fn duplicate_names_in_different_shards_are_diagnosed() {
-    let twice = vec![root().join("scenarios/car_u_turn.scn"), root().join("../shared/examples/car_u_turn.scn")];
+    let twice = vec![root().join("scenarios/car_u_turn.scn"), root().join("tests/fixtures/examples/car_u_turn.scn")];
     let out = tmp("dup-shards");
     let o = Options { previews: false, ..opts(Stage::Bev, "0") };
     // Shard 1 of 2 owns the first file: it compiles, as it would without sharding.
@@ -262,7 +262,7 @@ fn compiled_files_load_in_numpy_like_nuplan_occ_data() {
     }
     let out = tmp("numpy");
     let r = batch::run(
-        &[root().join("../shared/examples/cyclist_red_light.scn")],
+        &[root().join("tests/fixtures/examples/cyclist_red_light.scn")],
         &out,
         &Options { previews: false, ..opts(Stage::Lidar, "5") },
         true,

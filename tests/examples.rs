@@ -1,4 +1,4 @@
-//! Every scenario of the library and of `../shared/examples` compiles to clips whose behaviour
+//! Every scenario of the library and of `tests/fixtures/examples` compiles to clips whose behaviour
 //! matches the comment at its top: assertions on the tracks, plus a snapshot per clip of a
 //! summary of its `boxes.json` (where each agent is, in the ego's frame, every second).
 
@@ -23,7 +23,7 @@ fn load(path: &Path) -> Front {
 }
 
 fn shared(name: &str) -> Front {
-    load(&root().join("../shared/examples").join(format!("{name}.scn")))
+    load(&root().join("tests/fixtures/examples").join(format!("{name}.scn")))
 }
 
 fn idx(f: &Front, name: &str) -> usize {
@@ -71,7 +71,7 @@ fn summary(f: &Front, ego: usize) -> String {
 #[test]
 fn every_clip_matches_its_boxes_summary_snapshot() {
     let mut files: Vec<PathBuf> = Vec::new();
-    for dir in [root().join("scenarios"), root().join("../shared/examples")] {
+    for dir in [root().join("scenarios"), root().join("tests/fixtures/examples")] {
         let mut v: Vec<PathBuf> = std::fs::read_dir(&dir)
             .expect("read dir")
             .map(|e| e.expect("entry").path())
@@ -206,4 +206,97 @@ fn the_car_leaves_the_curve_into_the_tree_and_the_tractor_drives_on() {
     assert!((i.frame as f64 / f.tracks.rate - 3.0).abs() <= 0.5, "impact at frame {}", i.frame);
     // The tractor in the other lane is a bystander: it passes the wreck.
     assert!(travelled(&f, "farm") > 30.0, "tractor: {:.1} m", travelled(&f, "farm"));
+}
+
+// ---------------------------------------------------------------- behaviour pin
+
+/// FNV-1a, 64 bit.
+struct Fnv(u64);
+
+impl Fnv {
+    fn new() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+    fn bytes(&mut self, b: &[u8]) {
+        for &x in b {
+            self.0 = (self.0 ^ x as u64).wrapping_mul(0x100_0000_01b3);
+        }
+    }
+    fn u64(&mut self, x: u64) {
+        self.bytes(&x.to_le_bytes());
+    }
+}
+
+/// Every pose, speed and impact of a rollout, bit for bit.
+fn track_digest(h: &mut Fnv, t: &rocc::rollout::Tracks) {
+    for (poses, speeds) in t.poses.iter().zip(&t.speeds) {
+        for (p, v) in poses.iter().zip(speeds) {
+            for x in [p.x, p.y, p.yaw, *v] {
+                h.u64(x.to_bits());
+            }
+        }
+    }
+    for r in &t.impacts {
+        h.u64(r.frame as u64);
+        h.u64(r.depth.to_bits());
+    }
+}
+
+fn scn_in(dir: &str) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(root().join(dir))
+        .unwrap_or_else(|e| panic!("{dir}: {e}"))
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "scn"))
+        .collect();
+    v.sort();
+    v
+}
+
+/// The pin that every refactoring is held to: one digest per scene of every track of the library
+/// and of the rollout's regression scenes, and of the BEV and occupancy bytes of the first, middle
+/// and last frame of each library clip (first ego, procedural backend, as `rocc compile` renders
+/// them). A change of behaviour shows as a changed line in `digest_pin.snap`; a refactoring that
+/// claims to change nothing must leave the snapshot as it is.
+#[test]
+fn tracks_bev_and_occupancy_match_the_pinned_digests() {
+    use rocc::backend::{Background, OccInput, Occupancy, OccupancyBackend, Procedural};
+    use rocc::raster::{Bev, Rasterizer};
+    let mut out = String::new();
+    for dir in ["scenarios", "tests/rollout-cases"] {
+        for path in scn_in(dir) {
+            let f = load(&path);
+            let mut h = Fnv::new();
+            track_digest(&mut h, &f.tracks);
+            let name = path.file_stem().and_then(|n| n.to_str()).expect("utf-8 name");
+            let _ = write!(out, "{dir}/{name}: tracks {:016x}", h.0);
+            if dir == "scenarios" {
+                let ego = f.concrete.egos[0];
+                let n = f.tracks.frames;
+                let bg = Background::generate(&f.map, f.concrete.seed);
+                let seed = rocc::compile::clip_seed(&f, ego);
+                let (mut raster, mut bev, mut occ) = (Rasterizer::new(), Bev::zeros(), Occupancy::empty());
+                let (mut hb, mut ho) = (Fnv::new(), Fnv::new());
+                for fr in [0, n / 2, n - 1] {
+                    let pose = f.tracks.poses[ego][fr];
+                    let boxes = frame_boxes(&f, ego, fr);
+                    raster.rasterize_into(&f.map, pose, &boxes, &mut bev);
+                    hb.bytes(&i8_bytes(bev.masks.as_slice().expect("standard layout")));
+                    for x in bev.aux.iter() {
+                        hb.bytes(&x.to_le_bytes());
+                    }
+                    hb.bytes(&i8_bytes(bev.structure.as_slice().expect("standard layout")));
+                    let input = OccInput { boxes: &boxes, bev: &bev, background: &bg, ego: pose, seed, frame: fr };
+                    Procedural::default().occupancy_into(&input, &mut occ);
+                    ho.bytes(occ.labels.as_slice().expect("standard layout"));
+                }
+                let _ = write!(out, " bev {:016x} occ {:016x}", hb.0, ho.0);
+            }
+            out.push('\n');
+        }
+    }
+    insta::assert_snapshot!("digest_pin", out);
+}
+
+fn i8_bytes(v: &[i8]) -> Vec<u8> {
+    v.iter().map(|&x| x as u8).collect()
 }

@@ -32,7 +32,7 @@ fn check_named(path: &Path) -> (Result<Scenario, Vec<Diagnostic>>, SourceMap) {
 
 fn corpus() -> Vec<PathBuf> {
     let mut v = scn_files(&root().join("scenarios"));
-    v.extend(scn_files(&root().join("../shared/examples")));
+    v.extend(scn_files(&root().join("tests/fixtures/examples")));
     v
 }
 
@@ -50,7 +50,7 @@ fn every_scenario_checks_and_matches_its_snapshot() {
 
 #[test]
 fn shared_examples_check_unchanged() {
-    for path in scn_files(&root().join("../shared/examples")) {
+    for path in scn_files(&root().join("tests/fixtures/examples")) {
         let (r, sources) = check_named(&path);
         if let Err(d) = r {
             panic!("{} failed:\n{}", path.display(), d.iter().map(|d| d.render_plain(&sources)).collect::<String>());
@@ -84,7 +84,7 @@ fn render_all(d: &[Diagnostic], sources: &SourceMap) -> String {
 #[test]
 fn shared_invalid_examples_fail_with_the_described_error() {
     for (file, code, words) in SHARED_INVALID {
-        let path = root().join("../shared/examples/invalid").join(file);
+        let path = root().join("tests/fixtures/examples/invalid").join(file);
         let (r, sources) = check_named(&path);
         let diags = r.err().unwrap_or_else(|| panic!("{file} should fail"));
         let d = &diags[0];
@@ -98,7 +98,7 @@ fn shared_invalid_examples_fail_with_the_described_error() {
     }
     // The parse error points at the statement after the unclosed block (line 6), not at EOF,
     // and labels the `{` that was left open (line 5).
-    let path = root().join("../shared/examples/invalid/syntax_error.scn");
+    let path = root().join("tests/fixtures/examples/invalid/syntax_error.scn");
     let (r, sources) = check_named(&path);
     let d = &r.expect_err("fails")[0];
     let file = d.labels[0].span.file;
@@ -135,7 +135,7 @@ fn own_invalid_files_fail_with_the_code_in_their_first_line() {
 
 #[test]
 fn json_diagnostics_carry_code_span_position_and_help() {
-    let path = root().join("../shared/examples/invalid/unknown_agent.scn");
+    let path = root().join("tests/fixtures/examples/invalid/unknown_agent.scn");
     let (r, sources) = check_named(&path);
     let d = &r.expect_err("fails")[0];
     let j = d.to_json(&sources);
@@ -312,7 +312,7 @@ fn stdout_commands_exit_quietly_when_the_reader_goes_away() {
     std::fs::create_dir_all(&dir).expect("temp dir");
     let messy = dir.join("messy.scn");
     std::fs::write(&messy, "scenario m { duration 4 s\nroad straight { lanes 1 } }\n").expect("write");
-    let bad = root().join("../shared/examples/invalid/unknown_agent.scn");
+    let bad = root().join("tests/fixtures/examples/invalid/unknown_agent.scn");
     let cases: Vec<Vec<String>> = vec![
         vec!["explain".into()],
         vec!["explain".into(), "E0120".into()],

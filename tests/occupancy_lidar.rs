@@ -141,13 +141,13 @@ fn box_coverage_per_class_and_mode_clears_its_threshold() {
     }
 }
 
-/// The shared examples (`../shared/examples/*.scn`, the scenes the paper's users write), each
+/// The shared examples (`tests/fixtures/examples/*.scn`, the scenes the paper's users write), each
 /// compiled as `rocc compile` does up to its boxes: every agent of every ego's clip, at every
 /// fifth frame, whose footprint lies wholly inside the grid.
 fn example_boxes() -> Vec<(String, rocc::view::EgoBox, rocc::backend::Occupancy)> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/examples");
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/examples");
     let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .expect("../shared/examples")
+        .expect("tests/fixtures/examples")
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|x| x == "scn"))
         .collect();

@@ -192,7 +192,7 @@ fn summary(b: &Bev) -> String {
 
 #[test]
 fn every_example_frame_0_matches_its_raster_snapshot() {
-    for dir in [root().join("scenarios"), root().join("../shared/examples")] {
+    for dir in [root().join("scenarios"), root().join("tests/fixtures/examples")] {
         let origin = if dir.ends_with("scenarios") { "lib" } else { "shared" };
         let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
             .expect("read dir")

@@ -13,7 +13,7 @@ use rocc::road::{self, Map};
 use rocc::source::SourceMap;
 use std::path::{Path, PathBuf};
 
-const EXAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/examples");
+const EXAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/examples");
 
 fn road(template: Template) -> Road {
     Road {

@@ -2,7 +2,7 @@
 //! the label ids and the class -> label map that every occupancy reader and writer in rocc (the
 //! backends, the LiDAR ray caster, the scorer) must agree on.
 //!
-//! Source: /work/shared/SPEC.md, "Occupancy (one frame)", read from UniScene-v2's nuPlan-Occ
+//! Format: docs/output.md, "Occupancy", as read from UniScene-v2's nuPlan-Occ
 //! loaders: uint8 (400, 400, 32), axes [x, y, z], 0.25 m on every axis, x, y in [-50, 50),
 //! z in [-3, 5), index = floor((p - [-50, -50, -3]) / 0.25). The ego origin (box centre on the
 //! ground) is the corner between voxels 199 and 200 in x and y and the k = 12 boundary in z.

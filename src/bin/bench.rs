@@ -149,7 +149,7 @@ fn bench_rollout() {
     println!("== rollout: cost per agent-frame (one core; median wall time of 20 runs, then mean CPU time)");
     let mut total = (0.0, 0usize, 0.0);
     let mut h = 0xcbf2_9ce4_8422_2325u64;
-    let shared = batch::collect_inputs(&[root().join("../shared/examples")]).unwrap_or_default();
+    let shared = batch::collect_inputs(&[root().join("tests/fixtures/examples")]).unwrap_or_default();
     for p in &shared {
         if let Some(f) = load(p) {
             digest(&mut h, &f.tracks);

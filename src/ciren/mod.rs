@@ -87,7 +87,7 @@ pub fn case_inputs(inputs: &[PathBuf]) -> (Vec<PathBuf>, Vec<Diagnostic>) {
                             p.display()
                         ),
                     )
-                    .help("pass case directories (`../shared/ciren/100237`), their parent, or XML files"),
+                    .help("pass case directories (`ciren/100237`), their parent, or XML files"),
                 );
             }
             out.extend(sub);

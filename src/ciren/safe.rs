@@ -190,9 +190,8 @@ struct Actor {
 
 /// Read and map a SAFE extraction.
 pub fn read_safe(path: &Path, sources: &mut SourceMap) -> Result<(Crash, Vec<Diagnostic>), Vec<Diagnostic>> {
-    let text = read_capped(path, MAX_SAFE_BYTES).map_err(|m| {
-        vec![Diagnostic::error("E0800", m).help("pass a SAFE extraction file (`../shared/safe/<id>.json`)")]
-    })?;
+    let text = read_capped(path, MAX_SAFE_BYTES)
+        .map_err(|m| vec![Diagnostic::error("E0800", m).help("pass a SAFE extraction file (`<case id>.json`)")])?;
     let file = sources.add(path.display().to_string(), text.clone());
     let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("safe").to_string();
     let root: Value = serde_json::from_str(&text).map_err(|e| {

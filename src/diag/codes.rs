@@ -720,8 +720,8 @@ case record, 1 MiB for a SAFE extraction; the size is checked before reading), o
 UTF-8 text. Nothing is written for that input; the other inputs of the batch go on and the
 exit status is 1.
 
-    rocc ciren import ../shared/ciren/100237 -o scn/       # a case directory
-    rocc ciren import ../shared/ciren -o scn/              # every case below a directory",
+    rocc ciren import ciren/100237 -o scn/       # a case directory
+    rocc ciren import ciren -o scn/              # every case below a directory",
     },
     Code {
         code: "E0801",
@@ -742,7 +742,7 @@ an `Events/EventSum` row with `AreaOfDamage`, `Contacted` and `ContactedAreaOfDa
 refine the scene (speeds, lane counts, directions) are not required: their defaults are
 warnings (E0807).
 
-    rocc ciren import ../shared/ciren/100237 -o scn/   # error if the record has no EventSum rows",
+    rocc ciren import ciren/100237 -o scn/   # error if the record has no EventSum rows",
     },
     Code {
         code: "E0803",
@@ -766,7 +766,7 @@ strikes with a front or a side), a fixed object rocc has no kind for (ditch, emb
 a side impact with a tree, a T-junction approached from its missing leg, or a SAFE extraction
 with one vehicle or more than two.
 
-    rocc ciren import ../shared/ciren/100412 -o scn/   # error: the case codes a rollover",
+    rocc ciren import ciren/100412 -o scn/   # error: the case codes a rollover",
     },
     Code {
         code: "E0805",
@@ -779,7 +779,7 @@ attempt did. Nothing is written. Typical cause: an impact the rollout meets squa
 between vehicles whose paths do not let the striker reach the struck side, e.g. a vehicle hit
 on its side by oncoming traffic after it spun.
 
-    rocc ciren import ../shared/ciren/100237 -o scn/   # error: contact landed on the struck vehicle's front, not its right side",
+    rocc ciren import ciren/100237 -o scn/   # error: contact landed on the struck vehicle's front, not its right side",
     },
     Code {
         code: "E0806",
@@ -787,7 +787,7 @@ on its side by oncoming traffic after it spun.
         explanation: "A CIREN record codes several events (a second contact, a sideslap); rocc stages one
 conflict per scenario, the first-ranked event. This warning names each event left out.
 
-    rocc ciren import ../shared/ciren/100237 -o scn/   # warning: event 2 (V1 left side by V2 front) not staged",
+    rocc ciren import ciren/100237 -o scn/   # warning: event 2 (V1 left side by V2 front) not staged",
     },
     Code {
         code: "E0807",
@@ -818,7 +818,7 @@ struck) or `and` (head-on), where PART is front, rear/back, left side, right sid
 disk is full), or two inputs of one batch have the same case id and would write the same
 file. Files are written under a temporary name and renamed, so nothing partial is left.
 
-    rocc ciren import ../shared/ciren -o /read-only/   # error: permission denied",
+    rocc ciren import ciren -o /read-only/   # error: permission denied",
     },
     Code {
         code: "E0850",
@@ -827,7 +827,7 @@ file. Files are written under a temporary name and renamed, so nothing partial i
 sketch: `sketch.jpeg` (CIREN case folders), `Sketch.jpg` (SAFE extraction folders), or\n\
 `sketch.jpg`, `Sketch.jpeg`, `sketch.png`, `Sketch.png`. The path is not a directory, or none of\n\
 these files is there or readable. Nothing is sent to the model.\n
-    rocc ciren extract ../shared/ciren/100237 -o 100237.scn --endpoint ... --model ...",
+    rocc ciren extract ciren/100237 -o 100237.scn --endpoint ... --model ...",
     },
     Code {
         code: "E0851",
@@ -837,7 +837,7 @@ these files is there or readable. Nothing is sent to the model.\n
 there is no report, from `Summary.txt`. Neither file exists, the report has no `Summary`\n\
 element, or the summary is empty. Coded records without a narrative go through\n\
 `rocc ciren import` instead.\n
-    rocc ciren extract ../shared/ciren/100237 -o 100237.scn ...   # error if Summary is empty and there is no Summary.txt",
+    rocc ciren extract ciren/100237 -o 100237.scn ...   # error if Summary is empty and there is no Summary.txt",
     },
     Code {
         code: "E0852",
@@ -901,7 +901,7 @@ Nothing is written to `-o`; the last merged attempt (or the bare scene) is kept 
         explanation: "`--examples DIR` replaces the worked examples shown to the model with every `.scn` file of\n\
 DIR. Each must pass `rocc check` and carry a `conflict` block (the conflict call's examples are\n\
 derived from it). The directory could not be read, holds no `.scn` file, or one file fails.\n
-    rocc ciren extract ../shared/ciren/100237 -o 100237.scn --examples my_examples/ ...   # error if a file has no conflict block",
+    rocc ciren extract ciren/100237 -o 100237.scn --examples my_examples/ ...   # error if a file has no conflict block",
     },
     Code {
         code: "E0901",

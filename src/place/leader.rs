@@ -2,7 +2,7 @@
 //! joining it (E0206). In: the `Concrete` scenario, its `Map`, the placed poses. Out: one
 //! diagnostic per goal whose leader can never be ahead (the controller would silently ignore it).
 //!
-//! The route is the one the rollout drives (`rollout::route`, one function for both): the lane a
+//! The route is the one the rollout drives (`road::route`, one function for both): the lane a
 //! vehicle is found in from its pose, continued by its `turn` connector, else the straight one,
 //! else the lane's continuation; a walker, an animal or a vehicle off the lanes goes straight
 //! along its heading; a `change_lane` agent's route starts in the lane it moves to. The leader
@@ -18,7 +18,7 @@ use crate::check::scenario::{Dir, Lateral, Motion, Place, Stop, Turn};
 use crate::diag::Diagnostic;
 use crate::geom::Polyline;
 use crate::road::Map;
-use crate::rollout::route::{chain, find_lane, side_lane};
+use crate::road::route::{chain, find_lane, side_lane};
 use crate::sample::{Concrete, ConcreteAgent};
 use glam::DVec2;
 
@@ -35,9 +35,9 @@ struct Route {
     half: f64,
 }
 
-/// The lane a vehicle's route starts with, as the rollout finds it (`rollout::route::find_lane`:
+/// The lane a vehicle's route starts with, as the rollout finds it (`road::route::find_lane`:
 /// the nearest lane heading its way that holds it; for a `change_lane` goal the lane it moves to,
-/// `rollout::route::side_lane`); walkers and animals have none.
+/// `road::route::side_lane`); walkers and animals have none.
 fn lane_of(map: &Map, a: &ConcreteAgent, p: &PlacedAgent) -> Option<usize> {
     if a.motion != Motion::Vehicle {
         return None;
@@ -50,7 +50,7 @@ fn lane_of(map: &Map, a: &ConcreteAgent, p: &PlacedAgent) -> Option<usize> {
     }
 }
 
-/// The rollout's route from lane `l` (`rollout::route::chain`, the same function that builds the
+/// The rollout's route from lane `l` (`road::route::chain`, the same function that builds the
 /// path the agent drives), without its repeated points: a zero-length segment has no direction.
 fn chain_of(map: &Map, l: usize, turn: Option<Turn>) -> Vec<DVec2> {
     let (mut pts, _, _) = chain(map, l, turn);

@@ -1,7 +1,7 @@
 //! The BEV format's numbers in one place: grid, resolution, channel indices, class ids.
 //! In: nothing. Out: constants and the two lookups (class -> channel, class -> index) that every
-//! BEV reader and writer in rocc must agree on. Source for each: /work/shared/SPEC.md, "BEV (one
-//! frame)", which was read from UniScene-v2's `nuplan_bev_dataset` (nuPlan-Occ layout).
+//! BEV reader and writer in rocc must agree on. Format: docs/output.md, "BEV", as
+//! read from UniScene-v2's `nuplan_bev_dataset` (nuPlan-Occ layout).
 
 use crate::check::scenario::Class;
 

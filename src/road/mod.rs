@@ -11,6 +11,7 @@ mod junction;
 pub mod map;
 mod merge;
 mod roundabout;
+pub mod route;
 pub(crate) mod shape;
 mod straight;
 

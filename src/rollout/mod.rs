@@ -29,14 +29,20 @@
 //! following a Hermite intercept, re-planned each frame, to a pose that puts its striking face
 //! on the requested side of the struck box at the impact frame.
 
+mod agent;
+mod drive;
+mod frame;
+mod junction;
+mod kinematics;
 mod path;
-pub mod route;
-mod sim;
-mod stage;
+mod safety;
+mod setup;
+mod staging;
 mod traffic;
+mod turn_check;
 
-pub use sim::KEY_SNAP_S;
-pub use stage::{MIN_DEPTH, contact_centroid, off_striking_face, side_of, wrong_struck_side};
+pub use kinematics::KEY_SNAP_S;
+pub use staging::plan::{MIN_DEPTH, contact_centroid, off_striking_face, side_of, wrong_struck_side};
 
 use crate::check::scenario::{Class, Motion, Point};
 use crate::diag::Diagnostic;
@@ -138,5 +144,5 @@ pub const WHEELBASE_SHARE: f64 = 0.6;
 
 /// Roll the placed scenario out over its frames.
 pub fn rollout(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Vec<Diagnostic>> {
-    sim::run(c, map, placed)
+    staging::passes::run(c, map, placed)
 }

@@ -2,12 +2,12 @@
 //! striking face to meet the requested side; the choice of impact and departure times from the
 //! first pass; and measurements of a contact (overlap centroid, depth, which side).
 
-use super::Tracks;
-use super::path::Hermite;
-use super::sim::{Actor, Conf, Drive};
 use crate::check::scenario::{Impact, Point};
 use crate::geom::{Obb, wrap_angle};
 use crate::place::Pose;
+use crate::rollout::Tracks;
+use crate::rollout::agent::{Actor, Conf, Drive};
+use crate::rollout::path::Hermite;
 use glam::DVec2;
 
 /// Intercepts may accelerate harder than comfortable driving (the driver is at fault), by this
@@ -23,7 +23,7 @@ const OBLIQUE: f64 = 0.6;
 /// 30 degrees or more, leading with a front corner.
 const ANGLE_OBLIQUE: f64 = 1.05;
 
-pub(super) struct Plan {
+pub(crate) struct Plan {
     pub struck: usize,
     /// At-fault centre and yaw at the impact frame, in the struck agent's frame.
     pub rel_pos: DVec2,
@@ -36,7 +36,7 @@ pub(super) struct Plan {
 }
 
 /// World pose of a point given in the frame of `base`.
-pub(super) fn compose(base: Pose, rel: DVec2, rel_yaw: f64) -> (DVec2, f64) {
+pub(crate) fn compose(base: Pose, rel: DVec2, rel_yaw: f64) -> (DVec2, f64) {
     compose_turned(base, DVec2::from_angle(base.yaw), rel, rel_yaw)
 }
 
@@ -66,7 +66,7 @@ fn point_signs(p: Point) -> (f64, f64) {
 /// `drift` (sideswipes only) is how far the leading corner slides along the struck side, in its
 /// +x, between first touch and the planned penetration; first touch and the final overlap are
 /// centred on the target between them.
-pub(super) fn relative(
+pub(crate) fn relative(
     impact: Impact,
     point: Point,
     struck: (f64, f64),
@@ -151,10 +151,10 @@ pub(super) fn relative(
 pub const MIN_DEPTH: f64 = 0.05;
 
 /// How far from its requested time a staged impact may land, s.
-pub(super) const WINDOW_S: f64 = 1.5;
+pub(crate) const WINDOW_S: f64 = 1.5;
 
 /// The impact time a conflict asks for: its `at`, else mid-clip, within the clip's frames.
-pub(super) fn requested_time(c: &crate::check::scenario::Conflict, dt: f64, frames: usize, duration: f64) -> f64 {
+pub(crate) fn requested_time(c: &crate::check::scenario::Conflict, dt: f64, frames: usize, duration: f64) -> f64 {
     let last = frames.saturating_sub(1);
     c.at.unwrap_or(duration / 2.0).clamp(2.0 * dt, (last as f64 * dt).max(2.0 * dt))
 }
@@ -162,7 +162,7 @@ pub(super) fn requested_time(c: &crate::check::scenario::Conflict, dt: f64, fram
 /// The plan for conflict `k` from pass 1's tracks: of departure and impact frames within
 /// `WINDOW_S` of the requested time, the one of least cost, its impact more than `AVOID_S` from
 /// each time in `avoid` (impact times of plans that failed).
-pub(super) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration: f64, avoid: &[f64]) -> Option<Plan> {
+pub(crate) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration: f64, avoid: &[f64]) -> Option<Plan> {
     let (af, st) = (&actors[k.af], &actors[k.st]);
     if !matches!(af.drive, Drive::Mover) || p1.frames < 4 {
         return None;
@@ -313,7 +313,15 @@ const TAUS: [f64; 5] = [1.5, 2.0, 2.5, 3.0, 4.0];
 /// `choose`'s cost of a candidate without its curvature terms (the lateral acceleration above the
 /// limit, the curve tighter than the car can steer) and its closing-speed term, all of them at
 /// least 0: the same sums in the same order, so never above the cost.
-fn lower_bound(t_imp: f64, t_req: f64, acc: f64, lim: super::Limits, v_end: f64, drift: f64, natural: bool) -> f64 {
+fn lower_bound(
+    t_imp: f64,
+    t_req: f64,
+    acc: f64,
+    lim: crate::rollout::Limits,
+    v_end: f64,
+    drift: f64,
+    natural: bool,
+) -> f64 {
     let mut cost = 3.0 * (t_imp - t_req).abs() + acc.abs() / lim.accel + 0.0;
     if acc > STRIKE_ACCEL * lim.accel || acc < -lim.brake_max {
         cost += 20.0 + acc.abs();
@@ -329,7 +337,7 @@ fn lower_bound(t_imp: f64, t_req: f64, acc: f64, lim: super::Limits, v_end: f64,
 }
 
 /// Penetration depth of two overlapping boxes: the smallest overlap over the separating axes.
-pub(super) fn depth(a: &Obb, b: &Obb) -> f64 {
+pub(crate) fn depth(a: &Obb, b: &Obb) -> f64 {
     let (ca, cb) = (a.corners(), b.corners());
     let axes = [
         DVec2::from_angle(a.yaw),

@@ -1,0 +1,191 @@
+//! The agents' plain data: what each agent is (`Actor`, set up once), where it is (`State`, one
+//! per frame), and what joins two of them (`Conf`, a staged conflict; `Crossing`, a shared
+//! junction zone). Nothing here decides anything.
+
+use crate::check::scenario::{Keyframe, Turn};
+use crate::geom::Obb;
+use crate::place::Pose;
+use crate::road::route::Junction;
+use crate::rollout::junction::bend::Bend;
+use crate::rollout::path::Path;
+use crate::rollout::{Limits, TrackAgent};
+use glam::DVec2;
+
+pub(crate) enum Drive {
+    Static,
+    Replay(Vec<Keyframe>),
+    Mover,
+}
+
+pub(crate) enum Lat {
+    Hold,
+    Shift {
+        target: f64,
+        dur: f64,
+    },
+    /// Ease to `target` once agent `who` closes in from behind.
+    Away {
+        who: usize,
+        target: f64,
+        dur: f64,
+    },
+}
+
+pub(crate) enum StopGoal {
+    None,
+    /// Front bumper stops at this arc length.
+    Front(f64),
+    /// Queue behind agent (track index).
+    Behind(usize),
+    /// Centre stops at this arc length.
+    Centre(f64),
+}
+
+pub(crate) struct Actor {
+    pub drive: Drive,
+    /// Heading follows the path with bounded turning radius (vehicles, bicycles); otherwise
+    /// holonomic.
+    pub vehicle: bool,
+    pub hl: f64,
+    pub hw: f64,
+    pub radius: f64,
+    /// Smallest turning radius of the box centre, m (`crate::rollout::min_turn_radius`); vehicles only.
+    pub r_min: f64,
+    pub lim: Limits,
+    pub path: Path,
+    pub init: Pose,
+    pub s0: f64,
+    pub d0: f64,
+    pub v0: f64,
+    pub v_goal: f64,
+    pub v_hold: f64,
+    pub start: f64,
+    pub lateral: Lat,
+    pub stop: StopGoal,
+    pub info: TrackAgent,
+    /// An emergency vehicle (a kind in or derived from `EMERGENCY_KINDS`): cross traffic holds
+    /// for it.
+    pub emergency: bool,
+    /// The first junction on the route, if any.
+    pub junction: Option<Junction>,
+    /// Emergency vehicles (track indices) whose junction path crosses this agent's: while one
+    /// approaches or is inside the junction, this agent holds at its stop line.
+    pub yield_to: Vec<usize>,
+    /// Where a placed agent is declared (`None` for background traffic): E0204's and E0207's
+    /// label.
+    pub span: Option<crate::source::Span>,
+    /// A vehicle's `turn` goal: `check_turns` refuses a turn whose swept box leaves the road.
+    pub turn_goal: Option<Turn>,
+    /// Vehicles whose junction path crosses or merges into this one's (`assign_crossings`): who
+    /// enters the shared zone first is settled by the right-of-way rule (`Sim::gives_way`).
+    pub crossings: Vec<Crossing>,
+    /// A walker's `cross` goal: the arc length along its walk where its front reaches the road,
+    /// where it waits for a gap (`Sim::kerb_hold`); `None` for everyone else and for walkers in
+    /// a staged conflict.
+    pub kerb: Option<f64>,
+    /// One of the pair of a staged conflict: a latch may stop it dead, so followers keep the
+    /// gap to stop behind it at once (`Sim::drive`).
+    pub in_conflict: bool,
+    /// The lane from which its route enters its first junction (vehicles with `crossings`):
+    /// of those approaching through one lane, only the first can be next into the junction.
+    pub approach: Option<usize>,
+    /// A vehicle's sweep through its first junction (`assign_bends`).
+    pub bend: Option<std::sync::Arc<Bend>>,
+}
+
+/// The stretch that two vehicles' junction paths share, seen from one of them: route arc
+/// lengths of its box centre between which its box may touch the other's path.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Crossing {
+    pub other: usize,
+    /// This agent's zone on its own route: its centre from `enter` to `leave`.
+    pub enter: f64,
+    pub leave: f64,
+    /// The other agent's zone on the other's route.
+    pub other_enter: f64,
+    pub other_leave: f64,
+    /// Where the zone begins for each of the two before a sweep moved it back (`enter` and
+    /// `other_enter` start where one's sweep first reaches over the other's approach): where
+    /// their paths themselves come within reach of each other. Short of it one that can halt
+    /// is not inside (`Sim::zone_rank`).
+    pub meet: f64,
+    pub other_meet: f64,
+    /// Set where the two are placed too near their zones for either to stop short of its own
+    /// (`order_crossings`): `Some(true)` when this agent gives way, braking as hard as it may,
+    /// `Some(false)` when the other does; the rule's order otherwise.
+    pub placed_yield: Option<bool>,
+    /// One of the two is an emergency vehicle the other yields to (`Actor::yield_to`).
+    pub emergency: bool,
+    /// The two paths run on together here, the same way (a merge, a roundabout's ring), rather
+    /// than cross: one that has gone in ahead is followed, not waited out.
+    pub merge: bool,
+}
+
+impl Actor {
+    /// How far its front, at `st`, is short of where it halts for its junction (0.3 m before
+    /// the stop line, else the junction entry); `None` without a junction.
+    pub(crate) fn to_line(&self, st: &State) -> Option<f64> {
+        self.junction.map(|j| j.stop - 0.3 - (st.s + self.hl))
+    }
+
+    /// Whether one clearing a junction for an emergency vehicle goes on past this vehicle,
+    /// predicted to cross its way: it gives the junction to the emergency vehicle too (held at
+    /// its line, or clearing), or it is still outside its junction, where the right-of-way rule
+    /// holds it. Not one turning inside the junction that nothing holds: a car going straight to
+    /// clear for an ambulance drove into a U-turn's loop at 7 m/s.
+    pub(crate) fn cleared_past(&self, st: &State) -> bool {
+        self.vehicle && (!self.yield_to.is_empty() || self.to_line(st).is_none_or(|line| line > -0.05))
+    }
+
+    pub(crate) fn obb(&self, st: &State) -> Obb {
+        Obb { center: st.pos, yaw: st.yaw, length: 2.0 * self.hl, width: 2.0 * self.hw }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct State {
+    pub pos: DVec2,
+    pub yaw: f64,
+    pub v: f64,
+    /// Arc length along the route (of the box centre's projection, for vehicles).
+    pub s: f64,
+    /// Lateral offset the lateral goal asks for now (m, left of the route).
+    pub d: f64,
+    /// Lateral offset the agent is actually at; a vehicle steers toward `d` and lags it.
+    pub off: f64,
+    pub phase: f64,
+    pub triggered: bool,
+    pub stopped: bool,
+    pub frozen: bool,
+    /// Holding back for another agent under the right-of-way rule (at its stop line or short of
+    /// the shared zone) or at the kerb: waiting by choice, ready to go, not blocked.
+    pub give_way: bool,
+}
+
+/// A conflict with its agents as track indices.
+pub(crate) struct Conf {
+    pub index: usize,
+    pub af: usize,
+    pub st: usize,
+    pub c: crate::check::scenario::Conflict,
+}
+
+pub(crate) fn initial(a: &Actor) -> State {
+    let v = match a.drive {
+        Drive::Mover => a.v0,
+        _ => 0.0,
+    };
+    State {
+        pos: DVec2::new(a.init.x, a.init.y),
+        yaw: a.init.yaw,
+        v,
+        s: a.s0,
+        d: a.d0,
+        off: a.d0,
+        phase: 0.0,
+        triggered: false,
+        stopped: false,
+        frozen: false,
+        give_way: false,
+    }
+}

@@ -1,0 +1,8 @@
+//! Staged conflicts: the contact geometry and the choice of impact time (`plan`), the rollout's
+//! two passes that stage them (`passes`), the striker's intercept and the crash latch
+//! (`strike`), and why a staging is refused (`refusals`).
+
+pub(crate) mod passes;
+pub(crate) mod plan;
+pub(crate) mod refusals;
+pub(crate) mod strike;

@@ -1,0 +1,174 @@
+//! The rollout's passes: set up, pass 1 (everyone's natural motion), the staging plans chosen
+//! from it, pass 2 (the strikers on their intercepts), planned again where a staging fails.
+
+use crate::diag::Diagnostic;
+use crate::geom::Obb;
+use crate::place::Placed;
+use crate::road::Map;
+use crate::rollout::Tracks;
+use crate::rollout::agent::{Actor, Conf, State, initial};
+use crate::rollout::frame::{Sim, empty_tracks};
+use crate::rollout::junction::dry_run::assign_bends;
+use crate::rollout::junction::order::order_crossings;
+use crate::rollout::junction::zones::{assign_crossings, assign_yields};
+use crate::rollout::setup::{Routes, background_actor, build_actor, face_the_striker};
+use crate::rollout::staging::plan;
+use crate::rollout::staging::plan::Plan;
+use crate::rollout::staging::refusals::{forced_braking, forced_error, staging_errors, stopped_dead};
+use crate::rollout::traffic;
+use crate::rollout::turn_check::check_turns;
+use crate::sample::Concrete;
+
+pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Vec<Diagnostic>> {
+    // Concrete agent index -> track index.
+    let mut track_of = vec![None; c.agents.len()];
+    for (i, p) in placed.agents.iter().enumerate() {
+        if let Some(src) = p.source
+            && src < track_of.len()
+            && track_of[src].is_none()
+        {
+            track_of[src] = Some(i);
+        }
+    }
+    let mut errs = vec![];
+    // One resampling per distinct route (start lane, turn), shared by every agent on it.
+    let mut routes = Routes::new();
+    let mut actors: Vec<Actor> =
+        placed.agents.iter().map(|p| build_actor(c, map, p, &track_of, &mut routes, &mut errs)).collect();
+    if !errs.is_empty() {
+        return Err(errs);
+    }
+    if let Some(t) = c.traffic {
+        let boxes: Vec<(Obb, f64)> = actors.iter().map(|a| (a.obb(&initial(a)), initial(a).v)).collect();
+        for s in traffic::spawn(map, &boxes, t, c.seed) {
+            actors.push(background_actor(map, s, c.duration, &mut routes));
+        }
+    }
+    let mut confs = vec![];
+    for (index, k) in c.conflicts.iter().enumerate() {
+        let (Some(Some(af)), Some(Some(st))) = (track_of.get(k.at_fault), track_of.get(k.struck)) else { continue };
+        // An agent strikes once: a second conflict naming the same at-fault agent is not staged.
+        if af == st || confs.iter().any(|x: &Conf| x.af == *af) {
+            continue;
+        }
+        confs.push(Conf { index, af: *af, st: *st, c: k.clone() });
+    }
+    for k in &confs {
+        face_the_striker(&mut actors, k);
+    }
+    let frames = c.frame_count();
+    let dt = if c.rate > 0.0 { 1.0 / c.rate } else { 0.1 };
+    assign_bends(map, &mut actors, dt);
+    assign_yields(map, &mut actors, &confs);
+    assign_crossings(map, &mut actors, &confs);
+    order_crossings(&mut actors, &mut errs);
+    if !errs.is_empty() {
+        return Err(errs);
+    }
+    let mut out = empty_tracks(&actors, c.rate, frames);
+    if confs.is_empty() {
+        Sim::new(&actors, &confs, &[], None, dt).run(&mut out);
+    } else {
+        let mut pass1 = empty_tracks(&actors, c.rate, frames);
+        let mut states = Vec::with_capacity(frames);
+        Sim::new(&actors, &confs, &[], None, dt).keep_states(&mut states).run(&mut pass1);
+        // A staging that misses or lands elsewhere than asked, or that has the overlap safety
+        // net stop someone dead, is planned again away from the impact times tried (the plan
+        // nearest the request may be the one a bystander spoils), up to `RESTAGE` times. The
+        // first attempt that lands every crash as asked with everyone inside their limits is
+        // kept; if none does, the first attempt (the plans nearest the request) stands: its
+        // tracks, or its errors.
+        let mut avoid: Vec<Vec<f64>> = vec![Vec::new(); confs.len()];
+        // The first attempt's tracks (only where they are the answer should nothing do
+        // better: its crashes landed) and its errors.
+        let (mut first_tracks, mut first_failed, mut first_hard, mut first_forced) = (None, Vec::new(), None, None);
+        let mut plans: Vec<Option<Plan>> =
+            confs.iter().map(|k| plan::choose(k, &actors, &pass1, dt, c.duration, &[])).collect();
+        for attempt in 0..=RESTAGE {
+            // Pass 2 is pass 1 until a planned striker departs or a planned pair first
+            // overlaps: those frames are copied, not simulated again.
+            let start = pass2_start(&actors, &confs, &plans, &states, dt);
+            out = empty_tracks(&actors, c.rate, frames);
+            let report =
+                Sim::new(&actors, &confs, &plans, Some(&pass1), dt).resume(&pass1, &states, start).run(&mut out);
+            let failed = staging_errors(&actors, &confs, &plans, &out, &report.blocked_by, (dt, frames, c.duration));
+            let forced = forced_braking(&actors, &confs, &plans, &out);
+            if failed.is_empty() && report.first_hard.is_none() && forced.is_none() {
+                break;
+            }
+            // Plan again the conflicts that failed; where none did, every one.
+            let redo: Vec<usize> =
+                if failed.is_empty() { (0..confs.len()).collect() } else { failed.iter().map(|f| f.0).collect() };
+            if attempt == 0 {
+                first_tracks = failed.is_empty().then(|| out.clone());
+                first_failed = failed;
+                first_hard = report.first_hard;
+                first_forced = forced;
+            }
+            let mut replanned = false;
+            if attempt < RESTAGE {
+                for ki in redo {
+                    let Some(tried) = plans[ki].as_ref().map(|p| p.t_impact) else { continue };
+                    avoid[ki].push(tried);
+                    if let Some(p) = plan::choose(&confs[ki], &actors, &pass1, dt, c.duration, &avoid[ki]) {
+                        plans[ki] = Some(p);
+                        replanned = true;
+                    }
+                }
+            }
+            if !replanned {
+                // Landed, but only with the safety net stopping one of a staged pair dead: the
+                // crash is not driven within the limits (a motorcycle striker's intercept ran
+                // through a car standing at its line, and it was stopped from 19.8 m/s).
+                let pair_stopped = first_hard.and_then(|(k, other, t)| {
+                    confs.iter().position(|c| c.af == k || c.st == k).map(|ki| (ki, k, other, t))
+                });
+                match (first_tracks, pair_stopped, first_forced) {
+                    (Some(_), Some((ki, k, other, t)), _) => errs.push(stopped_dead(&actors, &confs[ki], k, other, t)),
+                    (Some(_), None, Some(f)) => errs.push(forced_error(&actors, &confs, f)),
+                    (Some(tracks), None, None) => out = tracks,
+                    (None, ..) => {}
+                }
+                errs.extend(first_failed.into_iter().map(|(_, d)| d));
+                break;
+            }
+        }
+    }
+    check_turns(map, &actors, &confs, &out, &mut errs);
+    if !errs.is_empty() {
+        return Err(errs);
+    }
+    Ok(out)
+}
+
+/// How many times a staging that fails is planned again (`plan::choose` away from the impact
+/// times already tried) before E0205.
+pub(crate) const RESTAGE: usize = 3;
+
+/// The first frame at which pass 2 can differ from pass 1: the first whose step starts at or
+/// after a planned striker's departure (`Sim::step`), or an earlier one at which a planned pair
+/// overlaps (`Sim::latch` looks at those). Before it both passes run the same steps on the same
+/// states, so pass 2 resumes from pass 1's state there.
+pub(crate) fn pass2_start(
+    actors: &[Actor],
+    confs: &[Conf],
+    plans: &[Option<Plan>],
+    states: &[Vec<State>],
+    dt: f64,
+) -> usize {
+    let frames = states.len();
+    let mut start = frames.max(1);
+    for (k, plan) in confs.iter().zip(plans).filter_map(|(k, p)| p.as_ref().map(|p| (k, p))) {
+        // The same test as `Sim::step`, frame by frame, so the float comparison is the same one.
+        if let Some(f) = (1..frames).find(|&f| (f - 1) as f64 * dt >= plan.t_depart - 1e-9) {
+            start = start.min(f);
+        }
+        if let Some(f) = (1..start).find(|&f| {
+            let s = &states[f];
+            actors[k.af].obb(&s[k.af]).overlaps(&actors[k.st].obb(&s[k.st]))
+        }) {
+            start = start.min(f);
+        }
+    }
+    start
+}
