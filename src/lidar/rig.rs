@@ -295,9 +295,9 @@ mod tests {
     }
 
     #[test]
-    fn readme_sensor_table_matches_the_rig() {
-        // README "Frames" lists each sensor's published pose and where rocc puts it.
-        let readme = include_str!("../../README.md");
+    fn output_doc_sensor_table_matches_the_rig() {
+        // docs/output.md, "Frames", lists each sensor's published pose and where rocc puts it.
+        let doc = include_str!("../../docs/output.md");
         let rig = Rig::nuplan();
         let triple = |cell: &str| -> Vec<f64> {
             cell.trim()
@@ -307,7 +307,7 @@ mod tests {
                 .collect()
         };
         let mut rows = 0;
-        for line in readme.lines().filter(|l| l.starts_with("| ") && l.contains(") | (")) {
+        for line in doc.lines().filter(|l| l.starts_with("| ") && l.contains(") | (")) {
             let cells: Vec<&str> = line.split('|').collect();
             let id: usize = cells[1].split_whitespace().next().and_then(|v| v.parse().ok()).expect("sensor id");
             let s = &rig.sensors[id];

@@ -189,3 +189,17 @@ pub(crate) fn initial(a: &Actor) -> State {
         give_way: false,
     }
 }
+
+/// `Sim::zone_rank`'s answer.
+pub(crate) type Rank = Option<ZoneRank>;
+
+/// An agent's standing toward a zone it shares (`Sim::zone_rank`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct ZoneRank {
+    /// 0 inside, 1 too close to stop, 2 approaching, 3 stopped by anything but this rule.
+    pub order: u8,
+    /// Its time to the zone, s.
+    pub eta: f64,
+    /// How far its front may go while it holds, m.
+    pub rem: f64,
+}

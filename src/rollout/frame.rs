@@ -4,13 +4,13 @@
 
 use crate::place::Pose;
 use crate::rollout::Tracks;
+use crate::rollout::agent::Rank;
 use crate::rollout::agent::initial;
 use crate::rollout::agent::{Actor, Conf, Drive, Lat, State};
-use crate::rollout::drive::neighbours::{AlongIndexes, Near};
-use crate::rollout::junction::right_of_way::Rank;
+use crate::rollout::drive::index::{AlongIndexes, Near};
 use crate::rollout::kinematics::{replay, steer};
+use crate::rollout::path::Foot;
 use crate::rollout::staging::plan::Plan;
-use crate::rollout::staging::strike::COURSE_STEPS;
 use glam::DVec2;
 
 pub(crate) struct Sim<'a, 'b> {
@@ -55,7 +55,7 @@ pub(crate) struct Sim<'a, 'b> {
     /// The first move the overlap safety net undid at a speed the agent could not have braked
     /// from within its limits in one step: the agent stopped, the one it would have run into,
     /// and when.
-    pub(crate) first_hard: Option<(usize, usize, f64)>,
+    pub(crate) first_hard: Option<HardStop>,
     /// `overlap_pairs`' boxes and output, kept likewise.
     pub(crate) sweep: Vec<(DVec2, DVec2, usize)>,
     pub(crate) pairs: Vec<(usize, usize)>,
@@ -66,6 +66,9 @@ pub(crate) struct Sim<'a, 'b> {
     /// Frames `..first` of the output, copied by `run`.
     pub(crate) prefix: Option<&'b Tracks>,
 }
+
+/// At most this many steps of a striker's braking course (`Sim::braking_course`).
+pub(crate) const COURSE_STEPS: usize = 40;
 
 /// What the agents' steps may write while the frame's states are read: buffers kept for their
 /// allocations, and what strikers record of who held them back. Everything else a step reads is
@@ -79,7 +82,7 @@ pub(crate) struct Scratch {
     pub(crate) index: AlongIndexes,
     /// `candidates`' output, and `Path::frenet_near` of each.
     pub(crate) cand: Vec<usize>,
-    pub(crate) proj: Vec<(f64, f64, f64, DVec2)>,
+    pub(crate) proj: Vec<Foot<DVec2>>,
     /// A striker's braking course (`braking_course`).
     pub(crate) course: Vec<(f64, DVec2, f64)>,
     /// Per striker, each bystander that held it back at full speed: when first, and for how
@@ -100,13 +103,22 @@ impl Scratch {
     }
 }
 
+/// A move the overlap safety net undid at a speed the agent could not have braked from within its
+/// limits in one step: the agent stopped, the one it would have run into, and when.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct HardStop {
+    pub agent: usize,
+    pub other: usize,
+    pub t: f64,
+}
+
 /// What a run saw besides its tracks.
 pub(crate) struct Report {
     /// Per striker, the bystander that held it back longest at full speed, and from when.
     pub(crate) blocked_by: Vec<Option<(usize, f64)>>,
     /// The first move the overlap safety net undid beyond the mover's braking limit
     /// (`Sim::first_hard`).
-    pub(crate) first_hard: Option<(usize, usize, f64)>,
+    pub(crate) first_hard: Option<HardStop>,
 }
 
 pub(crate) fn empty_tracks(actors: &[Actor], rate: f64, frames: usize) -> Tracks {

@@ -2,7 +2,7 @@
 //! excepted), so the only overlaps in `Tracks` are staged crashes.
 
 use crate::rollout::agent::{Drive, State};
-use crate::rollout::frame::Sim;
+use crate::rollout::frame::{HardStop, Sim};
 use glam::DVec2;
 
 impl Sim<'_, '_> {
@@ -52,7 +52,7 @@ impl Sim<'_, '_> {
                     if matches!(self.actors[k].drive, Drive::Mover) && moved {
                         if self.cur[k].v > self.actors[k].lim.brake_max * self.dt + 1e-6 {
                             let other = if k == i { j } else { i };
-                            self.first_hard.get_or_insert((k, other, f as f64 * self.dt));
+                            self.first_hard.get_or_insert(HardStop { agent: k, other, t: f as f64 * self.dt });
                         }
                         self.next[k] = State { v: 0.0, ..self.cur[k] };
                         changed = true;

@@ -263,7 +263,7 @@ fn vehicle_route(
                             1.0 / k
                         ),
                         "a wider road (lane_width, median) or a smaller kind; rocc derives the turning radius \
-                         from the kind's length (see README, Rollout)",
+                         from the kind's length (see docs/rollout.md)",
                     );
                 }
             }

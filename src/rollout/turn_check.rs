@@ -6,6 +6,7 @@ use crate::geom::Obb;
 use crate::road::Map;
 use crate::rollout::Tracks;
 use crate::rollout::agent::{Actor, Conf};
+use crate::rollout::path::Foot;
 use crate::rollout::setup::turn_name;
 use glam::DVec2;
 
@@ -69,7 +70,7 @@ pub(crate) fn check_turns(map: &Map, actors: &[Actor], confs: &[Conf], out: &Tra
             if !(c.cmpge(lo).all() && c.cmple(hi).all()) {
                 continue;
             }
-            let (s, ..) = a.path.frenet(c, guess);
+            let Foot { s, .. } = a.path.frenet(c, guess);
             guess = s;
             let (v, cap) = (out.speeds[i][f], a.path.cap(s));
             if v - cap > over.0 {
@@ -96,7 +97,7 @@ pub(crate) fn check_turns(map: &Map, actors: &[Actor], confs: &[Conf], out: &Tra
             );
             let mut help = String::from(
                 "a wider road (lanes, lane_width, median, a roundabout's radius) or a smaller kind; long vehicles \
-                 need room to swing through a turn (see README, Rollout)",
+                 need room to swing through a turn (see docs/rollout.md)",
             );
             if over.0 > TURN_SPEED_SLACK {
                 message += &format!(", driving it at {:.1} m/s where it allows {:.1} m/s", over.1, over.2);

@@ -9,7 +9,7 @@
 //! own footprint symmetric about pixel 200 in the BEV, so we use the centre for every kind. The
 //! sensor poses of SPEC.md's LiDAR table (headed "origin in ego frame") are nuPlan's rear-axle
 //! values at axle height, not this frame: the rig file keeps them as published and its
-//! `mount.frame_origin` moves them here (`lidar::rig::Mount`; README "Frames").
+//! `mount.frame_origin` moves them here (`lidar::rig::Mount`; docs/output.md, "Frames").
 
 use crate::check::scenario::Class;
 use crate::geom::wrap_angle;

@@ -4,6 +4,7 @@
 //! step.
 
 pub(crate) mod follow;
+pub(crate) mod index;
 pub(crate) mod neighbours;
 pub(crate) mod pair;
 
@@ -14,6 +15,7 @@ use crate::rollout::drive::neighbours::Corridor;
 use crate::rollout::drive::pair::{Constraint, Step};
 use crate::rollout::frame::{Scratch, Sim};
 use crate::rollout::kinematics::{band_meets, look_ahead, pursuit, quintic, slip_tan, turn_toward};
+use crate::rollout::path::Foot;
 use glam::DVec2;
 
 /// Lateral clearance a walker keeps from another walking beside it, and how fast it steps aside
@@ -183,7 +185,7 @@ impl Sim<'_, '_> {
             Lat::Away { who, target, dur } => {
                 if active && !triggered {
                     let o = &self.cur[who];
-                    let (sk, lk, beyond, _) =
+                    let Foot { s: sk, d: lk, beyond, .. } =
                         a.path.frenet(o.pos, st.s + (o.pos - st.pos).dot(DVec2::from_angle(st.yaw)));
                     let behind = st.s - sk;
                     let closing = o.v - st.v;
@@ -334,7 +336,7 @@ impl Sim<'_, '_> {
         let aim = a.path.point_fast(st.s + l_d, d_look);
         let k = pursuit(st.pos, self.dirs[i], aim);
         let (pos, yaw) = self.advance(a, &st, k, adv, 1.0);
-        let (s, off, _, _) = a.path.frenet_dir(pos, st.s + adv);
+        let Foot { s, d: off, .. } = a.path.frenet_dir(pos, st.s + adv);
         State { pos, yaw, s, off, ..next }
     }
 
@@ -355,7 +357,7 @@ impl Sim<'_, '_> {
             if ahead < -(a.hl + b.hl + 1.0) || ahead > look {
                 continue;
             }
-            let (_, lj, beyond, h) = a.path.frenet(o.pos, st.s + ahead);
+            let Foot { d: lj, beyond, dir: h, .. } = a.path.frenet(o.pos, st.s + ahead);
             if beyond > 0.5 {
                 continue;
             }

@@ -12,6 +12,7 @@ use crate::rollout::frame::Sim;
 use crate::rollout::junction::bend::{SLICE_MARGIN, SWEEP_MARGIN};
 use crate::rollout::junction::dry_run::swing;
 use crate::rollout::kinematics::{band_front, band_meets};
+use crate::rollout::path::Foot;
 use glam::DVec2;
 
 /// Agent `i`'s step as the pair loop reads it: settled before the loop, read-only in it.
@@ -124,9 +125,9 @@ impl Constraint {
 }
 
 impl Sim<'_, '_> {
-    /// What agent `j`, its centre at arc length `sj`, offset `lj`, `beyond` the ends of our route
-    /// whose tangent there is `th` (`Path::frenet_near`), asks of our step `s`.
-    pub(crate) fn constraint(&self, s: &Step, j: usize, (sj, lj, beyond, th): (f64, f64, f64, DVec2)) -> Constraint {
+    /// What agent `j`, its centre at `at` on our route (`Path::frenet_near`), asks of our step `s`.
+    pub(crate) fn constraint(&self, s: &Step, j: usize, at: Foot<DVec2>) -> Constraint {
+        let Foot { s: sj, d: lj, beyond, dir: th } = at;
         let Step { a, st, look, named, .. } = *s;
         let (o, b) = (&self.cur[j], &self.actors[j]);
         // cos and sin of the other's heading relative to the path's.
@@ -357,7 +358,7 @@ impl Sim<'_, '_> {
             if !way.in_cur {
                 let fwd = DVec2::from_angle(st.yaw);
                 for q in b.obb(o).corners() {
-                    let (sq, dq, beyond, _) = a.path.frenet_dir(q, st.s + (q - st.pos).dot(fwd));
+                    let Foot { s: sq, d: dq, beyond, .. } = a.path.frenet_dir(q, st.s + (q - st.pos).dot(fwd));
                     let ahead = sq - st.s - a.hl;
                     if beyond <= 0.0 && dq > way.band_lo && dq < way.band_hi && ahead > 0.0 {
                         way.gap = if way.in_cur { way.gap.min(ahead) } else { ahead };

@@ -7,7 +7,7 @@ use crate::road::route::Junction;
 use crate::rollout::agent::Actor;
 use crate::rollout::junction::bend::Bend;
 use crate::rollout::kinematics::{look_ahead, pursuit, steer};
-use crate::rollout::path::Path;
+use crate::rollout::path::{Foot, Path};
 use glam::DVec2;
 
 /// The least reach beyond the band a junction sweep's slice is kept for (`Bend::slices`), m:
@@ -106,7 +106,7 @@ impl DryRun {
         let dist = v * dt;
         (self.pos, self.yaw) = steer(a, self.pos, self.yaw, k, dist, dt, 1.0);
         let (pos, yaw, fwd) = (self.pos, self.yaw, self.fwd);
-        let [(s, off, _)] = a.path.frenet_many([pos], [self.s + dist]);
+        let [Foot { s, d: off, .. }] = a.path.frenet_many([pos], [self.s + dist]);
         self.s = s;
         let dir = DVec2::from_angle(yaw);
         let corners = Obb { center: pos, yaw, length: 2.0 * a.hl, width: 2.0 * a.hw }.corners_along(dir);
@@ -116,7 +116,7 @@ impl DryRun {
         if b.poses.last().is_none_or(|q| s > q.0) {
             b.poses.push((s, pos, yaw));
         }
-        for (sq, dq, beyond) in found {
+        for Foot { s: sq, d: dq, beyond, .. } in found {
             if beyond > 0.0 || dq.abs() <= a.hw {
                 continue;
             }

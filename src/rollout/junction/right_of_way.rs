@@ -2,8 +2,10 @@
 //! whom, who holds for an emergency vehicle, and when a walker waits at the kerb.
 
 use crate::rollout::agent::{Crossing, Drive, State, StopGoal};
+use crate::rollout::agent::{Rank, ZoneRank};
 use crate::rollout::frame::Sim;
 use crate::rollout::kinematics::can_stop;
+use crate::rollout::path::Foot;
 use glam::DVec2;
 
 /// How far ahead of an emergency vehicle the junction is cleared: this many seconds at its
@@ -17,9 +19,6 @@ pub(crate) const YIELD_BRAKE: f64 = 0.75;
 /// Time margin by which a vehicle with the right of way must have left a shared zone before
 /// one giving way to it arrives there for that one not to hold, s.
 pub(crate) const CLEAR_MARGIN_S: f64 = 1.0;
-
-/// `Sim::zone_rank`'s answer.
-pub(crate) type Rank = Option<(u8, f64, f64)>;
 
 impl Sim<'_, '_> {
     /// The right-of-way rule for agent `i`: how far its front may still go (to its stop line, or
@@ -47,7 +46,7 @@ impl Sim<'_, '_> {
     /// close to stop, 2 approaching, 3 stopped by anything but this rule) and its time to the
     /// zone; `None` once it has left the zone, or when it means to stop short of it. Also how
     /// far its front may go while it holds (stop line, else short of the zone).
-    pub(crate) fn zone_rank(&self, i: usize, enter: f64, meet: f64, leave: f64, t: f64) -> Option<(u8, f64, f64)> {
+    pub(crate) fn zone_rank(&self, i: usize, enter: f64, meet: f64, leave: f64, t: f64) -> Rank {
         let (a, st) = (&self.actors[i], &self.cur[i]);
         if st.s > leave || st.frozen || st.stopped {
             return None;
@@ -69,12 +68,12 @@ impl Sim<'_, '_> {
         // of the bus's swinging tail, counted as inside, set off and met the tail.
         let rem = if st.s >= enter && st.s < meet { rem.max(0.0) } else { rem };
         if st.s >= meet || (st.s >= enter && !can_stop(st.v, rem, a.lim.brake_max)) || self.striking(i, t) {
-            return Some((0, 0.0, rem));
+            return Some(ZoneRank { order: 0, eta: 0.0, rem });
         }
         // Giving way may take up to the emergency braking: within the limits, and it leaves the
         // fewest pairs where neither can stop (both then go, and only the safety net is left).
         if !can_stop(st.v, rem, a.lim.brake_max) {
-            return Some((1, 0.0, rem));
+            return Some(ZoneRank { order: 1, eta: 0.0, rem });
         }
         let dist = (enter - st.s).max(0.0);
         let acc = a.lim.accel;
@@ -83,7 +82,7 @@ impl Sim<'_, '_> {
         // behind another approaching the junction: not coming next.
         let not_next = (st.v < 0.3 && !st.give_way) || self.yielding[i].0.is_some() || self.behind[i];
         let rank = if not_next { 3 } else { 2 };
-        Some((rank, eta, rem.max(0.0)))
+        Some(ZoneRank { order: rank, eta, rem: rem.max(0.0) })
     }
 
     /// `zone_rank(i, enter, meet, leave, t)`, taken once per frame for each of `i`'s crossings (the
@@ -164,8 +163,9 @@ impl Sim<'_, '_> {
         if c.emergency && !(self.actors[i].emergency && self.yielding[c.other].1) {
             return None;
         }
-        let (ri, ei, rem) = self.rank(ranks, i, c.enter, c.meet, c.leave, t)?;
-        let (rj, ej, _) = self.rank(ranks, c.other, c.other_enter, c.other_meet, c.other_leave, t)?;
+        let ZoneRank { order: ri, eta: ei, rem } = self.rank(ranks, i, c.enter, c.meet, c.leave, t)?;
+        let ZoneRank { order: rj, eta: ej, .. } =
+            self.rank(ranks, c.other, c.other_enter, c.other_meet, c.other_leave, t)?;
         // Placed with one order only (`order_crossings`): it holds till the other has left.
         if let Some(yields) = c.placed_yield {
             return yields.then_some(rem);
@@ -270,7 +270,7 @@ impl Sim<'_, '_> {
                 return false;
             }
             let fwd = DVec2::from_angle(o.yaw);
-            let (sj, lj, beyond, _) = b.path.frenet(mid, o.s + (mid - o.pos).dot(fwd));
+            let Foot { s: sj, d: lj, beyond, .. } = b.path.frenet(mid, o.s + (mid - o.pos).dot(fwd));
             let ahead = sj - o.s;
             if beyond > 0.5 || lj.abs() > half + b.hw + clear || ahead < -(b.hl + clear) {
                 return false;
@@ -283,7 +283,7 @@ impl Sim<'_, '_> {
             // It could not stop: wait only if it would pass while we are in its lane (its path
             // meets our walk at `s_x`), with a second's margin either side.
             let (x, _) = b.path.point(sj, 0.0);
-            let (s_x, _, _, _) = a.path.frenet(x, s_mid);
+            let Foot { s: s_x, .. } = a.path.frenet(x, s_mid);
             let lane = b.hw + clear;
             let t_in = (s_x - lane - (st.s + a.hl)).max(0.0) / walk;
             let t_out = (s_x + lane - (st.s - a.hl)).max(0.0) / walk;

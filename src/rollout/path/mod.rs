@@ -35,6 +35,17 @@ pub struct Path {
     run: Vec<(u32, u32)>,
 }
 
+/// Where a point lies in a path's frame (`Path::frenet` and its kin): the arc length of its foot,
+/// its offset to the left, how far beyond either end of the path it lies (0 alongside it), and the
+/// path's direction at the foot (`T`: the heading angle, the unit tangent, or nothing).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Foot<T> {
+    pub s: f64,
+    pub d: f64,
+    pub beyond: f64,
+    pub dir: T,
+}
+
 /// A straight stretch of a path: on it, `Path::frenet_dir` from a guess inside the stretch ends
 /// (to float noise) at the point's projection onto the line, so pair checks can bound an agent's
 /// path coordinates without running it.
@@ -263,24 +274,23 @@ impl Path {
     /// tangent (O(1), good near the guess), how far beyond either end `p` lies, and the path
     /// heading there.
     #[inline]
-    pub fn frenet(&self, p: DVec2, guess: f64) -> (f64, f64, f64, f64) {
-        let (s, off, beyond, _) = self.frenet_dir(p, guess);
+    pub fn frenet(&self, p: DVec2, guess: f64) -> Foot<f64> {
+        let Foot { s, d, beyond, .. } = self.frenet_dir(p, guess);
         let (i, u) = self.locate(s);
         let h = self.head(i) + wrap_angle(self.head(i + 1) - self.head(i)) * u;
-        (s, off, beyond, h)
+        Foot { s, d, beyond, dir: h }
     }
 
     /// `frenet` with the path's unit tangent instead of its heading angle (no trigonometry).
     #[inline]
-    pub fn frenet_dir(&self, p: DVec2, guess: f64) -> (f64, f64, f64, DVec2) {
-        let (s, off, beyond, t, _) = self.newton(p, guess);
-        (s, off, beyond, t)
+    pub fn frenet_dir(&self, p: DVec2, guess: f64) -> Foot<DVec2> {
+        self.newton(p, guess).0
     }
 
     /// `frenet_dir`, and how far `p` still lies along the tangent from the point found (about
     /// zero once the steps have settled).
     #[inline]
-    fn newton(&self, p: DVec2, guess: f64) -> (f64, f64, f64, DVec2, f64) {
+    fn newton(&self, p: DVec2, guess: f64) -> (Foot<DVec2>, f64) {
         let len = self.length();
         let mut s = guess.clamp(0.0, len);
         let mut along = 0.0;
@@ -298,7 +308,7 @@ impl Path {
         let off = p - q;
         let beyond = if s <= 0.0 || s >= len { along.abs().min(off.dot(t).abs()) } else { 0.0 };
         let unit = t.normalize_or(DVec2::X);
-        (s, off.dot(t.perp()), beyond, unit, off.dot(unit))
+        (Foot { s, d: off.dot(t.perp()), beyond, dir: unit }, off.dot(unit))
     }
 
     /// `frenet_dir`, unless its Newton steps have not settled (`p` still more than a metre
@@ -309,17 +319,9 @@ impl Path {
     /// nearest. A car standing inside our loop lies beside the leg we are on and ahead on the
     /// leg coming back: the one ahead is the one to brake for.
     #[inline]
-    pub fn frenet_near(
-        &self,
-        p: DVec2,
-        guess: f64,
-        window: (f64, f64),
-        ahead: f64,
-        reach: f64,
-    ) -> (f64, f64, f64, DVec2) {
-        let (s, lat, beyond, t, rest) = self.newton(p, guess);
-        let found = (s, lat, beyond, t);
-        if beyond > 0.0 || rest.abs() <= 1.0 {
+    pub fn frenet_near(&self, p: DVec2, guess: f64, window: (f64, f64), ahead: f64, reach: f64) -> Foot<DVec2> {
+        let (found, rest) = self.newton(p, guess);
+        if found.beyond > 0.0 || rest.abs() <= 1.0 {
             return found;
         }
         self.feet(p, found, window, ahead, reach)
@@ -329,14 +331,7 @@ impl Path {
     /// stays as lean as `frenet_dir`.
     #[cold]
     #[inline(never)]
-    fn feet(
-        &self,
-        p: DVec2,
-        found: (f64, f64, f64, DVec2),
-        (from, to): (f64, f64),
-        ahead: f64,
-        reach: f64,
-    ) -> (f64, f64, f64, DVec2) {
+    fn feet(&self, p: DVec2, found: Foot<DVec2>, (from, to): (f64, f64), ahead: f64, reach: f64) -> Foot<DVec2> {
         let (from, to) = (from.max(0.0), to.min(self.length()));
         if to - from < STEP {
             return found;
@@ -353,16 +348,16 @@ impl Path {
         // Feet are (arc length, left offset, along the tangent, unit tangent), taken in order of
         // arc length: the first within reach at or past `ahead`, the first within reach, and
         // the nearest.
-        type Foot = (f64, f64, f64, DVec2);
-        let (mut first_ahead, mut first, mut nearest): (Option<Foot>, Option<Foot>, Option<Foot>) = (None, None, None);
-        let mut take = |cand: Foot| {
+        type Cand = (f64, f64, f64, DVec2);
+        let (mut first_ahead, mut first, mut nearest): (Option<Cand>, Option<Cand>, Option<Cand>) = (None, None, None);
+        let mut take = |cand: Cand| {
             if cand.1.abs() <= reach {
                 if cand.0 >= ahead {
                     first_ahead.get_or_insert(cand);
                 }
                 first.get_or_insert(cand);
             }
-            let dist = |c: &Foot| c.1.hypot(c.2);
+            let dist = |c: &Cand| c.1.hypot(c.2);
             if nearest.as_ref().is_none_or(|b| dist(&cand) < dist(b)) {
                 nearest = Some(cand);
             }
@@ -390,7 +385,7 @@ impl Path {
                 // An end of the stretch that is not an end of the path is no foot: `p` lies
                 // beyond it as it would beyond the path's.
                 let end = (s <= from && along < 0.0) || (s >= to && along > 0.0);
-                (s, lat, if end { along.abs() } else { 0.0 }, t)
+                Foot { s, d: lat, beyond: if end { along.abs() } else { 0.0 }, dir: t }
             }
             None => found,
         }
@@ -401,7 +396,7 @@ impl Path {
     /// takes the steps `frenet_dir` takes on the same values (one that has converged waits,
     /// its step's result dropped), so each result is `frenet_dir`'s, bit for bit.
     #[inline]
-    pub fn frenet_many<const N: usize>(&self, ps: [DVec2; N], guesses: [f64; N]) -> [(f64, f64, f64); N] {
+    pub fn frenet_many<const N: usize>(&self, ps: [DVec2; N], guesses: [f64; N]) -> [Foot<()>; N] {
         let len = self.length();
         let mut s = guesses.map(|g| g.clamp(0.0, len));
         let mut along = [0.0; N];
@@ -424,7 +419,7 @@ impl Path {
             let (q, t) = self.at_vec(s[k]);
             let off = ps[k] - q;
             let beyond = if s[k] <= 0.0 || s[k] >= len { along[k].abs().min(off.dot(t).abs()) } else { 0.0 };
-            (s[k], off.dot(t.perp()), beyond)
+            Foot { s: s[k], d: off.dot(t.perp()), beyond, dir: () }
         })
     }
 
@@ -491,7 +486,7 @@ mod tests {
         assert!((q.length() - r).abs() < 0.05);
         assert!((wrap_angle(h - (q.y.atan2(q.x) + std::f64::consts::FRAC_PI_2))).abs() < 0.02);
         assert!((p.curvature(10.0) - 1.0 / r).abs() < 0.005);
-        let (s, d, beyond, _) = p.frenet(q + DVec2::from_angle(h).perp() * 1.5, 6.0);
+        let Foot { s, d, beyond, .. } = p.frenet(q + DVec2::from_angle(h).perp() * 1.5, 6.0);
         assert!((s - 10.0).abs() < 0.05 && (d - 1.5).abs() < 0.05 && beyond == 0.0, "{s} {d}");
     }
 
@@ -507,17 +502,17 @@ mod tests {
         pts.extend((0..=40).map(|k| DVec2::new(-r, -k as f64)));
         let p = Path::new(&pts);
         let len = p.length();
-        let resid = |q: DVec2, (s, _, _, t): (f64, f64, f64, DVec2)| (q - p.at_vec(s).0).dot(t).abs();
+        let resid = |q: DVec2, f: Foot<DVec2>| (q - p.at_vec(f.s).0).dot(f.dir).abs();
         let far = DVec2::new(0.5, 20.0);
         let mut unsettled = 0;
         for k in 0..80 {
             let guess = 30.0 + k as f64 * 0.2;
             let newton = p.frenet_dir(far, guess);
-            unsettled += usize::from(newton.2 == 0.0 && resid(far, newton) > 1.0);
+            unsettled += usize::from(newton.beyond == 0.0 && resid(far, newton) > 1.0);
             let near = p.frenet_near(far, guess, (guess - 20.0, guess + 40.0), guess, 8.0);
             assert!(resid(far, near) < 0.05, "from {guess}: {near:?}");
             // None within reach: the nearest foot, the loop's apex 17.5 m below.
-            assert!(near.2 == 0.0 && (near.1.abs() - 17.5).abs() < 0.2, "from {guess}: {near:?}");
+            assert!(near.beyond == 0.0 && (near.d.abs() - 17.5).abs() < 0.2, "from {guess}: {near:?}");
         }
         assert!(unsettled > 0, "no guess leaves Newton unsettled: the fallback is not exercised");
         // Between the legs, 5 m below the loop, seen from 2 m further up the leg coming in: the
@@ -534,7 +529,7 @@ mod tests {
             }
             unsettled += 1;
             let foot = p.frenet_near(mid, guess, (at - 10.0, at + 30.0), at, 8.0);
-            assert!(foot.0 > out_leg && foot.0 < len && (foot.1.abs() - r).abs() < 0.05, "from {guess}: {foot:?}");
+            assert!(foot.s > out_leg && foot.s < len && (foot.d.abs() - r).abs() < 0.05, "from {guess}: {foot:?}");
         }
         assert!(unsettled > 0, "no guess leaves Newton unsettled between the legs");
     }
@@ -550,7 +545,7 @@ mod tests {
         let _longer = shared.path(1e9);
         let p = shared.path(70.0);
         assert!(p.cut > 0 && p.cut < p.len(), "reads shared and own samples");
-        let bits = |(s, d, b): (f64, f64, f64)| [s.to_bits(), d.to_bits(), b.to_bits()];
+        let bits = |f: Foot<()>| [f.s.to_bits(), f.d.to_bits(), f.beyond.to_bits()];
         let mut n = 0;
         for k in 0..600 {
             let along = k as f64 * 0.137 - 8.0;
@@ -561,9 +556,9 @@ mod tests {
             let guesses: [f64; 4] = std::array::from_fn(|c| along + ((k * 5 + c * 3) % 17) as f64 - 8.0);
             let many = p.frenet_many(ps, guesses);
             for c in 0..4 {
-                let (s, d, b, _) = p.frenet_dir(ps[c], guesses[c]);
-                assert_eq!(bits(many[c]), bits((s, d, b)), "{:?} from {}", ps[c], guesses[c]);
-                n += usize::from(b > 0.0);
+                let Foot { s, d, beyond, .. } = p.frenet_dir(ps[c], guesses[c]);
+                assert_eq!(bits(many[c]), bits(Foot { s, d, beyond, dir: () }), "{:?} from {}", ps[c], guesses[c]);
+                n += usize::from(beyond > 0.0);
             }
         }
         assert!(n > 50, "points beyond the ends are covered: {n}");
@@ -642,7 +637,7 @@ mod tests {
             if s_line <= ln.lo || s_line >= ln.hi {
                 continue;
             }
-            let (s, l, beyond, t) = p.frenet_dir(q, guess);
+            let Foot { s, d: l, beyond, dir: t } = p.frenet_dir(q, guess);
             assert_eq!(beyond, 0.0);
             worst = worst.max((s - s_line).abs()).max((l - l_line).abs()).max((t - ln.dir).length());
         }

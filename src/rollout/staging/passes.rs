@@ -7,7 +7,7 @@ use crate::place::Placed;
 use crate::road::Map;
 use crate::rollout::Tracks;
 use crate::rollout::agent::{Actor, Conf, State, initial};
-use crate::rollout::frame::{Sim, empty_tracks};
+use crate::rollout::frame::{HardStop, Sim, empty_tracks};
 use crate::rollout::junction::dry_run::assign_bends;
 use crate::rollout::junction::order::order_crossings;
 use crate::rollout::junction::zones::{assign_crossings, assign_yields};
@@ -120,7 +120,7 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
                 // Landed, but only with the safety net stopping one of a staged pair dead: the
                 // crash is not driven within the limits (a motorcycle striker's intercept ran
                 // through a car standing at its line, and it was stopped from 19.8 m/s).
-                let pair_stopped = first_hard.and_then(|(k, other, t)| {
+                let pair_stopped = first_hard.and_then(|HardStop { agent: k, other, t }| {
                     confs.iter().position(|c| c.af == k || c.st == k).map(|ki| (ki, k, other, t))
                 });
                 match (first_tracks, pair_stopped, first_forced) {

@@ -18,24 +18,18 @@ pub(crate) const FORCED_NEAR_M: f64 = 1.0;
 /// ahead of a car, one swerving into a lane that a motorcycle is setting off in), measured on
 /// the tracks. The first frame at which an agent's speed falls faster than its `brake_max`
 /// while its box is within `FORCED_NEAR_M` of another's, either of the two a striker (the pair
-/// up to their latched frame, where the crash stops them dead): the conflict, the braking
-/// agent, the other, the time and the deceleration.
-pub(crate) fn forced_braking(
-    actors: &[Actor],
-    confs: &[Conf],
-    plans: &[Option<Plan>],
-    out: &Tracks,
-) -> Option<(usize, usize, usize, f64, f64)> {
+/// up to their latched frame, where the crash stops them dead).
+pub(crate) fn forced_braking(actors: &[Actor], confs: &[Conf], plans: &[Option<Plan>], out: &Tracks) -> Option<Forced> {
     let dt = 1.0 / out.rate;
     let staged = |k: usize| confs.iter().zip(plans).position(|(c, p)| p.is_some() && c.af == k);
     let bx = |k: usize, f: usize| {
         let (p, s) = (out.poses[k][f], out.agents[k].size);
         Obb { center: DVec2::new(p.x, p.y), yaw: p.yaw, length: s[0], width: s[1] }.grown(0.5 * FORCED_NEAR_M)
     };
-    let mut first: Option<(usize, usize, usize, f64, f64)> = None;
+    let mut first: Option<Forced> = None;
     for (i, a) in actors.iter().enumerate() {
         let end = out.impacts.iter().filter(|r| r.at_fault == i || r.struck == i).map(|r| r.frame).min();
-        let end = end.unwrap_or(out.frames).min(first.map_or(out.frames, |f| (f.3 / dt).round() as usize));
+        let end = end.unwrap_or(out.frames).min(first.map_or(out.frames, |f| (f.t / dt).round() as usize));
         for f in 1..end {
             let acc = (out.speeds[i][f] - out.speeds[i][f - 1]) / dt;
             if acc >= -a.lim.brake_max - 1e-6 {
@@ -46,7 +40,7 @@ pub(crate) fn forced_braking(
                 [f - 1, f].iter().any(|&g| bx(i, g).overlaps(&bx(k, g))).then_some((ki, k))
             });
             if let Some((ki, k)) = near {
-                first = Some((ki, i, k, f as f64 * dt, acc));
+                first = Some(Forced { conflict: ki, agent: i, other: k, t: f as f64 * dt, acc });
                 break;
             }
         }
@@ -54,12 +48,24 @@ pub(crate) fn forced_braking(
     first
 }
 
+/// Someone braking beyond their limit for a staged crash (`forced_braking`): the conflict (index
+/// into `confs`), the braking agent, the other (one of the two a striker), when, and the
+/// deceleration (m/s2, negative).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Forced {
+    pub conflict: usize,
+    pub agent: usize,
+    pub other: usize,
+    pub t: f64,
+    pub acc: f64,
+}
+
 /// E0205 for a staging whose every plan makes someone brake beyond their limit for the crash
 /// (`forced_braking`).
 pub(crate) fn forced_error(
     actors: &[Actor],
     confs: &[Conf],
-    (ki, x, y, t, acc): (usize, usize, usize, f64, f64),
+    Forced { conflict: ki, agent: x, other: y, t, acc }: Forced,
 ) -> Diagnostic {
     let k = &confs[ki];
     let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
@@ -246,7 +252,9 @@ mod tests {
             };
             forced_braking(&actors, &confs, &[Some(plan)], &out).map(|f| (f, forced_error(&actors, &confs, f)))
         };
-        let Some(((k, who, by, t, acc), d)) = case(1.5, 0.5) else { panic!("15 m/s2 beside the striker passed") };
+        let Some((Forced { conflict: k, agent: who, other: by, t, acc }, d)) = case(1.5, 0.5) else {
+            panic!("15 m/s2 beside the striker passed")
+        };
         assert_eq!((k, who, by), (0, 1, 0));
         assert!((t - 0.5).abs() < 1e-9 && (acc + 15.0).abs() < 1e-6, "{t} {acc}");
         assert_eq!(d.code, "E0205");

@@ -5,7 +5,7 @@ use crate::geom::{Obb, wrap_angle};
 use crate::place::Pose;
 use crate::rollout::agent::State;
 use crate::rollout::drive::follow::SAFE_MARGIN;
-use crate::rollout::frame::{Scratch, Sim};
+use crate::rollout::frame::{COURSE_STEPS, Scratch, Sim};
 use crate::rollout::kinematics::pursuit;
 use crate::rollout::path::Hermite;
 use crate::rollout::staging::plan;
@@ -23,9 +23,6 @@ pub(crate) struct Trial {
     pub left: f64,
     pub goal: (DVec2, f64),
 }
-
-/// At most this many steps of a striker's braking course (`Sim::braking_course`).
-pub(crate) const COURSE_STEPS: usize = 40;
 
 impl Sim<'_, '_> {
     /// The partner of agent `j` in a staged conflict whose striker has set off and not yet
