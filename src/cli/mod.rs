@@ -101,7 +101,7 @@ pub fn stdout_write(args: std::fmt::Arguments) -> Result<(), Failure> {
     }
 }
 
-/// Write `bytes` to `path` atomically (`rocc::files::write_atomic`).
+/// Write `bytes` to `path` atomically (`rocc::fsio::write_atomic`).
 pub fn write_file(path: &Path, bytes: &[u8]) -> std::io::Result<u64> {
-    rocc::files::write_atomic(path, |w| std::io::Write::write_all(w, bytes))
+    rocc::fsio::write_atomic(path, |w| std::io::Write::write_all(w, bytes))
 }

@@ -268,7 +268,7 @@ pub fn edit_clip(dir: &Path, edits: &[Edit], o: &ClipEdit) -> Result<Manifest, V
             "pass `--scenario FILE` when the clip was compiled elsewhere",
         )
     })?;
-    if crate::files::input_hash(&bytes) != manifest.input_hash {
+    if crate::fsio::input_hash(&bytes) != manifest.input_hash {
         return Err(clip_err(
             dir,
             format!("`{}` changed since the clip was compiled", input.display()),

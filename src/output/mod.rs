@@ -1,7 +1,7 @@
 //! Output writers. In: a `Bev`, per-frame `EgoBox`es, run metadata and a destination directory
 //! (`OUT/<scenario>/<ego>/`). Out: `bev/NNNNNN.npz`, `preview/bev.png`, `boxes.json` and
 //! `manifest.json` laid out as SPEC.md "Output layout of `rocc compile`" says, each written
-//! through `files::write_atomic`. The readers of these files (`read_npz`, `read_boxes_json`) sit
+//! through `fsio::write_atomic`. The readers of these files (`read_npz`, `read_boxes_json`) sit
 //! beside their writers, so each format is defined once.
 
 mod anim;
@@ -13,9 +13,9 @@ pub use paint::{CHANNEL_COLOURS, SIDE as PREVIEW_SIDE, STRUCTURE_COLOUR, paint_b
 pub use preview::{render_preview, write_preview_png};
 
 /// A temporary of an interrupted write, as found in an output directory.
-pub use crate::files::is_atomic_tmp;
+pub use crate::fsio::is_atomic_tmp;
 
-use crate::files::{input_hash, write_atomic};
+use crate::fsio::{input_hash, write_atomic};
 
 use crate::check::scenario::Class;
 use crate::raster::Bev;
