@@ -278,7 +278,7 @@ pub fn occ_frame_path(dir: &Path, frame: usize) -> PathBuf {
 
 /// Write labels as an uncompressed `.npy` (uint8, C order, (400, 400, 32)), atomically.
 pub fn write_npy(path: &Path, occ: &Occupancy) -> io::Result<u64> {
-    crate::output::write_atomic(path, |w| occ.labels.write_npy(w).map_err(|e| io::Error::other(format!("npy: {e}"))))
+    crate::fsio::write_atomic(path, |w| occ.labels.write_npy(w).map_err(|e| io::Error::other(format!("npy: {e}"))))
 }
 
 /// Read an occupancy `.npy` back (any uint8 (400, 400, 32) array, e.g. nuPlan-Occ's dense form).

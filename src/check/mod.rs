@@ -2,8 +2,10 @@
 //! Out: `scenario::Scenario` — names resolved, units converted to SI, domain rules enforced —
 //! or every diagnostic found (the checker keeps going after an error to report them all).
 
+pub mod classes;
 pub mod load;
 pub mod scenario;
+pub mod summary;
 pub mod units;
 
 use crate::diag::{Diagnostic, did_you_mean};

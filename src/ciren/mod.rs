@@ -104,7 +104,7 @@ pub fn case_inputs(inputs: &[PathBuf]) -> (Vec<PathBuf>, Vec<Diagnostic>) {
 /// Write `DIR/<id>.scn` (`DIR/safe_<id>.scn`) atomically (a temporary name, then a rename: never a partial file).
 pub fn write_scenario(dir: &Path, imp: &Imported) -> Result<PathBuf, Diagnostic> {
     let path = dir.join(imp.file_name());
-    crate::output::write_atomic(&path, |w| std::io::Write::write_all(w, imp.staged.text.as_bytes())).map_err(|e| {
+    crate::fsio::write_atomic(&path, |w| std::io::Write::write_all(w, imp.staged.text.as_bytes())).map_err(|e| {
         Diagnostic::error("E0809", format!("cannot write `{}`: {e}", path.display()))
             .help("check that the output directory is writable")
     })?;

@@ -161,7 +161,7 @@ fn build_key(sources: &SourceMap, rig: Option<&crate::lidar::Rig>) -> String {
     if let Some(r) = rig {
         field(serde_json::to_string(r).unwrap_or_default().as_bytes());
     }
-    crate::output::input_hash(&bytes)
+    crate::fsio::input_hash(&bytes)
 }
 
 /// A complete earlier run of the same clip: same compiler, input (and its imports and prelude),
@@ -302,7 +302,7 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
         _ => {}
     }
     // Temporaries of an interrupted earlier run of this clip (never another clip's: one dir each).
-    crate::output::sweep_stale_tmp(dir)?;
+    crate::fsio::sweep_stale_tmp(dir)?;
 
     let seed = r.seed;
     let (gif_picks, sheet_picks) = if opts.previews { preview_picks(r.frames.len()) } else { (vec![], vec![]) };

@@ -10,11 +10,13 @@
 
 pub mod batch;
 mod clip;
+mod static_bev;
 
 pub use clip::{
     ClipInput, ClipReport, FrameSource, Render, clip_dir, clip_seed, compile_clip, edited_clip, frame_boxes,
     render_clip,
 };
+pub use static_bev::StaticBev;
 
 use crate::backend::Mode;
 use crate::check::scenario::Scenario;
@@ -25,6 +27,7 @@ use crate::road::{self, Map};
 use crate::rollout::{Tracks, rollout};
 use crate::sample::{Concrete, sample};
 use serde::{Deserialize, Serialize};
+use std::path::Path;
 
 /// How far `rocc compile` goes. Each stage includes the ones before it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
@@ -61,7 +64,7 @@ pub struct Options {
     /// Recompile clips whose manifest says they are complete.
     pub force: bool,
     /// A recorded BEV whose static and divider layers replace the map's (`--static-bev`).
-    pub static_bev: Option<crate::import::StaticBev>,
+    pub static_bev: Option<StaticBev>,
     /// Which occupancy backend runs (`--backend`).
     pub backend: OccBackend,
 }
@@ -72,6 +75,25 @@ pub enum OccBackend {
     #[default]
     Procedural,
     Grounded(std::sync::Arc<crate::backend::grounded::Grounded>),
+}
+
+impl OccBackend {
+    /// The backend `--backend` names: `grounded` loads `weights` (with `config`, by default the
+    /// `.ron` beside them); the procedural one takes neither (E0908 if given them).
+    pub fn select(grounded: bool, weights: Option<&Path>, config: Option<&Path>) -> Result<OccBackend, Diagnostic> {
+        match (grounded, weights) {
+            (false, None) if config.is_none() => Ok(OccBackend::Procedural),
+            (false, _) => Err(Diagnostic::error(
+                "E0908",
+                "`--weights` and `--grounded-config` apply to `--backend grounded` only",
+            )
+            .help("add `--backend grounded`, or drop the weights options for the procedural backend")),
+            (true, None) => Err(Diagnostic::error("E0901", "`--backend grounded` needs `--weights FILE`")
+                .help("train weights with `rocc train generator ...` (README: \"Training the grounded backend\")")),
+            (true, Some(w)) => crate::backend::grounded::Grounded::load(w, config)
+                .map(|g| OccBackend::Grounded(std::sync::Arc::new(g))),
+        }
+    }
 }
 
 impl std::fmt::Debug for OccBackend {

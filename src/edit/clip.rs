@@ -12,7 +12,7 @@ use crate::check::scenario::Class;
 use crate::compile::{OccBackend, Options, Render, Stage, clip_seed, render_clip};
 use crate::diag::{Diagnostic, did_you_mean};
 use crate::lidar::Rig;
-use crate::output::{FrameBoxes, Manifest, bev_frame_path, read_npz};
+use crate::output::{FrameBoxes, Manifest, bev_frame_path, read_boxes_json, read_npz};
 use crate::place::Pose;
 use crate::raster::layout::{HALF_EXTENT_M, box_reaches_patch};
 use crate::raster::{Bev, Rasterizer, keep_static};
@@ -41,62 +41,6 @@ pub struct ClipEdit {
 
 fn clip_err(dir: &Path, m: String, help: &str) -> Vec<Diagnostic> {
     vec![Diagnostic::error("E0712", format!("clip `{}`: {m}", dir.display())).help(help.to_string())]
-}
-
-/// Read `boxes.json` back into frames of ego-frame boxes.
-pub fn read_boxes_json(path: &Path) -> Result<Vec<FrameBoxes>, String> {
-    #[derive(serde::Deserialize)]
-    struct B {
-        agent: String,
-        kind: String,
-        class_name: String,
-        track: u32,
-        x: f64,
-        y: f64,
-        z: f64,
-        l: f64,
-        w: f64,
-        h: f64,
-        yaw: f64,
-    }
-    #[derive(serde::Deserialize)]
-    struct F {
-        frame: usize,
-        t: f64,
-        boxes: Vec<B>,
-    }
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
-    let frames: Vec<F> = serde_json::from_str(&text).map_err(|e| format!("`{}`: {e}", path.display()))?;
-    frames
-        .into_iter()
-        .map(|f| {
-            let boxes = f
-                .boxes
-                .into_iter()
-                .map(|b| {
-                    let class = Class::ALL
-                        .iter()
-                        .find(|(n, _)| *n == b.class_name)
-                        .map(|(_, c)| *c)
-                        .ok_or_else(|| format!("unknown class `{}` in `{}`", b.class_name, path.display()))?;
-                    Ok(EgoBox {
-                        agent: b.agent,
-                        kind: b.kind,
-                        class,
-                        track: b.track,
-                        x: b.x,
-                        y: b.y,
-                        z: b.z,
-                        l: b.l,
-                        w: b.w,
-                        h: b.h,
-                        yaw: b.yaw,
-                    })
-                })
-                .collect::<Result<Vec<_>, String>>()?;
-            Ok(FrameBoxes { frame: f.frame, t: f.t, boxes })
-        })
-        .collect()
 }
 
 /// A compiled BEV with its agent, aux and structure layers redrawn from `boxes` and its static
@@ -324,7 +268,7 @@ pub fn edit_clip(dir: &Path, edits: &[Edit], o: &ClipEdit) -> Result<Manifest, V
             "pass `--scenario FILE` when the clip was compiled elsewhere",
         )
     })?;
-    if crate::output::input_hash(&bytes) != manifest.input_hash {
+    if crate::fsio::input_hash(&bytes) != manifest.input_hash {
         return Err(clip_err(
             dir,
             format!("`{}` changed since the clip was compiled", input.display()),

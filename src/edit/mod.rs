@@ -12,7 +12,8 @@ mod clip;
 mod scn;
 mod spec;
 
-pub use clip::{ClipEdit, edit_clip, read_boxes_json, rerasterize};
+pub use crate::output::read_boxes_json;
+pub use clip::{ClipEdit, edit_clip, rerasterize};
 pub use scn::edit_scn;
 pub use spec::{Edit, parse_edit};
 

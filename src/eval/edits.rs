@@ -16,8 +16,7 @@
 //! backend, and the box scored. Residue at a moved agent's old pose counts only the old columns
 //! the new box does not cover — otherwise a 1 m move of a 2 m wide car would read as half residue.
 
-use super::occ::LABEL_NAMES;
-use crate::backend::layout::{NX, NY, NZ, ORIGIN, VOXEL, centre, class_label};
+use crate::backend::layout::{LABEL_NAMES, NX, NY, NZ, ORIGIN, VOXEL, centre, class_label};
 use crate::backend::{Background, Mode, OccInput, Occupancy, OccupancyBackend, Procedural};
 use crate::check::scenario::Class;
 use crate::compile::{frame_boxes, front};

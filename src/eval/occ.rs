@@ -7,26 +7,13 @@
 //! would weight a frame with three pedestrian voxels like one with three thousand.
 
 use crate::backend::Occupancy;
-use crate::backend::layout::{N_LABELS, NX, NY, NZ};
+use crate::backend::layout::{LABEL_NAMES, N_LABELS, NX, NY, NZ};
 use ndarray::{Array3, ArrayD, IxDyn};
 use ndarray_npy::{NpzReader, ReadNpyExt, ReadableElement};
 use serde::Serialize;
 use std::fs::File;
 use std::io;
 use std::path::Path;
-
-/// Label names, index = label (SPEC.md "Occupancy").
-pub const LABEL_NAMES: [&str; N_LABELS] = [
-    "free",
-    "background",
-    "vehicle",
-    "bicycle",
-    "pedestrian",
-    "traffic_cone",
-    "barrier",
-    "czone_sign",
-    "generic_object",
-];
 
 /// Running per-class counts over a set of frames.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]

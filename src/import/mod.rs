@@ -28,21 +28,18 @@
 //! reads it, so the lossless guarantee — rasterising the imported scene at the recorded frames
 //! reproduces the BEV rasterised from the input boxes, IoU 1.0 per channel — is unaffected.
 
-mod classes;
-
-pub use classes::{ClassMap, map_class};
+pub use crate::check::classes::{ClassMap, map_class};
 
 use crate::check::scenario::Class;
 use crate::diag::Diagnostic;
 use crate::geom::wrap_angle;
 use crate::place::Pose;
-use crate::raster::{Bev, keep_static};
 use crate::source::{SourceMap, Span};
 use crate::view::{AgentState, EgoBox, to_ego};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::f64::consts::{FRAC_PI_2, PI};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// nuPlan's ego vehicle (Chrysler Pacifica), l, w, h in metres.
 pub const NUPLAN_EGO_SIZE: [f64; 3] = [5.176, 2.297, 1.777];
@@ -602,51 +599,4 @@ pub fn reference_frames(imp: &Imported) -> Vec<(Pose, Vec<EgoBox>)> {
             (f.ego, to_ego(f.ego, states.collect::<Vec<_>>()))
         })
         .collect()
-}
-
-/// A recorded static BEV whose map layers replace the scene's (`--static-bev`): one `.npz` used
-/// for every frame, or a directory of per-frame `NNNNNN.npz` (a compiled clip's `bev/`).
-#[derive(Clone, Debug)]
-pub struct StaticBev {
-    /// As given on the command line (recorded in the manifest).
-    pub source: String,
-    one: Option<Box<Bev>>,
-    dir: Option<PathBuf>,
-}
-
-impl StaticBev {
-    pub fn load(path: &Path) -> Result<StaticBev, Diagnostic> {
-        let bad = |m: String| {
-            Diagnostic::error("E0708", format!("static BEV `{}`: {m}", path.display()))
-                .help("pass a nuPlan-Occ BEV `.npz` (gt_bev_masks int8 (18, 400, 400)) or a directory of NNNNNN.npz")
-        };
-        if path.is_dir() {
-            return Ok(StaticBev { source: path.display().to_string(), one: None, dir: Some(path.to_path_buf()) });
-        }
-        let bev = crate::output::read_npz(path).map_err(|e| bad(e.to_string()))?;
-        check_shape(&bev).map_err(bad)?;
-        Ok(StaticBev { source: path.display().to_string(), one: Some(Box::new(bev)), dir: None })
-    }
-
-    /// Replace the static and divider layers of frame `f`'s BEV.
-    pub fn apply(&self, f: usize, bev: &mut Bev) -> std::io::Result<()> {
-        if let Some(one) = &self.one {
-            keep_static(one, bev);
-        } else if let Some(dir) = &self.dir {
-            let p = dir.join(format!("{f:06}.npz"));
-            let rec = crate::output::read_npz(&p)
-                .map_err(|e| std::io::Error::other(format!("static BEV `{}`: {e}", p.display())))?;
-            check_shape(&rec).map_err(|m| std::io::Error::other(format!("static BEV `{}`: {m}", p.display())))?;
-            keep_static(&rec, bev);
-        }
-        Ok(())
-    }
-}
-
-fn check_shape(b: &Bev) -> Result<(), String> {
-    use crate::raster::layout::{GRID, N_MASKS};
-    if b.masks.dim() != (N_MASKS, GRID, GRID) {
-        return Err(format!("gt_bev_masks has shape {:?}, expected (18, 400, 400)", b.masks.dim()));
-    }
-    Ok(())
 }

@@ -50,7 +50,7 @@ pub fn label_of(name: &str) -> u8 {
     if name.trim().eq_ignore_ascii_case("structure") {
         BACKGROUND
     } else {
-        class_label(crate::import::map_class(name).class)
+        class_label(crate::check::classes::map_class(name).class)
     }
 }
 

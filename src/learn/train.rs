@@ -289,12 +289,12 @@ fn data_err(m: String) -> Diagnostic {
 
 fn save_module<M: Module>(m: &M, path: &Path) -> Result<(), Diagnostic> {
     let bytes = m.clone().into_record().into_bytes().map_err(|e| io_err("serialise weights for", path, e))?;
-    crate::output::write_atomic(path, |w| w.write_all(&bytes)).map_err(|e| io_err("write", path, e))?;
+    crate::fsio::write_atomic(path, |w| w.write_all(&bytes)).map_err(|e| io_err("write", path, e))?;
     Ok(())
 }
 
 fn write_text(path: &Path, text: &str) -> Result<(), Diagnostic> {
-    crate::output::write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(|e| io_err("write", path, e))?;
+    crate::fsio::write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(|e| io_err("write", path, e))?;
     Ok(())
 }
 
@@ -350,6 +350,21 @@ pub fn train(opts: &TrainOptions) -> Result<TrainReport, Diagnostic> {
             Ok((g, false))
         }),
     }
+}
+
+/// Write a stage's trained `weights` (`.bpk`) again as `.safetensors` beside them; returns that
+/// file.
+pub fn export_safetensors(stage: Stage, config: &GroundedConfig, weights: &Path) -> Result<PathBuf, Diagnostic> {
+    use crate::backend::grounded::{cpu, save_safetensors};
+    let st = weights.with_extension("safetensors");
+    let res = match stage {
+        Stage::Autoencoder => save_safetensors(&load_weights(Autoencoder::new(config, &cpu()), weights)?, &st),
+        Stage::Generator => save_safetensors(&load_weights(Generator::new(config, &cpu()), weights)?, &st),
+    };
+    res.map_err(|e| {
+        Diagnostic::error("E0906", format!("cannot write `{}`: {e}", st.display())).help("check the output directory")
+    })?;
+    Ok(st)
 }
 
 fn run<M: Net>(
@@ -455,7 +470,7 @@ fn run<M: Net>(
     let save = |model: &M, optim: &burn::optim::ModuleOptimizer, p: Position| -> Result<(), Diagnostic> {
         save_module(model, &model_ck)?;
         let bytes = optim.into_bytes().map_err(|e| io_err("serialise the optimiser for", &optim_ck, e))?;
-        crate::output::write_atomic(&optim_ck, |w| w.write_all(&bytes)).map_err(|e| io_err("write", &optim_ck, e))?;
+        crate::fsio::write_atomic(&optim_ck, |w| w.write_all(&bytes)).map_err(|e| io_err("write", &optim_ck, e))?;
         write_text(&state_path, &ron::to_string(&p).unwrap_or_default())
     };
 

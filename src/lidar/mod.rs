@@ -170,7 +170,7 @@ pub fn pcd_frame_path(dir: &Path, frame: usize) -> PathBuf {
 
 /// KITTI-style `.bin`: float32 little-endian x, y, z, intensity per point, atomically.
 pub fn write_bin(path: &Path, pc: &PointCloud) -> io::Result<u64> {
-    crate::output::write_atomic(path, |w| {
+    crate::fsio::write_atomic(path, |w| {
         let mut buf = Vec::with_capacity(pc.points.len() * 16);
         for p in &pc.points {
             for v in [p.x, p.y, p.z, p.intensity] {
@@ -184,7 +184,7 @@ pub fn write_bin(path: &Path, pc: &PointCloud) -> io::Result<u64> {
 /// Binary PCD v0.7 with fields x y z intensity (float32), ring (uint16) and lidar (uint8),
 /// little endian, atomically. Open3D's tensor reader and numpy (see tests/python) load it.
 pub fn write_pcd(path: &Path, pc: &PointCloud) -> io::Result<u64> {
-    crate::output::write_atomic(path, |w| {
+    crate::fsio::write_atomic(path, |w| {
         let n = pc.points.len();
         write!(
             w,

@@ -4,7 +4,9 @@
 //! noise parameters). Angles are degrees in the file and converted where used.
 
 use crate::backend::layout::N_LABELS;
+use crate::diag::Diagnostic;
 use serde::{Deserialize, Serialize};
+use std::path::Path;
 
 /// The nuPlan rig shipped with rocc (SPEC.md "LiDAR").
 pub const NUPLAN_RON: &str = include_str!("../../rigs/nuplan.ron");
@@ -115,6 +117,34 @@ impl Rig {
     pub fn from_ron(text: &str) -> Result<Rig, RigError> {
         let rig: Rig = ron::from_str(text)?;
         rig.validate()?;
+        Ok(rig)
+    }
+
+    /// The rig of `--rig PATH --lidar-resolution DEG`: the file (the bundled nuPlan rig when
+    /// `None`), with every sensor stepping `resolution` degrees when that is given. E0304 when
+    /// the file cannot be read or the rig is not one the ray caster can run.
+    pub fn load(path: Option<&Path>, resolution: Option<f64>) -> Result<Rig, Diagnostic> {
+        let mut rig = match path {
+            None => Rig::nuplan(),
+            Some(p) => {
+                let text = std::fs::read_to_string(p)
+                    .map_err(|e| Diagnostic::error("E0304", format!("cannot read rig `{}`: {e}", p.display())))?;
+                Rig::from_ron(&text).map_err(|e| {
+                    Diagnostic::error("E0304", format!("rig `{}`: {e}", p.display()))
+                        .help("start from rigs/nuplan.ron; `rocc explain E0304` lists the fields")
+                })?
+            }
+        };
+        if let Some(r) = resolution {
+            rig.horizontal_resolution_deg = r;
+            for s in &mut rig.sensors {
+                s.horizontal_resolution_deg = None;
+            }
+            rig.validate().map_err(|e| {
+                Diagnostic::error("E0304", format!("--lidar-resolution {r}: {e}"))
+                    .help("use a step like 0.1 to 2 degrees")
+            })?;
+        }
         Ok(rig)
     }
 

@@ -1,93 +1,37 @@
 //! Output writers. In: a `Bev`, per-frame `EgoBox`es, run metadata and a destination directory
 //! (`OUT/<scenario>/<ego>/`). Out: `bev/NNNNNN.npz`, `preview/bev.png`, `boxes.json` and
 //! `manifest.json` laid out as SPEC.md "Output layout of `rocc compile`" says, each written
-//! atomically: to a temporary name in the same directory, then renamed, so an interrupted run
-//! never leaves a truncated file under a final name and a re-run can resume. (No fsync: that
-//! protects against a crash of the process, not of the machine.)
+//! through `fsio::write_atomic`. The readers of these files (`read_npz`, `read_boxes_json`) sit
+//! beside their writers, so each format is defined once.
 
 mod anim;
+mod paint;
 mod preview;
 
-pub use anim::{SIDE as PREVIEW_SIDE, paint_bev, paint_lidar, paint_occ, palette, write_gif, write_sheet};
+pub use anim::{write_gif, write_sheet};
+pub use paint::{CHANNEL_COLOURS, SIDE as PREVIEW_SIDE, STRUCTURE_COLOUR, paint_bev, paint_lidar, paint_occ, palette};
+pub use preview::{render_preview, write_preview_png};
 
-pub use preview::{CHANNEL_COLOURS, STRUCTURE_COLOUR, render_preview, write_preview_png};
+/// A temporary of an interrupted write, as found in an output directory.
+pub use crate::fsio::is_atomic_tmp;
 
+use crate::fsio::{input_hash, write_atomic};
+
+use crate::check::scenario::Class;
 use crate::raster::Bev;
 use crate::raster::layout::{KEY_AUX, KEY_MASKS, KEY_STRUCTURE, class_index};
 use crate::view::EgoBox;
 use ndarray_npy::{NpzReader, NpzWriter};
 use serde::{Deserialize, Serialize};
-use std::fs::{self, File};
-use std::io::{self, BufWriter, Write};
+use std::fs::File;
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 /// One file written into the output directory: path relative to it, and size in bytes.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct OutputFile {
     pub path: String,
     pub bytes: u64,
-}
-
-static TMP_COUNTER: AtomicU64 = AtomicU64::new(0);
-
-/// Write `path` through `fill` under a temporary sibling name, then rename it into place; returns
-/// the final size. Parent directories are created. The temporary file is removed on error.
-pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>) -> io::Result<u64> {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    fs::create_dir_all(dir)?;
-    let name = path
-        .file_name()
-        .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, format!("`{}` names no file", path.display())))?;
-    // Unique per process and call, so parallel writers never share a temporary.
-    let n = TMP_COUNTER.fetch_add(1, Ordering::Relaxed);
-    let tmp = dir.join(format!(".{}.tmp-{}-{n}", name.to_string_lossy(), std::process::id()));
-    let result = (|| {
-        let mut w = BufWriter::new(File::create(&tmp)?);
-        fill(&mut w)?;
-        let f = w.into_inner().map_err(|e| e.into_error())?;
-        let bytes = f.metadata()?.len();
-        drop(f);
-        fs::rename(&tmp, path)?;
-        Ok(bytes)
-    })();
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp);
-    }
-    result
-}
-
-/// Whether `name` is one of `write_atomic`'s temporaries: `.{file}.tmp-{pid}-{n}`.
-pub fn is_atomic_tmp(name: &str) -> bool {
-    let Some(rest) = name.strip_prefix('.') else { return false };
-    let Some(at) = rest.rfind(".tmp-") else { return false };
-    let mut parts = rest[at + 5..].split('-');
-    let num = |p: Option<&str>| p.is_some_and(|p| !p.is_empty() && p.bytes().all(|b| b.is_ascii_digit()));
-    at > 0 && num(parts.next()) && num(parts.next()) && parts.next().is_none()
-}
-
-/// Remove the temporaries an interrupted run left in `dir` and its sub-directories (a killed
-/// process never reaches its clean-up). Call it only on a directory this process alone writes:
-/// a clip's directory at the start of its compile (shards write different clips). Returns how
-/// many were removed; a missing `dir` has none.
-pub fn sweep_stale_tmp(dir: &Path) -> io::Result<usize> {
-    let mut n = 0;
-    let entries = match fs::read_dir(dir) {
-        Ok(e) => e,
-        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(0),
-        Err(e) => return Err(e),
-    };
-    for e in entries {
-        let e = e?;
-        let ty = e.file_type()?;
-        if ty.is_dir() {
-            n += sweep_stale_tmp(&e.path())?;
-        } else if ty.is_file() && is_atomic_tmp(&e.file_name().to_string_lossy()) {
-            fs::remove_file(e.path())?;
-            n += 1;
-        }
-    }
-    Ok(n)
 }
 
 fn npz_err(e: impl std::fmt::Display) -> io::Error {
@@ -140,14 +84,16 @@ pub struct FrameBoxes {
     pub boxes: Vec<EgoBox>,
 }
 
-#[derive(Serialize)]
-struct BoxRecord<'a> {
-    agent: &'a str,
-    kind: &'a str,
+/// One box of `boxes.json`, as written and as read back.
+#[derive(Serialize, Deserialize)]
+struct BoxRecord {
+    agent: String,
+    kind: String,
     /// Index in UniScene's `object_classes` (vehicle 0 .. generic_object 6; structure 7), as
-    /// SPEC.md "Boxes" asks for a class index.
+    /// SPEC.md "Boxes" asks for a class index. Reading takes the class from `class_name`.
+    #[serde(default)]
     class: u8,
-    class_name: &'a str,
+    class_name: String,
     track: u32,
     x: f64,
     y: f64,
@@ -158,11 +104,53 @@ struct BoxRecord<'a> {
     yaw: f64,
 }
 
-#[derive(Serialize)]
-struct FrameRecord<'a> {
+/// One frame of `boxes.json`.
+#[derive(Serialize, Deserialize)]
+struct FrameRecord {
     frame: usize,
     t: f64,
-    boxes: Vec<BoxRecord<'a>>,
+    boxes: Vec<BoxRecord>,
+}
+
+impl BoxRecord {
+    fn of(b: &EgoBox) -> Self {
+        BoxRecord {
+            agent: b.agent.clone(),
+            kind: b.kind.clone(),
+            class: class_index(b.class),
+            class_name: b.class.name().to_string(),
+            track: b.track,
+            x: b.x,
+            y: b.y,
+            z: b.z,
+            l: b.l,
+            w: b.w,
+            h: b.h,
+            yaw: b.yaw,
+        }
+    }
+
+    /// The box again; `Err` names a `class_name` that is no class.
+    fn into_box(self) -> Result<EgoBox, String> {
+        let class = Class::ALL
+            .iter()
+            .find(|(n, _)| *n == self.class_name)
+            .map(|(_, c)| *c)
+            .ok_or_else(|| format!("unknown class `{}`", self.class_name))?;
+        Ok(EgoBox {
+            agent: self.agent,
+            kind: self.kind,
+            class,
+            track: self.track,
+            x: self.x,
+            y: self.y,
+            z: self.z,
+            l: self.l,
+            w: self.w,
+            h: self.h,
+            yaw: self.yaw,
+        })
+    }
 }
 
 /// `boxes.json`: `[{"frame", "t", "boxes": [{"agent", "kind", "class", "class_name", "track",
@@ -170,30 +158,26 @@ struct FrameRecord<'a> {
 pub fn boxes_json(frames: &[FrameBoxes]) -> serde_json::Value {
     let recs: Vec<FrameRecord> = frames
         .iter()
-        .map(|f| FrameRecord {
-            frame: f.frame,
-            t: f.t,
-            boxes: f
-                .boxes
-                .iter()
-                .map(|b| BoxRecord {
-                    agent: &b.agent,
-                    kind: &b.kind,
-                    class: class_index(b.class),
-                    class_name: b.class.name(),
-                    track: b.track,
-                    x: b.x,
-                    y: b.y,
-                    z: b.z,
-                    l: b.l,
-                    w: b.w,
-                    h: b.h,
-                    yaw: b.yaw,
-                })
-                .collect(),
-        })
+        .map(|f| FrameRecord { frame: f.frame, t: f.t, boxes: f.boxes.iter().map(BoxRecord::of).collect() })
         .collect();
     serde_json::to_value(recs).expect("box records hold only strings and numbers")
+}
+
+/// Read `boxes.json` back into frames of ego-frame boxes; `class` is taken from `class_name`.
+pub fn read_boxes_json(path: &Path) -> Result<Vec<FrameBoxes>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+    let frames: Vec<FrameRecord> = serde_json::from_str(&text).map_err(|e| format!("`{}`: {e}", path.display()))?;
+    frames
+        .into_iter()
+        .map(|f| {
+            let boxes = f
+                .boxes
+                .into_iter()
+                .map(|b| b.into_box().map_err(|m| format!("{m} in `{}`", path.display())))
+                .collect::<Result<Vec<_>, String>>()?;
+            Ok(FrameBoxes { frame: f.frame, t: f.t, boxes })
+        })
+        .collect()
 }
 
 /// Write `dir/boxes.json`.
@@ -284,17 +268,6 @@ impl Manifest {
 pub fn write_manifest(dir: &Path, m: &Manifest) -> io::Result<OutputFile> {
     let v = serde_json::to_value(m).map_err(io::Error::other)?;
     write_json(dir, "manifest.json", &v)
-}
-
-/// Content hash used in manifests: FNV-1a 64, hex, prefixed by its name. It identifies inputs
-/// (did the file change?); it is not a cryptographic digest.
-pub fn input_hash(bytes: &[u8]) -> String {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for &b in bytes {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0100_0000_01b3);
-    }
-    format!("fnv1a64:{h:016x}")
 }
 
 fn write_json(dir: &Path, name: &str, v: &serde_json::Value) -> io::Result<OutputFile> {

@@ -151,7 +151,7 @@ impl Grounded {
             Diagnostic::error("E0901", format!("cannot read weights `{}`: {e}", weights.display()))
                 .help("check the path and its permissions")
         })?;
-        let hash = crate::output::input_hash(&bytes);
+        let hash = crate::fsio::input_hash(&bytes);
         let short = hash.rsplit(':').next().unwrap_or(&hash);
         Ok(Grounded {
             name: format!("grounded-{}-{}", cfg.name, &short[..short.len().min(12)]),

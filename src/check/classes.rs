@@ -3,7 +3,7 @@
 //! motorcycles included, are `bicycle`; debris, pushables and animals are `generic_object`).
 //! Unknown names become `generic_object`, flagged so the importer warns — never dropped.
 
-use crate::check::scenario::Class;
+use super::scenario::Class;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ClassMap {
