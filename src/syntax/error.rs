@@ -1,7 +1,7 @@
 //! The E0001 syntax error: the place pest could not go on, said in the language's words, with
 //! "did you mean" for a misspelt keyword or unit, and the `{` that a missing `}` left open.
 
-use super::parse::Rule;
+use super::rules::Rule;
 use crate::diag::{self, Diagnostic};
 use crate::source::{FileId, Span};
 

@@ -5,6 +5,7 @@ pub mod ast;
 mod error;
 pub mod fmt;
 mod parse;
+mod rules;
 
 pub use parse::parse;
 

@@ -3,14 +3,11 @@
 
 use super::ast::*;
 use super::error::syntax_error;
+use super::rules::{Rule, ScnParser};
 use crate::diag::Diagnostic;
 use crate::source::{FileId, Span};
 use pest::Parser;
 use pest::iterators::Pair;
-
-#[derive(pest_derive::Parser)]
-#[grammar = "../grammar/scn.pest"]
-struct ScnParser;
 
 type P<'a> = Pair<'a, Rule>;
 
