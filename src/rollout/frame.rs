@@ -26,6 +26,28 @@ pub(crate) struct Sim<'a, 'b> {
     pub(crate) dt: f64,
     pub(crate) cur: Vec<State>,
     pub(crate) next: Vec<State>,
+    /// Per agent: a slot for its approach lane (`Actor::approach`), dense from 0.
+    pub(crate) approach_slot: Vec<Option<usize>>,
+    /// Per agent: where its crossings start in `Scratch::ranks`.
+    pub(crate) cross_at: Vec<usize>,
+    /// The largest bounding radius of any agent.
+    pub(crate) max_radius: f64,
+    /// This frame's facts, settled before any agent steps.
+    pub(crate) facts: Facts,
+    /// Where a resumed run starts, and where a first pass keeps its states.
+    pub(crate) resume: Resume<'b>,
+    /// The first move the overlap safety net undid at a speed the agent could not have braked
+    /// from within its limits in one step: the agent stopped, the one it would have run into,
+    /// and when.
+    pub(crate) first_hard: Option<HardStop>,
+    /// `overlap_pairs`' boxes and output, kept likewise.
+    pub(crate) sweep: Vec<(DVec2, DVec2, usize)>,
+    pub(crate) pairs: Vec<(usize, usize)>,
+}
+
+/// What every agent's step reads of this frame besides the states: derived from `Sim::cur`
+/// before any agent steps, read-only while they do.
+pub(crate) struct Facts {
     /// Unit heading of every agent in `cur`: pair checks use dot and cross products, not trig.
     pub(crate) dirs: Vec<DVec2>,
     /// The bits of the heading each of `dirs` was taken from.
@@ -39,29 +61,20 @@ pub(crate) struct Sim<'a, 'b> {
     /// Per agent, this frame: another vehicle is ahead of it on its junction approach, not yet
     /// past its stop line (`queued`).
     pub(crate) behind: Vec<bool>,
-    /// Per agent: a slot for its approach lane (`Actor::approach`), dense from 0; and per slot,
-    /// this frame, the two least distances to the stop line among the agents `queued` counts
-    /// there, with their indices (`queue_heads`).
-    pub(crate) approach_slot: Vec<Option<usize>>,
+    /// Per approach slot (`Sim::approach_slot`), this frame: the two least distances to the stop
+    /// line among the agents `queued` counts there, with their indices (`queue_heads`).
     pub(crate) lane_least: Vec<[(f64, usize); 2]>,
-    /// Per agent: where its crossings start in `Scratch::ranks`.
-    pub(crate) cross_at: Vec<usize>,
     /// This frame: agents easing aside (`away_from`, triggered), for `pass_offset`.
     pub(crate) easing: Vec<usize>,
     /// Per agent, this frame: what `candidates` reads, packed.
     pub(crate) near: Vec<Near>,
-    /// The largest bounding radius of any agent.
-    pub(crate) max_radius: f64,
-    /// The first move the overlap safety net undid at a speed the agent could not have braked
-    /// from within its limits in one step: the agent stopped, the one it would have run into,
-    /// and when.
-    pub(crate) first_hard: Option<HardStop>,
-    /// `overlap_pairs`' boxes and output, kept likewise.
-    pub(crate) sweep: Vec<(DVec2, DVec2, usize)>,
-    pub(crate) pairs: Vec<(usize, usize)>,
+}
+
+/// Where a run starts and what it keeps (`Sim::keep_states`, `Sim::resume`).
+pub(crate) struct Resume<'b> {
     /// Where to keep every frame's states (pass 1, for `resume`).
     pub(crate) keep: Option<&'b mut Vec<Vec<State>>>,
-    /// The first frame to simulate: earlier ones are already in the output (`resume`).
+    /// The first frame to simulate: earlier ones are already in the output.
     pub(crate) first: usize,
     /// Frames `..first` of the output, copied by `run`.
     pub(crate) prefix: Option<&'b Tracks>,
@@ -168,30 +181,30 @@ impl<'a, 'b> Sim<'a, 'b> {
             prev_depth: vec![0.0; confs.len()],
             dt,
             next: cur.clone(),
-            dirs: cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect(),
-            dir_yaw: vec![],
-            yielding: vec![(None, false); actors.len()],
-            ruled: vec![false; actors.len()],
-            held: vec![None; actors.len()],
-            behind: vec![false; actors.len()],
+            facts: Facts {
+                dirs: cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect(),
+                dir_yaw: vec![],
+                yielding: vec![(None, false); actors.len()],
+                ruled: vec![false; actors.len()],
+                held: vec![None; actors.len()],
+                behind: vec![false; actors.len()],
+                lane_least: vec![[(f64::INFINITY, usize::MAX); 2]; lanes.len()],
+                easing: Vec::with_capacity(actors.len()),
+                near: Vec::with_capacity(actors.len()),
+            },
             approach_slot,
-            lane_least: vec![[(f64::INFINITY, usize::MAX); 2]; lanes.len()],
             cross_at,
-            easing: Vec::with_capacity(actors.len()),
-            near: Vec::with_capacity(actors.len()),
             max_radius: actors.iter().map(|a| a.radius).fold(0.0, f64::max),
             first_hard: None,
             sweep: Vec::with_capacity(actors.len()),
             pairs: vec![],
             cur,
-            keep: None,
-            first: 1,
-            prefix: None,
+            resume: Resume { keep: None, first: 1, prefix: None },
         }
     }
 
     pub(crate) fn keep_states(mut self, keep: &'b mut Vec<Vec<State>>) -> Self {
-        self.keep = Some(keep);
+        self.resume.keep = Some(keep);
         self
     }
 
@@ -200,8 +213,8 @@ impl<'a, 'b> Sim<'a, 'b> {
     pub(crate) fn resume(mut self, done: &'b Tracks, states: &[Vec<State>], first: usize) -> Self {
         if first > 1 && first <= states.len() {
             self.cur.clone_from(&states[first - 1]);
-            self.first = first;
-            self.prefix = Some(done);
+            self.resume.first = first;
+            self.resume.prefix = Some(done);
         }
         self
     }
@@ -213,54 +226,56 @@ impl<'a, 'b> Sim<'a, 'b> {
         if out.frames == 0 {
             return self.held_longest(sc);
         }
-        match self.prefix {
+        match self.resume.prefix {
             Some(done) => {
                 for (i, (p, v)) in done.poses.iter().zip(&done.speeds).enumerate() {
-                    out.poses[i].extend_from_slice(&p[..self.first]);
-                    out.speeds[i].extend_from_slice(&v[..self.first]);
+                    out.poses[i].extend_from_slice(&p[..self.resume.first]);
+                    out.speeds[i].extend_from_slice(&v[..self.resume.first]);
                 }
             }
             None => self.record(out),
         }
-        for f in self.first..out.frames {
+        for f in self.resume.first..out.frames {
             let t = (f - 1) as f64 * self.dt;
             // An agent whose heading has not changed (bit for bit) keeps its unit heading: the
             // same call on the same bits. Standing and straight-driving agents take no sine.
-            self.dirs.resize(self.cur.len(), DVec2::X);
-            self.dir_yaw.resize(self.cur.len(), None);
-            for ((d, y), st) in self.dirs.iter_mut().zip(&mut self.dir_yaw).zip(&self.cur) {
+            self.facts.dirs.resize(self.cur.len(), DVec2::X);
+            self.facts.dir_yaw.resize(self.cur.len(), None);
+            for ((d, y), st) in self.facts.dirs.iter_mut().zip(&mut self.facts.dir_yaw).zip(&self.cur) {
                 if *y != Some(st.yaw.to_bits()) {
                     (*d, *y) = (DVec2::from_angle(st.yaw), Some(st.yaw.to_bits()));
                 }
             }
-            self.easing.clear();
+            self.facts.easing.clear();
             for (j, (o, b)) in self.cur.iter().zip(self.actors.iter()).enumerate() {
                 if o.triggered && matches!(b.lateral, Lat::Away { .. }) {
-                    self.easing.push(j);
+                    self.facts.easing.push(j);
                 }
             }
             // Emergency holds first: the right-of-way rule ranks one holding for an emergency
             // vehicle as not coming.
             for i in 0..self.actors.len() {
-                self.yielding[i] = self.yield_state(i);
+                self.facts.yielding[i] = self.yield_state(i);
             }
             self.queue_heads();
             sc.ranks.fill(None);
             for i in 0..self.actors.len() {
                 let rule = self.right_of_way(&mut sc.ranks, i, t);
-                self.ruled[i] = rule.is_some();
-                self.held[i] = match (self.yielding[i].0, rule) {
+                self.facts.ruled[i] = rule.is_some();
+                self.facts.held[i] = match (self.facts.yielding[i].0, rule) {
                     (Some(x), Some(y)) => Some(x.min(y)),
                     (x, y) => x.or(y),
                 };
             }
             for i in 0..self.actors.len() {
-                self.yielding[i].0 = self.held[i];
+                self.facts.yielding[i].0 = self.facts.held[i];
             }
             // Packed after the holds are final: `candidates` reads them as `drive` does.
-            self.near.clear();
-            for ((st, a), (&dir, y)) in self.cur.iter().zip(self.actors).zip(self.dirs.iter().zip(&self.yielding)) {
-                self.near.push(Near::new(st, a, dir, y.0.is_some()));
+            self.facts.near.clear();
+            for ((st, a), (&dir, y)) in
+                self.cur.iter().zip(self.actors).zip(self.facts.dirs.iter().zip(&self.facts.yielding))
+            {
+                self.facts.near.push(Near::new(st, a, dir, y.0.is_some()));
             }
             sc.index.along.clear();
             for i in 0..self.actors.len() {
@@ -283,7 +298,7 @@ impl<'a, 'b> Sim<'a, 'b> {
     }
 
     pub(crate) fn record(&mut self, out: &mut Tracks) {
-        if let Some(keep) = self.keep.as_deref_mut() {
+        if let Some(keep) = self.resume.keep.as_deref_mut() {
             keep.push(self.cur.clone());
         }
         for (i, st) in self.cur.iter().enumerate() {

@@ -103,7 +103,7 @@ impl Sim<'_, '_> {
             StopGoal::Behind(k) if active => Some(k),
             _ => None,
         };
-        let (yield_rem, clearing) = self.yielding[i];
+        let (yield_rem, clearing) = self.facts.yielding[i];
         let s = Step {
             i,
             a,
@@ -168,7 +168,7 @@ impl Sim<'_, '_> {
             d_next = st.d;
         }
         let stopped = stop_rem.is_some_and(|r| r - adv < 0.3) && v < 0.05;
-        let give_way = self.ruled[i];
+        let give_way = self.facts.ruled[i];
         let next = State { v, d: d_next, phase, triggered, stopped, frozen: false, give_way, ..st };
         self.move_body(i, next, adv, &lateral, side_blocked, aside)
     }
@@ -228,7 +228,7 @@ impl Sim<'_, '_> {
     /// Every agent in the way of step `s`, each one's `Constraint` folded.
     fn in_the_way(&self, sc: &mut Scratch, s: &Step) -> Constraint {
         let Step { i, a, st, d_next, lo, hi, margin, look, named, clearing, .. } = *s;
-        let fwd = self.dirs[i];
+        let fwd = self.facts.dirs[i];
         // On a straight stretch of our route, an agent's route coordinates are its coordinates
         // along the line: those that provably change nothing below are passed over without the
         // projection (the pair loop's main cost). Only when holding our offset: lateral moves
@@ -334,7 +334,7 @@ impl Sim<'_, '_> {
         let reach = l_d * slip_tan(a);
         let d_look = d_look.clamp(d_next.min(st.off - reach), d_next.max(st.off + reach));
         let aim = a.path.point_fast(st.s + l_d, d_look);
-        let k = pursuit(st.pos, self.dirs[i], aim);
+        let k = pursuit(st.pos, self.facts.dirs[i], aim);
         let (pos, yaw) = self.advance(a, &st, k, adv, 1.0);
         let Foot { s, d: off, .. } = a.path.frenet_dir(pos, st.s + adv);
         State { pos, yaw, s, off, ..next }
@@ -345,9 +345,9 @@ impl Sim<'_, '_> {
     /// is none, or when passing would take more than `PASS_MAX_SHIFT` out of the lane.
     pub(crate) fn pass_offset(&self, i: usize, look: f64) -> Option<f64> {
         let (a, st) = (&self.actors[i], &self.cur[i]);
-        let fwd = self.dirs[i];
+        let fwd = self.facts.dirs[i];
         let mut best: Option<f64> = None;
-        for &j in &self.easing {
+        for &j in &self.facts.easing {
             let (o, b) = (&self.cur[j], &self.actors[j]);
             if j == i || !matches!(b.lateral, Lat::Away { who, .. } if who == i) {
                 continue;

@@ -39,8 +39,8 @@ impl Sim<'_, '_> {
     /// order, the same ones the scan of everyone keeps.
     pub(crate) fn candidates(&self, i: usize, c: &Corridor, ix: &mut AlongIndexes, out: &mut Vec<usize>) {
         out.clear();
-        let me = (i, &self.actors[i], &self.cur[i], self.dirs[i]);
-        if self.near.len() >= ALONG_MIN_AGENTS
+        let me = (i, &self.actors[i], &self.cur[i], self.facts.dirs[i]);
+        if self.facts.near.len() >= ALONG_MIN_AGENTS
             && let Some(ln) = c.line
             && self.corridor_subset(i, c, ln, ix)
         {
@@ -50,7 +50,7 @@ impl Sim<'_, '_> {
                 }
             }
         } else {
-            for j in 0..self.near.len() {
+            for j in 0..self.facts.near.len() {
                 if self.candidate(me, c, j) {
                     out.push(j);
                 }
@@ -70,7 +70,7 @@ impl Sim<'_, '_> {
     pub(crate) fn candidate(&self, me: (usize, &Actor, &State, DVec2), c: &Corridor, j: usize) -> bool {
         let (i, a, st, fwd) = me;
         let look = c.look;
-        let b = &self.near[j];
+        let b = &self.facts.near[j];
         if j == i {
             return false;
         }
@@ -134,7 +134,7 @@ impl Sim<'_, '_> {
         let m = ALONG_MARGIN;
         let reach = c.look + a.radius + rmax;
         let back = a.hl + rmax + 1.0;
-        let g = reach * (self.dirs[i] - ln.dir).length();
+        let g = reach * (self.facts.dirs[i] - ln.dir).length();
         let s_here = ln.s0 + (st.pos - ln.origin).dot(ln.dir);
         let inside = st.s - back - m > ln.lo
             && s_here - back - g - a.hl - m > ln.lo
@@ -149,7 +149,7 @@ impl Sim<'_, '_> {
         let k = match along.iter().position(|x| x.key == key) {
             Some(k) => k,
             None => {
-                along.push(AlongIndex::new(&self.near, ln.dir));
+                along.push(AlongIndex::new(&self.facts.near, ln.dir));
                 along.len() - 1
             }
         };
@@ -168,9 +168,9 @@ impl Sim<'_, '_> {
         ix.collect(lo, hi, l_lo, l_hi, sub);
         if a.vehicle {
             // Clearing the junction for an emergency vehicle, we predict walkers only.
-            sub.extend(ix.crossing.iter().filter(|&&j| !c.clearing || !self.near[j].cleared_past));
+            sub.extend(ix.crossing.iter().filter(|&&j| !c.clearing || !self.facts.near[j].cleared_past));
         }
-        sub.extend(c.named.filter(|&j| j < self.near.len()));
+        sub.extend(c.named.filter(|&j| j < self.facts.near.len()));
         sub.sort_unstable();
         sub.dedup();
         true
@@ -211,8 +211,8 @@ mod tests {
             };
             sim.cur[k] = State { pos: p, yaw: h + turn, v: 35.0 * rnd(), s, d: lat, off: lat, ..sim.cur[k] };
         }
-        sim.dirs = sim.cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect();
-        sim.near = (0..n).map(|k| Near::new(&sim.cur[k], &actors[k], sim.dirs[k], k % 11 == 0)).collect();
+        sim.facts.dirs = sim.cur.iter().map(|s| DVec2::from_angle(s.yaw)).collect();
+        sim.facts.near = (0..n).map(|k| Near::new(&sim.cur[k], &actors[k], sim.facts.dirs[k], k % 11 == 0)).collect();
         let (mut asked, mut indexed) = (0, 0);
         for (i, ai) in actors.iter().enumerate() {
             let st = sim.cur[i];
@@ -231,7 +231,7 @@ mod tests {
                 };
                 let mut got = vec![];
                 sim.candidates(i, &c, &mut ix, &mut got);
-                let me = (i, ai, &sim.cur[i], sim.dirs[i]);
+                let me = (i, ai, &sim.cur[i], sim.facts.dirs[i]);
                 let mut want: Vec<usize> = (0..n).filter(|&j| sim.candidate(me, &c, j)).collect();
                 want.extend(c.named.filter(|&j| j != i));
                 assert_eq!(got, want, "agent {i}, look {look}");

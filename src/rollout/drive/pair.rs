@@ -131,7 +131,7 @@ impl Sim<'_, '_> {
         let Step { a, st, look, named, .. } = *s;
         let (o, b) = (&self.cur[j], &self.actors[j]);
         // cos and sin of the other's heading relative to the path's.
-        let (cr, sr) = (self.dirs[j].dot(th), th.perp_dot(self.dirs[j]));
+        let (cr, sr) = (self.facts.dirs[j].dot(th), th.perp_dot(self.facts.dirs[j]));
         let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
         let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
         // The one we queue behind, while it is on our way: once a vehicle has turned off,
@@ -269,7 +269,8 @@ impl Sim<'_, '_> {
         // at under half our speed is caught up with in the sweep: it counts as standing (a
         // bus slowing for walkers counted only below 0.5 m/s, and the bus turning in behind
         // it was stopped dead).
-        let in_sweep = o.v < 0.5 || self.yielding[j].0.is_some() || cr < -0.5 || (v_lon > 0.0 && v_lon < 0.5 * st.v);
+        let in_sweep =
+            o.v < 0.5 || self.facts.yielding[j].0.is_some() || cr < -0.5 || (v_lon > 0.0 && v_lon < 0.5 * st.v);
         let (mut band_lo, mut band_hi) = (cur_lo - margin - nose_lo, cur_hi + margin + nose_hi);
         if a.vehicle && in_sweep && gap > 0.0 {
             let (k0, k1) = (a.path.curvature(sj), a.path.curvature(sj - a.hl));
@@ -492,7 +493,7 @@ impl Sim<'_, '_> {
             let out = if v_lat > 0.0 { hi - (lj - ext_lat) } else { lj + ext_lat - lo };
             out / v_lat.abs().max(0.1) + 1.0 < way.gap.max(0.0) / st.v.max(1.0)
         };
-        let gives_way = self.yielding[j].0.is_some() || (clearing && (b.cleared_past(o) || crossed_first()));
+        let gives_way = self.facts.yielding[j].0.is_some() || (clearing && (b.cleared_past(o) || crossed_first()));
         if !obstacle && a.vehicle && v_lat.abs() > 0.3 && !gives_way {
             // A walker or an animal heading for the road gets two more seconds of slack:
             // drivers brake for someone stepping off the kerb, not only for someone already

@@ -80,7 +80,7 @@ impl Sim<'_, '_> {
         let eta = ((st.v * st.v + 2.0 * acc * dist).sqrt() - st.v) / acc;
         // Stopped, or holding for an emergency vehicle, for anything but this rule, or queued
         // behind another approaching the junction: not coming next.
-        let not_next = (st.v < 0.3 && !st.give_way) || self.yielding[i].0.is_some() || self.behind[i];
+        let not_next = (st.v < 0.3 && !st.give_way) || self.facts.yielding[i].0.is_some() || self.facts.behind[i];
         let rank = if not_next { 3 } else { 2 };
         Some(ZoneRank { order: rank, eta, rem: rem.max(0.0) })
     }
@@ -108,7 +108,7 @@ impl Sim<'_, '_> {
     /// the least distance to the stop line among the others counted on its lane (the least, or
     /// the second least where the least is `i`'s own) is below `i`'s, the same floats compared.
     pub(crate) fn queue_heads(&mut self) {
-        self.lane_least.fill([(f64::INFINITY, usize::MAX); 2]);
+        self.facts.lane_least.fill([(f64::INFINITY, usize::MAX); 2]);
         for (k, (b, o)) in self.actors.iter().zip(&self.cur).enumerate() {
             let Some(slot) = self.approach_slot[k] else { continue };
             let to_stop = b.junction.map_or(f64::NEG_INFINITY, |jb| jb.stop - (o.s + b.hl));
@@ -116,7 +116,7 @@ impl Sim<'_, '_> {
             if !counted {
                 continue;
             }
-            let least = &mut self.lane_least[slot];
+            let least = &mut self.facts.lane_least[slot];
             if to_stop < least[0].0 {
                 least[1] = least[0];
                 least[0] = (to_stop, k);
@@ -126,16 +126,16 @@ impl Sim<'_, '_> {
         }
         for i in 0..self.actors.len() {
             let (a, st) = (&self.actors[i], &self.cur[i]);
-            self.behind[i] = match (self.approach_slot[i], a.junction) {
+            self.facts.behind[i] = match (self.approach_slot[i], a.junction) {
                 (Some(slot), Some(j)) => {
                     let mine = j.stop - (st.s + a.hl);
-                    let least = self.lane_least[slot];
+                    let least = self.facts.lane_least[slot];
                     let other = if least[0].1 == i { least[1].0 } else { least[0].0 };
                     other < mine
                 }
                 _ => false,
             };
-            debug_assert_eq!(self.behind[i], self.queued(i), "queue_heads differs from queued for agent {i}");
+            debug_assert_eq!(self.facts.behind[i], self.queued(i), "queue_heads differs from queued for agent {i}");
         }
     }
 
@@ -160,7 +160,7 @@ impl Sim<'_, '_> {
         // Between an emergency vehicle and one yielding to it, the yield (`yield_state`) rules;
         // but one already too far into the junction to hold when the emergency vehicle came near
         // is clearing it, and the emergency vehicle takes its turn with it by this rule.
-        if c.emergency && !(self.actors[i].emergency && self.yielding[c.other].1) {
+        if c.emergency && !(self.actors[i].emergency && self.facts.yielding[c.other].1) {
             return None;
         }
         let ZoneRank { order: ri, eta: ei, rem } = self.rank(ranks, i, c.enter, c.meet, c.leave, t)?;
@@ -301,7 +301,7 @@ impl Sim<'_, '_> {
     /// moved on to where it holds.
     pub(crate) fn held_at(&self, j: usize) -> Option<State> {
         let o = &self.cur[j];
-        self.yielding[j].0.map(|rem| State { pos: o.pos + self.dirs[j] * rem, ..*o })
+        self.facts.yielding[j].0.map(|rem| State { pos: o.pos + self.facts.dirs[j] * rem, ..*o })
     }
 
     /// How agent `i` gives the junction to an emergency vehicle on a crossing path: short of the

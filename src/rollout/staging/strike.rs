@@ -102,7 +102,7 @@ impl Sim<'_, '_> {
             // In the last metres the contact point itself: the curve's end heading matters less
             // than reaching its end, and a short re-planned curve can bend tighter than the car.
             let aim = if len <= 3.0 * adv { g } else { curve.at(adv, gyaw).0 };
-            let (pos, yaw) = self.advance(a, &st, pursuit(st.pos, self.dirs[i], aim), adv, plan::STRIKE_YAW);
+            let (pos, yaw) = self.advance(a, &st, pursuit(st.pos, self.facts.dirs[i], aim), adv, plan::STRIKE_YAW);
             (pos, yaw, (len - adv).max(0.0))
         };
         // Reckless toward the struck agent only: it slows, within its emergency braking, rather
@@ -199,7 +199,7 @@ impl Sim<'_, '_> {
                     self.braking_course(i, trial, course);
                     built = true;
                 }
-                let vel = self.dirs[j] * o.v;
+                let vel = self.facts.dirs[j] * o.v;
                 if course.iter().any(|&(t, p, h)| {
                     let ours = Obb { center: p, yaw: h, length: 2.0 * a.hl + SAFE_MARGIN, width: 2.0 * a.hw };
                     ours.overlaps(&Obb { center: theirs_box.center + vel * t, ..theirs_box })
@@ -213,7 +213,7 @@ impl Sim<'_, '_> {
             // braking at its emergency braking from one step on: a bus swerving into the
             // oncoming lane at 20 m/s to sideswipe a car left the car coming the other way 1.3 m
             // to stop in from 5 m/s.
-            let fwd = self.dirs[j];
+            let fwd = self.facts.dirs[j];
             if b.vehicle && o.v > 0.05 && DVec2::from_angle(yaw).dot(fwd) < -0.5 && fwd.dot(pos - o.pos) > 0.0 {
                 if !built {
                     self.braking_course(i, trial, course);
