@@ -464,7 +464,7 @@ fn placement_forms_resolve_to_hand_computed_poses() {
     assert_pose(&p, "v", 18.0, 8.5, 180.0);
 }
 
-/// Each class starts only on its surfaces (README: vehicles on lanes, shoulders or the junction;
+/// Each class starts only on its surfaces (docs/language.md: vehicles on lanes, shoulders or the junction;
 /// bicycles also on sidewalks and crosswalks; pedestrians on sidewalks, crosswalks or shoulders,
 /// or anywhere with a `cross` goal; objects anywhere within 10 m of the map).
 #[test]

@@ -387,7 +387,7 @@ fn bench_e2e() {
     }
 }
 
-/// The README's BEV target is stated at 20 agents; the library's scenes have fewer, so each
+/// The BEV target is stated at 20 agents; the library's scenes have fewer, so each
 /// frame's boxes are repeated beside themselves (cost depends on box count and size, not on
 /// where the boxes stand). One core, median of 5 passes over the frames; scenes with a frame
 /// without boxes are skipped.

@@ -89,7 +89,7 @@ impl OccBackend {
             )
             .help("add `--backend grounded`, or drop the weights options for the procedural backend")),
             (true, None) => Err(Diagnostic::error("E0901", "`--backend grounded` needs `--weights FILE`")
-                .help("train weights with `rocc train generator ...` (README: \"Training the grounded backend\")")),
+                .help("train weights with `rocc train generator ...` (docs/learned-backend.md, \"Training\")")),
             (true, Some(w)) => crate::backend::grounded::Grounded::load(w, config)
                 .map(|g| OccBackend::Grounded(std::sync::Arc::new(g))),
         }

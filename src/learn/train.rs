@@ -283,7 +283,7 @@ fn io_err(what: &str, path: &Path, e: impl std::fmt::Display) -> Diagnostic {
 fn data_err(m: String) -> Diagnostic {
     Diagnostic::error("E0905", m).help(
         "pass a directory that `rocc compile --stage occ` wrote, or the nuPlan-Occ layout of docs/learned-backend.md \
-         (\"Training the grounded backend\")",
+         (\"Training on nuPlan-Occ\")",
     )
 }
 
