@@ -103,7 +103,7 @@ impl Sim<'_, '_> {
                 let behind = s_line - st.s < -LINE_EPS - c.back;
                 let too_far = s_line - st.s - a.hl - ext_lon > look + LINE_EPS;
                 let aside = l_line - ext_lat > c.hi + LINE_EPS || l_line + ext_lat < c.lo - LINE_EPS;
-                // Nor would it be predicted to cut across (see `obstacle` in `drive`).
+                // Nor would it be predicted to cut across (see `obstacle` in `Sim::respond`).
                 let v_lat = b.v * sr;
                 let steady =
                     !a.vehicle || v_lat.abs() < 0.3 - LINE_EPS || b.gives_way || (c.clearing && b.cleared_past);

@@ -12,7 +12,7 @@ pub struct Hermite {
 const HN: usize = 24;
 
 /// The four cubic Hermite basis polynomials at each sample `u = i / HN`, the same for every
-/// curve (`stage::choose` builds some 150 per conflict, the intercept one per frame).
+/// curve (`plan::choose` builds some 150 per conflict, the intercept one per frame).
 const HERMITE_BASIS: [[f64; 4]; HN + 1] = hermite_basis();
 
 const fn hermite_basis() -> [[f64; 4]; HN + 1] {
@@ -66,7 +66,7 @@ impl Hermite {
     /// Largest curvature along the curve (1/m).
     pub fn max_curvature(&self) -> f64 {
         // Each segment's direction and length once: every inner sample reads two segments
-        // (`stage::choose` asks this of some 150 curves per conflict).
+        // (`plan::choose` asks this of some 150 curves per conflict).
         let mut dir = [0.0; HN];
         let mut len = [0.0; HN];
         for (i, (d, l)) in dir.iter_mut().zip(&mut len).enumerate() {
