@@ -320,6 +320,34 @@ fn rows_are_laid_out_along_the_lane_and_continue_past_the_centre() {
 }
 
 #[test]
+fn a_row_across_lanes_of_one_arm_tapers_from_one_lane_centre_to_the_other() {
+    let placed = place_src(
+        "scenario s { duration 4 s\n road straight { lanes 2 }\n agent ego: sedan { at west.in[1], 45 m before center }\n row traffic_cone from west.in[2], 20 m before center to west.in[1], 20 m after center every 5 m\n}\n",
+    )
+    .expect("a taper across the lanes of one arm places");
+    let cones: Vec<_> = placed.agents.iter().filter(|a| a.name.starts_with("traffic_cone_row1_")).collect();
+    assert_eq!(cones.len(), 9, "40 m every 5 m, both ends included");
+    // west.in[2] is the outer eastbound lane (centre y = -5.25), west.in[1] the inner (-1.75).
+    for (k, c) in cones.iter().enumerate() {
+        let t = k as f64 / 8.0;
+        assert!((c.pose.x - (-20.0 + 5.0 * k as f64)).abs() < 1e-9, "cone {k} at x {}", c.pose.x);
+        assert!((c.pose.y - (-5.25 + 3.5 * t)).abs() < 1e-9, "cone {k} at y {}", c.pose.y);
+        assert!(c.pose.yaw.abs() < 1e-9, "cones face along the road");
+        assert!(c.pose.y < 0.0 && c.pose.y > -7.0, "cone {k} stays on the eastbound carriageway");
+    }
+}
+
+#[test]
+fn a_taper_onto_an_occupied_lane_overlaps_like_any_object() {
+    let errs = place_src(
+        "scenario s { duration 4 s\n road straight { lanes 2 }\n agent ego: sedan { at west.in[1], 15 m after center }\n row traffic_cone from west.in[2], 20 m before center to west.in[1], 20 m after center every 1 m\n}\n",
+    )
+    // At 15 m after center the taper is 0.44 m from the inner lane's centre, inside the sedan.
+    .expect_err("the taper runs into the ego");
+    assert!(errs.iter().any(|e| e.code == "E0202" && e.message.contains("`ego`")), "{errs:?}");
+}
+
+#[test]
 fn lane_placement_past_the_road_end_is_e0203() {
     let errs = place_src(
         "scenario s { duration 4 s\n road straight { lanes 1 }\n agent ego: sedan { at west.in[1], 70 m before center }\n}\n",

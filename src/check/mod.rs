@@ -1326,17 +1326,21 @@ impl Checker {
         let every = self.fixed(&r.every, Dim::Length, "row spacing", 0.1, 1000.0, "0.1..1000 m");
         let (kind, from, to, every) = (kind?, from?, to?, every?);
         let same = match (&from, &to) {
-            (Place::Lane { lane: a, .. }, Place::Lane { lane: b, .. }) => a == b,
+            // Lanes of one arm and direction run side by side: a row across them is a taper.
+            (Place::Lane { lane: a, .. }, Place::Lane { lane: b, .. }) => a.arm == b.arm && a.dir == b.dir,
             (Place::Sidewalk { arm: a, dir: d, .. }, Place::Sidewalk { arm: b, dir: e, .. }) => a == b && d == e,
             (Place::World { .. }, Place::World { .. }) => true,
             _ => false,
         };
         if !same {
             self.err(
-                Diagnostic::error("E0118", "a row runs along one lane, one sidewalk, or between two world points")
-                    .label(r.to.span(), "different lane or placement form than `from`")
-                    .label(r.from.span(), "row starts here")
-                    .help("use the same lane for both ends, e.g. `from west.in[2], 20 m before center to west.in[2], 30 m after center`"),
+                Diagnostic::error(
+                    "E0118",
+                    "a row runs along the lanes of one arm and direction, one sidewalk, or between two world points",
+                )
+                .label(r.to.span(), "different arm, direction or placement form than `from`")
+                .label(r.from.span(), "row starts here")
+                .help("put both ends on lanes of one arm and direction (a taper may change lane), e.g. `from west.in[2], 20 m before center to west.in[1], 30 m after center`"),
             );
             return None;
         }

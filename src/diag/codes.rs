@@ -220,9 +220,12 @@ must strictly increase and start at or after 0 s; an agent with a track has no `
         code: "E0118",
         title: "invalid row",
         explanation: "`row KIND from PLACE to PLACE every DIST` lines up static objects. Both ends must use\n\
-the same placement form on the same lane or sidewalk (or both world coordinates), the spacing\n\
-must be positive, and a row may hold at most 500 objects.\n
-    row traffic_cone from west.in[2], 20 m before center to east.out[2], 30 m after center every 5 m   // error: two lanes",
+the same placement form: lanes of one arm and direction (a row from one lane to another is a\n\
+taper, its objects sliding across from the first lane's centre to the second's), one sidewalk,\n\
+or world coordinates. The spacing must be positive, and a row may hold at most 500 objects.\n
+    row traffic_cone from east.in[2], 20 m before center to east.in[1], 40 m before center every 4 m   // fine: a taper
+    row traffic_cone from west.in[2], 20 m before center to east.out[2], 30 m after center every 5 m   // error: two arms
+    row traffic_cone from west.in[1], 20 m before center to west.out[1], 30 m after center every 5 m   // error: two directions",
     },
     Code {
         code: "E0119",

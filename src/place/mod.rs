@@ -226,10 +226,13 @@ fn fallback_size(class: Class) -> [f64; 3] {
 fn lay_out(c: &Concrete, map: &Map, row: &ConcreteRow, ri: usize) -> Result<Vec<PlacedAgent>, Miss> {
     // A guide line, the stations of both ends on it, and their lateral offsets and headings.
     let (guide, s0, s1, off0, off1, heading): (Guide, f64, f64, f64, f64, Option<f64>) = match (&row.from, &row.to) {
-        (Place::Lane { lane, along: a, offset: o0, heading }, Place::Lane { offset: o1, .. }) => {
+        (Place::Lane { lane, along: a, offset: o0, heading }, Place::Lane { lane: l1, offset: o1, .. }) => {
             let (g, s0) = resolve::on_lane(map, *lane, a.landmark, a.dist)?;
             let s1 = end_station(map, &g, &row.to)?;
-            (g, s0, s1, *o0, *o1, *heading)
+            // A taper ends on another lane of the arm: its centre's offset from this guide
+            // joins the end's own offset, so the row slides across linearly.
+            let off1 = if l1 == lane { *o1 } else { *o1 + lane_offset(map, &g, &row.to)? };
+            (g, s0, s1, *o0, off1, *heading)
         }
         (Place::Sidewalk { arm, dir, along: a, offset: o0, heading }, Place::Sidewalk { offset: o1, .. }) => {
             let (g, s0) = resolve::on_sidewalk(map, *arm, *dir, a.landmark, a.dist)?;
@@ -285,6 +288,14 @@ fn lay_out(c: &Concrete, map: &Map, row: &ConcreteRow, ri: usize) -> Result<Vec<
         });
     }
     Ok(elems)
+}
+
+/// Signed offset (left positive) from guide `g` of the centre of the lane under `to`, abreast
+/// of `to`'s station.
+fn lane_offset(map: &Map, g: &Guide, to: &Place<f64>) -> Result<f64, Miss> {
+    let Place::Lane { lane, along: b, .. } = to else { return Ok(0.0) };
+    let (g2, s) = resolve::on_lane(map, *lane, b.landmark, b.dist)?;
+    Ok(g.line.project(g2.line.point_at(s)).1)
 }
 
 /// Station of a row's `to` end on the guide its `from` end chose.
