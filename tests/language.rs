@@ -221,6 +221,20 @@ fn formatting_is_idempotent_keeps_comments_and_meaning() {
     }
 }
 
+/// A blank line after a statement whose optional tail is absent (a bare number) is kept the same
+/// way on every pass, with or without a `;` after it.
+#[test]
+fn blank_line_after_a_bare_number_is_kept_once_and_for_all() {
+    for src in [
+        "scenario x {\n    seed 1\n    rate 1;\n\n    road straight { lanes 1 }\n}\n",
+        "scenario x {\n    seed 1\n    rate 1\n\n    road straight { lanes 1 }\n}\n",
+    ] {
+        let once = rocc::syntax::format_source(src).expect("formats");
+        assert!(once.contains("rate 1\n\n    road"), "blank line lost:\n{once}");
+        assert_eq!(rocc::syntax::format_source(&once).expect("formats again"), once, "not idempotent");
+    }
+}
+
 #[test]
 fn scenario_library_is_canonically_formatted() {
     let mut files = scn_files(&root().join("scenarios"));

@@ -330,7 +330,11 @@ impl Printer<'_> {
                 self.flush_before(span.start as usize);
                 self.blank_line_before(span.start as usize);
                 self.line(text);
-                self.last_end = span.end as usize;
+                // A statement ending in an optional part that is absent (`rate 1`, no unit) has
+                // the whitespace after it in its span (pest skips it before trying the part): the
+                // gap to the next one, and any blank line in it, starts where its text ends.
+                let end = span.end as usize;
+                self.last_end = span.start as usize + self.src[span.start as usize..end].trim_end().len();
                 self.flush_before(span.end as usize);
             }
             Doc::Block { header, span, items, .. } => {
