@@ -1,0 +1,180 @@
+//! Agent and object blocks: kind, placement, speed, size and goal, or a replayed track in place of placement and goal.
+
+use super::scenario::*;
+use super::units::Dim;
+use super::{Checker, MAX_DURATION_S, MAX_SPEED_MS};
+use crate::diag::Diagnostic;
+use crate::source::Span;
+use crate::syntax::ast;
+use std::collections::BTreeMap;
+
+impl Checker {
+    pub(super) fn agent(
+        &mut self,
+        a: &ast::Agent,
+        road: Option<&Road>,
+        order: &[&str],
+        duration: Option<f64>,
+        used: &mut BTreeMap<String, Kind>,
+    ) -> Option<Agent> {
+        let kind = self.kind_ref(&a.kind, used);
+        let class = kind.as_ref().map(|k| k.1);
+        let motion = kind.as_ref().map(|k| k.2);
+        let is_static = a.is_object || motion == Some(Motion::Static);
+        let mut place: Option<(&ast::Placement, Span)> = None;
+        let mut speed: Option<(&ast::Value, Span)> = None;
+        let mut sizes: [Option<(&ast::Value, Span)>; 3] = [None; 3];
+        let mut goal: Option<&ast::Goal> = None;
+        let mut track: Option<&ast::Track> = None;
+        for st in &a.stmts {
+            let (slot_first, what): (Option<Span>, &str) = match st {
+                ast::AgentStmt::At { place: p, span } => (place.replace((p, *span)).map(|x| x.1), "placement `at`"),
+                ast::AgentStmt::Speed { value, span } => (speed.replace((value, *span)).map(|x| x.1), "`speed`"),
+                ast::AgentStmt::Size(s) => {
+                    (sizes[s.key as usize].replace((&s.value, s.span)).map(|x| x.1), s.key.as_str())
+                }
+                ast::AgentStmt::Goal(g) => (goal.replace(g).map(|x| x.span), "`goal`"),
+                ast::AgentStmt::Track(t) => (track.replace(t).map(|x| x.span), "`track`"),
+            };
+            if let Some(first) = slot_first {
+                self.dup(what, first, st.span());
+            }
+        }
+        let what = if a.is_object { "object" } else { "agent" };
+        if is_static {
+            let label = if a.is_object {
+                "an object never moves".to_string()
+            } else {
+                format!("a {} never moves", class.map_or("static kind", |c| c.name()))
+            };
+            if let Some(g) = goal {
+                self.err(
+                    Diagnostic::error("E0113", format!("`{}` cannot have a goal: {label}", a.name.name))
+                        .label(g.span, "goal on a static thing")
+                        .help("remove the goal, or declare a moving kind with `agent`"),
+                );
+            }
+            if let Some((v, span)) = speed
+                && (v.lo.value != 0.0 || v.hi.is_some())
+            {
+                self.err(
+                    Diagnostic::error("E0113", format!("`{}` cannot have a speed: {label}", a.name.name))
+                        .label(span, "speed on a static thing")
+                        .help("remove the speed"),
+                );
+            }
+        }
+        let track_keys = track.and_then(|t| self.track(t, duration));
+        let place = match (place, track) {
+            (Some((p, _)), Some(t)) => {
+                self.err(
+                    Diagnostic::error("E0117", format!("`{}` has both a placement and a track", a.name.name))
+                        .label(t.span, "the track gives the pose")
+                        .label(p.span(), "placement")
+                        .help("remove `at ...`: the first keyframe places the agent"),
+                );
+                None
+            }
+            (None, Some(_)) => Some(Place::Track),
+            (Some((p, _)), None) => self.placement(p, road, class),
+            (None, None) => {
+                self.err(
+                    Diagnostic::error("E0106", format!("{what} `{}` has no placement", a.name.name))
+                        .label(a.name.span, "where does it start?")
+                        .help("add `at LANE, DIST before|after LANDMARK`, e.g. `at west.in[1], 20 m before center`"),
+                );
+                None
+            }
+        };
+        if let (Some(_), Some(g)) = (track, goal) {
+            self.err(
+                Diagnostic::error("E0117", format!("`{}` replays a track and cannot also have a goal", a.name.name))
+                    .label(g.span, "goal")
+                    .help("a replayed agent follows its keyframes; remove the goal"),
+            );
+        }
+        let speed_d = match speed {
+            None => Some(Dist::Fixed(0.0)),
+            Some((v, _)) => self.bounded(v, Dim::Speed, "speed", 0.0, MAX_SPEED_MS, "0..324 km/h"),
+        };
+        let mut size = [None; 3];
+        for (i, s) in sizes.iter().enumerate() {
+            if let Some((v, _)) = s {
+                let what = ["length", "width", "height"][i];
+                size[i] = Some(self.bounded(v, Dim::Length, what, 0.05, 40.0, "0.05..40 m"));
+            }
+        }
+        let goal_c = match (goal, motion) {
+            (Some(g), Some(m)) if !is_static => self.goal(g, m, class?, place.as_ref(), road, order, &a.name),
+            _ => Some(None),
+        };
+        let span = a.span;
+        let place_span = place.as_ref().and(a.stmts.iter().find_map(|s| match s {
+            ast::AgentStmt::At { place, .. } => Some(place.span()),
+            ast::AgentStmt::Track(t) => Some(t.span),
+            _ => None,
+        }));
+        let (kinds, class, motion) = kind?;
+        Some(Agent {
+            name: a.name.name.clone(),
+            kinds,
+            class,
+            motion: if a.is_object { Motion::Static } else { motion },
+            is_object: a.is_object,
+            length: size[0].flatten(),
+            width: size[1].flatten(),
+            height: size[2].flatten(),
+            place: place?,
+            speed: speed_d?,
+            goal: goal_c?,
+            track: track_keys.clone(),
+            span,
+            place_span: place_span.unwrap_or(span),
+        })
+        // A size or track that was given but invalid has been reported: no agent then.
+        .filter(|_| size.iter().all(|s| s.is_none_or(|x| x.is_some())))
+        .filter(|_| track.is_none() || track_keys.is_some())
+    }
+
+    fn track(&mut self, t: &ast::Track, duration: Option<f64>) -> Option<Vec<Keyframe>> {
+        let _ = duration;
+        if t.keys.is_empty() {
+            self.err(
+                Diagnostic::error("E0117", "a track needs at least one keyframe")
+                    .label(t.span, "empty track")
+                    .help("write keyframes as `0 s: (12.0 m, -3.5 m) yaw 90 deg`"),
+            );
+            return None;
+        }
+        let mut out = vec![];
+        let mut prev: Option<(f64, Span)> = None;
+        for k in &t.keys {
+            let tt = self.fixed(&k.t, Dim::Time, "keyframe time", 0.0, MAX_DURATION_S, "0..120 s");
+            let x = self.fixed(&k.x, Dim::Length, "x", -1000.0, 1000.0, "-1000..1000 m");
+            let y = self.fixed(&k.y, Dim::Length, "y", -1000.0, 1000.0, "-1000..1000 m");
+            let yaw = self.fixed(
+                &k.yaw,
+                Dim::Angle,
+                "yaw",
+                -4.0 * std::f64::consts::PI,
+                4.0 * std::f64::consts::PI,
+                "-720..720 deg",
+            );
+            let (Some(tt), Some(x), Some(y), Some(yaw)) = (tt, x, y, yaw) else { return None };
+            if let Some((pt, pspan)) = prev
+                && tt <= pt
+            {
+                self.err(
+                    Diagnostic::error("E0117", "keyframe times must strictly increase")
+                        .label(k.t.span, format!("{tt} s is not after {pt} s"))
+                        .label(pspan, "previous keyframe")
+                        .help("sort the keyframes by time and drop duplicates"),
+                );
+                return None;
+            }
+            prev = Some((tt, k.t.span));
+            out.push(Keyframe { t: tt, x, y, yaw });
+        }
+        Some(out)
+    }
+}
