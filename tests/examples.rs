@@ -210,38 +210,6 @@ fn the_car_leaves_the_curve_into_the_tree_and_the_tractor_drives_on() {
 
 // ---------------------------------------------------------------- behaviour pin
 
-/// FNV-1a, 64 bit.
-struct Fnv(u64);
-
-impl Fnv {
-    fn new() -> Self {
-        Fnv(0xcbf2_9ce4_8422_2325)
-    }
-    fn bytes(&mut self, b: &[u8]) {
-        for &x in b {
-            self.0 = (self.0 ^ x as u64).wrapping_mul(0x100_0000_01b3);
-        }
-    }
-    fn u64(&mut self, x: u64) {
-        self.bytes(&x.to_le_bytes());
-    }
-}
-
-/// Every pose, speed and impact of a rollout, bit for bit.
-fn track_digest(h: &mut Fnv, t: &rocc::rollout::Tracks) {
-    for (poses, speeds) in t.poses.iter().zip(&t.speeds) {
-        for (p, v) in poses.iter().zip(speeds) {
-            for x in [p.x, p.y, p.yaw, *v] {
-                h.u64(x.to_bits());
-            }
-        }
-    }
-    for r in &t.impacts {
-        h.u64(r.frame as u64);
-        h.u64(r.depth.to_bits());
-    }
-}
-
 fn scn_in(dir: &str) -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(root().join(dir))
         .unwrap_or_else(|e| panic!("{dir}: {e}"))
@@ -260,36 +228,37 @@ fn scn_in(dir: &str) -> Vec<PathBuf> {
 #[test]
 fn tracks_bev_and_occupancy_match_the_pinned_digests() {
     use rocc::backend::{Background, OccInput, Occupancy, OccupancyBackend, Procedural};
+    use rocc::fsio::Fnv1a;
     use rocc::raster::{Bev, Rasterizer};
     let mut out = String::new();
     for dir in ["scenarios", "tests/rollout-cases"] {
         for path in scn_in(dir) {
             let f = load(&path);
-            let mut h = Fnv::new();
-            track_digest(&mut h, &f.tracks);
+            let mut h = Fnv1a::new();
+            f.tracks.digest(&mut h);
             let name = path.file_stem().and_then(|n| n.to_str()).expect("utf-8 name");
-            let _ = write!(out, "{dir}/{name}: tracks {:016x}", h.0);
+            let _ = write!(out, "{dir}/{name}: tracks {:016x}", h.finish());
             if dir == "scenarios" {
                 let ego = f.concrete.egos[0];
                 let n = f.tracks.frames;
                 let bg = Background::generate(&f.map, f.concrete.seed);
                 let seed = rocc::compile::clip_seed(&f, ego);
                 let (mut raster, mut bev, mut occ) = (Rasterizer::new(), Bev::zeros(), Occupancy::empty());
-                let (mut hb, mut ho) = (Fnv::new(), Fnv::new());
+                let (mut hb, mut ho) = (Fnv1a::new(), Fnv1a::new());
                 for fr in [0, n / 2, n - 1] {
                     let pose = f.tracks.poses[ego][fr];
                     let boxes = frame_boxes(&f, ego, fr);
                     raster.rasterize_into(&f.map, pose, &boxes, &mut bev);
-                    hb.bytes(&i8_bytes(bev.masks.as_slice().expect("standard layout")));
+                    hb.write(&i8_bytes(bev.masks.as_slice().expect("standard layout")));
                     for x in bev.aux.iter() {
-                        hb.bytes(&x.to_le_bytes());
+                        hb.write(&x.to_le_bytes());
                     }
-                    hb.bytes(&i8_bytes(bev.structure.as_slice().expect("standard layout")));
+                    hb.write(&i8_bytes(bev.structure.as_slice().expect("standard layout")));
                     let input = OccInput { boxes: &boxes, bev: &bev, background: &bg, ego: pose, seed, frame: fr };
                     Procedural::default().occupancy_into(&input, &mut occ);
-                    ho.bytes(occ.labels.as_slice().expect("standard layout"));
+                    ho.write(occ.labels.as_slice().expect("standard layout"));
                 }
-                let _ = write!(out, " bev {:016x} occ {:016x}", hb.0, ho.0);
+                let _ = write!(out, " bev {:016x} occ {:016x}", hb.finish(), ho.finish());
             }
             out.push('\n');
         }

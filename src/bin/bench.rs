@@ -22,6 +22,7 @@
 use rayon::prelude::*;
 use rocc::backend::{Background, OccInput, Occupancy, OccupancyBackend, Procedural, write_npy};
 use rocc::compile::{Front, Options, batch, frame_boxes, front};
+use rocc::fsio::Fnv1a;
 use rocc::lidar::{Rig, scan, write_bin, write_pcd};
 use rocc::output::write_npz;
 use rocc::raster::{Bev, Rasterizer};
@@ -123,41 +124,20 @@ fn bench_front() {
     }
 }
 
-/// FNV-1a over every pose, speed and impact of a rollout, bit for bit: a speed-up must leave it
-/// unchanged (`bench rollout` prints one digest over all the scenes it times and the shared
-/// examples).
-fn digest(h: &mut u64, t: &rocc::rollout::Tracks) {
-    let mut eat = |x: u64| {
-        for b in x.to_le_bytes() {
-            *h = (*h ^ b as u64).wrapping_mul(0x100_0000_01b3);
-        }
-    };
-    for (poses, speeds) in t.poses.iter().zip(&t.speeds) {
-        for (p, v) in poses.iter().zip(speeds) {
-            for x in [p.x, p.y, p.yaw, *v] {
-                eat(x.to_bits());
-            }
-        }
-    }
-    for r in &t.impacts {
-        eat(r.frame as u64);
-        eat(r.depth.to_bits());
-    }
-}
-
 fn bench_rollout() {
     println!("== rollout: cost per agent-frame (one core; median wall time of 20 runs, then mean CPU time)");
     let mut total = (0.0, 0usize, 0.0);
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    // Every track rolled out below, bit for bit (`Tracks::digest`): a speed-up must leave it as it is.
+    let mut h = Fnv1a::new();
     let shared = batch::collect_inputs(&[root().join("tests/fixtures/examples")]).unwrap_or_default();
     for p in &shared {
         if let Some(f) = load(p) {
-            digest(&mut h, &f.tracks);
+            f.tracks.digest(&mut h);
         }
     }
     for p in library() {
         let Some(f) = load(&p) else { continue };
-        digest(&mut h, &f.tracks);
+        f.tracks.digest(&mut h);
         let (t, c) = median_cpu(20, || {
             std::hint::black_box(rocc::rollout::rollout(&f.concrete, &f.map, &f.placed).is_ok());
         });
@@ -191,7 +171,7 @@ fn bench_rollout() {
             std::hint::black_box(rocc::rollout::rollout(&f.concrete, &f.map, &f.placed).is_ok());
         });
         let af = (f.tracks.agents.len() * f.tracks.frames) as f64;
-        digest(&mut h, &f.tracks);
+        f.tracks.digest(&mut h);
         println!(
             "  generated {n} agents x {} frames: {:.3} us/agent-frame  cpu {:.3}",
             f.tracks.frames,
@@ -199,7 +179,7 @@ fn bench_rollout() {
             c * 1e6 / af
         );
     }
-    println!("  digest of every track above and of {} shared examples: {h:016x}", shared.len());
+    println!("  digest of every track above and of {} shared examples: {:016x}", shared.len(), h.finish());
 }
 
 /// One scene rolled out for `secs` seconds, so that a profiler sees nothing else.

@@ -118,9 +118,7 @@ fn goal(c: &Crash, v: &VehicleDesc) -> String {
 
 /// The seed: the numeric case id, or a stable hash of it.
 fn seed(id: &str) -> u64 {
-    id.parse().unwrap_or_else(|_| {
-        id.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
-    })
+    id.parse().unwrap_or_else(|_| crate::fsio::fnv1a(id.as_bytes()))
 }
 
 /// The `.scn` text of a crash under one staging.

@@ -363,9 +363,7 @@ impl Run {
 
 /// The scenario seed of a case: its number when the id is one, else a hash of it.
 pub fn default_seed(id: &str) -> u64 {
-    id.parse::<u64>().unwrap_or_else(|_| {
-        id.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3))
-    })
+    id.parse::<u64>().unwrap_or_else(|_| crate::fsio::fnv1a(id.as_bytes()))
 }
 
 /// rocc's decisions, re-imposed on every scene the model writes: no conflict block (the

@@ -3,7 +3,7 @@
 //! the same directory, then renamed, so an interrupted run never leaves a truncated file under a
 //! final name and a re-run can resume (no fsync: that protects against a crash of the process,
 //! not of the machine). Also here: the sweep of the temporaries a killed run leaves, and the
-//! content hash that manifests record.
+//! content hash that manifests record (FNV-1a, also rocc's one hash for seeds and digests).
 
 use std::fs::{self, File};
 use std::io::{self, BufWriter};
@@ -74,10 +74,58 @@ pub fn sweep_stale_tmp(dir: &Path) -> io::Result<usize> {
 /// Content hash used in manifests: FNV-1a 64, hex, prefixed by its name. It identifies inputs
 /// (did the file change?); it is not a cryptographic digest.
 pub fn input_hash(bytes: &[u8]) -> String {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for &b in bytes {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0100_0000_01b3);
+    format!("fnv1a64:{:016x}", fnv1a(bytes))
+}
+
+/// FNV-1a, 64 bit, of `bytes`: a stable hash of names and contents (seeds from names, the
+/// manifest's content hash). Not a cryptographic digest.
+pub fn fnv1a(bytes: &[u8]) -> u64 {
+    Fnv1a::new().write(bytes).finish()
+}
+
+/// FNV-1a, 64 bit, fed in pieces (`Tracks::digest` feeds it every pose bit for bit).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Fnv1a(u64);
+
+impl Default for Fnv1a {
+    fn default() -> Self {
+        Self::new()
     }
-    format!("fnv1a64:{h:016x}")
+}
+
+impl Fnv1a {
+    pub const fn new() -> Self {
+        Fnv1a(0xcbf2_9ce4_8422_2325)
+    }
+
+    pub fn write(&mut self, bytes: &[u8]) -> &mut Self {
+        for &b in bytes {
+            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+        self
+    }
+
+    /// `x`'s little-endian bytes.
+    pub fn write_u64(&mut self, x: u64) -> &mut Self {
+        self.write(&x.to_le_bytes())
+    }
+
+    pub fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The published FNV-1a 64 test vectors, whole and fed in pieces.
+    #[test]
+    fn fnv1a_gives_the_reference_values() {
+        assert_eq!(fnv1a(b""), 0xcbf2_9ce4_8422_2325);
+        assert_eq!(fnv1a(b"a"), 0xaf63_dc4c_8601_ec8c);
+        assert_eq!(fnv1a(b"foobar"), 0x8594_4171_f739_67e8);
+        assert_eq!(Fnv1a::new().write(b"foo").write(b"bar").finish(), fnv1a(b"foobar"));
+        assert_eq!(Fnv1a::new().write_u64(7).finish(), fnv1a(&7u64.to_le_bytes()));
+    }
 }

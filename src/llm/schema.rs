@@ -221,11 +221,7 @@ pub fn apply(s: &mut Schema, o: &Overrides, sentence: &str) {
     if let Some(r) = o.randomness {
         s.randomness = Some(r);
     }
-    s.seed = o.seed.or(s.seed).or(Some(fnv1a(sentence.as_bytes()) % 1_000_000));
-}
-
-pub fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3))
+    s.seed = o.seed.or(s.seed).or(Some(crate::fsio::fnv1a(sentence.as_bytes()) % 1_000_000));
 }
 
 /// The `at ...` placement of one agent.

@@ -128,6 +128,24 @@ pub fn limits(class: Class, motion: Motion) -> Limits {
     }
 }
 
+impl Tracks {
+    /// Feed every pose, speed and impact (frame and depth) to `h`, bit for bit: the digest that
+    /// pins the rollout (`bench rollout`, the pin test), which a change that claims to change
+    /// nothing must leave as it is.
+    pub fn digest(&self, h: &mut crate::fsio::Fnv1a) {
+        for (poses, speeds) in self.poses.iter().zip(&self.speeds) {
+            for (p, v) in poses.iter().zip(speeds) {
+                for x in [p.x, p.y, p.yaw, *v] {
+                    h.write_u64(x.to_bits());
+                }
+            }
+        }
+        for r in &self.impacts {
+            h.write_u64(r.frame as u64).write_u64(r.depth.to_bits());
+        }
+    }
+}
+
 /// Smallest turning radius of a vehicle's box centre, m, from its kind's box length (the stdlib
 /// priors carry no wheelbase): a kinematic bicycle with wheelbase `0.6 * length` (a sedan's
 /// 2.8 m at 4.65 m, a city bus's 7.2 m at 12 m) and a largest steering angle of 35 degrees

@@ -17,11 +17,7 @@ impl Rng {
     /// An independent stream for a named consumer (an agent, a row, the traffic pass).
     pub fn stream(seed: u64, name: &str) -> Self {
         // FNV-1a of the name, mixed with the seed.
-        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-        for b in name.bytes() {
-            h ^= u64::from(b);
-            h = h.wrapping_mul(0x0000_0100_0000_01b3);
-        }
+        let h = crate::fsio::fnv1a(name.as_bytes());
         let mut r = Rng::new(seed ^ h.rotate_left(17));
         r.next_u64();
         r
