@@ -157,8 +157,7 @@ impl Sim<'_, '_> {
         }
         let (v_lon, v_lat) = (o.v * cr, o.v * sr);
         let way = self.way(s, &x, gap, v_lon);
-        let (acc, hard) = self.respond(s, &x, &way, v_lon, v_lat);
-        Constraint { acc, hard, touch_rem: way.touch_rem, ..c }
+        self.respond(s, &x, &way, v_lon, v_lat).and(Constraint { touch_rem: way.touch_rem, ..c })
     }
 
     /// The lateral move's side of a pair: whether `x` beside us blocks the move (`side_blocked`),
@@ -278,15 +277,6 @@ impl Sim<'_, '_> {
             band_hi += swing(a.hl, (-k0).max(-k1).max(0.0));
         }
         let in_cur = lj - ext_lat < band_hi && lj + ext_lat > band_lo;
-        // Our sweep through the junction (the dry run's, `Bend::slices`) where it lies on the road:
-        // one it reaches is in our way from the first metre that reaches it; one holding at its
-        // line, also where it will stand there (rolling up to it, it was found only once inside).
-        // Laid out in the straight frame at the other's projection, a U-turn's loop reached over
-        // cars holding well clear of it. Also one whose centre is ahead of ours but whose box the
-        // straight frame puts beside us: in a turn our box heads elsewhere than the path at its
-        // projection, and a car standing across an ambulance's wide U-turn lay straight ahead of
-        // the box and 6 m beside the path (tests/rollout-cases/ambulance-u-turn-sedan-in-loop.scn).
-        // The slices are then searched at least two box lengths on.
         let mut way = Way { in_cur, gap, swept: false, band_lo, band_hi, touch_rem: f64::INFINITY };
         self.sweep_hits(s, x, in_sweep, &mut way);
         self.turned_box(s, x, &mut way);
@@ -300,6 +290,15 @@ impl Sim<'_, '_> {
     fn sweep_hits(&self, s: &Step, x: &Other, in_sweep: bool, way: &mut Way) {
         let Step { a, st, lim, .. } = *s;
         let Other { j, o, b, sj, ext_lon, ds, .. } = *x;
+        // Our sweep through the junction (the dry run's, `Bend::slices`) where it lies on the road:
+        // one it reaches is in our way from the first metre that reaches it; one holding at its
+        // line, also where it will stand there (rolling up to it, it was found only once inside).
+        // Laid out in the straight frame at the other's projection, a U-turn's loop reached over
+        // cars holding well clear of it. Also one whose centre is ahead of ours but whose box the
+        // straight frame puts beside us: in a turn our box heads elsewhere than the path at its
+        // projection, and a car standing across an ambulance's wide U-turn lay straight ahead of
+        // the box and 6 m beside the path (tests/rollout-cases/ambulance-u-turn-sedan-in-loop.scn).
+        // The slices are then searched at least two box lengths on.
         let sweep_hi = (sj + ext_lon + a.hl + 2.0 * b.hl).max(st.s + 2.0 * (a.hl + b.hl) + 5.0);
         if !way.in_cur
             && a.vehicle
@@ -475,7 +474,7 @@ impl Sim<'_, '_> {
 
     /// How `x`, in our way now or predicted to cut into it (`way`), bounds our acceleration and
     /// how far our centre may go this step.
-    fn respond(&self, s: &Step, x: &Other, way: &Way, v_lon: f64, v_lat: f64) -> (f64, f64) {
+    fn respond(&self, s: &Step, x: &Other, way: &Way, v_lon: f64, v_lat: f64) -> Constraint {
         let Step { i, a, st, t, lim, dt, lo, hi, margin, shortest, clearing, .. } = *s;
         let Other { j, o, b, lj, ext_lat, is_named, .. } = *x;
         let (mut acc, mut hard) = (f64::INFINITY, f64::INFINITY);
@@ -504,7 +503,7 @@ impl Sim<'_, '_> {
             obstacle = lj.min(l2) - ext_lat < hi && lj.max(l2) + ext_lat > lo;
         }
         if !obstacle {
-            return (f64::INFINITY, f64::INFINITY);
+            return Constraint::FREE;
         }
         let s0 = if is_named { 2.0 } else { lim.min_gap };
         // A striker coming at us does not stop for us: it comes on to its target, where the
@@ -546,6 +545,6 @@ impl Sim<'_, '_> {
             // stood there (-19 m/s2): the striker's contact pose below did.
             acc = acc.min(self.safe_acc(i, j, acc_gap, v_lon, t));
         }
-        (acc, hard)
+        Constraint { acc, hard, ..Constraint::FREE }
     }
 }
