@@ -228,15 +228,15 @@ fn lay_out(c: &Concrete, map: &Map, row: &ConcreteRow, ri: usize) -> Result<Vec<
     let (guide, s0, s1, off0, off1, heading): (Guide, f64, f64, f64, f64, Option<f64>) = match (&row.from, &row.to) {
         (Place::Lane { lane, along: a, offset: o0, heading }, Place::Lane { lane: l1, offset: o1, .. }) => {
             let (g, s0) = resolve::on_lane(map, *lane, a.landmark, a.dist)?;
-            let s1 = end_station(map, &g, &row.to)?;
+            let (s1, across) = end_on(map, &g, &row.to)?;
             // A taper ends on another lane of the arm: its centre's offset from this guide
             // joins the end's own offset, so the row slides across linearly.
-            let off1 = if l1 == lane { *o1 } else { *o1 + lane_offset(map, &g, &row.to)? };
+            let off1 = if l1 == lane { *o1 } else { *o1 + across };
             (g, s0, s1, *o0, off1, *heading)
         }
         (Place::Sidewalk { arm, dir, along: a, offset: o0, heading }, Place::Sidewalk { offset: o1, .. }) => {
             let (g, s0) = resolve::on_sidewalk(map, *arm, *dir, a.landmark, a.dist)?;
-            let s1 = end_station(map, &g, &row.to)?;
+            let (s1, _) = end_on(map, &g, &row.to)?;
             (g, s0, s1, *o0, *o1, *heading)
         }
         _ => {
@@ -290,35 +290,29 @@ fn lay_out(c: &Concrete, map: &Map, row: &ConcreteRow, ri: usize) -> Result<Vec<
     Ok(elems)
 }
 
-/// Signed offset (left positive) from guide `g` of the centre of the lane under `to`, abreast
-/// of `to`'s station.
-fn lane_offset(map: &Map, g: &Guide, to: &Place<f64>) -> Result<f64, Miss> {
-    let Place::Lane { lane, along: b, .. } = to else { return Ok(0.0) };
-    let (g2, s) = resolve::on_lane(map, *lane, b.landmark, b.dist)?;
-    Ok(g.line.project(g2.line.point_at(s)).1)
-}
-
-/// Station of a row's `to` end on the guide its `from` end chose.
-fn end_station(map: &Map, g: &Guide, to: &Place<f64>) -> Result<f64, Miss> {
+/// Station of a row's `to` end on the guide its `from` end chose, and the signed offset (left
+/// positive) from the guide of that end's own line there (0 on the guide itself; of a lane end,
+/// its lane's centre, which a taper across lanes slides to).
+fn end_on(map: &Map, g: &Guide, to: &Place<f64>) -> Result<(f64, f64), Miss> {
     match to {
         Place::Lane { lane, along: b, .. } => {
             let (g2, s) = resolve::on_lane(map, *lane, b.landmark, b.dist)?;
             if g2.line == g.line {
-                return Ok(s);
+                return Ok((s, 0.0));
             }
             let p = g2.line.pose_at(s).0;
-            Ok(g.line.project(p).0)
+            Ok(g.line.project(p))
         }
         Place::Sidewalk { arm, dir, along: b, .. } => {
             let (g2, s) = resolve::on_sidewalk(map, *arm, *dir, b.landmark, b.dist)?;
             if g2.line == g.line {
-                return Ok(s);
+                return Ok((s, 0.0));
             }
-            Ok(g.line.project(g2.line.pose_at(s).0).0)
+            Ok(g.line.project(g2.line.pose_at(s).0))
         }
         other => {
             let p = resolve::pose(map, other, None)?;
-            Ok(g.line.project(DVec2::new(p.x, p.y)).0)
+            Ok(g.line.project(DVec2::new(p.x, p.y)))
         }
     }
 }
