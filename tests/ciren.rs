@@ -344,3 +344,146 @@ fn generated_files_check_format_and_are_deterministic() {
     assert!(fmt.success(), "the emitter writes canonical layout");
     let _ = std::fs::remove_dir_all(&out);
 }
+
+// ------------------------------------------------------------------ generated records
+
+/// One coded record built from the fields the importer reads: the configuration, the narrated
+/// directions, junction and road, the coded areas, movements and body types.
+#[derive(Debug, Clone)]
+struct Record {
+    config: &'static str,
+    junction: &'static str,
+    relation: &'static str,
+    alignment: &'static str,
+    lanes: u32,
+    dirs: [Option<&'static str>; 2],
+    areas: [&'static str; 2],
+    moves: [&'static str; 2],
+    bodies: [&'static str; 2],
+}
+
+impl Record {
+    fn xml(&self) -> String {
+        let travel = |n: usize, word: &str| match self.dirs[n] {
+            Some(d) => format!("Vehicle {word} (V{}) was traveling {d} in the {d}bound lane of a road. ", n + 1),
+            None => format!("Vehicle {word} (V{}) was on a road. ", n + 1),
+        };
+        let summary = format!(
+            "{}{}{}The front of V2 struck the {} of V1.",
+            travel(0, "one"),
+            travel(1, "two"),
+            self.junction,
+            self.areas[0].to_lowercase()
+        );
+        fn area_code(a: &str) -> &str {
+            &a[..1]
+        }
+        let form = |n: usize| {
+            format!(
+                r#"<GeneralVehicleForm VehicleNumber="{v}">
+      <Vehicle><BodyType value="1" sasCode="1">{body}</BodyType></Vehicle>
+      <OfficialRecords><PoliceReport><TravelSpeed UOM="kmph" value="40" sasCode="40">40</TravelSpeed><PostedSpeedLimit UOM="kmph" value="50" sasCode="50">50</PostedSpeedLimit></PoliceReport></OfficialRecords>
+      <Precrash><Trafficway><RelationToJunction value="1" sasCode="1">{rel}</RelationToJunction><RelationToFlow value="1" sasCode="4">Not physically divided (two way traffic)</RelationToFlow></Trafficway><Roadway><TravelLanes value="{l}" sasCode="{l}">{l}</TravelLanes><Alignment value="1" sasCode="1">{al}</Alignment></Roadway></Precrash>
+      <Driver><PreeventMovement value="1" sasCode="01">{mv}</PreeventMovement></Driver>
+    </GeneralVehicleForm>"#,
+                v = n + 1,
+                body = self.bodies[n],
+                rel = self.relation,
+                l = self.lanes,
+                al = self.alignment,
+                mv = self.moves[n],
+            )
+        };
+        format!(
+            r#"<?xml version="1.0" encoding="UTF-8"?>
+<Case CaseID="990001">
+  <CaseForm>
+    <CaseSummary>
+      <CrashType value="1" sasCode="01">Vehicle to vehicle</CrashType>
+      <Configuration value="2" sasCode="02">{cfg}</Configuration>
+      <Summary>{summary}</Summary>
+    </CaseSummary>
+    <Events>
+      <EventSum VehicleNumber="1" EventNumber="1"><Rank>1</Rank><Class value="2" sasCode="2">Compact</Class><AreaOfDamage value="1" sasCode="{a1c}">{a1}</AreaOfDamage><Contacted value="2" sasCode="2">Vehicle#2</Contacted><ContactedClass value="2" sasCode="2">Compact</ContactedClass><ContactedAreaOfDamage value="1" sasCode="{a2c}">{a2}</ContactedAreaOfDamage></EventSum>
+    </Events>
+  </CaseForm>
+  <GeneralVehicleForms>
+    {f1}
+    {f2}
+  </GeneralVehicleForms>
+</Case>
+"#,
+            cfg = self.config,
+            a1 = self.areas[0],
+            a1c = area_code(self.areas[0]),
+            a2 = self.areas[1],
+            a2c = area_code(self.areas[1]),
+            f1 = form(0),
+            f2 = form(1),
+        )
+    }
+}
+
+fn record() -> impl proptest::strategy::Strategy<Value = Record> {
+    use proptest::prelude::*;
+    let dir = prop_oneof![Just(None), Just(Some("north")), Just(Some("south")), Just(Some("east")), Just(Some("west"))];
+    let area = prop_oneof![Just("Front"), Just("Back"), Just("Left Side"), Just("Right Side")];
+    let mv = prop_oneof![
+        Just("Going Straight"),
+        Just("Turning left"),
+        Just("Turning right"),
+        Just("Stopped in traffic lane"),
+        Just("Unknown")
+    ];
+    let body = prop_oneof![Just("4-door sedan, hardtop"), Just("Compact utility"), Just("Pickup"), Just("Minivan")];
+    let road = (
+        prop_oneof![Just("Angle/sideswipe"), Just("Head-on"), Just("Rear end")],
+        prop_oneof![
+            Just(""),
+            Just("It was approaching a 4-leg intersection. "),
+            Just("It was approaching a T-intersection. ")
+        ],
+        prop_oneof![Just("Intersection related / non-interchange"), Just("Non-junction")],
+        prop_oneof![Just("Straight"), Just("Curve right"), Just("Curve left")],
+        1u32..=4,
+    );
+    (road, [dir.clone(), dir], [area.clone(), area], [mv.clone(), mv], [body.clone(), body]).prop_map(
+        |((config, junction, relation, alignment, lanes), dirs, areas, moves, bodies)| Record {
+            config,
+            junction,
+            relation,
+            alignment,
+            lanes,
+            dirs,
+            areas,
+            moves,
+            bodies,
+        },
+    )
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig { cases: 96, ..Default::default() })]
+
+    /// Whatever a coded record says, the importer either stages it or refuses it with a reason:
+    /// it never emits a scenario its own checker rejects.
+    #[test]
+    fn the_importer_never_emits_a_scenario_that_fails_to_check(r in record()) {
+        let d = tmp(&format!("gen-{}", std::thread::current().name().unwrap_or("t").len()));
+        let p = d.join("crash_report.xml");
+        std::fs::write(&p, r.xml()).expect("write");
+        let mut sources = SourceMap::default();
+        if let Err(diags) = ciren::import_case(&p, &mut sources) {
+            for x in &diags {
+                proptest::prop_assert!(
+                    !x.message.contains("does not check"),
+                    "{}: {}\n{}",
+                    x.code,
+                    x.message,
+                    r.xml()
+                );
+            }
+        }
+        let _ = std::fs::remove_dir_all(&d);
+    }
+}

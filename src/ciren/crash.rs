@@ -130,14 +130,25 @@ pub fn man_word(m: Manoeuvre) -> &'static str {
     }
 }
 
-/// A T-junction's stem (rotated to `south`) has no straight on: a vehicle going straight there
-/// turns right, said in its notes.
-pub fn stem_turn(template: Template, arm: &str, man: Manoeuvre, notes: &mut Vec<String>) -> Manoeuvre {
-    if template == Template::TJunction && arm == "south" && man == Manoeuvre::Straight {
-        notes.push("no straight on from a T's stem: turns right".into());
-        return Manoeuvre::TurnRight;
+/// A T-junction has no north leg (its stem is rotated to `south`): a manoeuvre that would leave
+/// by it becomes one the T holds, said in the vehicle's notes. From the stem, straight on turns
+/// right; from the west, a left turn and from the east a right turn go straight on.
+pub fn t_junction_turn(template: Template, arm: &str, man: Manoeuvre, notes: &mut Vec<String>) -> Manoeuvre {
+    if template != Template::TJunction {
+        return man;
     }
-    man
+    match (arm, man) {
+        ("south", Manoeuvre::Straight) => {
+            notes.push("no straight on from a T's stem: turns right".into());
+            Manoeuvre::TurnRight
+        }
+        ("west", Manoeuvre::TurnLeft) | ("east", Manoeuvre::TurnRight) => {
+            let turn = if man == Manoeuvre::TurnLeft { "left" } else { "right" };
+            notes.push(format!("a {turn} turn from the T's {arm} arm would leave by its missing leg: straight on"));
+            Manoeuvre::Straight
+        }
+        _ => man,
+    }
 }
 
 /// Where a vehicle starts, in rocc's arms: `arm.in[lane]`.

@@ -10,7 +10,7 @@
 use super::case::{CaseVehicle, CirenCase, Coded, Event};
 use super::crash::{
     Compass, ConflictDesc, Crash, Face, Manoeuvre, ObjectDesc, RoadDesc, Side, Template, VehicleDesc, approach_arm,
-    man_word, stem_turn,
+    man_word, t_junction_turn,
 };
 use super::narrative::{self, Junction, LanePos, Move, Narrative, Side2};
 use crate::check::scenario::{Impact, Point};
@@ -778,6 +778,26 @@ fn two_vehicles(
                 "the narrated directions do not fit a T-junction; check the case's Summary",
             ));
         }
+        // A road without a junction runs west-east in rocc's frame (rotated by the struck
+        // vehicle's travel): a vehicle travelling across it has no lane to start in.
+        if matches!(template, Template::Straight | Template::Curve { .. })
+            && matches!(rdir, Compass::North | Compass::South)
+        {
+            return Err(cx.err(
+                "E0804",
+                format!(
+                    "V{} travels {} ({dir_cite}), across the road V{} travels {} on, and the record codes no \
+                     junction: rocc's roads without a junction hold traffic along them only",
+                    v.number,
+                    dir.name(),
+                    st.number,
+                    d_st.name()
+                ),
+                cx.case.summary.as_ref().map(|s| (cx.span(s), "the directions are narrated here")),
+                "a vehicle coming out of a driveway or crossing away from a junction is written by hand on a \
+                 `t_junction` (its stem as the driveway); check the case's Summary and RelationToJunction",
+            ));
+        }
         notes.push(format!("travels {} ({dir_cite}) -> {arm}.in[{lane}]: {lane_cite}", dir.name()));
         // Manoeuvres the template cannot hold fall back to straight on, said so.
         let junction = template.has_junction();
@@ -797,7 +817,7 @@ fn two_vehicles(
             Manoeuvre::Merge if template != Template::Merge => Manoeuvre::Straight,
             m => m,
         };
-        man = stem_turn(template, arm, man, &mut notes);
+        man = t_junction_turn(template, arm, man, &mut notes);
         notes.push(format!("manoeuvre {}: {man_cite}", man_word(man)));
         let (speed, speed_cite) = speed_of(cx, v, limit, man);
         notes.push(format!("speed: {speed_cite}"));

@@ -12,7 +12,8 @@
 
 use super::case::read_capped;
 use super::crash::{
-    Compass, ConflictDesc, Crash, Face, Manoeuvre, RoadDesc, Template, VehicleDesc, approach_arm, man_word, stem_turn,
+    Compass, ConflictDesc, Crash, Face, Manoeuvre, RoadDesc, Template, VehicleDesc, approach_arm, man_word,
+    t_junction_turn,
 };
 use super::record::{TURN_KMH, kind_for};
 use crate::check::scenario::{Impact, Point};
@@ -755,7 +756,7 @@ fn map(cx: &mut Ctx, root: &Value, path: &Path) -> Result<Crash, Vec<Diagnostic>
             notes.push(format!("Actions \"{}\": no junction to turn at on this road: straight on", a.action));
             man = Manoeuvre::Straight;
         }
-        man = stem_turn(template, arm, man, &mut notes);
+        man = t_junction_turn(template, arm, man, &mut notes);
         // A stopped car stays stopped: 0 mph, or an action that says so.
         let stopped = man == Manoeuvre::Stopped || sp.kmh == Some(0.0);
         if stopped {

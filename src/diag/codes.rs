@@ -768,8 +768,9 @@ scenario by hand.
 the message says which: a rollover (rocc stages planar contacts between boxes on the ground), a
 non-collision, a pedestrian record, a contact by a vehicle's back, top or undercarriage (rocc
 strikes with a front or a side), a fixed object rocc has no kind for (ditch, embankment, curb),
-a side impact with a tree, a T-junction approached from its missing leg, or a SAFE extraction
-with one vehicle or more than two.
+a side impact with a tree, a T-junction approached from its missing leg, a vehicle travelling
+across a road the record codes without a junction (out of a driveway: write it by hand on a
+`t_junction`), or a SAFE extraction with one vehicle or more than two.
 
     rocc ciren import ciren/100412 -o scn/   # error: the case codes a rollover",
     },
