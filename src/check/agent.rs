@@ -26,6 +26,7 @@ impl Checker {
         let mut sizes: [Option<(&ast::Value, Span)>; 3] = [None; 3];
         let mut goal: Option<&ast::Goal> = None;
         let mut track: Option<&ast::Track> = None;
+        let mut posture: Option<(&ast::Ident, Span)> = None;
         for st in &a.stmts {
             let (slot_first, what): (Option<Span>, &str) = match st {
                 ast::AgentStmt::At { place: p, span } => (place.replace((p, *span)).map(|x| x.1), "placement `at`"),
@@ -35,6 +36,7 @@ impl Checker {
                 }
                 ast::AgentStmt::Goal(g) => (goal.replace(g).map(|x| x.span), "`goal`"),
                 ast::AgentStmt::Track(t) => (track.replace(t).map(|x| x.span), "`track`"),
+                ast::AgentStmt::Posture { word, span } => (posture.replace((word, *span)).map(|x| x.1), "`posture`"),
             };
             if let Some(first) = slot_first {
                 self.dup(what, first, st.span());
@@ -76,7 +78,8 @@ impl Checker {
                 None
             }
             (None, Some(_)) => Some(Place::Track),
-            (Some((p, _)), None) => self.placement(p, road, class),
+            // A static thing (a wreck) may lie anywhere on or near the map, a sidewalk included.
+            (Some((p, _)), None) => self.placement(p, road, class.filter(|_| !is_static)),
             (None, None) => {
                 self.err(
                     Diagnostic::error("E0106", format!("{what} `{}` has no placement", a.name.name))
@@ -108,6 +111,7 @@ impl Checker {
             (Some(g), Some(m)) if !is_static => self.goal(g, m, class?, place.as_ref(), road, order, &a.name),
             _ => Some(None),
         };
+        let posture = self.posture(posture, class, motion);
         let span = a.span;
         let place_span = place.as_ref().and(a.stmts.iter().find_map(|s| match s {
             ast::AgentStmt::At { place, .. } => Some(place.span()),
@@ -128,6 +132,7 @@ impl Checker {
             speed: speed_d?,
             goal: goal_c?,
             track: track_keys.clone(),
+            posture: posture?,
             span,
             place_span: place_span.unwrap_or(span),
         })
@@ -173,7 +178,7 @@ impl Checker {
                 return None;
             }
             prev = Some((tt, k.t.span));
-            out.push(Keyframe { t: tt, x, y, yaw });
+            out.push(Keyframe { t: tt, x, y, yaw, span: k.span });
         }
         Some(out)
     }

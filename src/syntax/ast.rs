@@ -143,11 +143,22 @@ impl KindRef {
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub enum AgentStmt {
-    At { place: Placement, span: Span },
-    Speed { value: Value, span: Span },
+    At {
+        place: Placement,
+        span: Span,
+    },
+    Speed {
+        value: Value,
+        span: Span,
+    },
     Size(SizeStmt),
     Goal(Goal),
     Track(Track),
+    /// `posture WORD` (standing, kneeling, lying), validated by the checker.
+    Posture {
+        word: Ident,
+        span: Span,
+    },
 }
 
 impl AgentStmt {
@@ -157,6 +168,7 @@ impl AgentStmt {
             AgentStmt::Size(s) => s.span,
             AgentStmt::Goal(g) => g.span,
             AgentStmt::Track(t) => t.span,
+            AgentStmt::Posture { span, .. } => *span,
         }
     }
 }

@@ -149,6 +149,7 @@ fn agent_stmt(s: &AgentStmt) -> Doc {
                 .collect(),
             fit: false,
         },
+        AgentStmt::Posture { word, span } => Doc::Line { span: *span, text: format!("posture {}", word.name) },
     }
 }
 

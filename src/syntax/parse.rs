@@ -196,6 +196,7 @@ impl Builder {
                     .collect();
                 AgentStmt::Track(Track { keys, span })
             }
+            Rule::posture_stmt => AgentStmt::Posture { word: self.ident(last(p)), span },
             r => unreachable!("grammar: agent statement {r:?}"),
         }
     }
