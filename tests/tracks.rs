@@ -148,3 +148,40 @@ fn a_sedan_jumping_90_m_sideways_off_the_road_fails_and_each_limit_names_its_key
     let walker = "scenario s { duration 3 s\n road straight { lanes 1; sidewalks on }\n agent ego: sedan { at west.in[1], 30 m before center }\n agent p: adult { track { 0 s: (0 m, -5 m) yaw 0 deg; 2 s: (0 m, -2 m) yaw 0 deg } }\n}\n";
     run(walker).expect("a walker sidesteps onto the road");
 }
+
+#[test]
+fn keyframes_in_lane_coordinates_mix_with_world_ones_and_are_checked_like_them() {
+    let scene = |keys: &str| {
+        format!(
+            "scenario s {{ duration 4 s\n road straight {{ lanes 2 }}\n agent ego: sedan {{ at west.in[1], 50 m before center; speed 10 m/s }}\n agent cutter: van {{ track {{ {keys} }} }}\n}}\n"
+        )
+    };
+    let keys = "0 s: west.in[2], 40 m before center; 1 s: west.in[2], 26 m before center; \
+                2 s: (-12 m, -3.5 m) yaw 5 deg; 3 s: west.in[1], 2 m after center offset 0.5 m left heading 0 deg";
+    let mut sources = SourceMap::default();
+    let s = check::check_text("t.scn", &scene(keys), Path::new("."), &mut sources).expect("checks");
+    let f = front(s, None).unwrap_or_else(|d| panic!("{d:?}"));
+    let i = f.tracks.agents.iter().position(|a| a.name == "cutter").expect("cutter");
+    // west.in[2] runs east 5.25 m south of the centre line; in[1] 1.75 m south.
+    for (frame, x, y, yaw) in
+        [(0, -40.0, -5.25, 0.0), (10, -26.0, -5.25, 0.0), (20, -12.0, -3.5, 5.0), (30, 2.0, -1.25, 0.0)]
+    {
+        let p = f.tracks.poses[i][frame];
+        assert!(
+            (p.x - x).abs() < 1e-6 && (p.y - y).abs() < 1e-6 && (p.yaw - f64::to_radians(yaw)).abs() < 1e-6,
+            "frame {frame}: {p:?}"
+        );
+    }
+    // Formatting keeps both forms.
+    let src = scene(keys);
+    let text = rocc::syntax::fmt::format_file(&rocc::syntax::parse(0, &src).expect("parses"), &src);
+    assert!(
+        text.contains("1 s: west.in[2], 26 m before center") && text.contains("2 s: (-12 m, -3.5 m) yaw 5 deg"),
+        "{text}"
+    );
+    let code = |keys: &str| run(&scene(keys)).expect_err(keys)[0].code;
+    // 100 m along the lane in one second, past the lane's end, and a range.
+    assert_eq!(code("0 s: west.in[2], 50 m before center; 1 s: west.in[2], 50 m after center"), "E0131");
+    assert_eq!(code("0 s: west.in[2], 50 m before center; 1 s: west.in[2], 90 m after center"), "E0203");
+    assert_eq!(code("0 s: west.in[2], 40..45 m before center"), "E0117");
+}

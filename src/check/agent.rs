@@ -66,7 +66,7 @@ impl Checker {
                 );
             }
         }
-        let track_keys = track.and_then(|t| self.track(t, duration));
+        let track_keys = track.and_then(|t| self.track(t, duration, road, class));
         let place = match (place, track) {
             (Some((p, _)), Some(t)) => {
                 self.err(
@@ -141,7 +141,13 @@ impl Checker {
         .filter(|_| track.is_none() || track_keys.is_some())
     }
 
-    fn track(&mut self, t: &ast::Track, duration: Option<f64>) -> Option<Vec<Keyframe>> {
+    fn track(
+        &mut self,
+        t: &ast::Track,
+        duration: Option<f64>,
+        road: Option<&Road>,
+        class: Option<Class>,
+    ) -> Option<Vec<Keyframe>> {
         let _ = duration;
         if t.keys.is_empty() {
             self.err(
@@ -155,17 +161,14 @@ impl Checker {
         let mut prev: Option<(f64, Span)> = None;
         for k in &t.keys {
             let tt = self.fixed(&k.t, Dim::Time, "keyframe time", 0.0, MAX_DURATION_S, "0..120 s");
-            let x = self.fixed(&k.x, Dim::Length, "x", -1000.0, 1000.0, "-1000..1000 m");
-            let y = self.fixed(&k.y, Dim::Length, "y", -1000.0, 1000.0, "-1000..1000 m");
-            let yaw = self.fixed(
-                &k.yaw,
-                Dim::Angle,
-                "yaw",
-                -4.0 * std::f64::consts::PI,
-                4.0 * std::f64::consts::PI,
-                "-720..720 deg",
-            );
-            let (Some(tt), Some(x), Some(y), Some(yaw)) = (tt, x, y, yaw) else { return None };
+            let (pose, at) = match &k.pose {
+                ast::KeyPose::World { x, y, yaw } => (self.world_key(x, y, yaw), None),
+                ast::KeyPose::Lane(p) => {
+                    let at = self.lane_key(p, road, class);
+                    (at.is_some().then_some((0.0, 0.0, 0.0)), at)
+                }
+            };
+            let (Some(tt), Some((x, y, yaw))) = (tt, pose) else { return None };
             if let Some((pt, pspan)) = prev
                 && tt <= pt
             {
@@ -178,7 +181,7 @@ impl Checker {
                 return None;
             }
             prev = Some((tt, k.t.span));
-            out.push(Keyframe { t: tt, x, y, yaw, span: k.span });
+            out.push(Keyframe { t: tt, x, y, yaw, at, span: k.span });
         }
         Some(out)
     }

@@ -365,12 +365,15 @@ pub enum Turn {
     UTurn,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Keyframe {
     pub t: f64,
     pub x: f64,
     pub y: f64,
     pub yaw: f64,
+    /// A keyframe in lane coordinates (x, y and yaw are 0 until the place pass resolves it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub at: Option<Place<f64>>,
     /// The keyframe in the source, for the place pass's E0131-E0134 and E0210.
     #[serde(skip)]
     pub span: Span,

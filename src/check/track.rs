@@ -8,8 +8,12 @@
 //! and yaw changes between two keyframes get a jitter allowance and accelerations are taken over
 //! windows of at least `WINDOW_S` (tests/fixtures/import and scenarios/replayed_cut_in.scn check).
 
-use super::scenario::{Class, Keyframe, Motion};
+use super::Checker;
+use super::scenario::{Along, Class, Dist, Keyframe, Motion, Place, Road};
+use super::units::Dim;
+use crate::diag::Diagnostic;
 use crate::geom::wrap_angle;
+use crate::syntax::ast;
 use glam::DVec2;
 
 /// What a body of some motion and class can do at most.
@@ -126,12 +130,61 @@ pub fn first_violation(keys: &[Keyframe], lim: &TrackLimits, length: f64) -> Opt
     None
 }
 
+impl Checker {
+    /// A world keyframe's x, y (m) and yaw (rad).
+    pub(super) fn world_key(&mut self, x: &ast::Value, y: &ast::Value, yaw: &ast::Value) -> Option<(f64, f64, f64)> {
+        let x = self.fixed(x, Dim::Length, "x", -1000.0, 1000.0, "-1000..1000 m");
+        let y = self.fixed(y, Dim::Length, "y", -1000.0, 1000.0, "-1000..1000 m");
+        let pi4 = 4.0 * std::f64::consts::PI;
+        let yaw = self.fixed(yaw, Dim::Angle, "yaw", -pi4, pi4, "-720..720 deg");
+        Some((x?, y?, yaw?))
+    }
+
+    /// A keyframe in lane coordinates: a lane placement with one value for each distance and
+    /// heading (a keyframe is a recorded or intended pose, not a distribution).
+    pub(super) fn lane_key(
+        &mut self,
+        p: &ast::Placement,
+        road: Option<&Road>,
+        class: Option<Class>,
+    ) -> Option<Place<f64>> {
+        let place = self.placement(p, road, class)?;
+        let fixed = |d: Dist| match d {
+            Dist::Fixed(v) => Some(v),
+            Dist::Uniform(..) => None,
+        };
+        let out = match place {
+            Place::Lane { lane, along, offset, heading } => match (fixed(along.dist), heading.map(fixed)) {
+                (Some(dist), None) => {
+                    Some(Place::Lane { lane, along: Along { landmark: along.landmark, dist }, offset, heading: None })
+                }
+                (Some(dist), Some(Some(h))) => Some(Place::Lane {
+                    lane,
+                    along: Along { landmark: along.landmark, dist },
+                    offset,
+                    heading: Some(h),
+                }),
+                _ => None,
+            },
+            _ => None,
+        };
+        if out.is_none() {
+            self.err(
+                Diagnostic::error("E0117", "a keyframe's distance and heading cannot be ranges")
+                    .label(p.span(), "a single pose is needed here")
+                    .help("write one value, e.g. `2 s: west.in[1], 20 m before center`"),
+            );
+        }
+        out
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn key(t: f64, x: f64, y: f64, yaw_deg: f64) -> Keyframe {
-        Keyframe { t, x, y, yaw: yaw_deg.to_radians(), span: Default::default() }
+        Keyframe { t, x, y, yaw: yaw_deg.to_radians(), at: None, span: Default::default() }
     }
 
     #[test]

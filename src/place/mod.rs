@@ -9,6 +9,7 @@ mod track;
 
 pub use resolve::Miss;
 pub use surface::Surfaces;
+pub use track::resolve_keys;
 
 use crate::check::scenario::{Class, Kind, Lateral, Motion, Place};
 use crate::diag::Diagnostic;

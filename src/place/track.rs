@@ -1,14 +1,31 @@
-//! A replayed `track` checked like any motion once its box is known: the feasibility limits of
-//! its kind (`check::track`, E0131-E0134) and, for a vehicle on a map, every keyframe on a lane,
-//! the shoulder or the junction (E0210). Each error names the keyframe.
+//! Tracks on the map: keyframes in lane coordinates get world poses (`resolve_keys`), then each
+//! track is checked like any motion once its box is known: the feasibility limits of its kind
+//! (`check::track`, E0131-E0134) and, for a vehicle on a map, every keyframe on a lane, the
+//! shoulder or the junction (E0210). Each error names the keyframe.
 
 use super::surface::Surfaces;
 use crate::check::scenario::{Class, Keyframe, Motion};
 use crate::check::track::{Violation, first_violation, limits};
 use crate::diag::Diagnostic;
 use crate::road::Map;
-use crate::sample::ConcreteAgent;
+use crate::sample::{Concrete, ConcreteAgent};
 use glam::DVec2;
+
+/// Give every keyframe written in lane coordinates (`2 s: west.in[1], 20 m before center`) its
+/// world pose on `map`; one beyond its lane's end is E0203 at the keyframe.
+pub fn resolve_keys(c: &mut Concrete, map: &Map) -> Result<(), Vec<Diagnostic>> {
+    let mut errs = Vec::new();
+    for a in &mut c.agents {
+        for k in a.track.iter_mut().flatten() {
+            let Some(at) = &k.at else { continue };
+            match super::resolve::pose(map, at, None) {
+                Ok(p) => (k.x, k.y, k.yaw) = (p.x, p.y, p.yaw),
+                Err(miss) => errs.push(super::off_road(&miss, &format!("a keyframe of `{}`", a.name), k.span)),
+            }
+        }
+    }
+    if errs.is_empty() { Ok(()) } else { Err(errs) }
+}
 
 /// The first infeasible step of `a`'s track and every keyframe of a moving vehicle off the road.
 pub(super) fn check(map: &Map, a: &ConcreteAgent, keys: &[Keyframe]) -> Vec<Diagnostic> {

@@ -333,10 +333,16 @@ pub struct Track {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Keyframe {
     pub t: Value,
-    pub x: Value,
-    pub y: Value,
-    pub yaw: Value,
+    pub pose: KeyPose,
     pub span: Span,
+}
+
+/// Where a keyframe puts the agent: a world pose, or a lane placement (`west.in[1], 20 m before
+/// center`) resolved on the map.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum KeyPose {
+    World { x: Value, y: Value, yaw: Value },
+    Lane(Placement),
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
