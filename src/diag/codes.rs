@@ -207,7 +207,8 @@ kind definition.\n
     Code {
         code: "E0117",
         title: "invalid track",
-        explanation: "A `track` replays recorded keyframes `TIME: (X, Y) yaw ANGLE` in the world frame. Times\n\
+        explanation: "A `track` replays keyframes `TIME: (X, Y) yaw ANGLE` in the world frame or\n\
+`TIME: LANE, DIST before|after LANDMARK` in lane coordinates (one value each, not a range). Times\n\
 must strictly increase and start at or after 0 s; an agent with a track has no `at` and no goal.\n
     agent v: sedan {
         track { 0 s: (0 m, 0 m) yaw 0 deg; 1 s: (10 m, 0 m) yaw 0 deg }   // fine
@@ -311,11 +312,11 @@ Give each keyframe the heading of the travel, or check that x and y are not swap
     Code {
         code: "E0201",
         title: "placement off a valid surface",
-        explanation: "Each class has surfaces it may start on: vehicles on lanes or shoulders; pedestrians\n\
-and bicycles on sidewalks, crosswalks, shoulders (and lanes for bicycles), or wherever a `cross`\n\
-goal starts; other objects (cones, barriers, debris, animals), static or moving, on the map or\n\
-within 10 m of it.\n
+        explanation: "Each class starts where it can physically be: moving vehicles on lanes, shoulders or\n\
+the junction; moving bicycles also on sidewalks and crosswalks; people, animals and static things\n\
+of any class (cones, debris, a wreck) anywhere on the map or within 10 m of it, lanes included.\n
     agent ego: sedan { at sidewalk(east.out), 10 m after center }   // error
+    object injured: adult { at west.in[1], 5 m before center; posture lying }   // fine
     object c: traffic_cone { at (500 m, 500 m) }                    // error: far off the map",
     },
     Code {
