@@ -690,7 +690,10 @@ fn route_goals_from_rest_without_a_speed_start_off() {
 #[test]
 fn replayed_agents_interpolate_and_hold() {
     let m = straight(1);
-    let keys = vec![Keyframe { t: 0.0, x: 0.0, y: 10.0, yaw: 3.0 }, Keyframe { t: 2.0, x: 10.0, y: 10.0, yaw: -3.0 }];
+    let keys = vec![
+        Keyframe { t: 0.0, x: 0.0, y: 10.0, yaw: 3.0, at: None, span: Default::default() },
+        Keyframe { t: 2.0, x: 10.0, y: 10.0, yaw: -3.0, at: None, span: Default::default() },
+    ];
     let mut s = car("replay", Pose { x: 0.0, y: 10.0, yaw: 3.0 }, 0.0, None);
     s.track = Some(keys);
     let t = run(vec![s], vec![], &m, 4.0);

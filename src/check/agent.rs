@@ -26,6 +26,7 @@ impl Checker {
         let mut sizes: [Option<(&ast::Value, Span)>; 3] = [None; 3];
         let mut goal: Option<&ast::Goal> = None;
         let mut track: Option<&ast::Track> = None;
+        let mut posture: Option<(&ast::Ident, Span)> = None;
         for st in &a.stmts {
             let (slot_first, what): (Option<Span>, &str) = match st {
                 ast::AgentStmt::At { place: p, span } => (place.replace((p, *span)).map(|x| x.1), "placement `at`"),
@@ -35,6 +36,7 @@ impl Checker {
                 }
                 ast::AgentStmt::Goal(g) => (goal.replace(g).map(|x| x.span), "`goal`"),
                 ast::AgentStmt::Track(t) => (track.replace(t).map(|x| x.span), "`track`"),
+                ast::AgentStmt::Posture { word, span } => (posture.replace((word, *span)).map(|x| x.1), "`posture`"),
             };
             if let Some(first) = slot_first {
                 self.dup(what, first, st.span());
@@ -64,7 +66,7 @@ impl Checker {
                 );
             }
         }
-        let track_keys = track.and_then(|t| self.track(t, duration));
+        let track_keys = track.and_then(|t| self.track(t, duration, road, class));
         let place = match (place, track) {
             (Some((p, _)), Some(t)) => {
                 self.err(
@@ -76,7 +78,8 @@ impl Checker {
                 None
             }
             (None, Some(_)) => Some(Place::Track),
-            (Some((p, _)), None) => self.placement(p, road, class),
+            // A static thing (a wreck) may lie anywhere on or near the map, a sidewalk included.
+            (Some((p, _)), None) => self.placement(p, road, class.filter(|_| !is_static)),
             (None, None) => {
                 self.err(
                     Diagnostic::error("E0106", format!("{what} `{}` has no placement", a.name.name))
@@ -108,6 +111,7 @@ impl Checker {
             (Some(g), Some(m)) if !is_static => self.goal(g, m, class?, place.as_ref(), road, order, &a.name),
             _ => Some(None),
         };
+        let posture = self.posture(posture, class, motion);
         let span = a.span;
         let place_span = place.as_ref().and(a.stmts.iter().find_map(|s| match s {
             ast::AgentStmt::At { place, .. } => Some(place.span()),
@@ -128,6 +132,7 @@ impl Checker {
             speed: speed_d?,
             goal: goal_c?,
             track: track_keys.clone(),
+            posture: posture?,
             span,
             place_span: place_span.unwrap_or(span),
         })
@@ -136,7 +141,13 @@ impl Checker {
         .filter(|_| track.is_none() || track_keys.is_some())
     }
 
-    fn track(&mut self, t: &ast::Track, duration: Option<f64>) -> Option<Vec<Keyframe>> {
+    fn track(
+        &mut self,
+        t: &ast::Track,
+        duration: Option<f64>,
+        road: Option<&Road>,
+        class: Option<Class>,
+    ) -> Option<Vec<Keyframe>> {
         let _ = duration;
         if t.keys.is_empty() {
             self.err(
@@ -150,17 +161,14 @@ impl Checker {
         let mut prev: Option<(f64, Span)> = None;
         for k in &t.keys {
             let tt = self.fixed(&k.t, Dim::Time, "keyframe time", 0.0, MAX_DURATION_S, "0..120 s");
-            let x = self.fixed(&k.x, Dim::Length, "x", -1000.0, 1000.0, "-1000..1000 m");
-            let y = self.fixed(&k.y, Dim::Length, "y", -1000.0, 1000.0, "-1000..1000 m");
-            let yaw = self.fixed(
-                &k.yaw,
-                Dim::Angle,
-                "yaw",
-                -4.0 * std::f64::consts::PI,
-                4.0 * std::f64::consts::PI,
-                "-720..720 deg",
-            );
-            let (Some(tt), Some(x), Some(y), Some(yaw)) = (tt, x, y, yaw) else { return None };
+            let (pose, at) = match &k.pose {
+                ast::KeyPose::World { x, y, yaw } => (self.world_key(x, y, yaw), None),
+                ast::KeyPose::Lane(p) => {
+                    let at = self.lane_key(p, road, class);
+                    (at.is_some().then_some((0.0, 0.0, 0.0)), at)
+                }
+            };
+            let (Some(tt), Some((x, y, yaw))) = (tt, pose) else { return None };
             if let Some((pt, pspan)) = prev
                 && tt <= pt
             {
@@ -173,7 +181,7 @@ impl Checker {
                 return None;
             }
             prev = Some((tt, k.t.span));
-            out.push(Keyframe { t: tt, x, y, yaw });
+            out.push(Keyframe { t: tt, x, y, yaw, at, span: k.span });
         }
         Some(out)
     }

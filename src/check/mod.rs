@@ -12,10 +12,12 @@ mod goal;
 mod kinds;
 pub mod load;
 mod placement;
+mod posture;
 mod road;
 pub mod scenario;
 mod scene;
 pub mod summary;
+pub mod track;
 pub mod units;
 
 pub use conflict::points_for;

@@ -229,6 +229,8 @@ pub struct Kind {
 /// kinds derived from them inherit it.
 pub const EMERGENCY_KINDS: [&str; 3] = ["ambulance", "fire_truck", "police_car"];
 
+pub use super::posture::Posture;
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Agent {
     pub name: String,
@@ -248,6 +250,9 @@ pub struct Agent {
     pub goal: Option<Goal>,
     /// Replayed keyframes (from the box-stream importer); `place` is `Place::Track` then.
     pub track: Option<Vec<Keyframe>>,
+    /// A person's or an animal's posture, which sets its box (`sample` applies it).
+    #[serde(default, skip_serializing_if = "Posture::is_standing")]
+    pub posture: Posture,
     #[serde(skip)]
     pub span: Span,
     #[serde(skip)]
@@ -360,12 +365,18 @@ pub enum Turn {
     UTurn,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Keyframe {
     pub t: f64,
     pub x: f64,
     pub y: f64,
     pub yaw: f64,
+    /// A keyframe in lane coordinates (x, y and yaw are 0 until the place pass resolves it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub at: Option<Place<f64>>,
+    /// The keyframe in the source, for the place pass's E0131-E0134 and E0210.
+    #[serde(skip)]
+    pub span: Span,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

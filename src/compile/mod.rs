@@ -144,8 +144,9 @@ pub struct Front {
 
 /// Sample, build the road, place and roll out a checked scenario.
 pub fn front(scenario: Scenario, seed: Option<u64>) -> Result<Front, Vec<Diagnostic>> {
-    let concrete = sample(&scenario, seed.unwrap_or(scenario.seed));
+    let mut concrete = sample(&scenario, seed.unwrap_or(scenario.seed));
     let map = road::build(&concrete.road);
+    crate::place::resolve_keys(&mut concrete, &map)?;
     let placed = place(&concrete, &map)?;
     let tracks = rollout(&concrete, &map, &placed)?;
     Ok(Front { scenario, concrete, map, placed, tracks })

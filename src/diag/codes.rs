@@ -207,7 +207,8 @@ kind definition.\n
     Code {
         code: "E0117",
         title: "invalid track",
-        explanation: "A `track` replays recorded keyframes `TIME: (X, Y) yaw ANGLE` in the world frame. Times\n\
+        explanation: "A `track` replays keyframes `TIME: (X, Y) yaw ANGLE` in the world frame or\n\
+`TIME: LANE, DIST before|after LANDMARK` in lane coordinates (one value each, not a range). Times\n\
 must strictly increase and start at or after 0 s; an agent with a track has no `at` and no goal.\n
     agent v: sedan {
         track { 0 s: (0 m, 0 m) yaw 0 deg; 1 s: (10 m, 0 m) yaw 0 deg }   // fine
@@ -263,14 +264,59 @@ post-impact poses. An agent can therefore take part in one conflict only, as `at
     conflict { at_fault c; struck b; impact angle; point left }      // error: `b` is already struck\n\n\
 Keep one conflict per agent, or stage the second crash with another agent.",
     },
+    // ---- postures and track feasibility (E0130-E0134) ----
+    Code {
+        code: "E0130",
+        title: "posture of a thing that has none",
+        explanation: "`posture standing | kneeling | lying` sets the box of a person or an animal: lying, it is\n\
+as long as the body is tall and 0.3 m high (an adult: about 1.8 x 0.6 x 0.3 m); kneeling, half\n\
+its standing height. Only pedestrians and walking kinds (animals) have a posture.\n
+    object injured: adult { at west.in[1], 5 m before center; posture lying }   // fine
+    object wreck: sedan { at west.in[1], 5 m before center; posture lying }     // error\n\n\
+Give a vehicle or an object another box with `length`, `width` and `height`.",
+    },
+    Code {
+        code: "E0131",
+        title: "track too fast",
+        explanation: "Between two keyframes of a `track` the body would move faster than its kind can: 324 km/h\n\
+for vehicles, 30 m/s for bicycles and scooters, 12 m/s for people, 25 m/s for animals (plus\n\
+0.3 m of recording jitter per step). The error names the keyframe with the speed and the limit.\n
+    agent v: sedan { track { 0 s: (0 m, 0 m) yaw 0 deg; 1 s: (120 m, 0 m) yaw 0 deg } }   // error: 120 m/s",
+    },
+    Code {
+        code: "E0132",
+        title: "track accelerates too hard",
+        explanation: "The mean velocity of a `track` changes faster than its kind's grip allows: 12 m/s2 for\n\
+vehicles, 8 for bicycles and people, 15 for animals, braking and cornering included. Velocities\n\
+are averaged over at least 0.5 s so recording jitter does not count.\n
+    agent v: sedan { track { 0 s: (0 m, 0 m) yaw 0 deg; 1 s: (10 m, 0 m) yaw 0 deg; 2 s: (50 m, 0 m) yaw 0 deg } }   // error: 30 m/s2",
+    },
+    Code {
+        code: "E0133",
+        title: "track turns too fast",
+        explanation: "The heading of a `track` turns faster than its kind can. A vehicle turns only while it\n\
+moves, no tighter than its turning radius (0.6 of its length) and no faster than its grip allows\n\
+at that speed; people and animals turn at most a full turn a second. 10 degrees of recording\n\
+jitter per step are allowed.\n
+    agent v: sedan { track { 0 s: (0 m, 0 m) yaw 0 deg; 1 s: (1 m, 0 m) yaw 90 deg } }   // error: turns on the spot",
+    },
+    Code {
+        code: "E0134",
+        title: "vehicle track slips sideways",
+        explanation: "A vehicle or bicycle moves along its heading, forwards or in reverse: between two\n\
+keyframes the direction of travel may differ from the mean heading by at most 30 degrees (plus\n\
+0.3 m of recording jitter).\n
+    agent v: sedan { track { 0 s: (0 m, 0 m) yaw 0 deg; 1 s: (0 m, 20 m) yaw 0 deg } }   // error: 90 degrees off its heading\n\n\
+Give each keyframe the heading of the travel, or check that x and y are not swapped.",
+    },
     Code {
         code: "E0201",
         title: "placement off a valid surface",
-        explanation: "Each class has surfaces it may start on: vehicles on lanes or shoulders; pedestrians\n\
-and bicycles on sidewalks, crosswalks, shoulders (and lanes for bicycles), or wherever a `cross`\n\
-goal starts; other objects (cones, barriers, debris, animals), static or moving, on the map or\n\
-within 10 m of it.\n
+        explanation: "Each class starts where it can physically be: moving vehicles on lanes, shoulders or\n\
+the junction; moving bicycles also on sidewalks and crosswalks; people, animals and static things\n\
+of any class (cones, debris, a wreck) anywhere on the map or within 10 m of it, lanes included.\n
     agent ego: sedan { at sidewalk(east.out), 10 m after center }   // error
+    object injured: adult { at west.in[1], 5 m before center; posture lying }   // fine
     object c: traffic_cone { at (500 m, 500 m) }                    // error: far off the map",
     },
     Code {
@@ -371,6 +417,16 @@ goal lies short of the stretch, can hold and is not judged; nor is a conflict pa
     agent a: sedan { at south.in[1], 25 m before stop_line; speed 14 m/s; goal { turn straight } } // fine\n\n\
 Start one further back or slower, or delay it with `start after`. To stage the crash the two are\n\
 headed for, write a `conflict`.",
+    },
+    // ---- track keyframes on the map (E0210) ----
+    Code {
+        code: "E0210",
+        title: "vehicle track off the road",
+        explanation: "A moving vehicle's `track` keyframe lies where it cannot drive: not on a lane, the shoulder\n\
+or the junction (a sidewalk, the median, off the road). A scene on `road none` (recorded tracks\n\
+imported with `rocc import boxes`) has no map to check against.\n
+    road straight { lanes 1; sidewalks on }
+    agent v: sedan { track { 0 s: (-20 m, -1.75 m) yaw 0 deg; 1 s: (-10 m, -6 m) yaw 0 deg } }   // error: on a sidewalk",
     },
     Code {
         code: "E0301",

@@ -119,11 +119,14 @@ pub fn edit_scn(path: &Path, edits: &[Edit], sources: &mut SourceMap) -> Result<
                         }
                         ast::AgentStmt::Track(t) => {
                             for kf in &t.keys {
-                                let (Some(xv), Some(yv)) = (metres(&kf.x), metres(&kf.y)) else {
+                                let ast::KeyPose::World { x, y, .. } = &kf.pose else {
+                                    return Err(cannot("has a keyframe placed relative to the road"));
+                                };
+                                let (Some(xv), Some(yv)) = (metres(x), metres(y)) else {
                                     return Err(cannot("has a keyframe with a range or an unusual unit"));
                                 };
-                                splices.push((kf.x.span, format!("{} m", num(xv + dx))));
-                                splices.push((kf.y.span, format!("{} m", num(yv + dy))));
+                                splices.push((x.span, format!("{} m", num(xv + dx))));
+                                splices.push((y.span, format!("{} m", num(yv + dy))));
                             }
                             moved = true;
                         }

@@ -5,9 +5,11 @@
 mod leader;
 mod resolve;
 mod surface;
+mod track;
 
 pub use resolve::Miss;
 pub use surface::Surfaces;
+pub use track::resolve_keys;
 
 use crate::check::scenario::{Class, Kind, Lateral, Motion, Place};
 use crate::diag::Diagnostic;
@@ -69,8 +71,9 @@ pub fn place(c: &Concrete, map: &Map) -> Result<Placed, Vec<Diagnostic>> {
                 continue;
             }
         };
-        // Replayed tracks come from recorded data on another road; only their overlaps are checked.
-        if !matches!(a.place, Place::Track) {
+        if let Some(keys) = a.track.as_deref().filter(|_| !a.is_object) {
+            errs.extend(track::check(map, a, keys));
+        } else if !matches!(a.place, Place::Track) {
             let cross = a.goal.as_ref().is_some_and(|g| g.lateral == Lateral::Cross);
             if let Err(need) = surface_ok(map, a.class, a.motion, cross, pose) {
                 errs.push(wrong_surface(map, &a.name, a.class, need, pose, a.place_span));
@@ -163,18 +166,19 @@ fn surface_ok(map: &Map, class: Class, motion: Motion, cross: bool, pose: Pose) 
     let p = DVec2::new(pose.x, pose.y);
     let s = Surfaces::at(map, p);
     let (ok, need) = match class {
-        Class::Vehicle => (s.lane || s.shoulder || s.junction, "a lane or the shoulder"),
-        Class::Bicycle => {
+        // A road-less scene (replayed tracks) has no map for a static object to be near.
+        _ if motion == Motion::Static && map.lanes.is_empty() => (true, ""),
+        // A wreck, a parked car or a bicycle on its side can be anywhere a static thing can.
+        Class::Vehicle if motion != Motion::Static => (s.lane || s.shoulder || s.junction, "a lane or the shoulder"),
+        Class::Bicycle if motion != Motion::Static => {
             (s.lane || s.shoulder || s.junction || s.sidewalk || s.crosswalk, "a lane, the shoulder or a sidewalk")
         }
         // A crossing pedestrian starts at a kerb, wherever the scenario puts it.
-        Class::Pedestrian => {
-            (cross || s.sidewalk || s.crosswalk || s.shoulder, "a sidewalk, a crosswalk or the shoulder")
-        }
-        // A road-less scene (replayed tracks) has no map for a static object to be near.
-        _ if motion == Motion::Static && map.lanes.is_empty() => (true, ""),
-        // Cones, barriers, debris (static or moving) stand on or beside the road: an object far
-        // off the map is outside every frame and almost surely a mistaken coordinate.
+        Class::Pedestrian if cross => (true, ""),
+        // People and animals stand, kneel or lie wherever they can physically be, a lane
+        // included (tests/rollout-cases/person-lying-on-lane.scn); so do cones, barriers, debris
+        // and wrecks. Far off the map, a thing is outside every frame and almost surely a
+        // mistaken coordinate.
         _ => {
             let (lo, hi) = map.bounds;
             let near =
@@ -190,9 +194,6 @@ fn wrong_surface(map: &Map, who: &str, class: Class, need: &str, pose: Pose, spa
     let help = match class {
         Class::Vehicle => {
             "place vehicles on a lane, e.g. `at south.in[1], 20 m before stop_line`, or on the shoulder with `offset`"
-        }
-        Class::Pedestrian => {
-            "use `at sidewalk(ARM.in), ...` or `at crosswalk(ARM), 30 %`, or give it `goal { lateral cross }` to start at the kerb"
         }
         _ => "move it onto the road, or onto a sidewalk",
     };

@@ -76,11 +76,11 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
             let mut r = Rng::stream(seed, &a.name);
             let kind = a.kinds[r.index(a.kinds.len())].clone();
             let k = &s.kinds[&kind];
-            let size = [
+            let size = a.posture.apply([
                 r.draw(a.length.unwrap_or(k.length)),
                 r.draw(a.width.unwrap_or(k.width)),
                 r.draw(a.height.unwrap_or(k.height)),
-            ];
+            ]);
             let speed = r.draw(a.speed);
             ConcreteAgent {
                 name: a.name.clone(),

@@ -143,11 +143,22 @@ impl KindRef {
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub enum AgentStmt {
-    At { place: Placement, span: Span },
-    Speed { value: Value, span: Span },
+    At {
+        place: Placement,
+        span: Span,
+    },
+    Speed {
+        value: Value,
+        span: Span,
+    },
     Size(SizeStmt),
     Goal(Goal),
     Track(Track),
+    /// `posture WORD` (standing, kneeling, lying), validated by the checker.
+    Posture {
+        word: Ident,
+        span: Span,
+    },
 }
 
 impl AgentStmt {
@@ -157,6 +168,7 @@ impl AgentStmt {
             AgentStmt::Size(s) => s.span,
             AgentStmt::Goal(g) => g.span,
             AgentStmt::Track(t) => t.span,
+            AgentStmt::Posture { span, .. } => *span,
         }
     }
 }
@@ -321,10 +333,16 @@ pub struct Track {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Keyframe {
     pub t: Value,
-    pub x: Value,
-    pub y: Value,
-    pub yaw: Value,
+    pub pose: KeyPose,
     pub span: Span,
+}
+
+/// Where a keyframe puts the agent: a world pose, or a lane placement (`west.in[1], 20 m before
+/// center`) resolved on the map.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum KeyPose {
+    World { x: Value, y: Value, yaw: Value },
+    Lane(Placement),
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]

@@ -45,6 +45,7 @@ const KEYWORDS: &[&str] = &[
     "start",
     "track",
     "yaw",
+    "posture",
     "conflict",
     "at_fault",
     "struck",
@@ -250,6 +251,7 @@ fn begins_statement(r: &Rule) -> bool {
             | Rule::size_key
             | Rule::kw_goal
             | Rule::kw_track
+            | Rule::kw_posture
             | Rule::kw_lateral
             | Rule::kw_stop
             | Rule::kw_turn

@@ -144,11 +144,17 @@ fn agent_stmt(s: &AgentStmt) -> Doc {
                 .iter()
                 .map(|k| Doc::Line {
                     span: k.span,
-                    text: format!("{}: ({}, {}) yaw {}", val(&k.t), val(&k.x), val(&k.y), val(&k.yaw)),
+                    text: match &k.pose {
+                        KeyPose::World { x, y, yaw } => {
+                            format!("{}: ({}, {}) yaw {}", val(&k.t), val(x), val(y), val(yaw))
+                        }
+                        KeyPose::Lane(p) => format!("{}: {}", val(&k.t), placement(p)),
+                    },
                 })
                 .collect(),
             fit: false,
         },
+        AgentStmt::Posture { word, span } => Doc::Line { span: *span, text: format!("posture {}", word.name) },
     }
 }
 

@@ -189,13 +189,20 @@ impl Builder {
                     .skip(1)
                     .map(|k| {
                         let span = self.span(&k);
-                        let v: Vec<_> = inner(k).into_iter().filter(|q| q.as_rule() == Rule::value).collect();
-                        let [t, x, y, yaw]: [P<'_>; 4] = v.try_into().expect("grammar: keyframe has four values");
-                        Keyframe { t: self.value(t), x: self.value(x), y: self.value(y), yaw: self.value(yaw), span }
+                        let parts = inner(k);
+                        let t = self.value(parts[0].clone());
+                        if let Some(lane) = parts.iter().find(|q| q.as_rule() == Rule::key_lane) {
+                            return Keyframe { t, pose: KeyPose::Lane(self.placement(lane.clone())), span };
+                        }
+                        let v: Vec<_> = parts.into_iter().skip(1).filter(|q| q.as_rule() == Rule::value).collect();
+                        let [x, y, yaw]: [P<'_>; 3] = v.try_into().expect("grammar: a world keyframe has x, y and yaw");
+                        let (x, y, yaw) = (self.value(x), self.value(y), self.value(yaw));
+                        Keyframe { t, pose: KeyPose::World { x, y, yaw }, span }
                     })
                     .collect();
                 AgentStmt::Track(Track { keys, span })
             }
+            Rule::posture_stmt => AgentStmt::Posture { word: self.ident(last(p)), span },
             r => unreachable!("grammar: agent statement {r:?}"),
         }
     }

@@ -1,0 +1,187 @@
+//! Replayed tracks are checked like any motion (speed, acceleration, yaw rate, sideways slip,
+//! surface): one infeasible track per limit is in tests/invalid/track_*.scn; here, recorded tracks
+//! with their jitter still import and check, and the error names the keyframe.
+
+use rocc::check;
+use rocc::compile::front;
+use rocc::diag::Diagnostic;
+use rocc::import::{Convention, import_boxes};
+use rocc::source::SourceMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+fn run(src: &str) -> Result<(), Vec<Diagnostic>> {
+    let mut sources = SourceMap::default();
+    let s = check::check_text("t.scn", src, Path::new("."), &mut sources)?;
+    front(s, None).map(|_| ())
+}
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/import").join(name)
+}
+
+#[test]
+fn the_recorded_fixtures_import_and_check() {
+    for (name, conv) in [
+        ("nuplan.json", Convention::NuPlan),
+        ("nuscenes.json", Convention::NuScenes),
+        ("mmdet3d.json", Convention::Mmdet3d),
+    ] {
+        let mut sources = SourceMap::default();
+        import_boxes(&fixture(name), conv, "imported", &mut sources)
+            .unwrap_or_else(|d| panic!("{name}: {}", d.iter().map(|d| d.render_plain(&sources)).collect::<String>()));
+    }
+}
+
+/// A deterministic jitter in [-1, 1] (a hash of the frame and the track), as recorded annotations
+/// wobble from frame to frame.
+fn wobble(frame: usize, salt: u64) -> f64 {
+    let mut x = (frame as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ salt;
+    x ^= x >> 31;
+    x = x.wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x ^= x >> 29;
+    (x % 20_001) as f64 / 10_000.0 - 1.0
+}
+
+/// A nuPlan-layout box stream at 20 Hz: a car turning left at 10 m/s, a car braking hard from
+/// 15 m/s at 7 m/s^2 to a stop, a walker, each with 10 cm and 3 degrees (the walker 15) of
+/// jitter; `glitch` moves the turning car `glitch` m sideways in one frame.
+fn stream(glitch: f64) -> String {
+    let mut frames = vec![];
+    for f in 0..120 {
+        let t = f as f64 * 0.05;
+        let (r, w) = (20.0, 10.0 / 20.0);
+        let th = w * t;
+        let mut turn = [r * th.sin(), r - r * th.cos(), th];
+        if f == 60 {
+            turn[0] -= glitch * th.sin();
+            turn[1] += glitch * th.cos();
+        }
+        let tb = t.min(15.0 / 7.0);
+        let brake = [15.0 * tb - 3.5 * tb * tb, -10.0, 0.0];
+        let walk = [5.0, 8.0 + 1.4 * t, std::f64::consts::FRAC_PI_2];
+        let mut boxes = String::new();
+        for (i, (id, class, p, size, yaw_jitter)) in [
+            ("turn", "vehicle", turn, "[4.6, 1.9, 1.5]", 3.0_f64),
+            ("brake", "vehicle", brake, "[4.6, 1.9, 1.5]", 3.0),
+            ("walk", "pedestrian", walk, "[0.6, 0.6, 1.7]", 15.0),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let s = i as u64 * 3;
+            let (x, y) = (p[0] + 0.1 * wobble(f, s), p[1] + 0.1 * wobble(f, s + 1));
+            let yaw = p[2] + yaw_jitter.to_radians() * wobble(f, s + 2);
+            let sep = if i == 0 { "" } else { ", " };
+            let _ = write!(
+                boxes,
+                "{sep}{{\"track\": \"{id}\", \"class\": \"{class}\", \"center\": [{x}, {y}, 0.8], \"size\": {size}, \"yaw\": {yaw}}}"
+            );
+        }
+        frames.push(format!(
+            "{{\"frame\": {f}, \"time\": {t}, \"ego_pose\": {{\"x\": {}, \"y\": -20.0, \"yaw\": 0.0}}, \"boxes\": [{boxes}]}}",
+            -30.0 + 8.0 * t
+        ));
+    }
+    format!("{{\"convention\": \"nuplan\", \"ego_size\": [4.6, 1.9, 1.5], \"frames\": [{}]}}", frames.join(",\n"))
+}
+
+fn import_stream(text: &str, name: &str) -> Result<String, Vec<Diagnostic>> {
+    let dir = std::env::temp_dir().join(format!("rocc-tracks-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("stream.json");
+    std::fs::write(&path, text).expect("write");
+    let mut sources = SourceMap::default();
+    let r = import_boxes(&path, Convention::NuPlan, "recorded", &mut sources).map(|i| i.text);
+    let _ = std::fs::remove_dir_all(&dir);
+    r
+}
+
+#[test]
+fn jittery_recorded_turns_hard_braking_and_walkers_import_and_check() {
+    let text = import_stream(&stream(0.0), "clean").unwrap_or_else(|d| panic!("{d:?}"));
+    assert!(["t_turn", "t_brake", "t_walk"].iter().all(|n| text.contains(&format!("agent {n}"))), "{text}");
+}
+
+#[test]
+fn a_recorded_box_jumping_sideways_is_refused_at_its_keyframe() {
+    let d = import_stream(&stream(4.0), "glitch").expect_err("a 4 m sideways jump in 50 ms");
+    assert!(["E0131", "E0134"].contains(&d[0].code), "{d:?}");
+    assert!(d[0].message.contains("`t_turn`"), "{}", d[0].message);
+}
+
+#[test]
+fn a_sedan_jumping_90_m_sideways_off_the_road_fails_and_each_limit_names_its_keyframe() {
+    let scene = |keys: &str| {
+        format!(
+            "scenario s {{ duration 3 s\n road straight {{ lanes 1; sidewalks on }}\n agent v: sedan {{ track {{ {keys} }} }}\n}}\n"
+        )
+    };
+    let fails = |keys: &str, code: &str, words: &[&str]| {
+        let src = scene(keys);
+        let d = run(&src).expect_err(keys);
+        assert_eq!(d[0].code, code, "{keys}: {d:?}");
+        for w in words {
+            assert!(d[0].message.contains(w), "{keys}: `{w}` not in {}", d[0].message);
+        }
+        // The first label is the keyframe the step ends at.
+        let at = d[0].labels[0].span;
+        let key = &src[at.start as usize..at.end as usize];
+        assert!(key.starts_with("1 s:") || key.starts_with("2 s:"), "{keys}: labelled `{key}`");
+        d
+    };
+    let d = fails("0 s: (0 m, -1.75 m) yaw 0 deg; 1 s: (0 m, 88.25 m) yaw 0 deg", "E0134", &["sideways", "90 deg"]);
+    assert!(d.iter().any(|d| d.code == "E0210"), "off the road too: {d:?}");
+    fails("0 s: (-55 m, -1.75 m) yaw 0 deg; 1 s: (45 m, -1.75 m) yaw 0 deg", "E0131", &["100.0 m/s", "90.0 m/s"]);
+    fails(
+        "0 s: (-50 m, -1.75 m) yaw 0 deg; 1 s: (-40 m, -1.75 m) yaw 0 deg; 2 s: (0 m, -1.75 m) yaw 0 deg",
+        "E0132",
+        &["30.0 m/s^2", "12.0 m/s^2"],
+    );
+    fails("0 s: (-20 m, -1.75 m) yaw 0 deg; 1 s: (-19.5 m, -1.75 m) yaw 90 deg", "E0133", &["yaw rate 90 deg/s"]);
+    fails("0 s: (-20 m, -1.75 m) yaw 0 deg; 2 s: (-10 m, -5 m) yaw 0 deg", "E0210", &["keyframe 2", "sidewalk"]);
+    // Feasible: 20 m/s along the lane, reversing slowly, a gentle lane-keeping wobble.
+    run(&scene("0 s: (-50 m, -1.75 m) yaw 0 deg; 1 s: (-30 m, -1.6 m) yaw 1 deg; 2 s: (-10 m, -1.75 m) yaw 0 deg"))
+        .expect("a plain drive");
+    run(&scene("0 s: (0 m, -1.75 m) yaw 0 deg; 2 s: (-3 m, -1.75 m) yaw 0 deg")).expect("reversing");
+    // A walker on the same road may go anywhere near it, sideways included.
+    let walker = "scenario s { duration 3 s\n road straight { lanes 1; sidewalks on }\n agent ego: sedan { at west.in[1], 30 m before center }\n agent p: adult { track { 0 s: (0 m, -5 m) yaw 0 deg; 2 s: (0 m, -2 m) yaw 0 deg } }\n}\n";
+    run(walker).expect("a walker sidesteps onto the road");
+}
+
+#[test]
+fn keyframes_in_lane_coordinates_mix_with_world_ones_and_are_checked_like_them() {
+    let scene = |keys: &str| {
+        format!(
+            "scenario s {{ duration 4 s\n road straight {{ lanes 2 }}\n agent ego: sedan {{ at west.in[1], 50 m before center; speed 10 m/s }}\n agent cutter: van {{ track {{ {keys} }} }}\n}}\n"
+        )
+    };
+    let keys = "0 s: west.in[2], 40 m before center; 1 s: west.in[2], 26 m before center; \
+                2 s: (-12 m, -3.5 m) yaw 5 deg; 3 s: west.in[1], 2 m after center offset 0.5 m left heading 0 deg";
+    let mut sources = SourceMap::default();
+    let s = check::check_text("t.scn", &scene(keys), Path::new("."), &mut sources).expect("checks");
+    let f = front(s, None).unwrap_or_else(|d| panic!("{d:?}"));
+    let i = f.tracks.agents.iter().position(|a| a.name == "cutter").expect("cutter");
+    // west.in[2] runs east 5.25 m south of the centre line; in[1] 1.75 m south.
+    for (frame, x, y, yaw) in
+        [(0, -40.0, -5.25, 0.0), (10, -26.0, -5.25, 0.0), (20, -12.0, -3.5, 5.0), (30, 2.0, -1.25, 0.0)]
+    {
+        let p = f.tracks.poses[i][frame];
+        assert!(
+            (p.x - x).abs() < 1e-6 && (p.y - y).abs() < 1e-6 && (p.yaw - f64::to_radians(yaw)).abs() < 1e-6,
+            "frame {frame}: {p:?}"
+        );
+    }
+    // Formatting keeps both forms.
+    let src = scene(keys);
+    let text = rocc::syntax::fmt::format_file(&rocc::syntax::parse(0, &src).expect("parses"), &src);
+    assert!(
+        text.contains("1 s: west.in[2], 26 m before center") && text.contains("2 s: (-12 m, -3.5 m) yaw 5 deg"),
+        "{text}"
+    );
+    let code = |keys: &str| run(&scene(keys)).expect_err(keys)[0].code;
+    // 100 m along the lane in one second, past the lane's end, and a range.
+    assert_eq!(code("0 s: west.in[2], 50 m before center; 1 s: west.in[2], 50 m after center"), "E0131");
+    assert_eq!(code("0 s: west.in[2], 50 m before center; 1 s: west.in[2], 90 m after center"), "E0203");
+    assert_eq!(code("0 s: west.in[2], 40..45 m before center"), "E0117");
+}
