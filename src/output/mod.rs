@@ -184,7 +184,10 @@ pub fn boxes_json_with(frames: &[FrameBoxes], worlds: Option<&[FrameWorld]>) -> 
                 .boxes
                 .iter()
                 .enumerate()
-                .map(|(k, b)| BoxRecord { world: w.and_then(|w| w.boxes.get(k).cloned().flatten()), ..BoxRecord::of(b) })
+                .map(|(k, b)| BoxRecord {
+                    world: w.and_then(|w| w.boxes.get(k).cloned().flatten()),
+                    ..BoxRecord::of(b)
+                })
                 .collect();
             FrameRecord {
                 frame: f.frame,

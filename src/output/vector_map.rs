@@ -118,7 +118,9 @@ mod tests {
 
     #[test]
     fn two_touching_squares_have_one_outline_without_the_shared_edge() {
-        let sq = |x0: f64| vec![DVec2::new(x0, 0.0), DVec2::new(x0 + 1.0, 0.0), DVec2::new(x0 + 1.0, 1.0), DVec2::new(x0, 1.0)];
+        let sq = |x0: f64| {
+            vec![DVec2::new(x0, 0.0), DVec2::new(x0 + 1.0, 0.0), DVec2::new(x0 + 1.0, 1.0), DVec2::new(x0, 1.0)]
+        };
         let map = Map { road_segments: vec![sq(0.0)], intersections: vec![sq(1.0)], ..Map::default() };
         let b = road_boundaries(&map);
         // Each square keeps its three outer edges as one chain; the shared edge x = 1 is dropped.
