@@ -188,7 +188,7 @@ fn a_failing_file_does_not_stop_the_batch() {
         .map(|e| e.expect("e").file_name().to_string_lossy().into_owned())
         .collect();
     dirs.sort();
-    assert_eq!(dirs, vec!["index.json".to_string(), "replayed_cut_in".to_string()]);
+    assert_eq!(dirs, vec!["index.jsonl".to_string(), "replayed_cut_in".to_string()]);
 }
 
 #[test]

@@ -1,6 +1,6 @@
 //! The dataset side of compiled outputs: ego poses, box motion and instance ids in `boxes.json`,
 //! the vector map in `scene.json` against the BEV painted from the same geometry, the output
-//! root's `index.json` through batches, resumes and shards, and the Python reader on a real tree.
+//! root's `index.jsonl` through batches, resumes and shards, and the Python reader on a real tree.
 
 use glam::DVec2;
 use rocc::compile::index::{INDEX_FILE, read_index};
@@ -271,6 +271,30 @@ fn the_index_lists_exactly_the_finished_clips_through_batches_resumes_and_shards
     // Compiling the missing ones again lists them again.
     assert!(batch::run(&[a, c], &out, &o, true).failures.is_empty());
     assert_eq!(index_dirs(&out).len(), 5);
+}
+
+#[test]
+fn shards_running_at_once_leave_an_index_of_every_clip() {
+    let out = tmp("index-concurrent");
+    let lib = |n: &str| root().join("scenarios").join(n);
+    let inputs: Vec<PathBuf> =
+        ["rear_end_queue.scn", "car_u_turn.scn", "cyclist_red_light.scn", "deer_crossing.scn"].map(lib).to_vec();
+    let o = bev_opts("0..2");
+    std::thread::scope(|s| {
+        for k in 1..=3 {
+            let (inputs, out, o) = (&inputs, &out, &o);
+            s.spawn(move || assert!(batch::run_shard(inputs, Some((k, 3)), out, o, true).failures.is_empty()));
+        }
+    });
+    let dirs = index_dirs(&out);
+    let on_disk: usize = inputs
+        .iter()
+        .map(|p| {
+            let name = p.file_stem().unwrap();
+            std::fs::read_dir(out.join(name)).map_or(0, |d| d.count())
+        })
+        .sum();
+    assert!(on_disk >= 5 && dirs.len() == on_disk, "{dirs:?}");
 }
 
 #[test]

@@ -10,9 +10,9 @@ size (what `rocc compile` checks before it resumes). `RoccDataset` (a `torch.uti
 is available when torch is importable. File formats: docs/output.md.
 """
 
-from .tree import Clip, Frame, IncompleteClipError, NotAnOutputError, OutputTree, read_index
+from .tree import Clip, Frame, IncompleteClipError, NotAnOutputError, OutputTree, iter_index, read_index
 
-__all__ = ["Clip", "Frame", "IncompleteClipError", "NotAnOutputError", "OutputTree", "read_index"]
+__all__ = ["Clip", "Frame", "IncompleteClipError", "NotAnOutputError", "OutputTree", "iter_index", "read_index"]
 
 try:  # torch is optional
     from .torch_dataset import RoccDataset  # noqa: F401

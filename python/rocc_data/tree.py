@@ -23,14 +23,22 @@ def _json(path):
 
 
 def read_index(root):
-    """`root/index.json` as written by `rocc compile` (every finished clip and frame)."""
-    path = os.path.join(root, "index.json")
+    """`root/index.jsonl` as written by `rocc compile`: a list of clip records (dir, scenario,
+    ego, rate_hz, frames with paths, timestamps and ego poses), one per finished clip."""
+    return list(iter_index(root))
+
+
+def iter_index(root):
+    """The clip records of `root/index.jsonl`, one at a time (a corpus index can be large)."""
+    path = os.path.join(root, "index.jsonl")
     if not os.path.isfile(path):
         raise NotAnOutputError(f"{path}: no index (is {root} an output root of `rocc compile -o`?)")
-    idx = _json(path)
-    if idx.get("format") != "rocc-index":
-        raise NotAnOutputError(f"{path}: not a rocc index")
-    return idx
+    with open(path, encoding="utf-8") as f:
+        head = json.loads(f.readline() or "{}")
+        if head.get("format") != "rocc-index":
+            raise NotAnOutputError(f"{path}: not a rocc index")
+        for line in f:
+            yield json.loads(line)
 
 
 def _manifest(path):

@@ -128,7 +128,7 @@ pub fn run_shard(
     report
 }
 
-/// Rebuild the output root's `index.json` (nothing to do where no clip was ever written).
+/// Rebuild the output root's `index.jsonl` (nothing to do where no clip was ever written).
 fn refresh_index(out: &Path) -> Option<Failure> {
     if !out.is_dir() {
         return None;

@@ -1,22 +1,25 @@
-//! `index.json` at an output root: every finished clip and its frames (paths relative to the
-//! root, timestamps, ego poses). A clip is finished when its `manifest.json` parses and every
-//! file it lists exists with the listed size, the test a resumed run applies; a clip being
-//! written has no manifest (it is removed first), so it is never listed.
+//! `index.jsonl` at an output root: every finished clip and its frames (paths relative to the
+//! root, timestamps, ego poses), JSON Lines: a header line, then one clip per line in (scenario,
+//! ego) order, so a corpus index is written and read one clip at a time. A clip is finished when
+//! its `manifest.json` parses and every file it lists exists with the listed size, the test a
+//! resumed run applies; a clip being written has no manifest (it is removed first), so it is
+//! never listed.
 //!
 //! The index is rebuilt from the tree, not patched, so batch compiles, resumes and shards all
 //! leave it right. Concurrent shards each refresh at their end: `refresh` rewrites until a scan
-//! taken after reading the file finds what the file says, so the last write is always followed
+//! taken after opening the file finds what the file says, so the last write is always followed
 //! by a scan that saw every clip finished before it (docs/compile.md, "Dataset index").
 
-use crate::fsio::{input_hash, write_atomic};
+use crate::fsio::{Fnv1a, input_hash, write_atomic};
 use crate::output::{Manifest, read_ego_poses};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
-use std::io::{self, Write};
-use std::path::Path;
+use std::fs::File;
+use std::io::{self, BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
 
 /// The index's file name at the output root.
-pub const INDEX_FILE: &str = "index.json";
+pub const INDEX_FILE: &str = "index.jsonl";
 /// What `format` says.
 pub const INDEX_FORMAT: &str = "rocc-index";
 /// Rewrites before `refresh` gives up converging with concurrent writers (each one a full scan).
@@ -73,55 +76,138 @@ pub struct IndexFrame {
     pub ego2global: Option<[[f64; 4]; 4]>,
 }
 
-/// Read `root/index.json`.
+/// Read the whole of `root/index.jsonl` (a corpus index can be large: `IndexReader` streams it).
 pub fn read_index(root: &Path) -> Result<Index, String> {
-    let path = root.join(INDEX_FILE);
-    let text = std::fs::read_to_string(&path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
-    let idx: Index = serde_json::from_str(&text).map_err(|e| format!("`{}`: {e}", path.display()))?;
-    if idx.format != INDEX_FORMAT {
-        return Err(format!("`{}` is not a rocc index (format `{}`)", path.display(), idx.format));
-    }
-    Ok(idx)
-}
-
-/// Rebuild `root/index.json` from the clips finished under `root` (see the module comment).
-pub fn refresh(root: &Path) -> io::Result<Index> {
-    let mut on_disk = read_index(root).ok();
-    let mut idx = scan(root, on_disk.as_ref())?;
-    for _ in 0..MAX_ROUNDS {
-        if on_disk.as_ref() == Some(&idx) {
-            break;
-        }
-        write_index(root, &idx)?;
-        on_disk = read_index(root).ok();
-        idx = scan(root, on_disk.as_ref())?;
-    }
-    Ok(idx)
-}
-
-fn write_index(root: &Path, idx: &Index) -> io::Result<u64> {
-    write_atomic(&root.join(INDEX_FILE), |w| {
-        // Compact: a corpus index holds a record per frame.
-        serde_json::to_writer(&mut *w, idx).map_err(io::Error::other)?;
-        w.write_all(b"\n")
-    })
-}
-
-/// The index of the clips finished under `root` now; entries of `prev` whose manifest is
-/// unchanged are reused without reading `boxes.json` again.
-pub fn scan(root: &Path, prev: Option<&Index>) -> io::Result<Index> {
-    let reuse: BTreeMap<&str, &IndexClip> =
-        prev.map(|p| p.clips.iter().map(|c| (c.dir.as_str(), c)).collect()).unwrap_or_default();
+    let mut r = IndexReader::open(root)?;
     let mut clips = Vec::new();
-    for scenario in sorted_dirs(root)? {
-        for ego in sorted_dirs(&root.join(&scenario))? {
-            let dir = format!("{scenario}/{ego}");
-            if let Some(c) = finished_clip(root, &dir, &scenario, &ego, &reuse) {
-                clips.push(c);
+    while let Some(c) = r.next_clip()? {
+        clips.push(c);
+    }
+    Ok(Index { format: INDEX_FORMAT.to_string(), version: r.version, clips })
+}
+
+/// `index.jsonl` read one clip at a time, hashing every byte it reads.
+pub struct IndexReader {
+    path: PathBuf,
+    lines: io::Lines<BufReader<File>>,
+    pub version: u32,
+    hash: Fnv1a,
+    /// The clip read but not yet taken by `take`.
+    pending: Option<IndexClip>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Header {
+    format: String,
+    version: u32,
+}
+
+impl IndexReader {
+    pub fn open(root: &Path) -> Result<IndexReader, String> {
+        let path = root.join(INDEX_FILE);
+        let f = File::open(&path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+        let mut r =
+            IndexReader { path, lines: BufReader::new(f).lines(), version: 0, hash: Fnv1a::new(), pending: None };
+        let head = r.line()?.ok_or_else(|| format!("`{}` is empty", r.path.display()))?;
+        let h: Header = serde_json::from_str(&head).map_err(|e| format!("`{}`: {e}", r.path.display()))?;
+        if h.format != INDEX_FORMAT {
+            return Err(format!("`{}` is not a rocc index (format `{}`)", r.path.display(), h.format));
+        }
+        r.version = h.version;
+        Ok(r)
+    }
+
+    fn line(&mut self) -> Result<Option<String>, String> {
+        match self.lines.next() {
+            None => Ok(None),
+            Some(Err(e)) => Err(format!("cannot read `{}`: {e}", self.path.display())),
+            Some(Ok(l)) => {
+                self.hash.write(l.as_bytes()).write(b"\n");
+                Ok(Some(l))
             }
         }
     }
-    Ok(Index { format: INDEX_FORMAT.to_string(), version: 1, clips })
+
+    /// The next clip, in the file's order.
+    pub fn next_clip(&mut self) -> Result<Option<IndexClip>, String> {
+        if let Some(c) = self.pending.take() {
+            return Ok(Some(c));
+        }
+        let Some(l) = self.line()? else { return Ok(None) };
+        serde_json::from_str(&l).map(Some).map_err(|e| format!("`{}`: {e}", self.path.display()))
+    }
+
+    /// The entry of clip `key` (scenario, ego), skipping the ones before it; the file is in
+    /// key order, as `scan` writes it.
+    fn take(&mut self, key: (&str, &str)) -> Option<IndexClip> {
+        while let Ok(Some(c)) = self.next_clip() {
+            match (c.scenario.as_str(), c.ego.as_str()).cmp(&key) {
+                std::cmp::Ordering::Less => continue,
+                std::cmp::Ordering::Equal => return Some(c),
+                std::cmp::Ordering::Greater => {
+                    self.pending = Some(c);
+                    return None;
+                }
+            }
+        }
+        None
+    }
+
+    /// FNV-1a of the whole file, read to its end.
+    fn finish(mut self) -> u64 {
+        while let Ok(Some(_)) = self.line() {}
+        self.hash.finish()
+    }
+}
+
+/// Rebuild `root/index.jsonl` from the clips finished under `root` (see the module comment).
+/// Returns the number of clips listed.
+pub fn refresh(root: &Path) -> io::Result<usize> {
+    let mut n = 0;
+    for _ in 0..MAX_ROUNDS {
+        // First pass: what the index would say now, hashed, against what the file says.
+        let mut old = IndexReader::open(root).ok();
+        let mut hash = Fnv1a::new();
+        n = scan(root, old.as_mut(), &mut |b| {
+            hash.write(b);
+            Ok(())
+        })?;
+        if old.map(IndexReader::finish) == Some(hash.finish()) {
+            return Ok(n);
+        }
+        let mut old = IndexReader::open(root).ok();
+        write_atomic(&root.join(INDEX_FILE), |w| scan(root, old.as_mut(), &mut |b| w.write_all(b)).map(|_| ()))?;
+    }
+    Ok(n)
+}
+
+/// Stream the index of the clips finished under `root` now into `out`, one line each after the
+/// header; entries of `prev` whose manifest is unchanged are reused without reading `boxes.json`
+/// again. Returns the number of clips.
+pub fn scan(
+    root: &Path,
+    mut prev: Option<&mut IndexReader>,
+    out: &mut dyn FnMut(&[u8]) -> io::Result<()>,
+) -> io::Result<usize> {
+    put(&Header { format: INDEX_FORMAT.to_string(), version: 1 }, out)?;
+    let mut n = 0;
+    for scenario in sorted_dirs(root)? {
+        for ego in sorted_dirs(&root.join(&scenario))? {
+            let old = prev.as_deref_mut().and_then(|p| p.take((&scenario, &ego)));
+            if let Some(c) = finished_clip(root, &scenario, &ego, old) {
+                put(&c, out)?;
+                n += 1;
+            }
+        }
+    }
+    Ok(n)
+}
+
+/// One line of the index.
+fn put<T: Serialize>(v: &T, out: &mut dyn FnMut(&[u8]) -> io::Result<()>) -> io::Result<()> {
+    let mut b = serde_json::to_vec(v).map_err(io::Error::other)?;
+    b.push(b'\n');
+    out(&b)
 }
 
 fn sorted_dirs(dir: &Path) -> io::Result<Vec<String>> {
@@ -145,14 +231,9 @@ fn sorted_dirs(dir: &Path) -> io::Result<Vec<String>> {
 
 /// The entry of the clip in `root/dir` if it is finished; `None` for anything else (no manifest,
 /// another program's JSON, a listed file missing or of another size).
-fn finished_clip(
-    root: &Path,
-    dir: &str,
-    scenario: &str,
-    ego: &str,
-    reuse: &BTreeMap<&str, &IndexClip>,
-) -> Option<IndexClip> {
-    let clip = root.join(dir);
+fn finished_clip(root: &Path, scenario: &str, ego: &str, old: Option<IndexClip>) -> Option<IndexClip> {
+    let dir = format!("{scenario}/{ego}");
+    let clip = root.join(&dir);
     let bytes = std::fs::read(clip.join("manifest.json")).ok()?;
     let m: Manifest = serde_json::from_slice(&bytes).ok()?;
     let files_ok = m
@@ -165,8 +246,8 @@ fn finished_clip(
     // Timings left out: they are all that differs between two runs of the same input, and
     // the index is as deterministic as the clips.
     let hash = input_hash(&serde_json::to_vec(&Manifest { timings: Vec::new(), ..m.clone() }).ok()?);
-    if let Some(c) = reuse.get(dir).filter(|c| c.manifest_hash == hash) {
-        return Some((*c).clone());
+    if let Some(c) = old.filter(|c| c.manifest_hash == hash) {
+        return Some(c);
     }
     let listed: BTreeSet<&str> = m.files.iter().map(|f| f.path.as_str()).collect();
     let has = |p: String| listed.contains(p.as_str()).then(|| format!("{dir}/{p}"));
@@ -194,7 +275,7 @@ fn finished_clip(
         })
         .collect::<Option<Vec<_>>>()?;
     Some(IndexClip {
-        dir: dir.to_string(),
+        dir: dir.clone(),
         scenario: scenario.to_string(),
         ego: ego.to_string(),
         input: m.input.clone(),

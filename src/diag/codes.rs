@@ -442,11 +442,11 @@ FILE.scn ... -o edited.scn`) and compile that.\n
     Code {
         code: "E0410",
         title: "cannot write the dataset index",
-        explanation: "After a batch, `rocc compile` rebuilds `index.json` at the output root from every finished\n\
+        explanation: "After a batch, `rocc compile` rebuilds `index.jsonl` at the output root from every finished\n\
 clip below it (docs/compile.md, \"Dataset index\"). The clips themselves are written; only the index\n\
-could not be (permissions, a full disk, or an `index.json` that is a directory). Fix the cause and\n\
+could not be (permissions, a full disk, or an `index.jsonl` that is a directory). Fix the cause and\n\
 re-run the same command: complete clips are kept and the index is rebuilt.\n
-    $ rocc compile scenarios/ -o out     // error if out/index.json cannot be replaced",
+    $ rocc compile scenarios/ -o out     // error if out/index.jsonl cannot be replaced",
     },
     Code {
         code: "E0701",

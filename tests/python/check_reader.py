@@ -33,8 +33,8 @@ def main(out, not_output):
 
     # The reader and the index agree: same clips, frames, paths and poses.
     idx = read_index(out)
-    assert [c["dir"] for c in idx["clips"]] == [c.dir for c in tree.clips]
-    for ic, clip in zip(idx["clips"], tree.clips):
+    assert [c["dir"] for c in idx] == [c.dir for c in tree.clips]
+    for ic, clip in zip(idx, tree.clips):
         assert [f["frame"] for f in ic["frames"]] == clip.frames
         for f, fr in zip(ic["frames"], (clip[k] for k in range(len(clip)))):
             assert np.array_equal(np.asarray(f["ego2global"]), fr.ego2global)
