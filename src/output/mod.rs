@@ -321,7 +321,7 @@ pub fn write_manifest(dir: &Path, m: &Manifest) -> io::Result<OutputFile> {
     write_json(dir, "manifest.json", &v)
 }
 
-pub(crate) fn write_json(dir: &Path, name: &str, v: &serde_json::Value) -> io::Result<OutputFile> {
+fn write_json(dir: &Path, name: &str, v: &serde_json::Value) -> io::Result<OutputFile> {
     let bytes = write_atomic(&dir.join(name), |w| {
         serde_json::to_writer_pretty(&mut *w, v).map_err(io::Error::other)?;
         w.write_all(b"\n")

@@ -9,7 +9,7 @@ use crate::geom::{Polygon, point_in_polygon};
 use crate::road::Map;
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
-use std::io;
+use std::io::{self, Write};
 use std::path::Path;
 
 /// One polyline: `[x, y]` points in metres, world frame.
@@ -100,10 +100,13 @@ fn road_boundaries(map: &Map) -> Vec<Points> {
     out
 }
 
-/// Write `dir/scene.json`.
+/// Write `dir/scene.json`, compact: pretty-printed, every coordinate would take a line.
 pub fn write_scene_json(dir: &Path, scene: &SceneMap) -> io::Result<super::OutputFile> {
-    let v = serde_json::to_value(scene).map_err(io::Error::other)?;
-    super::write_json(dir, "scene.json", &v)
+    let bytes = crate::fsio::write_atomic(&dir.join("scene.json"), |w| {
+        serde_json::to_writer(&mut *w, scene).map_err(io::Error::other)?;
+        w.write_all(b"\n")
+    })?;
+    Ok(super::OutputFile { path: "scene.json".to_string(), bytes })
 }
 
 /// Read `scene.json` back.
