@@ -16,11 +16,27 @@ fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn tmp(name: &str) -> PathBuf {
+/// A temporary directory, removed when dropped (compiled trees with LiDAR are tens of MB).
+struct Tmp(PathBuf);
+
+impl std::ops::Deref for Tmp {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Tmp {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn tmp(name: &str) -> Tmp {
     let d = std::env::temp_dir().join(format!("rocc-dataset-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).expect("temp dir");
-    d
+    Tmp(d)
 }
 
 fn bev_opts(frames: &str) -> Options {
@@ -53,11 +69,12 @@ fn wrap(a: f64) -> f64 {
 }
 
 /// The first 24 frames (10 Hz) of a library scene with two egos, compiled to the BEV.
-fn two_egos(scenario: &str, name: &str) -> PathBuf {
+fn two_egos(scenario: &str, name: &str) -> (Tmp, PathBuf) {
     let out = tmp(name);
     let r = batch::run(&[root().join(format!("scenarios/{scenario}.scn"))], &out, &bev_opts("0..24"), true);
     assert!(r.failures.is_empty() && r.clips.len() == 2);
-    out.join(scenario)
+    let dir = out.join(scenario);
+    (out, dir)
 }
 
 /// A striker closing on a queue behind the ego: the two egos see each other.
@@ -65,7 +82,7 @@ const QUEUE: &str = "rear_end_queue";
 
 #[test]
 fn ego_poses_match_the_boxes_seen_by_the_other_ego_and_ids_are_stable() {
-    let scene = two_egos(QUEUE, "poses");
+    let (_out, scene) = two_egos(QUEUE, "poses");
     let (a, b) = (json(&scene.join("ego/boxes.json")), json(&scene.join("striker/boxes.json")));
     let mut ids: BTreeMap<String, String> = BTreeMap::new();
     let mut seen_each_other = 0;
@@ -106,7 +123,7 @@ fn ego_poses_match_the_boxes_seen_by_the_other_ego_and_ids_are_stable() {
 
 #[test]
 fn velocities_agree_with_finite_differences_of_positions() {
-    let scene = two_egos(QUEUE, "motion");
+    let (_out, scene) = two_egos(QUEUE, "motion");
     let frames = json(&scene.join("ego/boxes.json"));
     let frames = frames.as_array().unwrap();
     // World position and velocity of every agent per frame, from the written ego-frame boxes.
@@ -159,7 +176,7 @@ fn pixel(p: DVec2) -> Option<(usize, usize)> {
 
 #[test]
 fn the_vector_map_rasterises_to_the_bevs_lane_and_crosswalk_channels() {
-    let scene_dir = two_egos("ambulance_crowded_intersection", "vectors");
+    let (_out, scene_dir) = two_egos("ambulance_crowded_intersection", "vectors");
     let clip = scene_dir.join("ego");
     let scene = read_scene_json(&clip.join("scene.json")).expect("scene.json");
     assert_eq!(scene.frame, "world");
@@ -298,6 +315,24 @@ fn shards_running_at_once_leave_an_index_of_every_clip() {
 }
 
 #[test]
+fn an_edited_clip_is_indexed_with_its_new_manifest() {
+    let out = tmp("index-edit");
+    let input = root().join("scenarios/rear_end_queue.scn");
+    assert!(batch::run(std::slice::from_ref(&input), &out, &bev_opts("0..3"), true).failures.is_empty());
+    let clip = out.join("rear_end_queue/ego");
+    let hash = |out: &Path| {
+        read_index(out).unwrap().clips.iter().find(|c| c.dir == "rear_end_queue/ego").unwrap().manifest_hash.clone()
+    };
+    let before = hash(&out);
+    let seen = json(&clip.join("boxes.json"))[0]["boxes"][0]["agent"].as_str().unwrap().to_string();
+    let del = rocc::edit::parse_edit("delete", &[seen]).unwrap();
+    let o = rocc::edit::ClipEdit { scenario: Some(input), ..Default::default() };
+    rocc::edit::edit_clip(&clip, &[del], &o).expect("edit");
+    assert_ne!(hash(&out), before);
+    assert_eq!(index_dirs(&out).len(), 2);
+}
+
+#[test]
 fn an_index_that_cannot_be_written_is_an_error_after_the_clips() {
     let out = tmp("index-blocked");
     std::fs::create_dir_all(out.join(INDEX_FILE).join("x")).unwrap();
@@ -331,7 +366,7 @@ fn the_python_reader_loads_a_compiled_tree() {
     let not_output = tmp("python-not-output");
     let run = Command::new("python3")
         .arg(root().join("tests/python/check_reader.py"))
-        .args([&out, &not_output])
+        .args([&*out, &*not_output])
         .env("PYTHONPATH", root().join("python"))
         .output()
         .expect("python3");

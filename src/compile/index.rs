@@ -181,6 +181,22 @@ pub fn refresh(root: &Path) -> io::Result<usize> {
     Ok(n)
 }
 
+/// After a clip in `clip_dir` (`ROOT/<scenario>/<ego>`) changed outside a batch (`rocc edit`):
+/// refresh `ROOT`'s index if it has one; a directory without an index is left without one.
+pub fn refresh_root_of(clip_dir: &Path) -> Result<(), crate::diag::Diagnostic> {
+    let Some(root) = clip_dir.parent().and_then(Path::parent) else { return Ok(()) };
+    let root = if root.as_os_str().is_empty() { Path::new(".") } else { root };
+    let path = root.join(INDEX_FILE);
+    if !path.is_file() {
+        return Ok(());
+    }
+    refresh(root).map(|_| ()).map_err(|e| {
+        crate::diag::Diagnostic::error("E0410", format!("cannot write `{}`: {e}", path.display())).help(
+            "the clip is written; fix the cause and re-run `rocc compile` into the same root to rebuild the index",
+        )
+    })
+}
+
 /// Stream the index of the clips finished under `root` now into `out`, one line each after the
 /// header; entries of `prev` whose manifest is unchanged are reused without reading `boxes.json`
 /// again. Returns the number of clips.

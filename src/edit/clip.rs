@@ -397,6 +397,7 @@ pub fn edit_clip(dir: &Path, edits: &[Edit], o: &ClipEdit) -> Result<Manifest, V
                 .help("check permissions and free space"),
         ]
     })?;
+    crate::compile::index::refresh_root_of(dir).map_err(|d| vec![d])?;
     Ok(report.manifest)
 }
 
