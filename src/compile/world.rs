@@ -25,7 +25,6 @@ impl ClipWorld<'_> {
         let t = self.tracks;
         let a = &t.agents[self.ego];
         let motion = |i: usize| motion(t, i, f, ego_pose.yaw);
-        let (s, c) = ego_pose.yaw.sin_cos();
         let ego = EgoRecord {
             agent: a.name.clone(),
             kind: a.kind.clone(),
@@ -45,7 +44,6 @@ impl ClipWorld<'_> {
             ego2global_rotation: yaw_quaternion(ego_pose.yaw),
             motion: motion(self.ego),
         };
-        debug_assert!((ego.ego2global[0][0] - c).abs() < 1e-12 && (ego.ego2global[1][0] - s).abs() < 1e-12);
         let boxes = boxes
             .iter()
             .map(|b| {
