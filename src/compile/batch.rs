@@ -122,7 +122,27 @@ pub fn run_shard(
     progress.finish();
     // Failures in input order, whichever phase found them.
     report.failures.sort_by_key(|f| inputs.iter().position(|p| *p == f.input));
+    if let Some(f) = refresh_index(out) {
+        report.failures.push(f);
+    }
     report
+}
+
+/// Rebuild the output root's `index.jsonl` (nothing to do where no clip was ever written).
+fn refresh_index(out: &Path) -> Option<Failure> {
+    if !out.is_dir() {
+        return None;
+    }
+    let e = super::index::refresh(out).err()?;
+    let path = out.join(super::index::INDEX_FILE);
+    Some(Failure {
+        diags: vec![
+            Diagnostic::error("E0410", format!("cannot write `{}`: {e}", path.display()))
+                .help("the clips are written; fix the cause and re-run the same command to rebuild the index"),
+        ],
+        input: path,
+        sources: SourceMap::default(),
+    })
 }
 
 fn render(p: &Prepared, ego: usize, out: &Path, opts: &Options, progress: &Progress) -> Result<ClipReport, Failure> {

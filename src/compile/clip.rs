@@ -6,12 +6,14 @@
 //! is written after, and `manifest.json` last: its presence with matching inputs and files is
 //! what "this clip is complete" means to a resumed run.
 
+use super::world::ClipWorld;
 use super::{Front, Options, Stage};
 use crate::backend::{Background, OccInput, Occupancy, occ_frame_path, write_npy};
 use crate::lidar::{bin_frame_path, pcd_frame_path, scan, write_bin, write_pcd};
 use crate::output::{
-    FrameBoxes, Manifest, OutputFile, PREVIEW_SIDE, StageTiming, paint_bev, paint_lidar, paint_occ, write_bev_frame,
-    write_boxes_json, write_gif, write_manifest, write_preview_png, write_sheet,
+    FrameBoxes, FrameWorld, Manifest, OutputFile, PREVIEW_SIDE, StageTiming, paint_bev, paint_lidar, paint_occ,
+    write_bev_frame, write_boxes_json, write_boxes_json_with, write_gif, write_manifest, write_preview_png,
+    write_scene_json, write_sheet,
 };
 use crate::place::Pose;
 use crate::raster::layout::{HALF_EXTENT_M, box_reaches_patch};
@@ -99,6 +101,8 @@ struct Scratch {
 struct FrameOut {
     boxes: FrameBoxes,
     files: Vec<OutputFile>,
+    /// Ego pose, box motion and timestamp, when the clip knows its world.
+    world: Option<FrameWorld>,
     /// Preview images (bev, occ, lidar) when this frame is sampled for a preview.
     thumbs: Option<[Option<Vec<u8>>; 3]>,
     /// The full BEV preview (with legend) is drawn from the first selected frame.
@@ -251,6 +255,9 @@ pub struct Render<'a> {
     /// The manifest to write, without files and timings.
     pub manifest: Manifest,
     pub source: &'a FrameSource<'a>,
+    /// The tracks and map behind the frames: the ego pose and motion in `boxes.json`, and
+    /// `scene.json`.
+    pub world: Option<ClipWorld<'a>>,
 }
 
 /// Compile one clip into `dir`. `on_frame` is called once per finished frame (progress).
@@ -287,6 +294,7 @@ pub fn compile_clip(
         seed: clip_seed(front, ci.ego),
         manifest: want,
         source: &source,
+        world: Some(ClipWorld { scenario: &front.concrete.name, tracks: &front.tracks, map: &front.map, ego: ci.ego }),
     };
     render_clip(&render, opts, dir, on_frame)
 }
@@ -318,6 +326,7 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
             |s, (n, &f)| -> io::Result<FrameOut> {
                 let t0 = Instant::now();
                 let (ego_pose, boxes) = (r.source)(f, &mut s.raster, &mut s.bev)?;
+                let world = r.world.map(|w| w.frame(f, ego_pose, &boxes));
                 let t2 = Clock::add(&clock.bev, t0);
                 let mut files = vec![write_bev_frame(dir, f, &s.bev)?];
                 let mut t3 = Clock::add(&clock.write, t2);
@@ -367,6 +376,7 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
                 on_frame();
                 Ok(FrameOut {
                     boxes: FrameBoxes { frame: f, t: f as f64 / rate, boxes },
+                    world,
                     files,
                     thumbs: preview.then_some(thumbs),
                     first_bev: (n == 0 && opts.previews).then(|| s.bev.clone()),
@@ -378,7 +388,14 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
     let t0 = Instant::now();
     let mut files: Vec<OutputFile> = outs.iter().flat_map(|o| o.files.iter().cloned()).collect();
     let frame_boxes: Vec<FrameBoxes> = outs.iter().map(|o| o.boxes.clone()).collect();
-    files.push(write_boxes_json(dir, &frame_boxes)?);
+    let worlds: Option<Vec<FrameWorld>> = outs.iter().map(|o| o.world.clone()).collect();
+    match (&worlds, &r.world) {
+        (Some(w), Some(cw)) => {
+            files.push(write_boxes_json_with(dir, &frame_boxes, w)?);
+            files.push(write_scene_json(dir, &cw.scene())?);
+        }
+        _ => files.push(write_boxes_json(dir, &frame_boxes)?),
+    }
     let t1 = Clock::add(&clock.write, t0);
 
     if opts.previews {

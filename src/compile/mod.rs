@@ -10,13 +10,16 @@
 
 pub mod batch;
 mod clip;
+pub mod index;
 mod static_bev;
+mod world;
 
 pub use clip::{
     ClipInput, ClipReport, FrameSource, Render, clip_dir, clip_seed, compile_clip, edited_clip, frame_boxes,
     render_clip,
 };
 pub use static_bev::StaticBev;
+pub use world::ClipWorld;
 
 use crate::backend::Mode;
 use crate::check::scenario::Scenario;

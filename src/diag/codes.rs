@@ -496,6 +496,15 @@ FILE.scn ... -o edited.scn`) and compile that.\n
     $ rocc compile scenarios/replayed_cut_in.scn -o out --force   // recompiles, edits discarded",
     },
     Code {
+        code: "E0410",
+        title: "cannot write the dataset index",
+        explanation: "After a batch, `rocc compile` rebuilds `index.jsonl` at the output root from every finished\n\
+clip below it (docs/compile.md, \"Dataset index\"). The clips themselves are written; only the index\n\
+could not be (permissions, a full disk, or an `index.jsonl` that is a directory). Fix the cause and\n\
+re-run the same command: complete clips are kept and the index is rebuilt.\n
+    $ rocc compile scenarios/ -o out     // error if out/index.jsonl cannot be replaced",
+    },
+    Code {
         code: "E0701",
         title: "unreadable occupancy frame",
         explanation: "`rocc eval occ` reads occupancy frames as a dense `.npy` of shape (400, 400, 32) (rocc's\n\

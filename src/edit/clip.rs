@@ -384,6 +384,12 @@ pub fn edit_clip(dir: &Path, edits: &[Edit], o: &ClipEdit) -> Result<Manifest, V
         seed: clip_seed(&front, ego),
         manifest: m,
         source: &source,
+        world: Some(crate::compile::ClipWorld {
+            scenario: &front.concrete.name,
+            tracks: &front.tracks,
+            map: &front.map,
+            ego,
+        }),
     };
     let report = render_clip(&render, &opts, dir, &|| {}).map_err(|e| {
         vec![
@@ -391,6 +397,7 @@ pub fn edit_clip(dir: &Path, edits: &[Edit], o: &ClipEdit) -> Result<Manifest, V
                 .help("check permissions and free space"),
         ]
     })?;
+    crate::compile::index::refresh_root_of(dir).map_err(|d| vec![d])?;
     Ok(report.manifest)
 }
 

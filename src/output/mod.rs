@@ -5,12 +5,17 @@
 //! beside their writers, so each format is defined once.
 
 mod anim;
+mod ego;
 mod paint;
 mod preview;
+mod vector_map;
 
 pub use anim::{write_gif, write_sheet};
 pub use paint::{CHANNEL_COLOURS, SIDE as PREVIEW_SIDE, STRUCTURE_COLOUR, paint_bev, paint_lidar, paint_occ, palette};
 pub use preview::{render_preview, write_preview_png};
+
+pub use ego::{BoxMotion, EgoRecord, FrameWorld, Motion, ego2global, instance_id, yaw_quaternion};
+pub use vector_map::{Points, SceneMap, read_scene_json, write_scene_json};
 
 /// A temporary of an interrupted write, as found in an output directory.
 pub use crate::fsio::is_atomic_tmp;
@@ -102,6 +107,9 @@ struct BoxRecord {
     w: f64,
     h: f64,
     yaw: f64,
+    /// Instance id and motion (`ego.rs`); absent for a box no track describes (an inserted one).
+    #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
+    world: Option<BoxMotion>,
 }
 
 /// One frame of `boxes.json`.
@@ -109,6 +117,10 @@ struct BoxRecord {
 struct FrameRecord {
     frame: usize,
     t: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    timestamp_us: Option<u64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    ego: Option<EgoRecord>,
     boxes: Vec<BoxRecord>,
 }
 
@@ -127,6 +139,7 @@ impl BoxRecord {
             w: b.w,
             h: b.h,
             yaw: b.yaw,
+            world: None,
         }
     }
 
@@ -156,9 +169,34 @@ impl BoxRecord {
 /// `boxes.json`: `[{"frame", "t", "boxes": [{"agent", "kind", "class", "class_name", "track",
 /// "x", "y", "z", "l", "w", "h", "yaw"}]}]` (SPEC output layout; `class_name` is an addition).
 pub fn boxes_json(frames: &[FrameBoxes]) -> serde_json::Value {
+    boxes_json_with(frames, None)
+}
+
+/// `boxes_json` with each frame's world side (`worlds[i]` belongs to `frames[i]`): the frame
+/// gains `timestamp_us` and `ego`, each box its `instance_id` and motion.
+pub fn boxes_json_with(frames: &[FrameBoxes], worlds: Option<&[FrameWorld]>) -> serde_json::Value {
     let recs: Vec<FrameRecord> = frames
         .iter()
-        .map(|f| FrameRecord { frame: f.frame, t: f.t, boxes: f.boxes.iter().map(BoxRecord::of).collect() })
+        .enumerate()
+        .map(|(i, f)| {
+            let w = worlds.and_then(|w| w.get(i));
+            let boxes = f
+                .boxes
+                .iter()
+                .enumerate()
+                .map(|(k, b)| BoxRecord {
+                    world: w.and_then(|w| w.boxes.get(k).cloned().flatten()),
+                    ..BoxRecord::of(b)
+                })
+                .collect();
+            FrameRecord {
+                frame: f.frame,
+                t: f.t,
+                timestamp_us: w.map(|w| w.timestamp_us),
+                ego: w.map(|w| w.ego.clone()),
+                boxes,
+            }
+        })
         .collect();
     serde_json::to_value(recs).expect("box records hold only strings and numbers")
 }
@@ -183,6 +221,19 @@ pub fn read_boxes_json(path: &Path) -> Result<Vec<FrameBoxes>, String> {
 /// Write `dir/boxes.json`.
 pub fn write_boxes_json(dir: &Path, frames: &[FrameBoxes]) -> io::Result<OutputFile> {
     write_json(dir, "boxes.json", &boxes_json(frames))
+}
+
+/// Write `dir/boxes.json` with each frame's world side.
+pub fn write_boxes_json_with(dir: &Path, frames: &[FrameBoxes], worlds: &[FrameWorld]) -> io::Result<OutputFile> {
+    write_json(dir, "boxes.json", &boxes_json_with(frames, Some(worlds)))
+}
+
+/// The ego record of every frame of `boxes.json`, by frame index; frames written without one
+/// are left out.
+pub fn read_ego_poses(path: &Path) -> Result<Vec<(usize, f64, EgoRecord)>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+    let frames: Vec<FrameRecord> = serde_json::from_str(&text).map_err(|e| format!("`{}`: {e}", path.display()))?;
+    Ok(frames.into_iter().filter_map(|f| f.ego.map(|e| (f.frame, f.t, e))).collect())
 }
 
 /// Wall time of one pipeline stage.

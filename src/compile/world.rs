@@ -1,0 +1,100 @@
+//! A clip's world side: per frame the ego's pose and box, each box's motion and instance id
+//! (`boxes.json`), and the map as vectors (`scene.json`), from the scenario's tracks and map.
+
+use crate::geom::wrap_angle;
+use crate::output::{BoxMotion, EgoRecord, FrameWorld, Motion, SceneMap, ego2global, instance_id, yaw_quaternion};
+use crate::place::Pose;
+use crate::raster::layout::class_index;
+use crate::road::Map;
+use crate::rollout::Tracks;
+use crate::view::EgoBox;
+use glam::DVec2;
+
+/// What a clip knows of its world: the scenario's name (instance ids), tracks, map and ego.
+#[derive(Clone, Copy)]
+pub struct ClipWorld<'a> {
+    pub scenario: &'a str,
+    pub tracks: &'a Tracks,
+    pub map: &'a Map,
+    pub ego: usize,
+}
+
+impl ClipWorld<'_> {
+    /// The world side of frame `f`, whose ego pose and ego-frame boxes are given.
+    pub fn frame(&self, f: usize, ego_pose: Pose, boxes: &[EgoBox]) -> FrameWorld {
+        let t = self.tracks;
+        let a = &t.agents[self.ego];
+        let motion = |i: usize| motion(t, i, f, ego_pose.yaw);
+        let ego = EgoRecord {
+            agent: a.name.clone(),
+            kind: a.kind.clone(),
+            class: class_index(a.class),
+            class_name: a.class.name().to_string(),
+            track: self.ego as u32,
+            instance_id: instance_id(self.scenario, &a.name),
+            x: ego_pose.x,
+            y: ego_pose.y,
+            z: 0.0,
+            yaw: ego_pose.yaw,
+            l: a.size[0],
+            w: a.size[1],
+            h: a.size[2],
+            ego2global: ego2global(ego_pose),
+            ego2global_translation: [ego_pose.x, ego_pose.y, 0.0],
+            ego2global_rotation: yaw_quaternion(ego_pose.yaw),
+            motion: motion(self.ego),
+        };
+        let boxes = boxes
+            .iter()
+            .map(|b| {
+                let i = b.track as usize;
+                // A box the tracks do not describe (inserted by `rocc edit`) has no motion.
+                (t.agents.get(i).is_some_and(|a| a.name == b.agent))
+                    .then(|| BoxMotion { instance_id: instance_id(self.scenario, &b.agent), motion: motion(i) })
+            })
+            .collect();
+        let timestamp_us = (f as f64 * 1e6 / t.rate).round() as u64;
+        FrameWorld { timestamp_us, ego, boxes }
+    }
+
+    pub fn scene(&self) -> SceneMap {
+        SceneMap::of(self.scenario, self.map)
+    }
+}
+
+/// The derivative at frame `f` of a quantity sampled at every frame (`n` of them, `dt` apart):
+/// a central difference, one-sided at the clip's ends, zero for a single frame.
+fn diff<T>(g: impl Fn(usize) -> T, f: usize, n: usize, dt: f64) -> T
+where
+    T: std::ops::Sub<Output = T> + std::ops::Mul<f64, Output = T> + Default,
+{
+    if n < 2 {
+        return T::default();
+    }
+    let (lo, hi) = (f.saturating_sub(1), (f + 1).min(n - 1));
+    (g(hi) - g(lo)) * (1.0 / ((hi - lo) as f64 * dt))
+}
+
+/// Agent `i`'s motion at frame `f`, world and ego axes (the ego's heading `ego_yaw`).
+fn motion(t: &Tracks, i: usize, f: usize, ego_yaw: f64) -> Motion {
+    let (n, dt) = (t.frames.min(t.poses[i].len()), 1.0 / t.rate);
+    let pos = |k: usize| DVec2::new(t.poses[i][k].x, t.poses[i][k].y);
+    let vel = |k: usize| diff(pos, k, n, dt);
+    let v = vel(f);
+    let a = diff(vel, f, n, dt);
+    let yaw_rate = if n < 2 {
+        0.0
+    } else {
+        let (lo, hi) = (f.saturating_sub(1), (f + 1).min(n - 1));
+        wrap_angle(t.poses[i][hi].yaw - t.poses[i][lo].yaw) / ((hi - lo) as f64 * dt)
+    };
+    let to_ego = |w: DVec2| DVec2::from_angle(-ego_yaw).rotate(w);
+    let arr = |w: DVec2| [w.x, w.y];
+    Motion {
+        velocity: arr(to_ego(v)),
+        acceleration: arr(to_ego(a)),
+        velocity_world: arr(v),
+        acceleration_world: arr(a),
+        yaw_rate,
+    }
+}
