@@ -148,8 +148,8 @@ fn expected_manifest(ci: &ClipInput, opts: &Options, backend: &str) -> Manifest 
     m
 }
 
-/// What, besides the fields compared by name, decides a clip's bytes: the compiler version,
-/// every loaded source (an edited import or prelude changes the scene) and the effective rig
+/// What, besides the fields compared by name, decides a clip's bytes: the compiler version, the
+/// output format (`output::FORMAT`), every loaded source (an edited import or prelude changes the scene) and the effective rig
 /// (`--lidar-resolution` changes the rig but not its name).
 fn build_key(sources: &SourceMap, rig: Option<&crate::lidar::Rig>) -> String {
     let mut bytes = Vec::new();
@@ -158,6 +158,7 @@ fn build_key(sources: &SourceMap, rig: Option<&crate::lidar::Rig>) -> String {
         bytes.extend_from_slice(b);
     };
     field(env!("CARGO_PKG_VERSION").as_bytes());
+    field(&crate::output::FORMAT.to_le_bytes());
     // Texts, not names: the same files named from another directory compile the same.
     for f in &sources.files {
         field(f.text.as_bytes());

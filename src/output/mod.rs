@@ -243,6 +243,11 @@ pub struct StageTiming {
     pub seconds: f64,
 }
 
+/// The version of the files a clip holds, part of every clip's build key: a clip written with
+/// another format is recompiled by a resumed run, never kept. Raised whenever a file or field
+/// is added, removed or changes meaning.
+pub const FORMAT: u32 = 2;
+
 /// `manifest.json` (SPEC output layout).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Manifest {
