@@ -145,6 +145,7 @@ fn goal() -> Goal<f64> {
         stop: None,
         turn: None,
         start_after: 0.0,
+        start_when: None,
         stop_span: Default::default(),
     }
 }
@@ -198,6 +199,7 @@ fn scene(specs: Vec<Spec>, conflicts: Vec<Conflict>, traffic: Option<Traffic>, d
             speed: s.speed,
             goal: s.goal.clone(),
             track: s.track.clone(),
+            behaviour: Default::default(),
             span: Default::default(),
             place_span: Default::default(),
         })

@@ -26,6 +26,7 @@ impl Checker {
         let mut sizes: [Option<(&ast::Value, Span)>; 3] = [None; 3];
         let mut goal: Option<&ast::Goal> = None;
         let mut track: Option<&ast::Track> = None;
+        let mut behaviour: Option<&ast::Behaviour> = None;
         for st in &a.stmts {
             let (slot_first, what): (Option<Span>, &str) = match st {
                 ast::AgentStmt::At { place: p, span } => (place.replace((p, *span)).map(|x| x.1), "placement `at`"),
@@ -35,6 +36,7 @@ impl Checker {
                 }
                 ast::AgentStmt::Goal(g) => (goal.replace(g).map(|x| x.span), "`goal`"),
                 ast::AgentStmt::Track(t) => (track.replace(t).map(|x| x.span), "`track`"),
+                ast::AgentStmt::Behaviour(b) => (behaviour.replace(b).map(|x| x.span), "`behaviour`"),
             };
             if let Some(first) = slot_first {
                 self.dup(what, first, st.span());
@@ -114,6 +116,10 @@ impl Checker {
             ast::AgentStmt::Track(t) => Some(t.span),
             _ => None,
         }));
+        let behaviour_c = match behaviour {
+            Some(b) => self.behaviour(b, &a.name.name, motion, is_static, goal),
+            None => Some(Behaviour::default()),
+        };
         let (kinds, class, motion) = kind?;
         Some(Agent {
             name: a.name.name.clone(),
@@ -128,6 +134,7 @@ impl Checker {
             speed: speed_d?,
             goal: goal_c?,
             track: track_keys.clone(),
+            behaviour: behaviour_c?,
             span,
             place_span: place_span.unwrap_or(span),
         })

@@ -6,6 +6,7 @@
 //! agent, goal, conflict); this file holds the entry points and the value helpers they share.
 
 mod agent;
+mod behaviour;
 pub mod classes;
 mod conflict;
 mod goal;
@@ -16,6 +17,7 @@ mod road;
 pub mod scenario;
 mod scene;
 pub mod summary;
+mod trigger;
 pub mod units;
 
 pub use conflict::points_for;

@@ -2,7 +2,7 @@
 //! per frame), and what joins two of them (`Conf`, a staged conflict; `Crossing`, a shared
 //! junction zone). Nothing here decides anything.
 
-use crate::check::scenario::{Keyframe, Turn};
+use crate::check::scenario::{Behaviour, Keyframe, Trigger, Turn};
 use crate::geom::Obb;
 use crate::place::Pose;
 use crate::road::route::Junction;
@@ -60,6 +60,11 @@ pub(crate) struct Actor {
     pub v_goal: f64,
     pub v_hold: f64,
     pub start: f64,
+    /// What starts its goal besides `start` (`rollout::trigger`), `who` a track index.
+    pub trigger: Option<Trigger>,
+    /// Attention and compliance: whether it gives way and holds at its stop line, its reaction
+    /// time, its speeding.
+    pub behaviour: Behaviour,
     pub lateral: Lat,
     pub stop: StopGoal,
     pub info: TrackAgent,
@@ -137,6 +142,13 @@ impl Actor {
         self.vehicle && (!self.yield_to.is_empty() || self.to_line(st).is_none_or(|line| line > -0.05))
     }
 
+    /// Whether its goal has started by `t`: its start time has come and its trigger, if any, has
+    /// fired.
+    #[inline]
+    pub(crate) fn active(&self, st: &State, t: f64) -> bool {
+        st.go && t >= self.start - 1e-9
+    }
+
     pub(crate) fn obb(&self, st: &State) -> Obb {
         Obb { center: st.pos, yaw: st.yaw, length: 2.0 * self.hl, width: 2.0 * self.hw }
     }
@@ -160,6 +172,10 @@ pub(crate) struct State {
     /// Holding back for another agent under the right-of-way rule (at its stop line or short of
     /// the shared zone) or at the kerb: waiting by choice, ready to go, not blocked.
     pub give_way: bool,
+    /// Its trigger has fired (always, for one without a trigger).
+    pub go: bool,
+    /// How long a need to brake for someone has gone unanswered, s (`Behaviour::reaction`).
+    pub alarm: f64,
 }
 
 /// A conflict with its agents as track indices.
@@ -187,6 +203,8 @@ pub(crate) fn initial(a: &Actor) -> State {
         stopped: false,
         frozen: false,
         give_way: false,
+        go: a.trigger.is_none(),
+        alarm: 0.0,
     }
 }
 

@@ -47,6 +47,8 @@ pub struct ConcreteAgent {
     pub speed: f64,
     pub goal: Option<Goal<f64>>,
     pub track: Option<Vec<Keyframe>>,
+    #[serde(default, skip_serializing_if = "Behaviour::is_careful")]
+    pub behaviour: Behaviour,
     #[serde(skip)]
     pub span: crate::source::Span,
     #[serde(skip)]
@@ -97,9 +99,11 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
                     stop: g.stop,
                     turn: g.turn,
                     start_after: g.start_after,
+                    start_when: g.start_when,
                     stop_span: g.stop_span,
                 }),
                 track: a.track.clone(),
+                behaviour: a.behaviour,
                 span: a.span,
                 place_span: a.place_span,
             }

@@ -148,6 +148,7 @@ pub enum AgentStmt {
     Size(SizeStmt),
     Goal(Goal),
     Track(Track),
+    Behaviour(Behaviour),
 }
 
 impl AgentStmt {
@@ -157,6 +158,7 @@ impl AgentStmt {
             AgentStmt::Size(s) => s.span,
             AgentStmt::Goal(g) => g.span,
             AgentStmt::Track(t) => t.span,
+            AgentStmt::Behaviour(b) => b.span,
         }
     }
 }
@@ -268,11 +270,31 @@ pub struct Goal {
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub enum GoalStmt {
-    Speed { value: Value, span: Span },
-    Lateral { lateral: Lateral, span: Span },
-    Stop { stop: Stop, span: Span },
-    Turn { turn: Ident, span: Span },
-    Start { after: Value, span: Span },
+    Speed {
+        value: Value,
+        span: Span,
+    },
+    Lateral {
+        lateral: Lateral,
+        span: Span,
+    },
+    Stop {
+        stop: Stop,
+        span: Span,
+    },
+    Turn {
+        turn: Ident,
+        span: Span,
+    },
+    Start {
+        after: Value,
+        span: Span,
+    },
+    /// `start when NAME CONDITION` (a trigger; `start after` is the time condition).
+    StartWhen {
+        trigger: Trigger,
+        span: Span,
+    },
 }
 
 impl GoalStmt {
@@ -282,7 +304,8 @@ impl GoalStmt {
             | GoalStmt::Lateral { span, .. }
             | GoalStmt::Stop { span, .. }
             | GoalStmt::Turn { span, .. }
-            | GoalStmt::Start { span, .. } => *span,
+            | GoalStmt::Start { span, .. }
+            | GoalStmt::StartWhen { span, .. } => *span,
         }
     }
     pub fn keyword(&self) -> &'static str {
@@ -291,7 +314,7 @@ impl GoalStmt {
             GoalStmt::Lateral { .. } => "lateral",
             GoalStmt::Stop { .. } => "stop",
             GoalStmt::Turn { .. } => "turn",
-            GoalStmt::Start { .. } => "start",
+            GoalStmt::Start { .. } | GoalStmt::StartWhen { .. } => "start",
         }
     }
 }
@@ -310,6 +333,31 @@ pub enum Stop {
     At(Ident),
     Behind(Ident),
     After(Value),
+}
+
+/// `when NAME WORD [under] [VALUE | LANDMARK]`, as written: the checker validates the word.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Trigger {
+    pub who: Ident,
+    pub cond: Ident,
+    pub under: bool,
+    pub value: Option<Value>,
+    pub landmark: Option<Ident>,
+    pub span: Span,
+}
+
+/// `behaviour { NAME VALUE|WORD ... }`: settings are validated by the checker.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Behaviour {
+    pub sets: Vec<BehaviourSet>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BehaviourSet {
+    pub name: Ident,
+    pub value: FieldValue,
+    pub span: Span,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]

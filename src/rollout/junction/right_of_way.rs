@@ -29,6 +29,10 @@ impl Sim<'_, '_> {
         if st.frozen || st.stopped || !matches!(a.drive, Drive::Mover) || self.striking(i, t) {
             return None;
         }
+        // `yield never`: it goes regardless; a walker darts out without waiting for a gap.
+        if !a.behaviour.yields {
+            return None;
+        }
         if let Some(kerb) = a.kerb {
             return self.kerb_hold(i, kerb, t);
         }
@@ -53,13 +57,14 @@ impl Sim<'_, '_> {
         }
         if let StopGoal::Front(sf) | StopGoal::Centre(sf) = a.stop
             && sf < enter + a.hl
-            && t >= a.start - 1e-9
+            && a.active(st, t)
         {
             return None;
         }
         let to_zone = enter - 0.3 - st.s;
+        // `stop_line ignore`: it holds short of the zone itself, past its line.
         let rem = match a.to_line(st) {
-            Some(line) if line > -0.05 => line.min(to_zone),
+            Some(line) if line > -0.05 && a.behaviour.stop_line => line.min(to_zone),
             _ => to_zone,
         };
         // Short of where the paths come near (`meet`), in the stretch the other's sweep moved
@@ -247,7 +252,7 @@ impl Sim<'_, '_> {
     /// the kerb to stop, it goes on (vehicles yield to a walker on the road).
     pub(crate) fn kerb_hold(&self, i: usize, kerb: f64, t: f64) -> Option<f64> {
         let (a, st) = (&self.actors[i], &self.cur[i]);
-        if t < a.start - 1e-9 {
+        if !a.active(st, t) {
             return None;
         }
         let rem = kerb - (st.s + a.hl);
@@ -310,7 +315,9 @@ impl Sim<'_, '_> {
     pub(crate) fn yield_state(&self, i: usize) -> (Option<f64>, bool) {
         let (a, st) = (&self.actors[i], &self.cur[i]);
         let Some(j) = a.junction else { return (None, false) };
-        if !a.yield_to.iter().any(|&e| self.emergency_near(e)) {
+        // It holds for an emergency vehicle at its stop line: one that does not give way, or
+        // ignores its line, does not hold.
+        if !a.behaviour.yields || !a.behaviour.stop_line || !a.yield_to.iter().any(|&e| self.emergency_near(e)) {
             return (None, false);
         }
         let rem = j.stop - 0.3 - (st.s + a.hl);
