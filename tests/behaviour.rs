@@ -185,8 +185,30 @@ fn time_to_collision_headway_and_start_triggers_fire_when_their_condition_holds(
 }
 
 #[test]
+fn a_later_goal_block_takes_over_when_its_trigger_holds() {
+    let t = &front_of(&case("lead-brakes-on-approach")).tracks;
+    let (lead, car) = (idx(t, "lead"), idx(t, "car"));
+    let headway = |f: usize| {
+        let gap = t.poses[lead][f].x - t.poses[car][f].x - (t.agents[lead].size[0] + t.agents[car].size[0]) / 2.0;
+        gap / t.speeds[car][f]
+    };
+    let under = (0..t.frames).find(|&f| headway(f) <= 1.5).expect("closes in");
+    // Till then the lead holds its first goal's speed; from the step after, it brakes to a stop.
+    assert!((0..=under).all(|f| (t.speeds[lead][f] - 10.0).abs() < 1e-9), "the lead slowed before its phase");
+    assert!(t.speeds[lead][under + 2] < t.speeds[lead][under + 1] && t.speeds[lead][under + 1] < 10.0);
+    assert!(t.speeds[lead][t.frames - 1] < 0.05, "the lead did not stop");
+    assert!((0..t.frames).all(|f| !obb(t, lead, f).overlaps(&obb(t, car, f))));
+}
+
+#[test]
 fn triggers_and_behaviour_format_to_text_that_checks_the_same() {
-    for name in ["child-darts-out", "late-reaction", "stop-line-ignored", "walker-starts-on-approach"] {
+    for name in [
+        "child-darts-out",
+        "late-reaction",
+        "stop-line-ignored",
+        "walker-starts-on-approach",
+        "lead-brakes-on-approach",
+    ] {
         let text = case(name).replace("start when car within 30 m", "start when car ttc under 3 s");
         let once = rocc::syntax::format_source(&text).expect("formats");
         assert_eq!(once, rocc::syntax::format_source(&once).expect("formats again"), "{name}");
@@ -195,6 +217,6 @@ fn triggers_and_behaviour_format_to_text_that_checks_the_same() {
             ron::to_string(&s.expect("checks")).expect("ron")
         };
         assert_eq!(check(&text), check(&once), "{name}: formatting changed the checked scenario");
-        assert!(once.contains("behaviour {") || name == "walker-starts-on-approach", "{once}");
+        assert!(once.contains("behaviour {") || once.contains("start when"), "{once}");
     }
 }

@@ -200,6 +200,7 @@ fn scene(specs: Vec<Spec>, conflicts: Vec<Conflict>, traffic: Option<Traffic>, d
             goal: s.goal.clone(),
             track: s.track.clone(),
             behaviour: Default::default(),
+            phases: vec![],
             span: Default::default(),
             place_span: Default::default(),
         })

@@ -260,7 +260,7 @@ impl Checker {
     }
 }
 
-pub(super) fn find_goal_span(a: &ast::Agent, key: &str) -> Span {
+fn find_goal_span(a: &ast::Agent, key: &str) -> Span {
     a.stmts
         .iter()
         .find_map(|s| match s {

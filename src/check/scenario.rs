@@ -251,6 +251,9 @@ pub struct Agent {
     /// Attention and compliance (`behaviour { ... }`); careful by default.
     #[serde(default, skip_serializing_if = "Behaviour::is_careful")]
     pub behaviour: Behaviour,
+    /// Later goal blocks, in order: each takes over from the one before once it starts.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub phases: Vec<Phase>,
     #[serde(skip)]
     pub span: Span,
     #[serde(skip)]
@@ -532,4 +535,13 @@ impl Behaviour {
     pub fn is_careful(&self) -> bool {
         *self == Behaviour::default()
     }
+}
+
+/// A later goal block (a goal phase): a new goal speed from when its start holds, after the
+/// goal before it has started.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Phase<V = Dist> {
+    pub speed: V,
+    pub start_after: f64,
+    pub start_when: Option<Trigger>,
 }

@@ -1,10 +1,9 @@
 //! Triggers (`start when NAME CONDITION`): the condition's words and value, then, once every
 //! agent is known, what the condition watches and whether triggers wait on each other in a cycle.
 
-use super::Checker;
-use super::goal::find_goal_span;
 use super::scenario::*;
 use super::units::Dim;
+use super::{Checker, MAX_DURATION_S, MAX_SPEED_MS};
 use crate::diag::{Diagnostic, did_you_mean};
 use crate::syntax::ast;
 
@@ -18,6 +17,54 @@ const CONDITIONS: [(&str, &str); 5] = [
 ];
 
 impl Checker {
+    /// A later goal block: a goal `speed` and the `start` that hands over to it (E0155 for
+    /// anything else: a phase changes speed, not route or stops).
+    pub(super) fn phase(&mut self, g: &ast::Goal, order: &[&str]) -> Option<Phase> {
+        let mut speed = None;
+        let mut start: Option<(f64, Option<Trigger>)> = None;
+        let mut ok = true;
+        for st in &g.stmts {
+            match st {
+                ast::GoalStmt::Speed { value, .. } if speed.is_none() => {
+                    speed = self.bounded(value, Dim::Speed, "goal speed", 0.0, MAX_SPEED_MS, "0..324 km/h");
+                    ok &= speed.is_some();
+                }
+                ast::GoalStmt::Start { after, .. } if start.is_none() => {
+                    let t = self.fixed(after, Dim::Time, "start delay", 0.0, MAX_DURATION_S, "0..120 s");
+                    ok &= t.is_some();
+                    start = Some((t.unwrap_or(0.0), None));
+                }
+                ast::GoalStmt::StartWhen { trigger, .. } if start.is_none() => {
+                    let t = self.trigger(trigger, order);
+                    ok &= t.is_some();
+                    start = Some((0.0, t));
+                }
+                other => {
+                    self.err(
+                        Diagnostic::error(
+                            "E0155",
+                            format!("a goal phase takes one `speed` and one `start`, not `{}` here", other.keyword()),
+                        )
+                        .label(other.span(), "not in a later goal block")
+                        .help("route, lateral moves and stops belong to the first goal block"),
+                    );
+                    ok = false;
+                }
+            }
+        }
+        let (Some(speed), Some((start_after, start_when))) = (speed, start) else {
+            if ok {
+                self.err(
+                    Diagnostic::error("E0155", "a goal phase needs a `speed` and a `start`")
+                        .label(g.span, "second goal block")
+                        .help("e.g. `goal { speed 0 km/h; start when ego within 15 m }`"),
+                );
+            }
+            return None;
+        };
+        ok.then_some(Phase { speed, start_after, start_when })
+    }
+
     /// One `start when ...`: its agent resolved, its condition word known and given what it takes.
     pub(super) fn trigger(&mut self, w: &ast::Trigger, order: &[&str]) -> Option<Trigger> {
         let who = self.resolve(&w.who, order);
@@ -74,31 +121,33 @@ impl Checker {
     /// Once every agent is checked: each trigger watches something that can happen (E0154), and
     /// no agent's start waits, through other triggers, on itself (E0151).
     pub(super) fn trigger_refs(&mut self, agents: &[Option<Agent>], asts: &[&ast::Agent], road: Option<&Road>) {
-        let trigger_of = |i: usize| agents[i].as_ref().and_then(|a| a.goal.as_ref()).and_then(|g| g.start_when);
+        let triggers = |i: usize| -> Vec<Trigger> {
+            let Some(a) = &agents[i] else { return vec![] };
+            a.goal.iter().filter_map(|g| g.start_when).chain(a.phases.iter().filter_map(|p| p.start_when)).collect()
+        };
         for (i, a) in agents.iter().enumerate() {
-            let (Some(a), Some(t)) = (a, trigger_of(i)) else { continue };
-            let Some(other) = &agents[t.who()] else { continue };
-            if let Some(why) = cannot_happen(t, other, road) {
-                self.err(
-                    Diagnostic::error("E0154", format!("`{}` starts on a condition that cannot happen: {why}", a.name))
-                        .label(find_goal_span(asts[i], "start"), "never holds")
+            let Some(a) = a else { continue };
+            for t in triggers(i) {
+                let Some(other) = &agents[t.who()] else { continue };
+                if let Some(why) = cannot_happen(t, other, road) {
+                    self.err(
+                        Diagnostic::error(
+                            "E0154",
+                            format!("`{}` starts on a condition that cannot happen: {why}", a.name),
+                        )
+                        .label(trigger_span(asts[i], &other.name), "never holds")
                         .help("watch an agent that moves there, or use another condition (`within`, `ttc`)"),
-                );
+                    );
+                }
             }
         }
-        // Each agent has at most one trigger: following them from any agent either ends or
-        // comes back round; a cycle is reported once, from its first agent.
+        let edges: Vec<Vec<usize>> = (0..agents.len()).map(|i| triggers(i).iter().map(|t| t.who()).collect()).collect();
+        let mut seen = std::collections::BTreeSet::new();
         for start in 0..agents.len() {
-            let mut path = vec![start];
-            let mut at = start;
-            while let Some(t) = trigger_of(at) {
-                at = t.who();
-                if at == start || path.contains(&at) {
-                    break;
-                }
-                path.push(at);
-            }
-            if at != start || trigger_of(start).is_none() || path.iter().any(|&k| k < start) {
+            let Some(path) = cycle_from(&edges, start) else { continue };
+            let mut key = path.clone();
+            key.sort_unstable();
+            if !seen.insert(key) {
                 continue;
             }
             let names: Vec<String> = path.iter().filter_map(|&k| agents[k].as_ref().map(|a| a.name.clone())).collect();
@@ -108,12 +157,52 @@ impl Checker {
                 format!("triggers wait on each other in a cycle: {} -> {}", names.join(" -> "), names[0])
             };
             let mut d = Diagnostic::error("E0151", msg);
-            for &k in &path {
-                d = d.label(find_goal_span(asts[k], "start"), "waits here");
+            for (n, &k) in path.iter().enumerate() {
+                d = d.label(trigger_span(asts[k], &names[(n + 1) % names.len()]), "waits here");
             }
             self.err(d.help("a cycle has no first cause: let one of them start on time or on another agent"));
         }
     }
+}
+
+/// The shortest cycle of trigger edges through `start` (agents in order, `start` first).
+fn cycle_from(edges: &[Vec<usize>], start: usize) -> Option<Vec<usize>> {
+    // Breadth-first from `start`, remembering how each agent was reached.
+    let mut from = vec![usize::MAX; edges.len()];
+    let mut queue = std::collections::VecDeque::from([start]);
+    while let Some(k) = queue.pop_front() {
+        for &n in &edges[k] {
+            if n == start {
+                let mut path = vec![k];
+                while *path.last()? != start {
+                    path.push(from[*path.last()?]);
+                }
+                path.reverse();
+                return Some(path);
+            }
+            if from[n] == usize::MAX {
+                from[n] = k;
+                queue.push_back(n);
+            }
+        }
+    }
+    None
+}
+
+/// The `start when` of agent `a` (any goal block) that names `who`.
+fn trigger_span(a: &ast::Agent, who: &str) -> crate::source::Span {
+    a.stmts
+        .iter()
+        .filter_map(|s| match s {
+            ast::AgentStmt::Goal(g) => Some(g),
+            _ => None,
+        })
+        .flat_map(|g| &g.stmts)
+        .find_map(|s| match s {
+            ast::GoalStmt::StartWhen { trigger, span } if trigger.who.name == who => Some(*span),
+            _ => None,
+        })
+        .unwrap_or(a.span)
 }
 
 /// Why trigger `t` can never fire, watching `other`; `None` when it can.

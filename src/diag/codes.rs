@@ -316,6 +316,18 @@ moves, `reaches stop_line` a vehicle placed on an in-lane of a road with stop li
     goal { speed 8 m/s; start when cone starts }         // error: a cone never moves",
     },
     Code {
+        code: "E0155",
+        title: "invalid goal phase",
+        explanation: "A later `goal` block of an agent is a phase: it takes over from the goal before it once its\n\
+`start` holds (`start after T` counts from the clip's start, `start when ...` is a trigger),\n\
+and only after that goal has started. A phase gives one `speed` and one `start`, nothing else:\n\
+turns, lateral moves and stops belong to the first goal block. Static things and replayed\n\
+tracks have no phases.\n
+    goal { speed 10 m/s }
+    goal { speed 0 m/s; start when car headway under 1.5 s }     // fine: brakes to a stop
+    goal { speed 4 m/s; turn left; start after 1 s }             // error: a turn in a phase",
+    },
+    Code {
         code: "E0201",
         title: "placement off a valid surface",
         explanation: "Each class has surfaces it may start on: vehicles on lanes or shoulders; pedestrians\n\

@@ -65,6 +65,8 @@ pub(crate) struct Actor {
     /// Attention and compliance: whether it gives way and holds at its stop line, its reaction
     /// time, its speeding.
     pub behaviour: Behaviour,
+    /// Later goal phases, in order: a goal speed from each's start (`rollout::trigger`).
+    pub phases: Vec<Stage>,
     pub lateral: Lat,
     pub stop: StopGoal,
     pub info: TrackAgent,
@@ -96,6 +98,15 @@ pub(crate) struct Actor {
     pub approach: Option<usize>,
     /// A vehicle's sweep through its first junction (`assign_bends`).
     pub bend: Option<std::sync::Arc<Bend>>,
+}
+
+/// A goal phase as the rollout runs it: its goal speed, from its start time once its trigger
+/// (its agent a track index) holds.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Stage {
+    pub v_goal: f64,
+    pub start: f64,
+    pub trigger: Option<Trigger>,
 }
 
 /// The stretch that two vehicles' junction paths share, seen from one of them: route arc
@@ -149,6 +160,15 @@ impl Actor {
         st.go && t >= self.start - 1e-9
     }
 
+    /// Its goal speed in the phase it is in.
+    #[inline]
+    pub(crate) fn goal_speed(&self, st: &State) -> f64 {
+        match st.stage {
+            0 => self.v_goal,
+            k => self.phases[k as usize - 1].v_goal,
+        }
+    }
+
     pub(crate) fn obb(&self, st: &State) -> Obb {
         Obb { center: st.pos, yaw: st.yaw, length: 2.0 * self.hl, width: 2.0 * self.hw }
     }
@@ -176,6 +196,8 @@ pub(crate) struct State {
     pub go: bool,
     /// How long a need to brake for someone has gone unanswered, s (`Behaviour::reaction`).
     pub alarm: f64,
+    /// How many of its goal phases have started (`Actor::phases`).
+    pub stage: u8,
 }
 
 /// A conflict with its agents as track indices.
@@ -205,6 +227,7 @@ pub(crate) fn initial(a: &Actor) -> State {
         give_way: false,
         go: a.trigger.is_none(),
         alarm: 0.0,
+        stage: 0,
     }
 }
 

@@ -70,8 +70,8 @@ pub(crate) struct Facts {
     pub(crate) easing: Vec<usize>,
     /// Per agent, this frame: what `candidates` reads, packed.
     pub(crate) near: Vec<Near>,
-    /// This frame: agents whose triggers fired (`fire_triggers`).
-    pub(crate) fired: Vec<usize>,
+    /// This frame: agents whose triggers fired (`fire_triggers`), and whether for a phase.
+    pub(crate) fired: Vec<(usize, bool)>,
 }
 
 /// Where a run starts and what it keeps (`Sim::keep_states`, `Sim::resume`).
@@ -197,7 +197,7 @@ impl<'a, 'b> Sim<'a, 'b> {
                 near: Vec::with_capacity(actors.len()),
                 fired: Vec::with_capacity(actors.len()),
             },
-            any_trigger: actors.iter().any(|a| a.trigger.is_some()),
+            any_trigger: actors.iter().any(|a| a.trigger.is_some() || !a.phases.is_empty()),
             approach_slot,
             cross_at,
             max_radius: actors.iter().map(|a| a.radius).fold(0.0, f64::max),

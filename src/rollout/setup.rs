@@ -8,7 +8,7 @@ use crate::place::Pose;
 use crate::road::Map;
 use crate::road::route::RUN_OUT;
 use crate::road::route::{chain, find_lane, side_lane};
-use crate::rollout::agent::{Actor, Conf, Drive, Lat, StopGoal};
+use crate::rollout::agent::{Actor, Conf, Drive, Lat, Stage, StopGoal};
 use crate::rollout::junction::dry_run::junction_curvature;
 use crate::rollout::path::Path;
 use crate::rollout::path::Resampler;
@@ -68,6 +68,7 @@ pub(crate) fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Cl
         start: 0.0,
         trigger: None,
         behaviour: Default::default(),
+        phases: vec![],
         lateral: Lat::Hold,
         stop: StopGoal::None,
         emergency: false,
@@ -120,6 +121,16 @@ pub(crate) fn build_actor(
     a.start = goal.map(|g| g.start_after.max(0.0)).unwrap_or(0.0);
     a.trigger = goal.and_then(|g| g.start_when).and_then(|t| crate::rollout::trigger::on_tracks(t, track_of));
     a.behaviour = ca.behaviour;
+    a.phases = ca
+        .phases
+        .iter()
+        .take(u8::MAX as usize)
+        .map(|p| Stage {
+            v_goal: p.speed.max(0.0),
+            start: p.start_after.max(0.0),
+            trigger: p.start_when.and_then(|t| crate::rollout::trigger::on_tracks(t, track_of)),
+        })
+        .collect();
     let lateral = goal.map(|g| g.lateral).unwrap_or(Lateral::HoldLane);
     let mut facts = LaneFacts { limit: f64::INFINITY, stop_line: None, lane: None };
     if a.vehicle {

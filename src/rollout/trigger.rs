@@ -21,7 +21,8 @@ pub(crate) fn on_tracks(t: Trigger, track_of: &[Option<usize>]) -> Option<Trigge
 }
 
 impl Sim<'_, '_> {
-    /// Start the goals whose triggers hold on this frame's states (`State::go`).
+    /// Start the goals whose triggers hold on this frame's states (`State::go`), and the goal
+    /// phases whose start has come (`State::stage`).
     pub(crate) fn fire_triggers(&mut self, t: f64) {
         if !self.any_trigger {
             return;
@@ -33,11 +34,23 @@ impl Sim<'_, '_> {
                 && !st.go
                 && holds(self.actors, &self.cur, i, tr, t)
             {
-                fired.push(i);
+                fired.push((i, false));
+            }
+            // The next phase, once the goal before it has started: one phase per step.
+            if let Some(p) = a.phases.get(st.stage as usize)
+                && a.active(st, t)
+                && t >= p.start - 1e-9
+                && p.trigger.is_none_or(|tr| holds(self.actors, &self.cur, i, tr, t))
+            {
+                fired.push((i, true));
             }
         }
-        for &i in &self.facts.fired {
-            self.cur[i].go = true;
+        for &(i, phase) in &self.facts.fired {
+            if phase {
+                self.cur[i].stage += 1;
+            } else {
+                self.cur[i].go = true;
+            }
         }
     }
 }

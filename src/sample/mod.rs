@@ -49,6 +49,8 @@ pub struct ConcreteAgent {
     pub track: Option<Vec<Keyframe>>,
     #[serde(default, skip_serializing_if = "Behaviour::is_careful")]
     pub behaviour: Behaviour,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub phases: Vec<Phase<f64>>,
     #[serde(skip)]
     pub span: crate::source::Span,
     #[serde(skip)]
@@ -104,6 +106,11 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
                 }),
                 track: a.track.clone(),
                 behaviour: a.behaviour,
+                phases: a
+                    .phases
+                    .iter()
+                    .map(|p| Phase { speed: r.draw(p.speed), start_after: p.start_after, start_when: p.start_when })
+                    .collect(),
                 span: a.span,
                 place_span: a.place_span,
             }

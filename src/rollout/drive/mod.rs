@@ -74,7 +74,7 @@ impl Sim<'_, '_> {
             return State { v: 0.0, ..st };
         }
         let active = a.active(&st, t);
-        let v_des = if active { a.v_goal } else { a.v_hold }.min(a.path.cap(st.s));
+        let v_des = if active { a.goal_speed(&st) } else { a.v_hold }.min(a.path.cap(st.s));
         let lateral = self.lateral(i, active);
         let LateralPlan { target, triggered, mut phase, mut d_next, pass_target, .. } = lateral;
         let margin = if a.vehicle { 0.25 } else { 0.1 };

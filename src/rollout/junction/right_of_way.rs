@@ -268,7 +268,7 @@ impl Sim<'_, '_> {
         let (mid, _) = a.path.point(s_mid, 0.0);
         let half = 0.5 * (end - kerb);
         let clear = a.hw + 1.0;
-        let walk = a.v_goal.max(0.5);
+        let walk = a.goal_speed(st).max(0.5);
         let waits = (0..self.actors.len()).any(|j| {
             let (b, o) = (&self.actors[j], &self.cur[j]);
             if j == i || !b.vehicle || !matches!(b.drive, Drive::Mover) || o.frozen {
@@ -333,7 +333,7 @@ impl Sim<'_, '_> {
     pub(crate) fn emergency_near(&self, e: usize) -> bool {
         let (a, st) = (&self.actors[e], &self.cur[e]);
         let Some(j) = a.junction else { return false };
-        if st.frozen || st.stopped || (a.v_goal < 0.5 && st.v < 0.5) {
+        if st.frozen || st.stopped || (a.goal_speed(st) < 0.5 && st.v < 0.5) {
             return false;
         }
         // One that means to stop short of the junction's far side does not need it cleared.
@@ -343,6 +343,6 @@ impl Sim<'_, '_> {
             return false;
         }
         let to_stop = j.stop - (st.s + a.hl);
-        st.s - a.hl < j.exit && to_stop < EMERGENCY_NEAR_M.max(st.v.max(a.v_goal) * EMERGENCY_NEAR_S)
+        st.s - a.hl < j.exit && to_stop < EMERGENCY_NEAR_M.max(st.v.max(a.goal_speed(st)) * EMERGENCY_NEAR_S)
     }
 }
