@@ -1,15 +1,14 @@
 //! Triggers and behaviour, tested on the tracks of the scenes in `tests/behaviour-cases/`
 //! (each says in its first line what it shows) and of their careful twins.
 
-use rocc::rollout::Tracks;
+#[path = "support/contact.rs"]
+mod contact;
+#[path = "support/front.rs"]
+mod front;
 
-fn front_of(text: &str) -> rocc::compile::Front {
-    let mut sources = rocc::source::SourceMap::default();
-    let s = rocc::check::check_text("t.scn", text, std::path::Path::new("."), &mut sources)
-        .unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| d.message.clone()).collect::<Vec<_>>()));
-    rocc::compile::front(s, None)
-        .unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| d.message.clone()).collect::<Vec<_>>()))
-}
+use contact::obb;
+use front::front_of;
+use rocc::rollout::Tracks;
 
 fn case(name: &str) -> String {
     std::fs::read_to_string(format!("tests/behaviour-cases/{name}.scn")).expect("case")
@@ -68,12 +67,6 @@ fn a_child_that_does_not_yield_darts_out_in_front_of_the_car() {
     // Its careful twin waits at the kerb till the car has passed.
     let f = front_of(&careful(&case("child-darts-out")));
     assert_eq!(kid_in_lane_near_car(&f.tracks), 0, "the careful child stepped in front of the car");
-}
-
-fn obb(t: &Tracks, i: usize, f: usize) -> rocc::geom::Obb {
-    let p = t.poses[i][f];
-    let s = t.agents[i].size;
-    rocc::geom::Obb { center: glam::DVec2::new(p.x, p.y), yaw: p.yaw, length: s[0], width: s[1] }
 }
 
 /// The northbound car's front, furthest north it gets while the bus is short of clearing its lane.
