@@ -98,6 +98,32 @@ fn a_driver_that_ignores_its_stop_line_rolls_past_it_and_one_that_never_yields_g
     assert!(t.poses[bus][crossed].x + t.agents[bus].size[0] / 2.0 < 0.0, "the bus went first");
 }
 
+#[test]
+fn a_reach_trigger_starts_an_agent_when_the_other_is_at_its_stop_line() {
+    let text = careful(&case("stop-line-ignored")).replace(
+        "    agent late: sedan {",
+        "    agent third: sedan {\n        at east.in[1], 30 m before stop_line\n        \
+         goal { speed 6 m/s; turn straight; start when late reaches stop_line }\n    }\n    agent late: sedan {",
+    );
+    let f = front_of(&text);
+    let t = &f.tracks;
+    let (late, third) = (idx(t, "late"), idx(t, "third"));
+    // The south approach's stop line: across `late`'s lane, south of the centre.
+    let x = t.poses[late][0].x;
+    let line = f
+        .map
+        .stop_lines
+        .iter()
+        .find(|l| (l.a.y - l.b.y).abs() < 1e-6 && l.a.y < 0.0 && l.a.x.min(l.b.x) <= x && x <= l.a.x.max(l.b.x))
+        .expect("a stop line")
+        .a
+        .y;
+    // The trigger holds from 0.5 m short of the line.
+    let front = |f: usize| t.poses[late][f].y + t.agents[late].size[0] / 2.0;
+    let reached = (0..t.frames).find(|&f| front(f) >= line - 0.5 - 1e-6).expect("reaches its line");
+    assert_eq!(first_move(t, third), reached + 1, "`late` reached its line at frame {reached}");
+}
+
 /// The first frame agent `i` decelerates by more than 0.5 m/s2.
 fn braking_begins(t: &Tracks, i: usize) -> usize {
     let dt = 1.0 / t.rate;
