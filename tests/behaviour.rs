@@ -124,6 +124,18 @@ fn a_reach_trigger_starts_an_agent_when_the_other_is_at_its_stop_line() {
     assert_eq!(first_move(t, third), reached + 1, "`late` reached its line at frame {reached}");
 }
 
+#[test]
+fn a_speeding_driver_drives_over_the_limit() {
+    let top = |text: &str| {
+        let t = &front_of(text).tracks;
+        t.speeds[idx(t, "car")].iter().cloned().fold(0.0, f64::max)
+    };
+    let text = case("speeding");
+    let (fast, calm) = (top(&text), top(&careful(&text)));
+    assert!((fast - 60.0 / 3.6).abs() < 0.2, "the speeding car reached {:.1} km/h", fast * 3.6);
+    assert!((calm - 40.0 / 3.6).abs() < 1e-9, "the careful car reached {:.1} km/h", calm * 3.6);
+}
+
 /// The first frame agent `i` decelerates by more than 0.5 m/s2.
 fn braking_begins(t: &Tracks, i: usize) -> usize {
     let dt = 1.0 / t.rate;
