@@ -232,6 +232,21 @@ fn a_later_goal_block_takes_over_when_its_trigger_holds() {
 }
 
 #[test]
+fn a_phase_that_waits_on_an_agent_waiting_for_its_owner_is_no_cycle() {
+    // The lead's first goal starts at once; its phase waits on the car, which waits on that start.
+    let text = case("lead-brakes-on-approach")
+        .replace("goal { speed 15 m/s }", "goal { speed 15 m/s; start when lead starts }");
+    let t = &front_of(&text).tracks;
+    assert!(t.speeds[idx(t, "lead")][t.frames - 1] < 0.05, "the lead's phase did not start");
+    // Two first goals waiting on each other are a cycle.
+    let cyclic = text.replace("goal { speed 10 m/s }", "goal { speed 10 m/s; start when car starts }");
+    let mut sources = rocc::source::SourceMap::default();
+    let d = rocc::check::check_text("t.scn", &cyclic, std::path::Path::new("."), &mut sources).expect_err("a cycle");
+    assert_eq!(d[0].code, "E0151", "{:?}", d[0].message);
+    assert_eq!(d[0].labels.len(), 2);
+}
+
+#[test]
 fn triggers_and_behaviour_format_to_text_that_checks_the_same() {
     for name in [
         "child-darts-out",

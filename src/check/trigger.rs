@@ -141,7 +141,13 @@ impl Checker {
                 }
             }
         }
-        let edges: Vec<Vec<usize>> = (0..agents.len()).map(|i| triggers(i).iter().map(|t| t.who()).collect()).collect();
+        // Only first goals start an agent: a phase's owner is already under way when its trigger
+        // is read, so a phase's trigger closes no cycle.
+        let edges: Vec<Vec<usize>> = (0..agents.len())
+            .map(|i| {
+                agents[i].as_ref().and_then(|a| a.goal.as_ref()?.start_when).map(|t| t.who()).into_iter().collect()
+            })
+            .collect();
         let mut seen = std::collections::BTreeSet::new();
         for start in 0..agents.len() {
             let Some(path) = cycle_from(&edges, start) else { continue };
