@@ -4,8 +4,11 @@
 
 #[path = "support/contact.rs"]
 mod contact;
+#[path = "support/front.rs"]
+mod front;
 
 use contact::{measured_contact, obb, sector};
+use front::front_of;
 use glam::DVec2;
 use proptest::prelude::*;
 use rocc::check::scenario::*;
@@ -145,6 +148,7 @@ fn goal() -> Goal<f64> {
         stop: None,
         turn: None,
         start_after: 0.0,
+        start_when: None,
         stop_span: Default::default(),
     }
 }
@@ -198,6 +202,8 @@ fn scene(specs: Vec<Spec>, conflicts: Vec<Conflict>, traffic: Option<Traffic>, d
             speed: s.speed,
             goal: s.goal.clone(),
             track: s.track.clone(),
+            behaviour: Default::default(),
+            phases: vec![],
             span: Default::default(),
             place_span: Default::default(),
         })
@@ -1051,14 +1057,6 @@ fn impact_on_a_crossing_pedestrian() {
 // ------------------------------------------------------------------ emergency kinds
 
 /// The checked, sampled, placed scene of `.scn` text (through the whole front end).
-fn front_of(text: &str) -> rocc::compile::Front {
-    let mut sources = rocc::source::SourceMap::default();
-    let s = rocc::check::check_text("t.scn", text, std::path::Path::new("."), &mut sources)
-        .unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| d.message.clone()).collect::<Vec<_>>()));
-    rocc::compile::front(s, None)
-        .unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| d.message.clone()).collect::<Vec<_>>()))
-}
-
 fn crossing_scene(kind_decl: &str, kind: &str) -> String {
     format!(
         "{kind_decl}\nscenario t {{\n    seed 1\n    duration 10 s\n    rate 10 Hz\n    egos [car]\n\n    \

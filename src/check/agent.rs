@@ -27,6 +27,8 @@ impl Checker {
         let mut goal: Option<&ast::Goal> = None;
         let mut track: Option<&ast::Track> = None;
         let mut posture: Option<(&ast::Ident, Span)> = None;
+        let mut behaviour: Option<&ast::Behaviour> = None;
+        let mut phases: Vec<&ast::Goal> = vec![];
         for st in &a.stmts {
             let (slot_first, what): (Option<Span>, &str) = match st {
                 ast::AgentStmt::At { place: p, span } => (place.replace((p, *span)).map(|x| x.1), "placement `at`"),
@@ -34,9 +36,15 @@ impl Checker {
                 ast::AgentStmt::Size(s) => {
                     (sizes[s.key as usize].replace((&s.value, s.span)).map(|x| x.1), s.key.as_str())
                 }
+                // A later goal block is a phase that takes over on its own start (`phase`).
+                ast::AgentStmt::Goal(g) if goal.is_some() => {
+                    phases.push(g);
+                    (None, "`goal`")
+                }
                 ast::AgentStmt::Goal(g) => (goal.replace(g).map(|x| x.span), "`goal`"),
                 ast::AgentStmt::Track(t) => (track.replace(t).map(|x| x.span), "`track`"),
                 ast::AgentStmt::Posture { word, span } => (posture.replace((word, *span)).map(|x| x.1), "`posture`"),
+                ast::AgentStmt::Behaviour(b) => (behaviour.replace(b).map(|x| x.span), "`behaviour`"),
             };
             if let Some(first) = slot_first {
                 self.dup(what, first, st.span());
@@ -118,6 +126,22 @@ impl Checker {
             ast::AgentStmt::Track(t) => Some(t.span),
             _ => None,
         }));
+        let phases_c: Option<Vec<Phase>> = match (is_static || track.is_some(), phases.first()) {
+            (_, None) => Some(vec![]),
+            (true, Some(g)) => {
+                self.err(
+                    Diagnostic::error("E0155", format!("`{}` has a goal phase but no goal to follow", a.name.name))
+                        .label(g.span, "second goal block")
+                        .help("phases follow the first goal of a moving agent; remove it"),
+                );
+                None
+            }
+            (false, _) => phases.iter().map(|g| self.phase(g, order)).collect::<Vec<_>>().into_iter().collect(),
+        };
+        let behaviour_c = match behaviour {
+            Some(b) => self.behaviour(b, &a.name.name, motion, is_static, goal),
+            None => Some(Behaviour::default()),
+        };
         let (kinds, class, motion) = kind?;
         Some(Agent {
             name: a.name.name.clone(),
@@ -133,6 +157,8 @@ impl Checker {
             goal: goal_c?,
             track: track_keys.clone(),
             posture: posture?,
+            behaviour: behaviour_c?,
+            phases: phases_c?,
             span,
             place_span: place_span.unwrap_or(span),
         })

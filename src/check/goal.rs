@@ -27,6 +27,7 @@ impl Checker {
             stop: None,
             turn: None,
             start_after: 0.0,
+            start_when: None,
             stop_span: Span::default(),
         };
         let mut ok = true;
@@ -57,6 +58,10 @@ impl Checker {
                         None => ok = false,
                     }
                 }
+                ast::GoalStmt::StartWhen { trigger, .. } => match self.trigger(trigger, order) {
+                    Some(t) => out.start_when = Some(t),
+                    None => ok = false,
+                },
                 ast::GoalStmt::Lateral { lateral, span } => {
                     let l = match lateral {
                         ast::Lateral::Word(w) => word(

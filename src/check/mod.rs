@@ -6,6 +6,7 @@
 //! agent, goal, conflict); this file holds the entry points and the value helpers they share.
 
 mod agent;
+mod behaviour;
 pub mod classes;
 mod conflict;
 mod goal;
@@ -18,6 +19,7 @@ pub mod scenario;
 mod scene;
 pub mod summary;
 pub mod track;
+mod trigger;
 pub mod units;
 
 pub use conflict::points_for;

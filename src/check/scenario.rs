@@ -253,6 +253,12 @@ pub struct Agent {
     /// A person's or an animal's posture, which sets its box (`sample` applies it).
     #[serde(default, skip_serializing_if = "Posture::is_standing")]
     pub posture: Posture,
+    /// Attention and compliance (`behaviour { ... }`); careful by default.
+    #[serde(default, skip_serializing_if = "Behaviour::is_careful")]
+    pub behaviour: Behaviour,
+    /// Later goal blocks, in order: each takes over from the one before once it starts.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub phases: Vec<Phase>,
     #[serde(skip)]
     pub span: Span,
     #[serde(skip)]
@@ -331,6 +337,9 @@ pub struct Goal<V = Dist> {
     pub turn: Option<Turn>,
     /// Delay before the goal starts, s.
     pub start_after: f64,
+    /// A condition that starts the goal (`start when ...`); it holds its initial speed till then.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start_when: Option<Trigger>,
     /// The `stop ...` statement, for the place pass's E0206 (`stop behind` a leader that is not
     /// ahead); default when there is none.
     #[serde(skip)]
@@ -469,3 +478,81 @@ pub const LANDMARKS: [(&str, Landmark); 3] =
     [("center", Landmark::Center), ("junction", Landmark::Junction), ("stop_line", Landmark::StopLine)];
 pub const MOTIONS: [(&str, Motion); 3] =
     [("vehicle", Motion::Vehicle), ("holonomic", Motion::Holonomic), ("static", Motion::Static)];
+
+/// A condition that starts an agent's goal (`start when NAME ...`), after ASAM OpenSCENARIO's
+/// entity conditions; `who` is an agent index. `start after` is the simulation-time condition.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Trigger {
+    /// `within D`: box centres at most `D` m apart (DistanceCondition, centre to centre).
+    Within { who: usize, m: f64 },
+    /// `ttc under T`: time to collision, gap between bounding circles over closing speed, under
+    /// `T` s (TimeToCollisionCondition).
+    Ttc { who: usize, s: f64 },
+    /// `headway under T`: the time `who` needs at its speed to reach this agent ahead of it,
+    /// under `T` s (TimeHeadwayCondition).
+    Headway { who: usize, s: f64 },
+    /// `reaches MARK`: `who`'s front has reached its stop line, or a walker's its kerb
+    /// (ReachPositionCondition).
+    Reaches { who: usize, mark: Mark },
+    /// `starts`: `who`'s own goal has started (StoryboardElementStateCondition).
+    Starts { who: usize },
+}
+
+impl Trigger {
+    /// The agent the condition watches.
+    pub fn who(self) -> usize {
+        match self {
+            Trigger::Within { who, .. }
+            | Trigger::Ttc { who, .. }
+            | Trigger::Headway { who, .. }
+            | Trigger::Reaches { who, .. }
+            | Trigger::Starts { who } => who,
+        }
+    }
+}
+
+/// A place on another agent's way that `reaches` watches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Mark {
+    StopLine,
+    Kerb,
+}
+
+pub const MARKS: [(&str, Mark); 2] = [("stop_line", Mark::StopLine), ("kerb", Mark::Kerb)];
+
+/// How attentive and law-abiding an agent is (`behaviour { ... }`). The default is careful:
+/// it gives way, holds at its stop line, reacts at once and keeps to the speed limit.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Behaviour {
+    /// `yield always|never`: gives way under the right-of-way rule and to emergency vehicles,
+    /// and a walker waits at the kerb for a gap; `never` goes regardless (a walker darts out).
+    pub yields: bool,
+    /// `stop_line obey|ignore`: holds at its stop line when it gives way; `ignore` rolls past
+    /// it and holds only short of the shared zone itself.
+    pub stop_line: bool,
+    /// `reaction T`: how long a need to brake goes unanswered, s.
+    pub reaction: f64,
+    /// `speeding P %`: share over the lane's speed limit it drives at.
+    pub speeding: f64,
+}
+
+impl Default for Behaviour {
+    fn default() -> Self {
+        Behaviour { yields: true, stop_line: true, reaction: 0.0, speeding: 0.0 }
+    }
+}
+
+impl Behaviour {
+    pub fn is_careful(&self) -> bool {
+        *self == Behaviour::default()
+    }
+}
+
+/// A later goal block (a goal phase): a new goal speed from when its start holds, after the
+/// goal before it has started.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Phase<V = Dist> {
+    pub speed: V,
+    pub start_after: f64,
+    pub start_when: Option<Trigger>,
+}

@@ -105,6 +105,7 @@ impl Checker {
             let Some(a) = a else { continue };
             self.goal_refs(a, ast_a, &agents);
         }
+        self.trigger_refs(&agents, &agents_ast, road.as_ref());
 
         let conflicts: Vec<Option<Conflict>> =
             conflicts_ast.iter().map(|c| self.conflict(c, &order, &agents, duration_s)).collect();

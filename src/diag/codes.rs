@@ -309,6 +309,70 @@ keyframes the direction of travel may differ from the mean heading by at most 30
     agent v: sedan { track { 0 s: (0 m, 0 m) yaw 0 deg; 1 s: (0 m, 20 m) yaw 0 deg } }   // error: 90 degrees off its heading\n\n\
 Give each keyframe the heading of the travel, or check that x and y are not swapped.",
     },
+    // ---- triggers and behaviour (E0150-E0169) ----
+    Code {
+        code: "E0150",
+        title: "unknown or malformed trigger condition",
+        explanation: "`start when NAME CONDITION` starts a goal when a condition on agent NAME holds. The\n\
+conditions are `within DIST` (centre distance), `ttc under TIME` (time to collision),\n\
+`headway under TIME` (NAME's time to reach this agent), `reaches stop_line` or `reaches kerb`,\n\
+and `starts` (NAME's own goal has started). Each takes what it names, nothing else.\n
+    goal { lateral cross; start when ego within 20 m }     // fine
+    goal { lateral cross; start when ego wihtin 20 m }     // error: unknown condition
+    goal { lateral cross; start when ego within }          // error: `within` takes a distance",
+    },
+    Code {
+        code: "E0151",
+        title: "trigger cycle",
+        explanation: "Triggers that wait on each other in a cycle (a starts when b starts, b starts when a\n\
+starts; or an agent that waits for itself) have no first cause: which starts first would\n\
+depend on itself. Every agent of the cycle is labelled.\n
+    agent a: sedan { at west.in[1], 30 m before center; goal { speed 10 m/s; start when b starts } }
+    agent b: sedan { at east.in[1], 30 m before center; goal { speed 10 m/s; start when a starts } }   // error\n\n\
+Let one of them start on time (`start after 2 s`) or on a third agent.",
+    },
+    Code {
+        code: "E0152",
+        title: "unknown behaviour setting",
+        explanation: "`behaviour { ... }` sets how attentive and law-abiding an agent is: `yield always|never`,\n\
+`stop_line obey|ignore`, `reaction TIME` (0..5 s) and `speeding PERCENT` (0..200 %). Each is\n\
+given once; anything else is refused with the nearest name.\n
+    behaviour { yield never; reaction 1.5 s }     // fine
+    behaviour { yeild never }                     // error: unknown setting
+    behaviour { yield sometimes }                 // error: `yield` takes `always` or `never`",
+    },
+    Code {
+        code: "E0153",
+        title: "behaviour contradicts the agent",
+        explanation: "A behaviour setting must fit the agent that carries it: static things have no behaviour,\n\
+walkers have no stop line to ignore and no speed limit to exceed, and an agent told to\n\
+`stop at stop_line` cannot also ignore it.\n
+    agent kid: child { at sidewalk(east.out), 10 m after center
+                       goal { lateral cross }; behaviour { yield never } }       // fine: darts out
+    agent car: sedan { at south.in[1], 20 m before stop_line
+                       goal { stop at stop_line }; behaviour { stop_line ignore } }   // error",
+    },
+    Code {
+        code: "E0154",
+        title: "trigger that cannot happen",
+        explanation: "A trigger must watch something that can happen: `headway` and `starts` need an agent that\n\
+moves, `reaches stop_line` a vehicle placed on an in-lane of a road with stop lines, and\n\
+`reaches kerb` a walker with `lateral cross`.\n
+    goal { speed 8 m/s; start when kid reaches kerb }    // fine when `kid` crosses
+    goal { speed 8 m/s; start when cone starts }         // error: a cone never moves",
+    },
+    Code {
+        code: "E0155",
+        title: "invalid goal phase",
+        explanation: "A later `goal` block of an agent is a phase: it takes over from the goal before it once its\n\
+`start` holds (`start after T` counts from the clip's start, `start when ...` is a trigger),\n\
+and only after that goal has started. A phase gives one `speed` and one `start`, nothing else:\n\
+turns, lateral moves and stops belong to the first goal block. Static things and replayed\n\
+tracks have no phases.\n
+    goal { speed 10 m/s }
+    goal { speed 0 m/s; start when car headway under 1.5 s }     // fine: brakes to a stop
+    goal { speed 4 m/s; turn left; start after 1 s }             // error: a turn in a phase",
+    },
     Code {
         code: "E0201",
         title: "placement off a valid surface",

@@ -2,7 +2,7 @@
 //! per frame), and what joins two of them (`Conf`, a staged conflict; `Crossing`, a shared
 //! junction zone). Nothing here decides anything.
 
-use crate::check::scenario::{Keyframe, Turn};
+use crate::check::scenario::{Behaviour, Keyframe, Trigger, Turn};
 use crate::geom::Obb;
 use crate::place::Pose;
 use crate::road::route::Junction;
@@ -60,6 +60,13 @@ pub(crate) struct Actor {
     pub v_goal: f64,
     pub v_hold: f64,
     pub start: f64,
+    /// What starts its goal besides `start` (`rollout::trigger`), `who` a track index.
+    pub trigger: Option<Trigger>,
+    /// Attention and compliance: whether it gives way and holds at its stop line, its reaction
+    /// time, its speeding.
+    pub behaviour: Behaviour,
+    /// Later goal phases, in order: a goal speed from each's start (`rollout::trigger`).
+    pub phases: Vec<Stage>,
     pub lateral: Lat,
     pub stop: StopGoal,
     pub info: TrackAgent,
@@ -91,6 +98,15 @@ pub(crate) struct Actor {
     pub approach: Option<usize>,
     /// A vehicle's sweep through its first junction (`assign_bends`).
     pub bend: Option<std::sync::Arc<Bend>>,
+}
+
+/// A goal phase as the rollout runs it: its goal speed, from its start time once its trigger
+/// (its agent a track index) holds.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Stage {
+    pub v_goal: f64,
+    pub start: f64,
+    pub trigger: Option<Trigger>,
 }
 
 /// The stretch that two vehicles' junction paths share, seen from one of them: route arc
@@ -137,6 +153,22 @@ impl Actor {
         self.vehicle && (!self.yield_to.is_empty() || self.to_line(st).is_none_or(|line| line > -0.05))
     }
 
+    /// Whether its goal has started by `t`: its start time has come and its trigger, if any, has
+    /// fired.
+    #[inline]
+    pub(crate) fn active(&self, st: &State, t: f64) -> bool {
+        st.go && t >= self.start - 1e-9
+    }
+
+    /// Its goal speed in the phase it is in.
+    #[inline]
+    pub(crate) fn goal_speed(&self, st: &State) -> f64 {
+        match st.stage {
+            0 => self.v_goal,
+            k => self.phases[k as usize - 1].v_goal,
+        }
+    }
+
     pub(crate) fn obb(&self, st: &State) -> Obb {
         Obb { center: st.pos, yaw: st.yaw, length: 2.0 * self.hl, width: 2.0 * self.hw }
     }
@@ -160,6 +192,12 @@ pub(crate) struct State {
     /// Holding back for another agent under the right-of-way rule (at its stop line or short of
     /// the shared zone) or at the kerb: waiting by choice, ready to go, not blocked.
     pub give_way: bool,
+    /// Its trigger has fired (always, for one without a trigger).
+    pub go: bool,
+    /// How long a need to brake for someone has gone unanswered, s (`Behaviour::reaction`).
+    pub alarm: f64,
+    /// How many of its goal phases have started (`Actor::phases`).
+    pub stage: u8,
 }
 
 /// A conflict with its agents as track indices.
@@ -187,6 +225,9 @@ pub(crate) fn initial(a: &Actor) -> State {
         stopped: false,
         frozen: false,
         give_way: false,
+        go: a.trigger.is_none(),
+        alarm: 0.0,
+        stage: 0,
     }
 }
 

@@ -43,6 +43,8 @@ pub(crate) struct Sim<'a, 'b> {
     /// `overlap_pairs`' boxes and output, kept likewise.
     pub(crate) sweep: Vec<(DVec2, DVec2, usize)>,
     pub(crate) pairs: Vec<(usize, usize)>,
+    /// Some agent starts on a trigger (`fire_triggers`).
+    pub(crate) any_trigger: bool,
 }
 
 /// What every agent's step reads of this frame besides the states: derived from `Sim::cur`
@@ -68,6 +70,8 @@ pub(crate) struct Facts {
     pub(crate) easing: Vec<usize>,
     /// Per agent, this frame: what `candidates` reads, packed.
     pub(crate) near: Vec<Near>,
+    /// This frame: agents whose triggers fired (`fire_triggers`), and whether for a phase.
+    pub(crate) fired: Vec<(usize, bool)>,
 }
 
 /// Where a run starts and what it keeps (`Sim::keep_states`, `Sim::resume`).
@@ -191,7 +195,9 @@ impl<'a, 'b> Sim<'a, 'b> {
                 lane_least: vec![[(f64::INFINITY, usize::MAX); 2]; lanes.len()],
                 easing: Vec::with_capacity(actors.len()),
                 near: Vec::with_capacity(actors.len()),
+                fired: Vec::with_capacity(actors.len()),
             },
+            any_trigger: actors.iter().any(|a| a.trigger.is_some() || !a.phases.is_empty()),
             approach_slot,
             cross_at,
             max_radius: actors.iter().map(|a| a.radius).fold(0.0, f64::max),
@@ -237,6 +243,7 @@ impl<'a, 'b> Sim<'a, 'b> {
         }
         for f in self.resume.first..out.frames {
             let t = (f - 1) as f64 * self.dt;
+            self.fire_triggers(t);
             // An agent whose heading has not changed (bit for bit) keeps its unit heading: the
             // same call on the same bits. Standing and straight-driving agents take no sine.
             self.facts.dirs.resize(self.cur.len(), DVec2::X);

@@ -39,6 +39,7 @@ mod safety;
 mod setup;
 mod staging;
 mod traffic;
+mod trigger;
 mod turn_check;
 
 pub use kinematics::KEY_SNAP_S;

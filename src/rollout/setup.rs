@@ -8,7 +8,7 @@ use crate::place::Pose;
 use crate::road::Map;
 use crate::road::route::RUN_OUT;
 use crate::road::route::{chain, find_lane, side_lane};
-use crate::rollout::agent::{Actor, Conf, Drive, Lat, StopGoal};
+use crate::rollout::agent::{Actor, Conf, Drive, Lat, Stage, StopGoal};
 use crate::rollout::junction::dry_run::junction_curvature;
 use crate::rollout::path::Path;
 use crate::rollout::path::Resampler;
@@ -66,6 +66,9 @@ pub(crate) fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Cl
         v_goal: 0.0,
         v_hold: 0.0,
         start: 0.0,
+        trigger: None,
+        behaviour: Default::default(),
+        phases: vec![],
         lateral: Lat::Hold,
         stop: StopGoal::None,
         emergency: false,
@@ -116,6 +119,18 @@ pub(crate) fn build_actor(
     a.v0 = p.speed.max(0.0);
     a.v_hold = a.v0;
     a.start = goal.map(|g| g.start_after.max(0.0)).unwrap_or(0.0);
+    a.trigger = goal.and_then(|g| g.start_when).and_then(|t| crate::rollout::trigger::on_tracks(t, track_of));
+    a.behaviour = ca.behaviour;
+    a.phases = ca
+        .phases
+        .iter()
+        .take(u8::MAX as usize)
+        .map(|p| Stage {
+            v_goal: p.speed.max(0.0),
+            start: p.start_after.max(0.0),
+            trigger: p.start_when.and_then(|t| crate::rollout::trigger::on_tracks(t, track_of)),
+        })
+        .collect();
     let lateral = goal.map(|g| g.lateral).unwrap_or(Lateral::HoldLane);
     let mut facts = LaneFacts { limit: f64::INFINITY, stop_line: None, lane: None };
     if a.vehicle {
@@ -142,7 +157,9 @@ pub(crate) fn build_actor(
     let goes = goal.is_some_and(|g| g.turn.is_some() || matches!(g.lateral, Lateral::ChangeLane(_)));
     a.v_goal = match goal.and_then(|g| g.speed) {
         Some(v) => v.max(0.0),
-        None if a.vehicle && goes && a.v0 < 0.05 && limit.is_finite() => limit,
+        None if a.vehicle && goes && a.v0 < 0.05 && limit.is_finite() => limit * (1.0 + a.behaviour.speeding),
+        // A speeding driver drives over the limit whatever its placed speed.
+        None if a.vehicle && a.behaviour.speeding > 0.0 && limit.is_finite() => limit * (1.0 + a.behaviour.speeding),
         None if a.vehicle => a.v0.min(limit),
         None if lateral == Lateral::Cross && a.v0 < 0.05 => WALK_SPEED,
         None => a.v0,

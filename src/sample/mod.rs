@@ -47,6 +47,10 @@ pub struct ConcreteAgent {
     pub speed: f64,
     pub goal: Option<Goal<f64>>,
     pub track: Option<Vec<Keyframe>>,
+    #[serde(default, skip_serializing_if = "Behaviour::is_careful")]
+    pub behaviour: Behaviour,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub phases: Vec<Phase<f64>>,
     #[serde(skip)]
     pub span: crate::source::Span,
     #[serde(skip)]
@@ -97,9 +101,16 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
                     stop: g.stop,
                     turn: g.turn,
                     start_after: g.start_after,
+                    start_when: g.start_when,
                     stop_span: g.stop_span,
                 }),
                 track: a.track.clone(),
+                behaviour: a.behaviour,
+                phases: a
+                    .phases
+                    .iter()
+                    .map(|p| Phase { speed: r.draw(p.speed), start_after: p.start_after, start_when: p.start_when })
+                    .collect(),
                 span: a.span,
                 place_span: a.place_span,
             }

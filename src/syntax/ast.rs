@@ -159,6 +159,7 @@ pub enum AgentStmt {
         word: Ident,
         span: Span,
     },
+    Behaviour(Behaviour),
 }
 
 impl AgentStmt {
@@ -169,6 +170,7 @@ impl AgentStmt {
             AgentStmt::Goal(g) => g.span,
             AgentStmt::Track(t) => t.span,
             AgentStmt::Posture { span, .. } => *span,
+            AgentStmt::Behaviour(b) => b.span,
         }
     }
 }
@@ -280,11 +282,31 @@ pub struct Goal {
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub enum GoalStmt {
-    Speed { value: Value, span: Span },
-    Lateral { lateral: Lateral, span: Span },
-    Stop { stop: Stop, span: Span },
-    Turn { turn: Ident, span: Span },
-    Start { after: Value, span: Span },
+    Speed {
+        value: Value,
+        span: Span,
+    },
+    Lateral {
+        lateral: Lateral,
+        span: Span,
+    },
+    Stop {
+        stop: Stop,
+        span: Span,
+    },
+    Turn {
+        turn: Ident,
+        span: Span,
+    },
+    Start {
+        after: Value,
+        span: Span,
+    },
+    /// `start when NAME CONDITION` (a trigger; `start after` is the time condition).
+    StartWhen {
+        trigger: Trigger,
+        span: Span,
+    },
 }
 
 impl GoalStmt {
@@ -294,7 +316,8 @@ impl GoalStmt {
             | GoalStmt::Lateral { span, .. }
             | GoalStmt::Stop { span, .. }
             | GoalStmt::Turn { span, .. }
-            | GoalStmt::Start { span, .. } => *span,
+            | GoalStmt::Start { span, .. }
+            | GoalStmt::StartWhen { span, .. } => *span,
         }
     }
     pub fn keyword(&self) -> &'static str {
@@ -303,7 +326,7 @@ impl GoalStmt {
             GoalStmt::Lateral { .. } => "lateral",
             GoalStmt::Stop { .. } => "stop",
             GoalStmt::Turn { .. } => "turn",
-            GoalStmt::Start { .. } => "start",
+            GoalStmt::Start { .. } | GoalStmt::StartWhen { .. } => "start",
         }
     }
 }
@@ -322,6 +345,31 @@ pub enum Stop {
     At(Ident),
     Behind(Ident),
     After(Value),
+}
+
+/// `when NAME WORD [under] [VALUE | LANDMARK]`, as written: the checker validates the word.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Trigger {
+    pub who: Ident,
+    pub cond: Ident,
+    pub under: bool,
+    pub value: Option<Value>,
+    pub landmark: Option<Ident>,
+    pub span: Span,
+}
+
+/// `behaviour { NAME VALUE|WORD ... }`: settings are validated by the checker.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Behaviour {
+    pub sets: Vec<BehaviourSet>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BehaviourSet {
+    pub name: Ident,
+    pub value: FieldValue,
+    pub span: Span,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]

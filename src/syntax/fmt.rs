@@ -136,6 +136,22 @@ fn agent_stmt(s: &AgentStmt) -> Doc {
             items: g.stmts.iter().map(|s| Doc::Line { span: s.span(), text: goal_stmt(s) }).collect(),
             fit: true,
         },
+        AgentStmt::Behaviour(b) => Doc::Block {
+            header: "behaviour".into(),
+            span: b.span,
+            items: b
+                .sets
+                .iter()
+                .map(|x| Doc::Line {
+                    span: x.span,
+                    text: match &x.value {
+                        FieldValue::Ident(i) => format!("{} {}", x.name.name, i.name),
+                        FieldValue::Value(v) => format!("{} {}", x.name.name, val(v)),
+                    },
+                })
+                .collect(),
+            fit: true,
+        },
         AgentStmt::Track(t) => Doc::Block {
             header: "track".into(),
             span: t.span,
@@ -173,6 +189,14 @@ fn goal_stmt(s: &GoalStmt) -> String {
         },
         GoalStmt::Turn { turn, .. } => format!("turn {}", turn.name),
         GoalStmt::Start { after, .. } => format!("start after {}", val(after)),
+        GoalStmt::StartWhen { trigger: w, .. } => {
+            let tail = match (&w.value, &w.landmark) {
+                (Some(v), _) => format!(" {}{}", if w.under { "under " } else { "" }, val(v)),
+                (None, Some(l)) => format!(" {}", l.name),
+                (None, None) => String::new(),
+            };
+            format!("start when {} {}{tail}", w.who.name, w.cond.name)
+        }
     }
 }
 

@@ -203,6 +203,10 @@ impl Builder {
                 AgentStmt::Track(Track { keys, span })
             }
             Rule::posture_stmt => AgentStmt::Posture { word: self.ident(last(p)), span },
+            Rule::behaviour => {
+                let sets = inner(p).into_iter().skip(1).map(|q| self.behaviour_set(q)).collect();
+                AgentStmt::Behaviour(Behaviour { sets, span })
+            }
             r => unreachable!("grammar: agent statement {r:?}"),
         }
     }
@@ -241,9 +245,38 @@ impl Builder {
                 GoalStmt::Stop { stop, span }
             }
             Rule::turn => GoalStmt::Turn { turn: self.ident(last(p)), span },
-            Rule::start => GoalStmt::Start { after: self.value(last(p)), span },
+            Rule::start => match last(p.clone()) {
+                q if q.as_rule() == Rule::trigger => GoalStmt::StartWhen { trigger: self.trigger(q), span },
+                q => GoalStmt::Start { after: self.value(q), span },
+            },
             r => unreachable!("grammar: goal statement {r:?}"),
         }
+    }
+
+    fn trigger(&self, p: P<'_>) -> Trigger {
+        let span = self.span(&p);
+        let parts = inner(p);
+        let idents: Vec<_> = parts.iter().filter(|x| x.as_rule() == Rule::ident).cloned().collect();
+        let value = parts.iter().find(|x| x.as_rule() == Rule::value).map(|v| self.value(v.clone()));
+        let under = parts.iter().any(|x| x.as_rule() == Rule::kw_under);
+        let mut it = idents.into_iter();
+        let who = self.ident(it.next().expect("grammar: trigger names an agent"));
+        let cond = self.ident(it.next().expect("grammar: trigger has a condition"));
+        let landmark = it.next().map(|l| self.ident(l));
+        Trigger { who, cond, under, value, landmark, span }
+    }
+
+    fn behaviour_set(&self, p: P<'_>) -> BehaviourSet {
+        let span = self.span(&p);
+        let mut it = inner(p).into_iter();
+        let name = self.ident(it.next().expect("grammar: behaviour setting name"));
+        let v = it.next().expect("grammar: behaviour setting value");
+        let value = if v.as_rule() == Rule::value {
+            FieldValue::Value(self.value(v))
+        } else {
+            FieldValue::Ident(self.ident(v))
+        };
+        BehaviourSet { name, value, span }
     }
 
     fn placement(&self, p: P<'_>) -> Placement {

@@ -31,6 +31,22 @@ const PASS_CLEARANCE: f64 = 0.4;
 /// The most a pass may move off the lane's centre line (m): half into the next lane.
 const PASS_MAX_SHIFT: f64 = 2.5;
 
+/// A need to brake for others, m/s2 below zero, that a late reactor notices (`react`).
+const BRAKE_NEED: f64 = -0.5;
+
+/// What others ask of an agent with reaction time `reaction` (`others`, an acceleration), and how
+/// long their need to brake has gone unanswered after this step: while it is shorter than the
+/// reaction time, the need is not answered at all. A careful agent (no reaction time) answers at once.
+fn react(reaction: f64, alarm: f64, others: f64, dt: f64) -> (f64, f64) {
+    if reaction <= 0.0 {
+        return (others, 0.0);
+    }
+    if others >= BRAKE_NEED {
+        return (others, 0.0);
+    }
+    if alarm + 1e-9 >= reaction { (others, alarm + dt) } else { (f64::INFINITY, alarm + dt) }
+}
+
 /// Agent `i`'s lateral plan for one step (`Sim::lateral`).
 #[derive(Clone, Copy)]
 struct LateralPlan {
@@ -57,8 +73,8 @@ impl Sim<'_, '_> {
         if st.stopped {
             return State { v: 0.0, ..st };
         }
-        let active = t >= a.start - 1e-9;
-        let v_des = if active { a.v_goal } else { a.v_hold }.min(a.path.cap(st.s));
+        let active = a.active(&st, t);
+        let v_des = if active { a.goal_speed(&st) } else { a.v_hold }.min(a.path.cap(st.s));
         let lateral = self.lateral(i, active);
         let LateralPlan { target, triggered, mut phase, mut d_next, pass_target, .. } = lateral;
         let margin = if a.vehicle { 0.25 } else { 0.1 };
@@ -130,7 +146,9 @@ impl Sim<'_, '_> {
             clearing,
         };
         let way = self.in_the_way(sc, &s);
-        acc = acc.min(way.acc).min(self.strikers_ahead(&s));
+        // What others ask of us (the agents in our way, strikers ahead, our holds) is answered
+        // only once our reaction time has passed (`Behaviour::reaction`).
+        let mut others = way.acc.min(self.strikers_ahead(&s));
         hard = hard.min(way.hard);
         let Constraint { touch_rem, side_blocked, aside, .. } = way;
         let mut stop_rem = None;
@@ -148,9 +166,11 @@ impl Sim<'_, '_> {
             hard = hard.min(rem.max(shortest));
         }
         for rem in yield_rem.into_iter().chain((touch_rem < f64::INFINITY).then_some(touch_rem)) {
-            acc = acc.min(stop_law(st.v, rem, lim, dt));
+            others = others.min(stop_law(st.v, rem, lim, dt));
             hard = hard.min(rem.max(shortest));
         }
+        let (others, alarm) = react(a.behaviour.reaction, st.alarm, others, dt);
+        acc = acc.min(others);
         // Do not run off the end of the path (a walker's crossing ends there): slow down onto it.
         let to_end = a.path.length() - st.s;
         acc = acc.min(stop_law(st.v, to_end, lim, dt));
@@ -169,7 +189,7 @@ impl Sim<'_, '_> {
         }
         let stopped = stop_rem.is_some_and(|r| r - adv < 0.3) && v < 0.05;
         let give_way = self.facts.ruled[i];
-        let next = State { v, d: d_next, phase, triggered, stopped, frozen: false, give_way, ..st };
+        let next = State { v, d: d_next, phase, triggered, stopped, frozen: false, give_way, alarm, ..st };
         self.move_body(i, next, adv, &lateral, side_blocked, aside)
     }
 

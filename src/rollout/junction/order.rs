@@ -23,6 +23,7 @@ pub(crate) fn order_crossings(actors: &mut [Actor], errs: &mut Vec<Diagnostic>) 
     let holds = |a: &Actor, meet: f64| {
         !matches!(a.drive, Drive::Mover)
             || a.start > 1e-9
+            || a.trigger.is_some()
             || matches!(a.stop, StopGoal::Front(sf) | StopGoal::Centre(sf) if sf < meet + a.hl)
     };
     let mut set = vec![];

@@ -29,6 +29,10 @@ impl Sim<'_, '_> {
         if st.frozen || st.stopped || !matches!(a.drive, Drive::Mover) || self.striking(i, t) {
             return None;
         }
+        // `yield never`: it goes regardless; a walker darts out without waiting for a gap.
+        if !a.behaviour.yields {
+            return None;
+        }
         if let Some(kerb) = a.kerb {
             return self.kerb_hold(i, kerb, t);
         }
@@ -53,13 +57,14 @@ impl Sim<'_, '_> {
         }
         if let StopGoal::Front(sf) | StopGoal::Centre(sf) = a.stop
             && sf < enter + a.hl
-            && t >= a.start - 1e-9
+            && a.active(st, t)
         {
             return None;
         }
         let to_zone = enter - 0.3 - st.s;
+        // `stop_line ignore`: it holds short of the zone itself, past its line.
         let rem = match a.to_line(st) {
-            Some(line) if line > -0.05 => line.min(to_zone),
+            Some(line) if line > -0.05 && a.behaviour.stop_line => line.min(to_zone),
             _ => to_zone,
         };
         // Short of where the paths come near (`meet`), in the stretch the other's sweep moved
@@ -247,7 +252,7 @@ impl Sim<'_, '_> {
     /// the kerb to stop, it goes on (vehicles yield to a walker on the road).
     pub(crate) fn kerb_hold(&self, i: usize, kerb: f64, t: f64) -> Option<f64> {
         let (a, st) = (&self.actors[i], &self.cur[i]);
-        if t < a.start - 1e-9 {
+        if !a.active(st, t) {
             return None;
         }
         let rem = kerb - (st.s + a.hl);
@@ -263,7 +268,7 @@ impl Sim<'_, '_> {
         let (mid, _) = a.path.point(s_mid, 0.0);
         let half = 0.5 * (end - kerb);
         let clear = a.hw + 1.0;
-        let walk = a.v_goal.max(0.5);
+        let walk = a.goal_speed(st).max(0.5);
         let waits = (0..self.actors.len()).any(|j| {
             let (b, o) = (&self.actors[j], &self.cur[j]);
             if j == i || !b.vehicle || !matches!(b.drive, Drive::Mover) || o.frozen {
@@ -310,7 +315,9 @@ impl Sim<'_, '_> {
     pub(crate) fn yield_state(&self, i: usize) -> (Option<f64>, bool) {
         let (a, st) = (&self.actors[i], &self.cur[i]);
         let Some(j) = a.junction else { return (None, false) };
-        if !a.yield_to.iter().any(|&e| self.emergency_near(e)) {
+        // It holds for an emergency vehicle at its stop line: one that does not give way, or
+        // ignores its line, does not hold.
+        if !a.behaviour.yields || !a.behaviour.stop_line || !a.yield_to.iter().any(|&e| self.emergency_near(e)) {
             return (None, false);
         }
         let rem = j.stop - 0.3 - (st.s + a.hl);
@@ -326,7 +333,7 @@ impl Sim<'_, '_> {
     pub(crate) fn emergency_near(&self, e: usize) -> bool {
         let (a, st) = (&self.actors[e], &self.cur[e]);
         let Some(j) = a.junction else { return false };
-        if st.frozen || st.stopped || (a.v_goal < 0.5 && st.v < 0.5) {
+        if st.frozen || st.stopped || (a.goal_speed(st) < 0.5 && st.v < 0.5) {
             return false;
         }
         // One that means to stop short of the junction's far side does not need it cleared.
@@ -336,6 +343,6 @@ impl Sim<'_, '_> {
             return false;
         }
         let to_stop = j.stop - (st.s + a.hl);
-        st.s - a.hl < j.exit && to_stop < EMERGENCY_NEAR_M.max(st.v.max(a.v_goal) * EMERGENCY_NEAR_S)
+        st.s - a.hl < j.exit && to_stop < EMERGENCY_NEAR_M.max(st.v.max(a.goal_speed(st)) * EMERGENCY_NEAR_S)
     }
 }
