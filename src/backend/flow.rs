@@ -1,6 +1,6 @@
 //! Occupancy flow (`rocc compile --flow`). In: one frame's `Occupancy`, its ego-frame boxes and
 //! each box's velocity over the ground in that frame's ego axes. Out: float32 (400, 400, 32, 3),
-//! per voxel (vx, vy, vz) in m/s, written as `flow/NNNNNN.npz` (key `flow`).
+//! per voxel (vx, vy, vz) in m/s, which `output::write_flow` writes as `flow/NNNNNN.npz`.
 //!
 //! A voxel carries the velocity of the agent whose box holds its centre when its label is that
 //! agent's class label; every other voxel (free space, background, structures, parked or
@@ -10,17 +10,11 @@
 
 use super::Occupancy;
 use super::layout::{BACKGROUND, NX, NY, NZ, ORIGIN, VOXEL, centre, class_label, flat};
-use crate::output::Npz;
 use crate::place::Pose;
 use crate::view::EgoBox;
-use std::io;
-use std::path::{Path, PathBuf};
-
-/// The npz key of the flow array.
-pub const FLOW_KEY: &str = "flow";
 
 /// Components per voxel.
-const C: usize = 3;
+pub const C: usize = 3;
 
 /// A flow grid: standard-layout (400, 400, 32, 3) float32, and the voxels set since the last
 /// clear, so reusing it costs the moving voxels, not the whole 61 MB.
@@ -35,6 +29,11 @@ impl Flow {
     pub fn at(&self, i: usize, j: usize, k: usize) -> [f32; 3] {
         let n = C * flat(i, j, k);
         self.v.get(n..n + C).map_or([0.0; 3], |s| [s[0], s[1], s[2]])
+    }
+
+    /// Every voxel's components in standard layout; empty before the first `flow_into`.
+    pub fn values(&self) -> &[f32] {
+        &self.v
     }
 
     fn clear(&mut self) {
@@ -104,23 +103,4 @@ pub fn ground_velocity(poses: &[Pose], present: impl Fn(usize) -> bool, f: usize
 pub fn to_ego_axes(v: [f64; 2], yaw: f64) -> [f64; 2] {
     let (c, s) = (yaw.cos(), yaw.sin());
     [v[0] * c + v[1] * s, -v[0] * s + v[1] * c]
-}
-
-/// `dir/flow/NNNNNN.npz` for frame `frame`.
-pub fn flow_frame_path(dir: &Path, frame: usize) -> PathBuf {
-    dir.join("flow").join(format!("{frame:06}.npz"))
-}
-
-/// Write `flow` as an npz with one float32 (400, 400, 32, 3) array under `FLOW_KEY`, atomically.
-pub fn write_flow(path: &Path, flow: &Flow) -> io::Result<u64> {
-    let zeros;
-    let v = if flow.v.is_empty() {
-        zeros = vec![0.0f32; NX * NY * NZ * C];
-        &zeros
-    } else {
-        &flow.v
-    };
-    let mut npz = Npz::default();
-    npz.add(FLOW_KEY, &[NX, NY, NZ, C], v)?;
-    crate::fsio::write_atomic(path, |w| npz.finish(w))
 }

@@ -7,12 +7,12 @@
 //! what "this clip is complete" means to a resumed run.
 
 use super::{Front, Options, Stage};
-use crate::backend::flow::{Flow, flow_frame_path, flow_into, ground_velocity, to_ego_axes, write_flow};
+use crate::backend::flow::{Flow, flow_into, ground_velocity, to_ego_axes};
 use crate::backend::{Background, OccInput, Occupancy, occ_frame_path, write_npy};
 use crate::lidar::{bin_frame_path, pcd_frame_path, scan, write_bin, write_pcd};
 use crate::output::{
-    FrameBoxes, Manifest, OutputFile, PREVIEW_SIDE, StageTiming, paint_bev, paint_lidar, paint_occ, write_bev_frame,
-    write_boxes_json, write_gif, write_manifest, write_preview_png, write_sheet,
+    FrameBoxes, Manifest, OutputFile, PREVIEW_SIDE, StageTiming, flow_frame_path, paint_bev, paint_lidar, paint_occ,
+    write_bev_frame, write_boxes_json, write_flow, write_gif, write_manifest, write_preview_png, write_sheet,
 };
 use crate::place::Pose;
 use crate::raster::layout::{HALF_EXTENT_M, box_reaches_patch};

@@ -5,11 +5,13 @@
 //! beside their writers, so each format is defined once.
 
 mod anim;
+mod flow;
 mod npz;
 mod paint;
 mod preview;
 
 pub use anim::{write_gif, write_sheet};
+pub use flow::{FLOW_KEY, flow_frame_path, write_flow};
 pub use npz::{NpyElem, Npz};
 pub use paint::{CHANNEL_COLOURS, SIDE as PREVIEW_SIDE, STRUCTURE_COLOUR, paint_bev, paint_lidar, paint_occ, palette};
 pub use preview::{render_preview, write_preview_png};
