@@ -32,6 +32,7 @@
 //! primitive; no allocation per voxel or per object (`voxel::Voxelizer` keeps its scratch).
 
 pub mod background;
+pub mod flow;
 pub mod grounded;
 pub mod layout;
 pub mod shape;

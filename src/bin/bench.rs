@@ -367,6 +367,130 @@ fn bench_e2e() {
     }
 }
 
+/// One 16-frame clip of the ambulance example at the BEV stage with previews (the size of a
+/// CIREN case's clip), on every core: median wall time of 9 runs, mean process CPU time, and the
+/// manifest's per-stage seconds (wall time summed over threads) of the median run.
+fn bench_clip() {
+    use rocc::compile::{ClipInput, Stage, compile_clip};
+    let path = root().join("scenarios/ambulance_crowded_intersection.scn");
+    let mut sources = SourceMap::default();
+    let Some(f) = rocc::check::check_path(&path, &mut sources).ok().and_then(|s| front(s, None).ok()) else {
+        println!("== clip: {} does not compile", path.display());
+        return;
+    };
+    let bytes = std::fs::read(&path).unwrap_or_default();
+    let bg = Background::generate(&f.map, f.concrete.seed);
+    let frames: Vec<usize> = (0..16.min(f.tracks.frames)).collect();
+    let ci = ClipInput {
+        input: "ambulance.scn",
+        input_bytes: &bytes,
+        sources: &sources,
+        front: &f,
+        background: &bg,
+        ego: f.concrete.egos[0],
+        frames: &frames,
+    };
+    let dir = std::env::temp_dir().join(format!("rocc-bench-clip-{}", std::process::id()));
+    println!(
+        "== clip: {} frames, BEV stage, previews, {} cores (median of 9)",
+        frames.len(),
+        rayon::current_num_threads()
+    );
+    for previews in [false, true] {
+        let opts = Options { stage: Stage::Bev, previews, force: true, ..Options::default() };
+        let c0 = cpu_secs();
+        let mut runs: Vec<(f64, Vec<(String, f64)>)> = (0..9)
+            .map(|_| {
+                let t0 = Instant::now();
+                let r = compile_clip(&ci, &opts, &dir, &|| {});
+                let secs = t0.elapsed().as_secs_f64();
+                let stages = r.map(|r| r.manifest.timings.iter().map(|t| (t.stage.clone(), t.seconds)).collect());
+                (secs, stages.unwrap_or_default())
+            })
+            .collect();
+        let cpu = cpu_secs().zip(c0).map_or(f64::NAN, |(c1, c0)| (c1 - c0) / runs.len() as f64);
+        runs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let (secs, stages) = &runs[runs.len() / 2];
+        let parts: Vec<String> = stages.iter().map(|(n, s)| format!("{n} {:.1}", s * 1e3)).collect();
+        let label = if previews { "with previews" } else { "no previews" };
+        println!(
+            "  {label:<14} {:>6.1} ms per clip, {:>6.1} ms CPU (thread-ms by stage: {})",
+            secs * 1e3,
+            cpu * 1e3,
+            parts.join(", ")
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// BEV `.npz` writes: rocc's writer (fdeflate) against ndarray-npy's (zlib through the zip
+/// crate) at deflate levels 0 (stored), 1, 2, 6 (its default) and 9, on the ambulance example's
+/// first 16 frames, one core: the writers take turns, 5 rounds, median ms per file, bytes per file.
+fn bench_npz() {
+    use ndarray_npy::NpzWriter;
+    use rocc::raster::layout::{KEY_AUX, KEY_MASKS, KEY_STRUCTURE};
+    use zip::{CompressionMethod, write::SimpleFileOptions};
+    let Some(f) = load(&root().join("scenarios/ambulance_crowded_intersection.scn")) else { return };
+    let ego = f.concrete.egos[0];
+    let bevs: Vec<Bev> = (0..16.min(f.tracks.frames))
+        .map(|i| {
+            let (mut r, mut b) = (Rasterizer::new(), Bev::zeros());
+            r.rasterize_into(&f.map, f.tracks.poses[ego][i], &frame_boxes(&f, ego, i), &mut b);
+            b
+        })
+        .collect();
+    let dir = std::env::temp_dir().join(format!("rocc-bench-npz-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let zlib = |path: &Path, b: &Bev, level: i64| -> std::io::Result<u64> {
+        let opts = match level {
+            0 => SimpleFileOptions::default().compression_method(CompressionMethod::Stored),
+            l => {
+                SimpleFileOptions::default().compression_method(CompressionMethod::Deflated).compression_level(Some(l))
+            }
+        };
+        rocc::fsio::write_atomic(path, |w| {
+            let mut npz = NpzWriter::new_with_options(w, opts);
+            let e = |e: ndarray_npy::WriteNpzError| std::io::Error::other(e.to_string());
+            npz.add_array(KEY_MASKS, &b.masks).map_err(e)?;
+            npz.add_array(KEY_AUX, &b.aux).map_err(e)?;
+            npz.add_array(KEY_STRUCTURE, &b.structure).map_err(e)?;
+            npz.finish().map_err(e).map(|_| ())
+        })
+    };
+    type Writer<'a> = Box<dyn Fn(&Path, &Bev) -> std::io::Result<u64> + 'a>;
+    let writers: Vec<(String, Writer)> =
+        std::iter::once(("rocc (fdeflate)".to_string(), Box::new(|p: &Path, b: &Bev| write_npz(p, b)) as Box<_>))
+            .chain(
+                [0i64, 1, 2, 6, 9]
+                    .map(|l| (format!("zlib level {l}"), Box::new(move |p: &Path, b: &Bev| zlib(p, b, l)) as Box<_>)),
+            )
+            .collect();
+    let mut times = vec![Vec::new(); writers.len()];
+    let mut cpu = vec![Vec::new(); writers.len()];
+    let mut bytes = vec![0u64; writers.len()];
+    let per = bevs.len() as f64;
+    for _ in 0..5 {
+        for (n, (_, w)) in writers.iter().enumerate() {
+            let (t0, c0) = (Instant::now(), thread_cpu().unwrap_or(f64::NAN));
+            bytes[n] = bevs.iter().enumerate().map(|(i, b)| w(&dir.join(format!("{i}.npz")), b).unwrap_or(0)).sum();
+            times[n].push(t0.elapsed().as_secs_f64() / per);
+            cpu[n].push((thread_cpu().unwrap_or(f64::NAN) - c0) / per);
+        }
+    }
+    println!("== npz: BEV .npz writers, {} frames, one core (median of 5 rounds)", bevs.len());
+    for (n, (name, _)) in writers.iter().enumerate() {
+        times[n].sort_by(f64::total_cmp);
+        cpu[n].sort_by(f64::total_cmp);
+        println!(
+            "  {name:<16} {:>6.2} ms per file ({:>6.2} ms CPU), {:>8.0} bytes per file",
+            times[n][2] * 1e3,
+            cpu[n][2] * 1e3,
+            bytes[n] as f64 / per
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// The BEV target is stated at 20 agents; the library's scenes have fewer, so each
 /// frame's boxes are repeated beside themselves (cost depends on box count and size, not on
 /// where the boxes stand). One core, median of 5 passes over the frames; scenes with a frame
@@ -429,6 +553,12 @@ fn main() {
     }
     if want("e2e") {
         bench_e2e();
+    }
+    if want("clip") {
+        bench_clip();
+    }
+    if want("npz") {
+        bench_npz();
     }
     if args.iter().any(|a| a == "bev20") {
         bench_bev20();

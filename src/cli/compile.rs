@@ -62,6 +62,9 @@ pub struct Args {
     /// `--backend grounded`: the model config (default: the `.ron` beside the weights).
     #[arg(long)]
     grounded_config: Option<PathBuf>,
+    /// Also write `flow/NNNNNN.npz`: each moving agent's velocity on its voxels (docs/output.md).
+    #[arg(long)]
+    flow: bool,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -86,6 +89,11 @@ enum BackendArg {
 }
 
 pub fn run(a: Args) -> Result<(), Failure> {
+    if a.flow && matches!(a.stage, StageArg::Bev) {
+        return Err(Diagnostic::error("E0430", "`--flow` needs the occupancy, which `--stage bev` leaves out")
+            .help("drop `--stage bev` or use `--stage occ` (see `rocc explain E0430`)")
+            .into());
+    }
     let opts = Options {
         stage: match a.stage {
             StageArg::Bev => Stage::Bev,
@@ -108,6 +116,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
             a.weights.as_deref(),
             a.grounded_config.as_deref(),
         )?,
+        flow: a.flow,
     };
     let shard = a.shard.as_deref().map(batch::parse_shard).transpose().map_err(|m| {
         Diagnostic::error("E0402", format!("--shard {m}"))

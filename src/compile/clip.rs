@@ -8,12 +8,13 @@
 
 use super::world::ClipWorld;
 use super::{Front, Options, Stage};
+use crate::backend::flow::{Flow, flow_into, ground_velocity, to_ego_axes};
 use crate::backend::{Background, OccInput, Occupancy, occ_frame_path, write_npy};
 use crate::lidar::{bin_frame_path, pcd_frame_path, scan, write_bin, write_pcd};
 use crate::output::{
-    FrameBoxes, FrameWorld, Manifest, OutputFile, PREVIEW_SIDE, StageTiming, paint_bev, paint_lidar, paint_occ,
-    write_bev_frame, write_boxes_json, write_boxes_json_with, write_gif, write_manifest, write_preview_png,
-    write_scene_json, write_sheet,
+    FrameBoxes, FrameWorld, Manifest, OutputFile, PREVIEW_SIDE, StageTiming, flow_frame_path, paint_bev, paint_lidar,
+    paint_occ, write_bev_frame, write_boxes_json, write_boxes_json_with, write_flow, write_gif, write_manifest,
+    write_preview_png, write_scene_json, write_sheet,
 };
 use crate::place::Pose;
 use crate::raster::layout::{HALF_EXTENT_M, box_reaches_patch};
@@ -95,6 +96,9 @@ struct Scratch {
     raster: Rasterizer,
     bev: Bev,
     occ: Occupancy,
+    /// Allocated on first use: only with `--flow`.
+    flow: Flow,
+    velocities: Vec<[f64; 2]>,
 }
 
 /// Per-frame results kept for the clip-level files.
@@ -105,8 +109,6 @@ struct FrameOut {
     world: Option<FrameWorld>,
     /// Preview images (bev, occ, lidar) when this frame is sampled for a preview.
     thumbs: Option<[Option<Vec<u8>>; 3]>,
-    /// The full BEV preview (with legend) is drawn from the first selected frame.
-    first_bev: Option<Bev>,
 }
 
 /// The clip's output directory.
@@ -144,6 +146,7 @@ fn expected_manifest(ci: &ClipInput, opts: &Options, backend: &str) -> Manifest 
         m.weights = Some(w.display().to_string());
         m.grounded_config = Some(c.display().to_string());
     }
+    m.flow = opts.flow && opts.stage >= Stage::Occ;
     m.build_key = build_key(ci.sources, (opts.stage >= Stage::Lidar).then_some(&opts.rig));
     m
 }
@@ -184,6 +187,7 @@ fn complete(dir: &Path, want: &Manifest) -> Option<Manifest> {
         && m.rig == want.rig
         && m.ego == want.ego
         && m.static_bev == want.static_bev
+        && m.flow == want.flow
         // An edited clip is not what this input compiles to.
         && m.edits.is_empty();
     let files_ok = m
@@ -246,6 +250,9 @@ fn preview_picks(n: usize) -> (Vec<usize>, Vec<usize>) {
 /// re-rasterises edited boxes over a compiled BEV's static layers.
 pub type FrameSource<'a> = dyn Fn(usize, &mut Rasterizer, &mut Bev) -> io::Result<(Pose, Vec<EgoBox>)> + Sync + 'a;
 
+/// A box's velocity over the ground at frame `f`, in that frame's ego axes (m/s), for `--flow`.
+pub type BoxVelocity<'a> = dyn Fn(usize, &EgoBox) -> [f64; 2] + Sync + 'a;
+
 /// Everything the stages after the BEV need to render a clip into a directory.
 pub struct Render<'a> {
     pub frames: &'a [usize],
@@ -259,6 +266,8 @@ pub struct Render<'a> {
     /// The tracks and map behind the frames: the ego pose and motion in `boxes.json`, and
     /// `scene.json`.
     pub world: Option<ClipWorld<'a>>,
+    /// Where box velocities come from; `None` writes no flow even with `--flow`.
+    pub velocity: Option<&'a BoxVelocity<'a>>,
 }
 
 /// Compile one clip into `dir`. `on_frame` is called once per finished frame (progress).
@@ -288,6 +297,12 @@ pub fn compile_clip(
         }
         Ok((ego_pose, boxes))
     };
+    let t = &front.tracks;
+    let velocity = |f: usize, b: &EgoBox| -> [f64; 2] {
+        let i = b.track as usize;
+        let v = ground_velocity(&t.poses[i], |g| front.present(i, g), f, t.rate);
+        to_ego_axes(v, t.poses[ci.ego][f].yaw)
+    };
     let render = Render {
         frames: ci.frames,
         rate: front.tracks.rate,
@@ -296,6 +311,7 @@ pub fn compile_clip(
         manifest: want,
         source: &source,
         world: Some(ClipWorld { scenario: &front.concrete.name, tracks: &front.tracks, map: &front.map, ego: ci.ego }),
+        velocity: Some(&velocity),
     };
     render_clip(&render, opts, dir, on_frame)
 }
@@ -323,7 +339,13 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
         .par_iter()
         .enumerate()
         .map_init(
-            || Scratch { raster: Rasterizer::new(), bev: Bev::zeros(), occ: Occupancy::empty() },
+            || Scratch {
+                raster: Rasterizer::new(),
+                bev: Bev::zeros(),
+                occ: Occupancy::empty(),
+                flow: Flow::default(),
+                velocities: Vec::new(),
+            },
             |s, (n, &f)| -> io::Result<FrameOut> {
                 let t0 = Instant::now();
                 let (ego_pose, boxes) = (r.source)(f, &mut s.raster, &mut s.bev)?;
@@ -337,6 +359,11 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
                     let mut img = vec![0u8; PREVIEW_SIDE * PREVIEW_SIDE];
                     paint_bev(&s.bev, &mut img);
                     thumbs[0] = Some(img);
+                    // The full BEV preview (with legend) shows the first frame, written while
+                    // the other frames render.
+                    if n == 0 {
+                        files.push(write_preview_png(dir, &s.bev)?);
+                    }
                     t3 = Clock::add(&clock.preview, t3);
                 }
                 if opts.stage >= Stage::Occ {
@@ -352,6 +379,15 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
                     let t4 = Clock::add(&clock.occ, t3);
                     let path = occ_frame_path(dir, f);
                     files.push(OutputFile { path: rel(dir, &path), bytes: write_npy(&path, &s.occ)? });
+                    if opts.flow
+                        && let Some(velocity) = r.velocity
+                    {
+                        s.velocities.clear();
+                        s.velocities.extend(boxes.iter().map(|b| velocity(f, b)));
+                        flow_into(&s.occ, &boxes, &s.velocities, &mut s.flow);
+                        let path = flow_frame_path(dir, f);
+                        files.push(OutputFile { path: rel(dir, &path), bytes: write_flow(&path, &s.flow)? });
+                    }
                     t3 = Clock::add(&clock.write, t4);
                     if preview {
                         let mut img = vec![0u8; PREVIEW_SIDE * PREVIEW_SIDE];
@@ -380,7 +416,6 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
                     world,
                     files,
                     thumbs: preview.then_some(thumbs),
-                    first_bev: (n == 0 && opts.previews).then(|| s.bev.clone()),
                 })
             },
         )
@@ -400,24 +435,28 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
     let t1 = Clock::add(&clock.write, t0);
 
     if opts.previews {
-        if let Some(bev) = outs.first().and_then(|o| o.first_bev.as_ref()) {
-            files.push(write_preview_png(dir, bev)?);
-        }
         // Frames play at the clip's real speed.
         let stride = gif_picks.get(1).copied().unwrap_or(1);
         let delay_cs = ((100.0 * stride as f64 / rate).round() as u16).max(2);
         let names = ["bev", "occ", "lidar"];
         let stages = 1 + (opts.stage >= Stage::Occ) as usize + (opts.stage >= Stage::Lidar) as usize;
-        let mut rows = Vec::new();
-        for (s, name) in names.iter().enumerate().take(stages) {
-            let pick = |picks: &[usize]| -> Vec<Vec<u8>> {
-                picks.iter().filter_map(|&n| outs[n].thumbs.as_ref().and_then(|t| t[s].clone())).collect()
-            };
-            files.push(write_gif(dir, &format!("{name}.gif"), &pick(&gif_picks), delay_cs)?);
-            rows.push((*name, pick(&sheet_picks)));
-        }
+        let pick = |s: usize, picks: &[usize]| -> Vec<Vec<u8>> {
+            picks.iter().filter_map(|&n| outs[n].thumbs.as_ref().and_then(|t| t[s].clone())).collect()
+        };
+        let rows: Vec<(&str, Vec<Vec<u8>>)> = (0..stages).map(|s| (names[s], pick(s, &sheet_picks))).collect();
         let sheet_frames: Vec<usize> = sheet_picks.iter().map(|&n| r.frames[n]).collect();
-        files.push(write_sheet(dir, &sheet_frames, &rows)?);
+        // Each GIF and the sheet are independent files: encoded side by side.
+        let (gifs, sheet) = rayon::join(
+            || {
+                (0..stages)
+                    .into_par_iter()
+                    .map(|s| write_gif(dir, &format!("{}.gif", names[s]), &pick(s, &gif_picks), delay_cs))
+                    .collect::<io::Result<Vec<_>>>()
+            },
+            || write_sheet(dir, &sheet_frames, &rows),
+        );
+        files.extend(gifs?);
+        files.push(sheet?);
         Clock::add(&clock.preview, t1);
     }
     files.sort_by(|a, b| a.path.cmp(&b.path));

@@ -15,8 +15,8 @@ mod static_bev;
 mod world;
 
 pub use clip::{
-    ClipInput, ClipReport, FrameSource, Render, clip_dir, clip_seed, compile_clip, edited_clip, frame_boxes,
-    render_clip,
+    BoxVelocity, ClipInput, ClipReport, FrameSource, Render, clip_dir, clip_seed, compile_clip, edited_clip,
+    frame_boxes, render_clip,
 };
 pub use static_bev::StaticBev;
 pub use world::ClipWorld;
@@ -70,6 +70,8 @@ pub struct Options {
     pub static_bev: Option<StaticBev>,
     /// Which occupancy backend runs (`--backend`).
     pub backend: OccBackend,
+    /// Per-voxel velocity of moving agents, `flow/NNNNNN.npz` (`--flow`, stage occ and up).
+    pub flow: bool,
 }
 
 /// `--backend`: the procedural default (shapes by `mode`), or loaded grounded weights.
@@ -131,6 +133,7 @@ impl Default for Options {
             force: false,
             static_bev: None,
             backend: OccBackend::Procedural,
+            flow: false,
         }
     }
 }

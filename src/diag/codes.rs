@@ -569,6 +569,15 @@ re-run the same command: complete clips are kept and the index is rebuilt.\n
     $ rocc compile scenarios/ -o out     // error if out/index.jsonl cannot be replaced",
     },
     Code {
+        code: "E0430",
+        title: "--flow without occupancy",
+        explanation: "`--flow` writes the velocity of every occupied voxel of a moving agent\n\
+(`flow/NNNNNN.npz`, docs/output.md \"Occupancy flow\"), so it needs the occupancy stage:\n\
+`--stage occ` or `--stage lidar` (the default).\n
+    $ rocc compile scenarios/ -o out --flow                 // fine: all stages
+    $ rocc compile scenarios/ -o out --stage bev --flow     // error: no occupancy to give flow to",
+    },
+    Code {
         code: "E0701",
         title: "unreadable occupancy frame",
         explanation: "`rocc eval occ` reads occupancy frames as a dense `.npy` of shape (400, 400, 32) (rocc's\n\

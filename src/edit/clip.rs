@@ -351,6 +351,8 @@ pub fn edit_clip(dir: &Path, edits: &[Edit], o: &ClipEdit) -> Result<Manifest, V
         force: true,
         static_bev: None,
         backend,
+        // Edited boxes have no tracks to take a velocity from.
+        flow: false,
     };
     let background =
         if stage >= Stage::Occ { Background::generate(&front.map, front.concrete.seed) } else { Background::none() };
@@ -390,6 +392,7 @@ pub fn edit_clip(dir: &Path, edits: &[Edit], o: &ClipEdit) -> Result<Manifest, V
             map: &front.map,
             ego,
         }),
+        velocity: None,
     };
     let report = render_clip(&render, &opts, dir, &|| {}).map_err(|e| {
         vec![

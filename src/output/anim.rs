@@ -52,15 +52,17 @@ pub fn write_sheet(dir: &Path, frames: &[usize], rows: &[(&str, Vec<Vec<u8>>)]) 
             }
         }
     }
-    let pal = palette();
-    let rgb: Vec<u8> = idx.iter().flat_map(|&i| pal[i as usize]).collect();
+    let flat: Vec<u8> = palette().iter().flatten().copied().collect();
     let rel = "preview/sheet.png".to_string();
     let bytes = write_atomic(&dir.join(&rel), |out| {
+        // Palette indices as drawn: a third of the RGB bytes, and no colour is lost.
         let mut enc = png::Encoder::new(&mut *out, w as u32, h as u32);
-        enc.set_color(png::ColorType::Rgb);
+        enc.set_color(png::ColorType::Indexed);
+        enc.set_palette(flat);
         enc.set_depth(png::BitDepth::Eight);
+        enc.set_compression(png::Compression::Fast);
         let mut wr = enc.write_header().map_err(io::Error::other)?;
-        wr.write_image_data(&rgb).map_err(io::Error::other)?;
+        wr.write_image_data(&idx).map_err(io::Error::other)?;
         wr.finish().map_err(io::Error::other)
     })?;
     Ok(OutputFile { path: rel, bytes })

@@ -6,11 +6,15 @@
 
 mod anim;
 mod ego;
+mod flow;
+mod npz;
 mod paint;
 mod preview;
 mod vector_map;
 
 pub use anim::{write_gif, write_sheet};
+pub use flow::{FLOW_KEY, flow_frame_path, write_flow};
+pub use npz::{NpyElem, Npz};
 pub use paint::{CHANNEL_COLOURS, SIDE as PREVIEW_SIDE, STRUCTURE_COLOUR, paint_bev, paint_lidar, paint_occ, palette};
 pub use preview::{render_preview, write_preview_png};
 
@@ -26,7 +30,7 @@ use crate::check::scenario::Class;
 use crate::raster::Bev;
 use crate::raster::layout::{KEY_AUX, KEY_MASKS, KEY_STRUCTURE, class_index};
 use crate::view::EgoBox;
-use ndarray_npy::{NpzReader, NpzWriter};
+use ndarray_npy::NpzReader;
 use serde::{Deserialize, Serialize};
 use std::fs::File;
 use std::io::{self, Write};
@@ -46,14 +50,16 @@ fn npz_err(e: impl std::fmt::Display) -> io::Error {
 /// Write one BEV as a compressed `.npz` with keys `gt_bev_masks` (int8, 18x400x400),
 /// `gt_aux_bev` (int32, 7x400x400) and `structure` (int8, 400x400). Returns the size in bytes.
 pub fn write_npz(path: &Path, bev: &Bev) -> io::Result<u64> {
-    write_atomic(path, |w| {
-        let mut npz = NpzWriter::new_compressed(w);
-        npz.add_array(KEY_MASKS, &bev.masks).map_err(npz_err)?;
-        npz.add_array(KEY_AUX, &bev.aux).map_err(npz_err)?;
-        npz.add_array(KEY_STRUCTURE, &bev.structure).map_err(npz_err)?;
-        npz.finish().map_err(npz_err)?;
-        Ok(())
-    })
+    let mut npz = Npz::default();
+    npz.add(KEY_MASKS, bev.masks.shape(), std_slice(&bev.masks)?)?;
+    npz.add(KEY_AUX, bev.aux.shape(), std_slice(&bev.aux)?)?;
+    npz.add(KEY_STRUCTURE, bev.structure.shape(), std_slice(&bev.structure)?)?;
+    write_atomic(path, |w| npz.finish(w))
+}
+
+/// The elements of a standard-layout array (every array rocc makes is one).
+fn std_slice<T, D: ndarray::Dimension>(a: &ndarray::Array<T, D>) -> io::Result<&[T]> {
+    a.as_slice().ok_or_else(|| npz_err("array not in standard layout"))
 }
 
 /// Read back a `.npz` written by `write_npz` (or any nuPlan-Occ BEV; a missing `structure` key
@@ -288,6 +294,9 @@ pub struct Manifest {
     pub weights: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub grounded_config: Option<String>,
+    /// Whether `flow/` was written (`--flow`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub flow: bool,
     /// Box edits applied by `rocc edit` after compilation, in order (`insert sedan at 10,-3.5 yaw 0`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub edits: Vec<String>,
@@ -315,6 +324,7 @@ impl Manifest {
             static_bev: None,
             weights: None,
             grounded_config: None,
+            flow: false,
             edits: Vec::new(),
         }
     }

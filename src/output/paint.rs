@@ -142,18 +142,30 @@ fn mark_ego(img: &mut [u8]) {
 
 /// The BEV as palette indices, `SIDE * SIDE`, layers in `PAINT_ORDER`.
 pub fn paint_bev(bev: &Bev, img: &mut [u8]) {
+    // `px` maps cell (i, j) to SIDE * SIDE - 1 - (i SIDE + j): the image is the grid in reverse.
+    // Painting in grid order lets each layer be one branch-free pass over two slices.
     img.fill(I_BACKGROUND);
     for layer in PAINT_ORDER {
         let (plane, col) = match layer {
             Some(ch) => (bev.masks.index_axis(ndarray::Axis(0), ch), I_BEV + ch as u8),
             None => (bev.structure.view(), I_STRUCTURE),
         };
-        for ((i, j), &m) in plane.indexed_iter() {
-            if m != 0 {
-                img[px(i, j)] = col;
+        match plane.as_slice() {
+            Some(cells) => {
+                for (d, &m) in img.iter_mut().zip(cells) {
+                    *d = if m != 0 { col } else { *d };
+                }
+            }
+            None => {
+                for ((i, j), &m) in plane.indexed_iter() {
+                    if m != 0 {
+                        img[i * SIDE + j] = col;
+                    }
+                }
             }
         }
     }
+    img[..SIDE * SIDE].reverse();
     mark_ego(img);
 }
 

@@ -56,6 +56,7 @@ pub fn write_preview_png(dir: &Path, bev: &Bev) -> io::Result<OutputFile> {
         let mut enc = png::Encoder::new(&mut *out, w, h);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
+        enc.set_compression(png::Compression::Fast);
         let mut wr = enc.write_header().map_err(io::Error::other)?;
         wr.write_image_data(&data).map_err(io::Error::other)?;
         wr.finish().map_err(io::Error::other)

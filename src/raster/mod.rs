@@ -91,9 +91,13 @@ impl Bev {
         if fresh {
             *self = Bev::zeros();
         } else {
-            self.masks.fill(0);
-            self.aux.fill(0);
-            self.structure.fill(0);
+            // As slices: one memset each (ndarray's `fill` walks the elements).
+            for s in [self.masks.as_slice_mut(), self.structure.as_slice_mut()].into_iter().flatten() {
+                s.fill(0);
+            }
+            if let Some(s) = self.aux.as_slice_mut() {
+                s.fill(0);
+            }
         }
     }
 }

@@ -1,0 +1,199 @@
+//! The `.npz` container, written directly: a zip archive (no zip64, fixed 1980-01-01 timestamps,
+//! so the bytes depend only on the arrays) of `.npy` v1.0 members, each deflated by `fdeflate`.
+//! `fdeflate` codes runs of zeros with one fixed Huffman table and never searches for matches:
+//! BEV arrays are mostly zeros, so it runs several times faster than zlib's levels at a few
+//! times their size (`bench npz` measures both; docs/benchmarks.md has the figures). numpy's
+//! `np.load` and `ndarray_npy::NpzReader` read the result.
+
+use std::io::{self, Write};
+
+/// An element type `.npy` can hold, and its `descr` (little-endian where it has an order).
+pub trait NpyElem: bytemuck::Pod {
+    const DESCR: &'static str;
+}
+
+impl NpyElem for i8 {
+    const DESCR: &'static str = "|i1";
+}
+
+impl NpyElem for u8 {
+    const DESCR: &'static str = "|u1";
+}
+
+impl NpyElem for i32 {
+    const DESCR: &'static str = "<i4";
+}
+
+impl NpyElem for f32 {
+    const DESCR: &'static str = "<f4";
+}
+
+/// `xs` as little-endian bytes: their memory itself on a little-endian machine.
+#[cfg(target_endian = "little")]
+fn le_bytes<'a, T: NpyElem>(xs: &'a [T], _buf: &'a mut Vec<u8>) -> &'a [u8] {
+    bytemuck::cast_slice(xs)
+}
+
+#[cfg(target_endian = "big")]
+fn le_bytes<'a, T: NpyElem>(xs: &'a [T], buf: &'a mut Vec<u8>) -> &'a [u8] {
+    buf.clear();
+    for x in xs {
+        buf.extend(bytemuck::bytes_of(x).iter().rev());
+    }
+    buf
+}
+
+/// The `.npy` v1.0 header of a C-order array: magic, version, length, then the dict padded with
+/// spaces to a 64-byte boundary and closed by a newline.
+fn npy_header(descr: &str, shape: &[usize]) -> Vec<u8> {
+    let dims: Vec<String> = shape.iter().map(usize::to_string).collect();
+    let shape = if dims.len() == 1 { format!("({},)", dims[0]) } else { format!("({})", dims.join(", ")) };
+    let mut dict = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
+    while (10 + dict.len() + 1) % 64 != 0 {
+        dict.push(' ');
+    }
+    dict.push('\n');
+    let mut h = b"\x93NUMPY\x01\x00".to_vec();
+    h.extend_from_slice(&(dict.len() as u16).to_le_bytes());
+    h.extend_from_slice(dict.as_bytes());
+    h
+}
+
+/// One member as it goes into the archive.
+struct Member {
+    name: String,
+    crc: u32,
+    raw: u64,
+    deflated: Vec<u8>,
+}
+
+/// Elements checksummed and deflated per step, so both passes find them in cache.
+const STEP: usize = 1 << 16;
+
+/// An `.npz` being built in memory; `finish` writes it out.
+#[derive(Default)]
+pub struct Npz {
+    members: Vec<Member>,
+}
+
+impl Npz {
+    /// Add `data` (C order, `shape`) as member `name.npy`.
+    pub fn add<T: NpyElem>(&mut self, name: &str, shape: &[usize], data: &[T]) -> io::Result<()> {
+        if shape.iter().product::<usize>() != data.len() {
+            return Err(io::Error::other(format!("npz: `{name}` has {} elements, shape {shape:?}", data.len())));
+        }
+        let header = npy_header(T::DESCR, shape);
+        let mut crc = crc32fast::Hasher::new();
+        let mut z = fdeflate::Compressor::new(Vec::new())?;
+        crc.update(&header);
+        z.write_data(&header)?;
+        let mut buf = Vec::new();
+        for chunk in data.chunks(STEP) {
+            let bytes = le_bytes(chunk, &mut buf);
+            crc.update(bytes);
+            z.write_data(bytes)?;
+        }
+        let zlib = z.finish()?;
+        // A zlib stream is a 2-byte header, the raw deflate data a zip member holds, and an
+        // Adler-32 trailer.
+        let deflated = zlib.get(2..zlib.len().saturating_sub(4)).unwrap_or_default().to_vec();
+        let raw = (header.len() + std::mem::size_of_val(data)) as u64;
+        self.members.push(Member { name: format!("{name}.npy"), crc: crc.finalize(), raw, deflated });
+        Ok(())
+    }
+
+    /// Write the archive: each member's local header and data, then the central directory.
+    pub fn finish(self, w: &mut impl Write) -> io::Result<()> {
+        let too_big = || io::Error::other("npz: a member over 4 GiB needs zip64, which rocc does not write");
+        let u32_of = |n: u64| u32::try_from(n).map_err(|_| too_big());
+        let mut offset = 0u64;
+        let mut central = Vec::new();
+        for m in &self.members {
+            let (raw, packed) = (u32_of(m.raw)?, u32_of(m.deflated.len() as u64)?);
+            let fixed = |sig: u32, out: &mut Vec<u8>| {
+                out.extend_from_slice(&sig.to_le_bytes());
+                if sig == CENTRAL {
+                    out.extend_from_slice(&20u16.to_le_bytes()); // version made by
+                }
+                for v in [20u16, 0, 8, 0, DOS_DATE] {
+                    out.extend_from_slice(&v.to_le_bytes()); // version needed, flags, deflate, time, date
+                }
+                for v in [m.crc, packed, raw] {
+                    out.extend_from_slice(&v.to_le_bytes());
+                }
+                out.extend_from_slice(&(m.name.len() as u16).to_le_bytes());
+                out.extend_from_slice(&0u16.to_le_bytes()); // extra field length
+            };
+            let mut local = Vec::with_capacity(30 + m.name.len());
+            fixed(LOCAL, &mut local);
+            local.extend_from_slice(m.name.as_bytes());
+            w.write_all(&local)?;
+            w.write_all(&m.deflated)?;
+            fixed(CENTRAL, &mut central);
+            for v in [0u16, 0, 0] {
+                central.extend_from_slice(&v.to_le_bytes()); // comment length, disk, internal attributes
+            }
+            central.extend_from_slice(&0u32.to_le_bytes()); // external attributes
+            central.extend_from_slice(&u32_of(offset)?.to_le_bytes());
+            central.extend_from_slice(m.name.as_bytes());
+            offset += (local.len() + m.deflated.len()) as u64;
+        }
+        let n = self.members.len() as u16;
+        let mut end = Vec::with_capacity(22);
+        end.extend_from_slice(&END.to_le_bytes());
+        for v in [0u16, 0, n, n] {
+            end.extend_from_slice(&v.to_le_bytes());
+        }
+        end.extend_from_slice(&u32_of(central.len() as u64)?.to_le_bytes());
+        end.extend_from_slice(&u32_of(offset)?.to_le_bytes());
+        end.extend_from_slice(&0u16.to_le_bytes()); // comment length
+        w.write_all(&central)?;
+        w.write_all(&end)
+    }
+}
+
+const LOCAL: u32 = 0x0403_4b50;
+const CENTRAL: u32 = 0x0201_4b50;
+const END: u32 = 0x0605_4b50;
+/// 1980-01-01, the earliest date zip can hold.
+const DOS_DATE: u16 = (1 << 5) | 1;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ndarray::{Array1, Array3};
+    use ndarray_npy::NpzReader;
+
+    #[test]
+    fn npz_reads_back_with_ndarray_npy() {
+        let a = Array3::from_shape_fn((3, 50, 70), |(c, i, j)| ((c * 7 + i * j) % 5) as i8 - 2);
+        let b = Array1::from_shape_fn(200_000, |i| if i % 1000 == 0 { -(i as i32) } else { 0 });
+        let f = Array1::from_shape_fn(9, |i| i as f32 * 0.5);
+        let mut npz = Npz::default();
+        npz.add("a", &[3, 50, 70], a.as_slice().unwrap()).unwrap();
+        npz.add("b", &[200_000], b.as_slice().unwrap()).unwrap();
+        npz.add("f", &[9], f.as_slice().unwrap()).unwrap();
+        let mut bytes = Vec::new();
+        npz.finish(&mut bytes).unwrap();
+        let mut r = NpzReader::new(std::io::Cursor::new(bytes)).unwrap();
+        assert_eq!(r.names().unwrap(), vec!["a", "b", "f"]);
+        let ra: Array3<i8> = r.by_name("a").unwrap();
+        let rb: Array1<i32> = r.by_name("b").unwrap();
+        let rf: Array1<f32> = r.by_name("f").unwrap();
+        assert_eq!((ra, rb, rf), (a, b, f));
+    }
+
+    #[test]
+    fn a_shape_that_does_not_match_the_data_is_an_error() {
+        assert!(Npz::default().add("x", &[2, 3], &[0u8; 5]).is_err());
+    }
+
+    #[test]
+    fn npy_headers_end_on_a_64_byte_boundary() {
+        for shape in [&[18usize, 400, 400][..], &[5], &[400, 400, 32]] {
+            let h = npy_header("<i4", shape);
+            assert_eq!(h.len() % 64, 0);
+            assert_eq!(*h.last().unwrap(), b'\n');
+        }
+    }
+}
