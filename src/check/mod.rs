@@ -8,6 +8,7 @@
 mod agent;
 pub mod classes;
 mod conflict;
+mod expect;
 mod goal;
 mod kinds;
 pub mod load;
