@@ -132,7 +132,7 @@ fn snapshots_are_written_compared_and_reviewed() {
     );
     assert!(first.contains("  ok   contact striker with ego on rear\n"), "{first}");
     assert!(first.contains("contacts\n  frames 30..59: ego (rear) with striker (front)\n"), "{first}");
-    assert!(first.contains("bev digests (first ego)\n  frame 0: "), "{first}");
+    assert!(first.contains("digests (first ego; BEV, procedural occupancy)\n  frame 0: bev "), "{first}");
     assert!(std::fs::read_dir(d.join("snapshots")).expect("dir").count() == 1, "a temporary file was left");
     assert!(rocc(&["test", dir], "").status.success());
 

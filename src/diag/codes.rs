@@ -1077,9 +1077,9 @@ speed furthest beyond the bound and when.\n
     Code {
         code: "E1020",
         title: "snapshot differs",
-        explanation: "The run's snapshot (checked summary, verdicts, tracks at 1 Hz in centimetres, contacts, BEV\n\
-digests) differs from `snapshots/NAME.snap` beside the scenario. A diff is printed. If the change is\n\
-meant, accept it:\n
+        explanation: "The run's snapshot (checked summary, verdicts, tracks at 1 Hz in centimetres, contacts,\n\
+BEV and occupancy digests) differs from `snapshots/NAME.snap` beside the scenario. A diff is\n\
+printed. If the change is meant, accept it:\n
     rocc test scenarios/ --review     // accept, reject or skip each change
     rocc test scenarios/ --accept     // accept all",
     },

@@ -2,12 +2,12 @@
 //! header of `key: value` lines, then the body) so that `cargo insta` can review pending
 //! `.snap.new` files inside a cargo workspace. The body holds the checked summary, each
 //! expectation's verdict, every track at 1 Hz rounded to centimetres, the contacts, and digests
-//! of the first ego's BEV at the first, middle and last frame.
+//! of the first ego's BEV and occupancy at the first, middle and last frame.
 
 use super::geometry::Contact;
+use crate::backend::{Background, OccInput, Occupancy, OccupancyBackend, Procedural};
 use crate::check::summary::Summary;
-use crate::compile::{Front, frame_boxes};
-use crate::fsio::Fnv1a;
+use crate::compile::{Front, clip_seed, frame_boxes};
 use crate::raster::{Bev, Rasterizer};
 use std::fmt::Write;
 
@@ -65,36 +65,85 @@ pub fn body(front: &Front, verdicts: &[(String, bool)], contacts: &[Contact]) ->
             c.side_b.name()
         );
     }
-    out.push_str("\nbev digests (first ego)\n");
+    out.push_str("\ndigests (first ego; BEV, procedural occupancy)\n");
     if let Some(&ego) = front.concrete.egos.first() {
-        for (f, d) in bev_digests(front, ego) {
-            let _ = writeln!(out, "  frame {f}: {d:016x}");
+        for (f, bev, occ) in digests(front, ego) {
+            let _ = writeln!(out, "  frame {f}: bev {bev:016x} occ {occ:016x}");
         }
     }
     out
 }
 
-/// FNV-1a of the BEV bytes (masks, auxiliary channels, structure) at the first, middle and last
-/// frame, hashed as the digest pin in `tests/examples.rs` hashes them.
-fn bev_digests(front: &Front, ego: usize) -> Vec<(usize, u64)> {
+/// Digests of the BEV (masks, auxiliary channels, structure) and of the procedural occupancy
+/// labels at the first, middle and last frame (`Words`).
+fn digests(front: &Front, ego: usize) -> Vec<(usize, u64, u64)> {
     let n = front.tracks.frames;
     let mut frames = vec![0, n / 2, n.saturating_sub(1)];
     frames.dedup();
-    let (mut raster, mut bev) = (Rasterizer::new(), Bev::zeros());
+    let background = Background::generate(&front.map, front.concrete.seed);
+    let seed = clip_seed(front, ego);
+    let (mut raster, mut bev, mut occ) = (Rasterizer::new(), Bev::zeros(), Occupancy::empty());
     frames
         .into_iter()
         .map(|f| {
             let boxes = frame_boxes(front, ego, f);
-            raster.rasterize_into(&front.map, front.tracks.poses[ego][f], &boxes, &mut bev);
-            let mut h = Fnv1a::new();
-            h.write(&bev.masks.iter().map(|&x| x as u8).collect::<Vec<u8>>());
-            for x in bev.aux.iter() {
-                h.write(&x.to_le_bytes());
-            }
-            h.write(&bev.structure.iter().map(|&x| x as u8).collect::<Vec<u8>>());
-            (f, h.finish())
+            let pose = front.tracks.poses[ego][f];
+            raster.rasterize_into(&front.map, pose, &boxes, &mut bev);
+            let mut h = Words::new();
+            h.i8s(bev.masks.as_slice().unwrap_or(&[]));
+            h.i32s(bev.aux.as_slice().unwrap_or(&[]));
+            h.i8s(bev.structure.as_slice().unwrap_or(&[]));
+            let input = OccInput { boxes: &boxes, bev: &bev, background: &background, ego: pose, seed, frame: f };
+            Procedural::default().occupancy_into(&input, &mut occ);
+            let mut o = Words::new();
+            o.u8s(occ.labels.as_slice().unwrap_or(&[]));
+            (f, h.0, o.0)
         })
         .collect()
+}
+
+/// FNV-1a's offset and prime applied to little-endian 64-bit words rather than bytes: the
+/// snapshot hashes about 38 MB of rasters per scene, and byte-wise FNV-1a (`fsio::Fnv1a`) over
+/// them was most of `rocc test`'s time; word-wise it is an eighth of the multiplications. A
+/// digest to see a change, not a cryptographic one.
+struct Words(u64);
+
+impl Words {
+    fn new() -> Self {
+        Words(0xcbf2_9ce4_8422_2325)
+    }
+
+    fn mix(&mut self, w: u64) {
+        self.0 = (self.0 ^ w).wrapping_mul(0x0100_0000_01b3);
+    }
+
+    fn u8s(&mut self, v: &[u8]) {
+        let mut it = v.chunks_exact(8);
+        for c in &mut it {
+            self.mix(u64::from_le_bytes(std::array::from_fn(|k| c[k])));
+        }
+        let rest = it.remainder();
+        self.mix(rest.iter().rev().fold(rest.len() as u64, |w, &b| (w << 8) | u64::from(b)));
+    }
+
+    fn i8s(&mut self, v: &[i8]) {
+        let mut it = v.chunks_exact(8);
+        for c in &mut it {
+            self.mix(u64::from_le_bytes(std::array::from_fn(|k| c[k] as u8)));
+        }
+        let rest = it.remainder();
+        self.mix(rest.iter().rev().fold(rest.len() as u64, |w, &b| (w << 8) | u64::from(b as u8)));
+    }
+
+    fn i32s(&mut self, v: &[i32]) {
+        let mut it = v.chunks_exact(2);
+        for c in &mut it {
+            self.mix(u64::from(c[0] as u32) | (u64::from(c[1] as u32) << 32));
+        }
+        for &x in it.remainder() {
+            self.mix(u64::from(x as u32) | (1 << 40));
+        }
+    }
 }
 
 /// Metres (or m/s) to two decimals, without a negative zero.
@@ -136,4 +185,33 @@ pub fn parse(text: &str) -> Result<&str, Bad> {
         return Err(Bad::Foreign(expression.to_string()));
     }
     Ok(&rest[end + 5..])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn word_digests_see_every_byte_and_the_length() {
+        let digest = |v: &[i8]| {
+            let mut h = Words::new();
+            h.i8s(v);
+            h.0
+        };
+        let base = [0i8; 19];
+        let mut seen = vec![digest(&base), digest(&base[..18]), digest(&base[..16])];
+        for k in 0..base.len() {
+            let mut v = base;
+            v[k] = 1;
+            seen.push(digest(&v));
+        }
+        let n = seen.len();
+        seen.sort_unstable();
+        seen.dedup();
+        assert_eq!(seen.len(), n, "two inputs share a digest");
+        let (mut a, mut b) = (Words::new(), Words::new());
+        a.i32s(&[1, 2, 3]);
+        b.i32s(&[1, 2, 4]);
+        assert_ne!(a.0, b.0);
+    }
 }
