@@ -4,8 +4,8 @@
 //! failed. `--accept` writes snapshots, `--review` asks per change, `--pending` leaves
 //! `NAME.snap.new` files for `cargo insta review`, `--junit FILE` writes a JUnit report.
 
+use super::check::MessageFormat;
 use super::{Failure, show};
-use clap::ValueEnum;
 use rayon::prelude::*;
 use rocc::diag::Diagnostic;
 use rocc::expect::compare::{self, Status};
@@ -33,12 +33,6 @@ pub struct Args {
     /// `json`: one JSON object per line (diagnostics, one result per file, a summary).
     #[arg(long, value_enum, default_value = "human")]
     message_format: MessageFormat,
-}
-
-#[derive(Clone, Copy, ValueEnum, PartialEq, Eq)]
-enum MessageFormat {
-    Human,
-    Json,
 }
 
 /// One file's outcome.
