@@ -387,6 +387,19 @@ pub struct Expectation {
     pub span: Span,
 }
 
+impl Expectation {
+    /// The agents the line names.
+    pub fn agents(&self) -> Vec<&Ident> {
+        match &self.what {
+            ExpectWhat::Contact { a, b, .. } | ExpectWhat::Gap { a, b, .. } => vec![a, b],
+            ExpectWhat::NoContact { pair } => pair.iter().flat_map(|(a, b)| [a, b]).collect(),
+            ExpectWhat::Stopped { agent, .. } | ExpectWhat::Reach { agent, .. } | ExpectWhat::Speed { agent, .. } => {
+                vec![agent]
+            }
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub enum ExpectWhat {
     /// `contact A with B [on SIDE]`: SIDE is on B's box.
