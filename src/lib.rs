@@ -8,6 +8,7 @@ pub mod compile;
 pub mod diag;
 pub mod edit;
 pub mod eval;
+pub mod expect;
 pub mod fsio;
 pub mod geom;
 pub mod grammar;

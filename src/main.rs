@@ -40,6 +40,8 @@ enum Cmd {
         #[command(subcommand)]
         what: cli::eval::EvalCmd,
     },
+    /// Test a scenario library: judge every `expect` block and compare snapshots (`rocc test scenarios/`).
+    Test(cli::test::Args),
     /// Write a checked scenario from a sentence with a language model (OpenAI-compatible server).
     Text(cli::text::Args),
     /// Print the language grammar for grammar-constrained LLM decoding (derived from scn.pest).
@@ -58,6 +60,7 @@ fn main() -> ExitCode {
         Cmd::Ciren { what } => cli::ciren::run(what),
         Cmd::Edit(a) => cli::edit::run(a),
         Cmd::Eval { what } => cli::eval::run(what),
+        Cmd::Test(a) => cli::test::run(a),
         Cmd::Text(a) => cli::text::run(a),
         Cmd::Grammar(a) => cli::grammar::run(a),
         Cmd::Explain(a) => cli::explain::run(a),

@@ -566,6 +566,8 @@ fn scn_edits_are_gated_by_the_checker_and_placement() {
     .unwrap();
     assert!(text.contains("agent inserted_traffic_cone_1: traffic_cone { at (40 m, -7 m) heading 0 deg }"));
     assert!(!text.contains("agent cutter"));
+    // The `expect` lines naming the deleted agent go with it; the others stay.
+    assert!(!text.contains("gap cutter with ego") && text.contains("speed ego at_most"), "{text}");
     // Rejections say why: a vehicle off the road (E0201), an overlap (E0202), road-relative move.
     let code = |e: Edit| edit_scn(&scn, &[e], &mut SourceMap::default()).unwrap_err()[0].code;
     assert_eq!(code(Edit::Insert { kind: "sedan".into(), x: 0.0, y: 40.0, yaw: 0.0 }), "E0201");

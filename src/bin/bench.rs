@@ -560,6 +560,9 @@ fn main() {
     if want("npz") {
         bench_npz();
     }
+    if want("test") {
+        bench_test();
+    }
     if args.iter().any(|a| a == "bev20") {
         bench_bev20();
     }
@@ -602,4 +605,30 @@ fn bench_grounded() {
             t
         );
     }
+}
+
+/// `rocc test scenarios/` without the process around it: check, rollout, judging and snapshot
+/// body per file on one core, then the whole library spread over every core as the command does.
+fn bench_test() {
+    println!("== test: `rocc test scenarios/` per file on one core (median of 5), then the library on every core");
+    let files = library();
+    let run = |p: &Path| {
+        let mut sources = SourceMap::default();
+        std::hint::black_box(rocc::expect::run(p, &mut sources).is_ok());
+    };
+    let mut cpu_total = 0.0;
+    for p in &files {
+        let (t, cpu) = median_cpu(5, || run(p));
+        cpu_total += cpu;
+        let name = p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        println!("  {name:<40} {:>7.1} ms  ({:.1} ms CPU)", t * 1e3, cpu * 1e3);
+    }
+    let t = median(5, || files.par_iter().for_each(|p| run(p)));
+    println!(
+        "  library, {} files, {} threads: {:.0} ms wall; {:.0} ms CPU on one core",
+        files.len(),
+        rayon::current_num_threads(),
+        t * 1e3,
+        cpu_total * 1e3
+    );
 }

@@ -9,6 +9,7 @@ mod agent;
 mod behaviour;
 pub mod classes;
 mod conflict;
+mod expect;
 mod goal;
 mod kinds;
 pub mod load;

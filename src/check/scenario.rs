@@ -51,6 +51,9 @@ pub struct Scenario {
     pub rows: Vec<Row>,
     pub conflicts: Vec<Conflict>,
     pub traffic: Option<Traffic>,
+    /// `expect` lines, evaluated on the tracks by `rocc test` (`crate::expect`).
+    #[serde(default)]
+    pub expects: Vec<Expect>,
     /// Every kind the scenario names (after `one_of`), with its priors.
     pub kinds: BTreeMap<String, Kind>,
 }
@@ -555,4 +558,36 @@ pub struct Phase<V = Dist> {
     pub speed: V,
     pub start_after: f64,
     pub start_when: Option<Trigger>,
+}
+
+// ---- expectations (`expect { ... }`) ----
+
+/// One checked expectation: agents are indices into `Scenario::agents` (= track indices), the
+/// window is in seconds within the clip.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Expect {
+    pub what: ExpectWhat,
+    pub from: f64,
+    pub to: f64,
+    /// The line as written, canonically formatted: the name the report and the snapshot use.
+    pub text: String,
+    #[serde(skip)]
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ExpectWhat {
+    /// The boxes of `a` and `b` overlap; `side` is on `b`'s box.
+    Contact { a: usize, b: usize, side: Option<Point> },
+    /// No two boxes overlap (or not these two).
+    NoContact { pair: Option<(usize, usize)> },
+    /// The least distance between the two boxes over the window, m.
+    Gap { a: usize, b: usize, at_least: bool, metres: f64 },
+    /// Comes to a stop with its front short of `landmark` on `lane`, and never passes it.
+    Stopped { agent: usize, lane: LaneId, landmark: Landmark },
+    /// Its front passes `landmark` on `lane` within the window.
+    Reach { agent: usize, lane: LaneId, landmark: Landmark },
+    /// Its speed within the window, m/s.
+    Speed { agent: usize, at_least: bool, ms: f64 },
 }

@@ -19,6 +19,7 @@ impl Checker {
         let mut agents_ast = vec![];
         let mut rows_ast = vec![];
         let mut conflicts_ast = vec![];
+        let mut expects_ast = vec![];
         let mut first_span: BTreeMap<&str, Span> = BTreeMap::new();
         for st in &s.stmts {
             let key = match st {
@@ -63,6 +64,7 @@ impl Checker {
                 ast::ScenarioStmt::Agent(a) => agents_ast.push(a),
                 ast::ScenarioStmt::Row(r) => rows_ast.push(r),
                 ast::ScenarioStmt::Conflict(c) => conflicts_ast.push(c),
+                ast::ScenarioStmt::Expect(e) => expects_ast.extend(&e.items),
             }
         }
         let header = s.name.span;
@@ -111,6 +113,7 @@ impl Checker {
             conflicts_ast.iter().map(|c| self.conflict(c, &order, &agents, duration_s)).collect();
         self.one_conflict_each(&conflicts, &conflicts_ast, &order);
         let egos = self.egos(egos_stmt, &order, &agents, header);
+        let expects = self.expects(&expects_ast, &order, &agents, road.as_ref(), duration_s);
 
         if self.diags.iter().any(Diagnostic::is_error) {
             return None;
@@ -126,6 +129,7 @@ impl Checker {
             rows: rows.into_iter().collect::<Option<Vec<_>>>()?,
             conflicts: conflicts.into_iter().collect::<Option<Vec<_>>>()?,
             traffic,
+            expects: expects?,
             kinds: used_kinds,
         })
     }

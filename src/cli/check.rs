@@ -18,7 +18,7 @@ pub struct Args {
 }
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq)]
-enum MessageFormat {
+pub(super) enum MessageFormat {
     Human,
     Json,
 }

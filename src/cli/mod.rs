@@ -33,6 +33,8 @@ pub mod fmt;
 pub mod grammar;
 pub mod import;
 mod llm;
+pub mod test;
+mod test_junit;
 pub mod text;
 pub mod train;
 

@@ -92,12 +92,23 @@ pub fn edit_scn(path: &Path, edits: &[Edit], sources: &mut SourceMap) -> Result<
             Edit::Delete { agent } => {
                 let a = find(agent)?;
                 // Take the line's indentation with it.
-                let bytes = text.as_bytes();
-                let mut start = a.span.start as usize;
-                while start > 0 && (bytes[start - 1] == b' ' || bytes[start - 1] == b'\t') {
-                    start -= 1;
+                let cut = |span: Span| {
+                    let bytes = text.as_bytes();
+                    let mut start = span.start as usize;
+                    while start > 0 && (bytes[start - 1] == b' ' || bytes[start - 1] == b'\t') {
+                        start -= 1;
+                    }
+                    (Span { file: id, start: start as u32, end: span.end }, String::new())
+                };
+                splices.push(cut(a.span));
+                // The `expect` lines about the agent go with it: they are about a scene that no
+                // longer is.
+                for st in &sc.stmts {
+                    if let ast::ScenarioStmt::Expect(b) = st {
+                        let about = b.items.iter().filter(|x| x.agents().iter().any(|n| n.name == *agent));
+                        splices.extend(about.map(|x| cut(x.span)));
+                    }
                 }
-                splices.push((Span { file: id, start: start as u32, end: a.span.end }, String::new()));
             }
             Edit::Move { agent, dx, dy } => {
                 let a = find(agent)?;

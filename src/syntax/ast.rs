@@ -64,6 +64,7 @@ pub enum ScenarioStmt {
     Row(Row),
     Conflict(Conflict),
     Traffic(ParamBlock),
+    Expect(ExpectBlock),
 }
 
 impl ScenarioStmt {
@@ -78,6 +79,7 @@ impl ScenarioStmt {
             ScenarioStmt::Row(r) => r.span,
             ScenarioStmt::Conflict(c) => c.span,
             ScenarioStmt::Traffic(t) => t.span,
+            ScenarioStmt::Expect(e) => e.span,
         }
     }
 }
@@ -432,5 +434,64 @@ pub struct Number {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Unit {
     pub text: String,
+    pub span: Span,
+}
+
+// ---- expectations (`expect { ... }`, evaluated by `rocc test`) ----
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ExpectBlock {
+    pub items: Vec<Expectation>,
+    pub span: Span,
+}
+
+/// One line of an `expect` block; `window` is `during A..B s` or `by T s`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Expectation {
+    pub what: ExpectWhat,
+    pub window: Option<Window>,
+    pub span: Span,
+}
+
+impl Expectation {
+    /// The agents the line names.
+    pub fn agents(&self) -> Vec<&Ident> {
+        match &self.what {
+            ExpectWhat::Contact { a, b, .. } | ExpectWhat::Gap { a, b, .. } => vec![a, b],
+            ExpectWhat::NoContact { pair } => pair.iter().flat_map(|(a, b)| [a, b]).collect(),
+            ExpectWhat::Stopped { agent, .. } | ExpectWhat::Reach { agent, .. } | ExpectWhat::Speed { agent, .. } => {
+                vec![agent]
+            }
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum ExpectWhat {
+    /// `contact A with B [on SIDE]`: SIDE is on B's box.
+    Contact { a: Ident, b: Ident, side: Option<Ident> },
+    /// `no_contact [A with B]`.
+    NoContact { pair: Option<(Ident, Ident)> },
+    /// `gap A with B at_least|at_most DIST`.
+    Gap { a: Ident, b: Ident, bound: Bound, value: Value },
+    /// `stopped A before LANDMARK`.
+    Stopped { agent: Ident, landmark: Ident },
+    /// `reach A LANDMARK by T`.
+    Reach { agent: Ident, landmark: Ident },
+    /// `speed A at_least|at_most SPEED`.
+    Speed { agent: Ident, bound: Bound, value: Value },
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Bound {
+    pub at_least: bool,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Window {
+    /// `by T` (from the start to T) rather than `during A..B`.
+    pub by: bool,
+    pub value: Value,
     pub span: Span,
 }

@@ -67,6 +67,8 @@ fn rule_words(r: &Rule) -> &'static [&'static str] {
         Rule::rel => &["before", "after"],
         Rule::switch => &["on", "off"],
         Rule::unit => UNITS,
+        Rule::exp_bound => &["at_least", "at_most"],
+        Rule::exp_when => &["during", "by"],
         _ => KEYWORDS
             .iter()
             .find(|k| format!("{r:?}").strip_prefix("kw_") == Some(**k))
@@ -100,6 +102,8 @@ fn rule_name(r: &Rule) -> Option<String> {
             Rule::param => "a parameter",
             Rule::keyframe => "a keyframe `TIME: (X, Y) yaw ANGLE`",
             Rule::conflict_field => "a conflict field",
+            Rule::exp_bound => "`at_least` or `at_most`",
+            Rule::exp_when => "`during A..B s` or `by T s`",
             _ => return Some(s.replace('_', " ")),
         }
         .to_string(),

@@ -122,7 +122,36 @@ fn scenario_stmt(s: &ScenarioStmt) -> Doc {
                 .collect(),
             fit: true,
         },
+        ScenarioStmt::Expect(e) => Doc::Block {
+            header: "expect".into(),
+            span: e.span,
+            items: e.items.iter().map(|x| Doc::Line { span: x.span, text: expectation(x) }).collect(),
+            fit: false,
+        },
     }
+}
+
+/// One expectation in canonical form (also the name `rocc test` reports it by).
+pub fn expectation(x: &Expectation) -> String {
+    let bound = |b: &Bound| if b.at_least { "at_least" } else { "at_most" };
+    let mut s = match &x.what {
+        ExpectWhat::Contact { a, b, side } => {
+            let on = side.as_ref().map_or(String::new(), |s| format!(" on {}", s.name));
+            format!("contact {} with {}{on}", a.name, b.name)
+        }
+        ExpectWhat::NoContact { pair: None } => "no_contact".to_string(),
+        ExpectWhat::NoContact { pair: Some((a, b)) } => format!("no_contact {} with {}", a.name, b.name),
+        ExpectWhat::Gap { a, b, bound: k, value } => {
+            format!("gap {} with {} {} {}", a.name, b.name, bound(k), val(value))
+        }
+        ExpectWhat::Stopped { agent, landmark } => format!("stopped {} before {}", agent.name, landmark.name),
+        ExpectWhat::Reach { agent, landmark } => format!("reach {} {}", agent.name, landmark.name),
+        ExpectWhat::Speed { agent, bound: k, value } => format!("speed {} {} {}", agent.name, bound(k), val(value)),
+    };
+    if let Some(w) = &x.window {
+        s.push_str(&format!(" {} {}", if w.by { "by" } else { "during" }, val(&w.value)));
+    }
+    s
 }
 
 fn agent_stmt(s: &AgentStmt) -> Doc {

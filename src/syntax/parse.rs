@@ -145,8 +145,65 @@ impl Builder {
                     .collect();
                 ScenarioStmt::Conflict(Conflict { fields, span })
             }
+            Rule::expect_block => {
+                let items = inner(p).into_iter().skip(1).map(|q| self.expectation(q)).collect();
+                ScenarioStmt::Expect(ExpectBlock { items, span })
+            }
             r => unreachable!("grammar: scenario statement {r:?}"),
         }
+    }
+
+    /// One expectation: keywords dropped, the names, bound, value and window in written order.
+    fn expectation(&self, p: P<'_>) -> Expectation {
+        // pest's span of a rule that ends in an optional part takes the white space (and
+        // comments) skipped before it: end at the last part instead.
+        let end = p.clone().into_inner().last().map_or(p.as_span().end(), |q| q.as_span().end());
+        let span = Span::new(self.file, p.as_span().start(), end);
+        let rule = p.as_rule();
+        let mut window = None;
+        let mut names = vec![];
+        let (mut bound, mut value, mut side) = (None, None, None);
+        for q in inner(p) {
+            match q.as_rule() {
+                Rule::ident => names.push(self.ident(q)),
+                Rule::exp_pair => {
+                    names.extend(inner(q).into_iter().filter(|x| x.as_rule() == Rule::ident).map(|x| self.ident(x)))
+                }
+                Rule::exp_bound => {
+                    bound = Some(Bound { at_least: q.as_str().starts_with("at_least"), span: self.span(&q) })
+                }
+                Rule::value => value = Some(self.value(q)),
+                Rule::exp_on => side = Some(self.ident(last(q))),
+                Rule::exp_window => {
+                    let wspan = self.span(&q);
+                    let mut it = inner(q).into_iter();
+                    let by = it.next().expect("grammar: window word").as_str().starts_with("by");
+                    window =
+                        Some(Window { by, value: self.value(it.next().expect("grammar: window value")), span: wspan });
+                }
+                _ => {}
+            }
+        }
+        let name = |i: usize| names.get(i).cloned().expect("grammar: expectation names");
+        let what = match rule {
+            Rule::exp_contact => ExpectWhat::Contact { a: name(0), b: name(1), side },
+            Rule::exp_no_contact => ExpectWhat::NoContact { pair: names.first().cloned().zip(names.get(1).cloned()) },
+            Rule::exp_gap => ExpectWhat::Gap {
+                a: name(0),
+                b: name(1),
+                bound: bound.expect("grammar: gap bound"),
+                value: value.expect("grammar: gap value"),
+            },
+            Rule::exp_stopped => ExpectWhat::Stopped { agent: name(0), landmark: name(1) },
+            Rule::exp_reach => ExpectWhat::Reach { agent: name(0), landmark: name(1) },
+            Rule::exp_speed => ExpectWhat::Speed {
+                agent: name(0),
+                bound: bound.expect("grammar: speed bound"),
+                value: value.expect("grammar: speed value"),
+            },
+            r => unreachable!("grammar: expectation {r:?}"),
+        };
+        Expectation { what, window, span }
     }
 
     fn param(&self, p: P<'_>) -> Param {

@@ -1,0 +1,154 @@
+//! `expect { ... }`: what a scenario is for, stated on its tracks and evaluated after the rollout
+//! by `rocc test` (`crate::expect`). Names and landmarks resolve as in goals; windows lie within
+//! the clip (E1001); landmarks need an agent placed on a lane of a road that has them (E1002).
+
+use super::scenario::*;
+use super::units::Dim;
+use super::{Checker, MAX_SPEED_MS, word};
+use crate::diag::Diagnostic;
+use crate::syntax::ast;
+use crate::syntax::fmt::expectation;
+
+impl Checker {
+    /// Every expectation checked; `None` when one of them (or the agents they name) is wrong.
+    pub(super) fn expects(
+        &mut self,
+        items: &[&ast::Expectation],
+        order: &[&str],
+        agents: &[Option<Agent>],
+        road: Option<&Road>,
+        duration: Option<f64>,
+    ) -> Option<Vec<Expect>> {
+        let out: Vec<Option<Expect>> = items.iter().map(|x| self.expect(x, order, agents, road, duration)).collect();
+        out.into_iter().collect()
+    }
+
+    fn expect(
+        &mut self,
+        x: &ast::Expectation,
+        order: &[&str],
+        agents: &[Option<Agent>],
+        road: Option<&Road>,
+        duration: Option<f64>,
+    ) -> Option<Expect> {
+        let window = self.window(x.window.as_ref(), duration);
+        let what = match &x.what {
+            ast::ExpectWhat::Contact { a, b, side } => {
+                let (a, b) = self.pair(a, b, order);
+                let side = match side {
+                    Some(s) => Some(word(self, s, &POINTS, "side of a box")?),
+                    None => None,
+                };
+                ExpectWhat::Contact { a: a?, b: b?, side }
+            }
+            ast::ExpectWhat::NoContact { pair: None } => ExpectWhat::NoContact { pair: None },
+            ast::ExpectWhat::NoContact { pair: Some((a, b)) } => {
+                let (a, b) = self.pair(a, b, order);
+                ExpectWhat::NoContact { pair: Some((a?, b?)) }
+            }
+            ast::ExpectWhat::Gap { a, b, bound, value } => {
+                let (a, b) = self.pair(a, b, order);
+                let metres = self.fixed(value, Dim::Length, "gap", 0.0, 1000.0, "0..1000 m");
+                ExpectWhat::Gap { a: a?, b: b?, at_least: bound.at_least, metres: metres? }
+            }
+            ast::ExpectWhat::Speed { agent, bound, value } => {
+                let i = self.resolve(agent, order);
+                let ms = self.fixed(value, Dim::Speed, "speed bound", 0.0, MAX_SPEED_MS, "0..324 km/h");
+                ExpectWhat::Speed { agent: i?, at_least: bound.at_least, ms: ms? }
+            }
+            ast::ExpectWhat::Stopped { agent, landmark } => {
+                let (agent, lane, landmark) = self.on_lane(agent, landmark, order, agents, road)?;
+                ExpectWhat::Stopped { agent, lane, landmark }
+            }
+            ast::ExpectWhat::Reach { agent, landmark } => {
+                let (agent, lane, landmark) = self.on_lane(agent, landmark, order, agents, road)?;
+                ExpectWhat::Reach { agent, lane, landmark }
+            }
+        };
+        let (from, to) = window?;
+        Some(Expect { what, from, to, text: expectation(x), span: x.span })
+    }
+
+    /// Two distinct agents.
+    fn pair(&mut self, a: &ast::Ident, b: &ast::Ident, order: &[&str]) -> (Option<usize>, Option<usize>) {
+        let (i, j) = (self.resolve(a, order), self.resolve(b, order));
+        if i.is_some() && i == j {
+            self.err(
+                Diagnostic::error("E1003", format!("the expectation names `{}` twice", a.name))
+                    .label(b.span, "the same agent again")
+                    .help("an expectation on contacts or gaps relates two different agents"),
+            );
+            return (None, None);
+        }
+        (i, j)
+    }
+
+    /// `(from, to)` in seconds: the whole clip without a window.
+    fn window(&mut self, w: Option<&ast::Window>, duration: Option<f64>) -> Option<(f64, f64)> {
+        let clip = duration.unwrap_or(f64::INFINITY);
+        let Some(w) = w else { return Some((0.0, clip)) };
+        let d = self.quantity(&w.value, Dim::Time, "expectation window")?;
+        let (from, to) = if w.by { (0.0, d.hi()) } else { (d.lo(), d.hi()) };
+        if w.by && d.lo() != d.hi() {
+            self.err(
+                Diagnostic::error("E1001", "`by` takes one time")
+                    .label(w.span, "a range here")
+                    .help("write `by 8 s`, or `during 2..8 s` for a window"),
+            );
+            return None;
+        }
+        if from < 0.0 || to > clip + 1e-9 {
+            let shown = duration.map_or(String::new(), |d| format!("0..{} s", d));
+            self.err(
+                Diagnostic::error("E1001", "the expectation's time lies outside the clip")
+                    .label(w.span, format!("the clip runs {shown}"))
+                    .help("keep the window within the scenario's `duration`, or lengthen the clip"),
+            );
+            return None;
+        }
+        Some((from, to))
+    }
+
+    /// An agent placed on a lane, and a landmark of that lane.
+    fn on_lane(
+        &mut self,
+        agent: &ast::Ident,
+        landmark: &ast::Ident,
+        order: &[&str],
+        agents: &[Option<Agent>],
+        road: Option<&Road>,
+    ) -> Option<(usize, LaneId, Landmark)> {
+        let i = self.resolve(agent, order);
+        let l = word(self, landmark, &LANDMARKS, "landmark")?;
+        let i = i?;
+        let a = agents.get(i)?.as_ref()?;
+        let Place::Lane { lane, .. } = a.place else {
+            self.err(
+                Diagnostic::error("E1002", format!("`{}` is not placed on a lane", agent.name))
+                    .label(landmark.span, "measured along the agent's lane")
+                    .help("landmarks are measured along the lane an agent starts in: place it `at ARM.in[N], ...`"),
+            );
+            return None;
+        };
+        let template = road.map(|r| r.template)?;
+        let bad = match l {
+            Landmark::Junction if !template.has_junction() => {
+                Some(format!("a {} road has no junction", template.name()))
+            }
+            Landmark::StopLine if !template.has_stop_lines() => {
+                Some(format!("a {} road has no stop lines", template.name()))
+            }
+            Landmark::StopLine if lane.dir == Dir::Out => Some(format!("`{}` starts on an out-lane", agent.name)),
+            _ => None,
+        };
+        if let Some(msg) = bad {
+            self.err(
+                Diagnostic::error("E1002", msg).label(landmark.span, "no such landmark on this agent's lane").help(
+                    "stop lines are on in-lanes of four_way, t_junction and roundabout roads; `center` is everywhere",
+                ),
+            );
+            return None;
+        }
+        Some((i, lane, l))
+    }
+}
