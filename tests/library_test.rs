@@ -115,6 +115,17 @@ fn bad_expectations_are_check_errors() {
 }
 
 #[test]
+fn stopped_before_center_sees_a_car_that_drove_past_it() {
+    // A straight road's in-lane ends at its centre; the front is measured on past it.
+    let d = tmp("past-center");
+    let scene = "scenario s {\n    duration 4 s\n    road straight { lanes 1 }\n    agent car: sedan {\n        at west.in[1], 10 m before center\n        speed 10 m/s\n        goal { speed 10 m/s; stop after 25 m }\n    }\n    expect {\n        stopped car before center during 3..4 s\n        reach car center by 1 s\n    }\n}\n";
+    std::fs::write(d.join("s.scn"), scene).expect("write");
+    let (out, err) = text(&rocc(&["test", d.to_str().expect("utf-8"), "--accept"], ""));
+    assert!(out.contains("1 of 2 expectation(s) hold"), "{out}{err}");
+    assert!(err.contains("E1013") && err.contains("its front passes the center by 13.42 m at t = 3.0 s"), "{err}");
+}
+
+#[test]
 fn snapshots_are_written_compared_and_reviewed() {
     let d = scene_dir("review", "        contact striker with ego on rear");
     let dir = d.to_str().expect("utf-8");

@@ -104,7 +104,18 @@ pub fn past_landmark(front: &Front, i: usize, f: usize, lane: LaneId, landmark: 
     }?;
     let b = footprint(front, i, f);
     let nose = b.center + DVec2::from_angle(b.yaw) * (b.length / 2.0);
-    Some(l.centre.project(nose).0 - at)
+    // Past the lane's end (a straight road's in-lane ends at its centre) the projection stops
+    // at the end; the line runs on along its last heading, so a nose beyond it is measured
+    // along that (tests/library_test.rs, `stopped_before_center_sees_a_car_that_drove_past_it`).
+    let len = l.centre.length();
+    let s = match l.centre.project(nose).0 {
+        s if s < len - 1e-9 => s,
+        _ => {
+            let (end, yaw) = l.centre.pose_at(len);
+            len + (nose - end).dot(DVec2::from_angle(yaw)).max(0.0)
+        }
+    };
+    Some(s - at)
 }
 
 #[cfg(test)]
