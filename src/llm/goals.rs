@@ -53,10 +53,19 @@ fn one_line(block: &str) -> String {
     if parts.is_empty() { "goal { }".to_string() } else { format!("goal {{ {} }}", parts.join("; ")) }
 }
 
-/// The one goal block of a hierarchical reply.
+/// Later blocks of one agent: goal phases (`goal { speed 0 m/s; start when ... }`). More than
+/// this many is a model looping, not a plan.
+pub const MAX_PHASES: usize = 4;
+
+/// The goal block of a hierarchical reply, with any phases that follow it, one block a line.
 pub fn parse_single(reply: &str) -> Result<String, String> {
-    let (a, b) = next_block(reply, 0).ok_or("the reply holds no `goal { ... }` block")?;
-    let block = one_line(&reply[a..b]);
+    let (a, mut b) = next_block(reply, 0).ok_or("the reply holds no `goal { ... }` block")?;
+    let mut blocks = vec![one_line(&reply[a..b])];
+    while let Some((c, d)) = next_block(reply, b).filter(|_| blocks.len() < MAX_PHASES) {
+        blocks.push(one_line(&reply[c..d]));
+        b = d;
+    }
+    let block = blocks.join("\n");
     parses(&block)?;
     Ok(block)
 }
@@ -64,10 +73,24 @@ pub fn parse_single(reply: &str) -> Result<String, String> {
 /// The `NAME: goal { ... }` lines of a joint reply, as (roster index, block). Agents the model
 /// left out get no goal; an unknown name or a block that does not parse is an error to correct.
 pub fn parse_joint(reply: &str, names: &[String]) -> Result<Vec<(usize, String)>, String> {
-    let mut out = vec![];
+    let mut out: Vec<(usize, String)> = vec![];
     let mut from = 0;
+    let mut last: Option<usize> = None;
     while let Some((a, b)) = next_block(reply, from) {
+        let prev = from;
         from = b;
+        // A block right after another on its line is a phase of the same agent.
+        if let Some(j) = last.filter(|_| prev > 0 && reply[prev..a].trim_matches([' ', '\t']).is_empty()) {
+            let phase = one_line(&reply[a..b]);
+            if let Some((_, blocks)) = out.iter_mut().find(|(i, _)| *i == j) {
+                if blocks.lines().count() < MAX_PHASES {
+                    blocks.push('\n');
+                    blocks.push_str(&phase);
+                    parses(blocks).map_err(|e| format!("the goal phases of `{}` do not parse: {e}", names[j]))?;
+                }
+            }
+            continue;
+        }
         // The name is the identifier before the `:` that precedes `goal`.
         let head = reply[..a].trim_end();
         let Some(head) = head.strip_suffix(':') else { return Err("write each line as `NAME: goal { ... }`".into()) };
@@ -86,6 +109,9 @@ pub fn parse_joint(reply: &str, names: &[String]) -> Result<Vec<(usize, String)>
         parses(&block).map_err(|e| format!("the goal of `{name}` does not parse: {e}"))?;
         if out.iter().all(|(j, _)| *j != i) {
             out.push((i, block));
+            last = Some(i);
+        } else {
+            last = None;
         }
     }
     if out.is_empty() {
@@ -114,19 +140,26 @@ fn goal_block() -> Cfg {
     grammar::for_decoding(cfg.with_root("goal_block", Node::Seq(seq)))
 }
 
-/// GBNF for one goal block (hierarchical mode).
-pub fn single_grammar() -> String {
-    grammar::print(&goal_block(), Format::Gbnf)
+/// The goal block and at most one later phase after it on the same line (a phase takes `speed`
+/// and `start` only; the checker says so to the repair loop if the model adds more).
+fn goal_phases() -> Cfg {
+    let phase = Node::Opt(Box::new(Node::Seq(vec![Node::Lit(" ".into()), Node::Ref("goal_block".into())])));
+    goal_block().with_root("goal_phases", Node::Seq(vec![Node::Ref("goal_block".into()), phase]))
 }
 
-/// GBNF for the joint reply: exactly one `NAME: goal { ... }` line per mover, in roster order,
-/// so a small model cannot invent agents or loop on lines.
+/// GBNF for one goal block, or a block and a phase (hierarchical mode).
+pub fn single_grammar() -> String {
+    grammar::print(&goal_phases(), Format::Gbnf)
+}
+
+/// GBNF for the joint reply: exactly one `NAME: goal { ... }` line per mover (a phase may follow
+/// on the line), in roster order, so a small model cannot invent agents or loop on lines.
 pub fn joint_grammar(names: &[String]) -> String {
     let lines = names
         .iter()
-        .map(|n| Node::Seq(vec![Node::Lit(format!("{n}: ")), Node::Ref("goal_block".into()), Node::Lit("\n".into())]))
+        .map(|n| Node::Seq(vec![Node::Lit(format!("{n}: ")), Node::Ref("goal_phases".into()), Node::Lit("\n".into())]))
         .collect();
-    grammar::print(&goal_block().with_root("plan", Node::Seq(lines)), Format::Gbnf)
+    grammar::print(&goal_phases().with_root("plan", Node::Seq(lines)), Format::Gbnf)
 }
 
 #[cfg(test)]

@@ -280,7 +280,9 @@ impl Pipeline<'_> {
                     let decided: Vec<String> = goals
                         .iter()
                         .enumerate()
-                        .filter_map(|(j, g)| g.as_ref().map(|g| format!("{}: {g}", s.agents[j].name)))
+                        .filter_map(|(j, g)| {
+                            g.as_ref().map(|g| format!("{}: {}", s.agents[j].name, g.replace('\n', " ")))
+                        })
                         .collect();
                     let decided = if decided.is_empty() { "(none yet)".to_string() } else { decided.join("\n") };
                     let name = &s.agents[i].name;

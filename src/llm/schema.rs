@@ -73,7 +73,46 @@ pub struct AgentSpec {
     pub speed_kmh: f64,
     #[serde(default)]
     pub ego: bool,
+    /// `standing`, `kneeling` or `lying` (people and animals); `None` writes nothing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub posture: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub behaviour: Option<BehaviourSpec>,
+    /// When the agent's goal starts (in place of `start after`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start_when: Option<TriggerSpec>,
 }
+
+/// How an agent departs from careful behaviour (the `.scn` `behaviour { ... }` block).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct BehaviourSpec {
+    /// `always` or `never`.
+    #[serde(default, rename = "yield", skip_serializing_if = "Option::is_none")]
+    pub yield_: Option<String>,
+    /// `obey` or `ignore`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stop_line: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reaction_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speeding_pct: Option<f64>,
+}
+
+/// `start when AGENT CONDITION [VALUE]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TriggerSpec {
+    pub agent: String,
+    /// One of `CONDITIONS`.
+    pub condition: String,
+    /// Metres for `within`, seconds for `ttc_under` and `headway_under`; unused otherwise.
+    #[serde(default)]
+    pub value: f64,
+}
+
+pub const POSTURES: [&str; 3] = ["standing", "kneeling", "lying"];
+/// Trigger conditions as the schema spells them (one word each, for an enum).
+pub const CONDITIONS: [&str; 6] =
+    ["within", "ttc_under", "headway_under", "reaches_stop_line", "reaches_kerb", "starts"];
 
 fn lane_word() -> String {
     "lane".into()
@@ -135,7 +174,26 @@ pub fn json_schema(kinds: &[String]) -> Value {
                         "relation": {"enum": ["before", "after"]},
                         "landmark": {"enum": LANDMARKS},
                         "speed_kmh": {"type": "number", "minimum": 0, "maximum": 130},
-                        "ego": {"type": "boolean"}
+                        "ego": {"type": "boolean"},
+                        "posture": {"enum": POSTURES},
+                        "behaviour": {
+                            "type": "object",
+                            "properties": {
+                                "yield": {"enum": ["always", "never"]},
+                                "stop_line": {"enum": ["obey", "ignore"]},
+                                "reaction_s": {"type": "number", "minimum": 0, "maximum": 5},
+                                "speeding_pct": {"type": "number", "minimum": 0, "maximum": 200}
+                            }
+                        },
+                        "start_when": {
+                            "type": "object",
+                            "required": ["agent", "condition"],
+                            "properties": {
+                                "agent": {"type": "string", "pattern": "^[a-z][a-z0-9_]{0,20}$"},
+                                "condition": {"enum": CONDITIONS},
+                                "value": {"type": "number", "minimum": 0, "maximum": 200}
+                            }
+                        }
                     }
                 }
             },
@@ -185,8 +243,90 @@ pub fn parse(reply: &str) -> Result<Schema, String> {
                 return Err(format!("agent `{}`: {field} must be a non-negative number", a.name));
             }
         }
+        rare_fields(a)?;
     }
     Ok(s)
+}
+
+/// The words of `posture`, `behaviour` and `start_when` (what a JSON schema's enums say, for
+/// servers that take no schema). Names and meanings are the checker's to judge.
+fn rare_fields(a: &mut AgentSpec) -> Result<(), String> {
+    let one_of = |field: &str, v: &Option<String>, words: &[&str]| match v {
+        Some(w) if !words.contains(&w.as_str()) => {
+            Err(format!("agent `{}`: {field} `{w}` is not one of {}", a.name, words.join(", ")))
+        }
+        _ => Ok(()),
+    };
+    one_of("posture", &a.posture, &POSTURES)?;
+    if let Some(b) = &a.behaviour {
+        one_of("behaviour.yield", &b.yield_, &["always", "never"])?;
+        one_of("behaviour.stop_line", &b.stop_line, &["obey", "ignore"])?;
+        for (field, v) in [("reaction_s", b.reaction_s), ("speeding_pct", b.speeding_pct)] {
+            if v.is_some_and(|v| !v.is_finite() || v < 0.0) {
+                return Err(format!("agent `{}`: behaviour.{field} must be a non-negative number", a.name));
+            }
+        }
+    }
+    if let Some(t) = &mut a.start_when {
+        one_of("start_when.condition", &Some(t.condition.clone()), &CONDITIONS)?;
+        if !t.value.is_finite() || t.value < 0.0 {
+            return Err(format!("agent `{}`: start_when.value must be a non-negative number", a.name));
+        }
+        t.agent = ident(&t.agent, "agent");
+    }
+    Ok(())
+}
+
+/// `start when ...` of a trigger.
+pub fn trigger(t: &TriggerSpec) -> String {
+    let v = num(t.value);
+    let cond = match t.condition.as_str() {
+        "within" => format!("within {v} m"),
+        "ttc_under" => format!("ttc under {v} s"),
+        "headway_under" => format!("headway under {v} s"),
+        "reaches_stop_line" => "reaches stop_line".into(),
+        "reaches_kerb" => "reaches kerb".into(),
+        _ => "starts".into(),
+    };
+    format!("start when {} {cond}", t.agent)
+}
+
+/// The `behaviour { ... }` block, if it says anything.
+pub fn behaviour(b: &BehaviourSpec) -> Option<String> {
+    let mut parts = vec![];
+    if let Some(w) = &b.yield_ {
+        parts.push(format!("yield {w}"));
+    }
+    if let Some(w) = &b.stop_line {
+        parts.push(format!("stop_line {w}"));
+    }
+    if let Some(v) = b.reaction_s {
+        parts.push(format!("reaction {} s", num(v)));
+    }
+    if let Some(v) = b.speeding_pct {
+        parts.push(format!("speeding {} %", num(v)));
+    }
+    (!parts.is_empty()).then(|| format!("behaviour {{ {} }}", parts.join("; ")))
+}
+
+/// The goal blocks of a mover with the schema's trigger put into its first block, unless the
+/// goal stage gave that block a `start` of its own; a trigger without goals starts a block.
+fn goal_lines(goal: Option<&str>, start_when: Option<&TriggerSpec>) -> Vec<String> {
+    let mut lines: Vec<String> = goal.map(|g| g.lines().map(|l| l.trim().to_string()).collect()).unwrap_or_default();
+    let Some(t) = start_when else { return lines };
+    match lines.first_mut() {
+        None => lines.push(format!("goal {{ {} }}", trigger(t))),
+        Some(first) if !first.contains(" start ") && !first.contains("{ start ") => {
+            let body = first.trim_end().trim_end_matches('}').trim_end().trim_end_matches(';');
+            *first = if body.trim_end().ends_with('{') {
+                format!("goal {{ {} }}", trigger(t))
+            } else {
+                format!("{body}; {} }}", trigger(t))
+            };
+        }
+        Some(_) => {}
+    }
+    lines
 }
 
 /// A legal identifier from a model's word: lowercase, `[a-z0-9_]`, starting with a letter.
@@ -280,10 +420,17 @@ pub fn emit(s: &Schema, goals: &[Option<String>], is_static: &dyn Fn(&str) -> bo
         let stat = is_static(&a.kind);
         out.push_str(&format!("\n    {} {}: {} {{\n", if stat { "object" } else { "agent" }, a.name, a.kind));
         out.push_str(&format!("        {}\n", placement(a)));
+        if let Some(p) = &a.posture {
+            out.push_str(&format!("        posture {p}\n"));
+        }
         if !stat {
             out.push_str(&format!("        speed {} km/h\n", num(a.speed_kmh)));
-            if let Some(g) = goals.get(i).and_then(|g| g.as_ref()) {
-                out.push_str(&format!("        {}\n", g.trim()));
+            let goal = goals.get(i).and_then(|g| g.as_deref());
+            for line in goal_lines(goal, a.start_when.as_ref()) {
+                out.push_str(&format!("        {line}\n"));
+            }
+            if let Some(b) = a.behaviour.as_ref().and_then(behaviour) {
+                out.push_str(&format!("        {b}\n"));
             }
         }
         out.push_str("    }\n");
@@ -325,7 +472,7 @@ pub fn describe(s: &Schema, a: &AgentSpec) -> String {
             format!("in lane {} of the {} arm, {toward}, {motion} {junction}", a.lane, a.arm)
         }
     };
-    format!(
+    let mut words = format!(
         "{}: a {} {place}, {} m {} the {}, at {} km/h",
         a.name,
         a.kind.replace('_', " "),
@@ -333,5 +480,15 @@ pub fn describe(s: &Schema, a: &AgentSpec) -> String {
         a.relation,
         a.landmark.replace('_', " "),
         num(a.speed_kmh)
-    )
+    );
+    if let Some(p) = &a.posture {
+        words.push_str(&format!(", {p}"));
+    }
+    if let Some(b) = a.behaviour.as_ref().and_then(behaviour) {
+        words.push_str(&format!(", {b}"));
+    }
+    if let Some(t) = &a.start_when {
+        words.push_str(&format!(", its goal will {}", trigger(t)));
+    }
+    words
 }

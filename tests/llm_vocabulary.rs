@@ -1,0 +1,236 @@
+//! `rocc text` and the rare-scene vocabulary: canned model replies (an in-process fake server,
+//! no model) that use postures, behaviour settings, triggers and goal phases each yield a
+//! scenario that checks; the goal grammars admit triggers and phases; the grammar export has
+//! the new rules.
+
+#[path = "llm_support/fake.rs"]
+mod fake;
+#[path = "llm_support/gbnf.rs"]
+mod gbnf;
+
+use fake::{chat, serve};
+use rocc::llm::client::{ClientConfig, Server};
+use rocc::llm::schema::Overrides;
+use rocc::llm::{self, Outcome, Plan};
+use serde_json::{Value, json};
+use std::time::Duration;
+
+fn opts(url: &str, plan: Plan) -> llm::Options {
+    llm::Options {
+        client: ClientConfig {
+            endpoint: url.to_string(),
+            model: "test-model".into(),
+            api_key: None,
+            server: Server::Vllm,
+            timeout: Duration::from_secs(5),
+            retries: 0,
+            backoff: Duration::from_millis(5),
+            max_tokens: 512,
+            temperature: 0.0,
+            seed: 0,
+        },
+        plan,
+        max_repairs: 0,
+        overrides: Overrides::default(),
+        constrain: true,
+        image: None,
+    }
+}
+
+/// The scene written from a schema reply and a goal reply, which must check first time (no
+/// repair rounds are allowed).
+fn accepted(schema: &Value, goals: &[&str], plan: Plan) -> String {
+    let mut replies = vec![chat(&schema.to_string())];
+    replies.extend(goals.iter().map(|g| chat(g)));
+    let fake = serve(replies);
+    let (out, r) = llm::text_to_scenario("a rare scene", &opts(&fake.url, plan), "scene.scn", &std::env::temp_dir());
+    match out {
+        Outcome::Accepted { text } => {
+            assert_eq!(r.attempts.len(), 1, "{:?}", r.attempts);
+            text
+        }
+        Outcome::Rejected { text, diags, .. } => {
+            panic!("{text}\n{:?}", diags.iter().map(|d| (d.code, d.message.clone())).collect::<Vec<_>>())
+        }
+        Outcome::Failed(d) => panic!("{}: {}", d.code, d.message),
+    }
+}
+
+fn lane(name: &str, kind: &str, arm: &str, dir: &str, dist: f64, speed: f64) -> Value {
+    json!({"name": name, "kind": kind, "on": "lane", "arm": arm, "direction": dir, "lane": 1,
+        "distance_m": dist, "relation": "before", "landmark": "center", "speed_kmh": speed, "ego": name == "ego"})
+}
+
+fn sidewalk(name: &str, dist: f64) -> Value {
+    json!({"name": name, "kind": "child", "on": "sidewalk", "arm": "east", "direction": "out", "lane": 1,
+        "distance_m": dist, "relation": "after", "landmark": "center", "speed_kmh": 0, "ego": false})
+}
+
+fn straight(agents: Vec<Value>) -> Value {
+    json!({"name": "rare", "brief": "a rare scene", "duration_s": 6,
+        "road": {"template": "straight", "lanes": 1, "speed_limit_kmh": 50, "sidewalks": true},
+        "agents": agents})
+}
+
+#[test]
+fn postures_behaviour_triggers_and_phases_from_the_model_check() {
+    let mut ego = lane("ego", "sedan", "west", "in", 30.0, 40.0);
+    ego["behaviour"] = json!({"reaction_s": 0.5});
+    let mut kid = sidewalk("kid", 10.0);
+    kid["behaviour"] = json!({"yield": "never"});
+    kid["start_when"] = json!({"agent": "ego", "condition": "within", "value": 16});
+    let mut injured = lane("injured", "adult", "east", "in", 50.0, 0.0);
+    injured["posture"] = json!("lying");
+    let mut speeder = lane("speeder", "sedan", "east", "in", 20.0, 50.0);
+    speeder["behaviour"] = json!({"speeding_pct": 20});
+    let schema = straight(vec![ego, kid, injured, speeder]);
+    let goals = "ego: goal { speed 40 km/h } goal { speed 20 km/h; start when kid starts }\n\
+                 kid: goal { speed 3 m/s; lateral cross }\n\
+                 speeder: goal { lateral hold_lane }\n";
+    for plan in [Plan::Joint, Plan::Hierarchical] {
+        let replies: Vec<&str> = match plan {
+            Plan::Joint => vec![goals],
+            Plan::Hierarchical => vec![
+                "goal { speed 40 km/h } goal { speed 20 km/h; start when kid starts }",
+                "goal { speed 3 m/s; lateral cross }",
+                "goal { }",
+                "goal { lateral hold_lane }",
+            ],
+        };
+        let text = accepted(&schema, &replies, plan);
+        for says in [
+            "goal { speed 40 km/h }\n        goal { speed 20 km/h; start when kid starts }",
+            "goal { speed 3 m/s; lateral cross; start when ego within 16 m }",
+            "behaviour { yield never }",
+            "behaviour { reaction 0.5 s }",
+            "behaviour { speeding 20 % }",
+            "posture lying",
+        ] {
+            assert!(text.contains(says), "{plan:?}: no `{says}` in\n{text}");
+        }
+    }
+}
+
+#[test]
+fn every_trigger_condition_from_the_schema_checks() {
+    for (condition, value, on, says) in [
+        ("within", 20.0, "ego", "start when ego within 20 m"),
+        ("ttc_under", 3.0, "ego", "start when ego ttc under 3 s"),
+        ("headway_under", 1.5, "ego", "start when ego headway under 1.5 s"),
+        ("reaches_kerb", 0.0, "first", "start when first reaches kerb"),
+        ("starts", 0.0, "first", "start when first starts"),
+    ] {
+        let mut second = sidewalk("second", 20.0);
+        second["start_when"] = json!({"agent": on, "condition": condition, "value": value});
+        let schema = straight(vec![lane("ego", "sedan", "west", "in", 40.0, 30.0), sidewalk("first", 5.0), second]);
+        let goals = "ego: goal { speed 30 km/h }\nfirst: goal { speed 1.4 m/s; lateral cross; start after 1 s }\n\
+                     second: goal { speed 1.4 m/s; lateral cross }\n";
+        let text = accepted(&schema, &[goals], Plan::Joint);
+        assert!(text.contains(&format!("goal {{ speed 1.4 m/s; lateral cross; {says} }}")), "{condition}:\n{text}");
+    }
+}
+
+#[test]
+fn stop_line_ignore_and_a_reach_trigger_at_a_junction_check() {
+    let at_line = |name: &str, arm: &str, dist: f64| {
+        json!({"name": name, "kind": "sedan", "on": "lane", "arm": arm, "direction": "in", "lane": 1,
+            "distance_m": dist, "relation": "before", "landmark": "stop_line", "speed_kmh": 30, "ego": name == "ego"})
+    };
+    let mut runner = at_line("runner", "west", 30.0);
+    runner["behaviour"] = json!({"stop_line": "ignore", "yield": "never"});
+    let mut ego = at_line("ego", "south", 20.0);
+    ego["start_when"] = json!({"agent": "runner", "condition": "reaches_stop_line"});
+    let schema = json!({"name": "runner", "brief": "a driver runs the stop line", "duration_s": 8,
+        "road": {"template": "four_way", "lanes": 1, "speed_limit_kmh": 50},
+        "agents": [ego, runner]});
+    let goals = "ego: goal { speed 30 km/h; turn straight }\nrunner: goal { speed 30 km/h; turn straight }\n";
+    let text = accepted(&schema, &[goals], Plan::Joint);
+    assert!(text.contains("behaviour { yield never; stop_line ignore }"), "{text}");
+    assert!(text.contains("goal { speed 30 km/h; turn straight; start when runner reaches stop_line }"), "{text}");
+}
+
+#[test]
+fn a_goal_stage_start_wins_over_the_schema_trigger() {
+    let mut kid = sidewalk("kid", 10.0);
+    kid["start_when"] = json!({"agent": "ego", "condition": "within", "value": 16});
+    let schema = straight(vec![lane("ego", "sedan", "west", "in", 30.0, 40.0), kid]);
+    let text = accepted(
+        &schema,
+        &["ego: goal { speed 40 km/h }\nkid: goal { lateral cross; start after 2 s }\n"],
+        Plan::Joint,
+    );
+    assert!(text.contains("goal { lateral cross; start after 2 s }") && !text.contains("within"), "{text}");
+    // A trigger on an agent without a goal starts one.
+    let text = accepted(&schema, &["ego: goal { speed 40 km/h }\n"], Plan::Joint);
+    assert!(text.contains("goal { start when ego within 16 m }"), "{text}");
+}
+
+#[test]
+fn unknown_words_in_the_schema_are_sent_back_for_correction() {
+    let mut bad = straight(vec![lane("ego", "sedan", "west", "in", 30.0, 40.0), sidewalk("kid", 10.0)]);
+    bad["agents"][1]["posture"] = json!("sitting");
+    let mut good = bad.clone();
+    good["agents"][1]["posture"] = json!("kneeling");
+    let fake = serve(vec![chat(&bad.to_string()), chat(&good.to_string()), chat("ego: goal { speed 40 km/h }\n")]);
+    let mut o = opts(&fake.url, Plan::Joint);
+    o.max_repairs = 1;
+    let (out, _) = llm::text_to_scenario("a kneeling child", &o, "scene.scn", &std::env::temp_dir());
+    let Outcome::Accepted { text } = out else { panic!("{out:?}") };
+    assert!(text.contains("posture kneeling"), "{text}");
+    let reqs = fake.requests();
+    let told = reqs[1]["messages"][3]["content"].as_str().expect("correction");
+    assert!(told.contains("posture `sitting` is not one of standing, kneeling, lying"), "{told}");
+    // The JSON schema sent for decoding names the words.
+    let props = &reqs[0]["structured_outputs"]["json"]["properties"]["agents"]["items"]["properties"];
+    assert_eq!(props["posture"]["enum"], json!(["standing", "kneeling", "lying"]));
+    assert_eq!(props["behaviour"]["properties"]["yield"]["enum"], json!(["always", "never"]));
+    assert!(props["start_when"]["properties"]["condition"]["enum"].as_array().is_some_and(|c| c.len() == 6));
+}
+
+#[test]
+fn goal_grammars_admit_triggers_and_one_phase() {
+    let single = gbnf::Grammar::parse(&llm::goals::single_grammar());
+    for block in [
+        "goal { speed 3 m/s; lateral cross; start when ego within 16 m }",
+        "goal { start when ego ttc under 3 s }",
+        "goal { start when ego headway under 1.5 s }",
+        "goal { start when lead reaches stop_line }",
+        "goal { start when kid reaches kerb }",
+        "goal { start when lead starts }",
+        "goal { speed 10 m/s } goal { speed 0 m/s; start when ego headway under 1.5 s }",
+    ] {
+        assert!(single.accepts(block), "{block}");
+    }
+    assert!(!single.accepts("goal { } goal { } goal { }"), "at most one phase when decoding");
+    let joint = gbnf::Grammar::parse(&llm::goals::joint_grammar(&["lead".into(), "ego".into()]));
+    assert!(joint.accepts(
+        "lead: goal { speed 10 m/s } goal { speed 0 m/s; start when ego headway under 1.5 s }\nego: goal { speed 12 m/s }\n"
+    ));
+    // A phase on the line of its agent belongs to it; on a line of its own it has no name.
+    let names = vec!["lead".to_string(), "ego".to_string()];
+    let got = llm::goals::parse_joint(
+        "lead: goal { speed 10 m/s } goal { speed 0 m/s; start when ego starts }\nego: goal { }",
+        &names,
+    )
+    .expect("joint reply");
+    assert_eq!(got[0], (0, "goal { speed 10 m/s }\ngoal { speed 0 m/s; start when ego starts }".to_string()));
+    assert!(llm::goals::parse_joint("lead: goal { }\ngoal { speed 0 m/s }", &names).is_err());
+    assert_eq!(
+        llm::goals::parse_single("goal { speed 1 m/s }\ngoal { speed 0 m/s; start after 2 s }").expect("phases"),
+        "goal { speed 1 m/s }\ngoal { speed 0 m/s; start after 2 s }"
+    );
+}
+
+#[test]
+fn the_grammar_export_has_the_rare_vocabulary() {
+    for (format, def) in [(rocc::grammar::Format::Gbnf, " ::= "), (rocc::grammar::Format::Lark, ": ")] {
+        let g = rocc::grammar::print(&rocc::grammar::language(), format);
+        for rule in ["posture_stmt", "behaviour", "behaviour_set", "trigger", "kw_when", "kw_under"] {
+            let rule = if def == ": " { rule.to_string() } else { rule.replace('_', "-") };
+            assert!(g.lines().any(|l| l.starts_with(&format!("{rule}{def}"))), "{format:?} has no rule `{rule}`");
+        }
+    }
+    let g = gbnf::Grammar::parse(&rocc::grammar::print(&rocc::grammar::language(), rocc::grammar::Format::Gbnf));
+    let scene = "scenario s {\n    duration 4 s\n    road straight { lanes 1 }\n    agent kid: child {\n        at west.in[1], 5 m before center\n        posture kneeling\n        goal { speed 1 m/s; lateral cross; start when ego within 10 m }\n        goal { speed 2 m/s; start when ego ttc under 2 s }\n        behaviour { yield never; reaction 1 s }\n    }\n}\n";
+    assert!(g.accepts(scene), "the GBNF rejects the rare vocabulary");
+}
