@@ -82,12 +82,12 @@ pub fn parse_joint(reply: &str, names: &[String]) -> Result<Vec<(usize, String)>
         // A block right after another on its line is a phase of the same agent.
         if let Some(j) = last.filter(|_| prev > 0 && reply[prev..a].trim_matches([' ', '\t']).is_empty()) {
             let phase = one_line(&reply[a..b]);
-            if let Some((_, blocks)) = out.iter_mut().find(|(i, _)| *i == j) {
-                if blocks.lines().count() < MAX_PHASES {
-                    blocks.push('\n');
-                    blocks.push_str(&phase);
-                    parses(blocks).map_err(|e| format!("the goal phases of `{}` do not parse: {e}", names[j]))?;
-                }
+            if let Some((_, blocks)) = out.iter_mut().find(|(i, _)| *i == j)
+                && blocks.lines().count() < MAX_PHASES
+            {
+                blocks.push('\n');
+                blocks.push_str(&phase);
+                parses(blocks).map_err(|e| format!("the goal phases of `{}` do not parse: {e}", names[j]))?;
             }
             continue;
         }
