@@ -51,6 +51,8 @@ pub(crate) struct Step<'s> {
     pub named: Option<usize>,
     /// Clearing a junction for an emergency vehicle.
     pub clearing: bool,
+    /// Held back from passing an obstacle: how far short of one to wait (`Avoid::standoff`).
+    pub standoff: f64,
 }
 
 /// Agent `j` as seen from our route this step.
@@ -505,7 +507,14 @@ impl Sim<'_, '_> {
         if !obstacle {
             return Constraint::FREE;
         }
-        let s0 = if is_named { 2.0 } else { lim.min_gap };
+        // Waiting to pass an obstacle, far enough back to steer out round it from a standstill.
+        let s0 = if is_named {
+            2.0
+        } else if b.blocker {
+            lim.min_gap.max(s.standoff)
+        } else {
+            lim.min_gap
+        };
         // A striker coming at us does not stop for us: it comes on to its target, where the
         // latch stops it. Braking for it where it is now, a motorcycle met a bus overtaking
         // into its lane at 18 m/s and stopped at 13 m/s2. The reach only slows us: where we

@@ -89,7 +89,13 @@ impl Sim<'_, '_> {
     /// zone with these bounds): what it reads (`cur`, `behind`, the emergency holds) is settled
     /// before the right-of-way rule runs, and `ranks` is cleared each frame.
     pub(crate) fn rank(&self, ranks: &mut [Option<Rank>], i: usize, enter: f64, meet: f64, leave: f64, t: f64) -> Rank {
-        let same = |c: &Crossing| c.enter.to_bits() == enter.to_bits() && c.leave.to_bits() == leave.to_bits();
+        // Keyed by all three bounds: two crossings may share `enter` and `leave` and differ in
+        // `meet` (a car passing a standing one beside a turning bus met a stale rank).
+        let same = |c: &Crossing| {
+            c.enter.to_bits() == enter.to_bits()
+                && c.meet.to_bits() == meet.to_bits()
+                && c.leave.to_bits() == leave.to_bits()
+        };
         let Some(k) = self.actors[i].crossings.iter().position(same) else {
             return self.zone_rank(i, enter, meet, leave, t);
         };
