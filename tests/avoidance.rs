@@ -110,3 +110,49 @@ fn cars_ahead_of_a_fire_truck_pull_over_and_go_on_after_it_passed() {
     }
     assert!(slowest(t, truck) > 5.0, "the truck slowed to {:.2} m/s\n{}", slowest(t, truck), trace(t, truck));
 }
+
+/// The fire-truck scene with the truck's siren stated.
+fn fire_truck_scene(siren: &str) -> String {
+    let text = std::fs::read_to_string("tests/rollout-cases/fire-truck-from-behind-cars-pull-over.scn").expect("case");
+    text.replacen("goal { speed 60 km/h }", &format!("goal {{ speed 60 km/h }}\n        siren {siren}"), 1)
+}
+
+fn front_of_text(text: &str) -> Result<rocc::compile::Front, Vec<rocc::diag::Diagnostic>> {
+    let mut sources = rocc::source::SourceMap::default();
+    let s = rocc::check::check_text("t.scn", text, std::path::Path::new("."), &mut sources)?;
+    rocc::compile::front(s, None)
+}
+
+/// `siren on` is the default; `siren off` makes the fire truck an ordinary vehicle, which the
+/// cars ahead do not pull over for: it follows them.
+#[test]
+fn with_its_siren_off_the_fire_truck_gets_no_way() {
+    let on = front_of_text(&fire_truck_scene("on")).expect("checks");
+    let default = front_of("tests/rollout-cases/fire-truck-from-behind-cars-pull-over.scn");
+    let digest = |t: &Tracks| {
+        let mut h = rocc::fsio::Fnv1a::default();
+        t.digest(&mut h);
+        h.finish()
+    };
+    assert_eq!(digest(&on.tracks), digest(&default.tracks), "`siren on` is not the default");
+    let off = front_of_text(&fire_truck_scene("off")).expect("checks");
+    let t = &off.tracks;
+    let (truck, c1) = (idx(t, "truck"), idx(t, "c1"));
+    let lane_y = t.poses[c1][0].y;
+    assert!((0..t.frames).all(|f| (t.poses[c1][f].y - lane_y).abs() < 0.05), "c1 moved over\n{}", trace(t, c1));
+    assert!(slowest(t, c1) > 10.0, "c1 slowed to {:.2} m/s", slowest(t, c1));
+    assert!((0..t.frames).all(|f| t.poses[truck][f].x < t.poses[c1][f].x), "the truck passed c1");
+}
+
+#[test]
+fn a_siren_is_on_or_off_and_only_on_emergency_kinds() {
+    let err = |text: &str| front_of_text(text).err().map(|d| d[0].code);
+    assert_eq!(err(&fire_truck_scene("loud")), Some("E0116"));
+    let sedan = fire_truck_scene("on").replacen("truck: fire_truck", "truck: sedan", 1);
+    assert_eq!(err(&sedan), Some("E0170"));
+    let derived = format!(
+        "kind pumper: fire_truck {{ length 9 m }}\n{}",
+        fire_truck_scene("off").replacen("truck: fire_truck", "truck: pumper", 1)
+    );
+    assert_eq!(err(&derived), None);
+}

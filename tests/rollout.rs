@@ -198,6 +198,7 @@ fn scene(specs: Vec<Spec>, conflicts: Vec<Conflict>, traffic: Option<Traffic>, d
             speed: s.speed,
             goal: s.goal.clone(),
             track: s.track.clone(),
+            siren: None,
             span: Default::default(),
             place_span: Default::default(),
         })

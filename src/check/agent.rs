@@ -26,6 +26,7 @@ impl Checker {
         let mut sizes: [Option<(&ast::Value, Span)>; 3] = [None; 3];
         let mut goal: Option<&ast::Goal> = None;
         let mut track: Option<&ast::Track> = None;
+        let mut siren: Option<(&ast::Ident, Span)> = None;
         for st in &a.stmts {
             let (slot_first, what): (Option<Span>, &str) = match st {
                 ast::AgentStmt::At { place: p, span } => (place.replace((p, *span)).map(|x| x.1), "placement `at`"),
@@ -35,6 +36,7 @@ impl Checker {
                 }
                 ast::AgentStmt::Goal(g) => (goal.replace(g).map(|x| x.span), "`goal`"),
                 ast::AgentStmt::Track(t) => (track.replace(t).map(|x| x.span), "`track`"),
+                ast::AgentStmt::Siren { value, span } => (siren.replace((value, *span)).map(|x| x.1), "`siren`"),
             };
             if let Some(first) = slot_first {
                 self.dup(what, first, st.span());
@@ -115,6 +117,7 @@ impl Checker {
             _ => None,
         }));
         let (kinds, class, motion) = kind?;
+        let siren = self.siren(siren, &kinds, is_static);
         Some(Agent {
             name: a.name.name.clone(),
             kinds,
@@ -128,12 +131,33 @@ impl Checker {
             speed: speed_d?,
             goal: goal_c?,
             track: track_keys.clone(),
+            siren: siren?,
             span,
             place_span: place_span.unwrap_or(span),
         })
         // A size or track that was given but invalid has been reported: no agent then.
         .filter(|_| size.iter().all(|s| s.is_none_or(|x| x.is_some())))
         .filter(|_| track.is_none() || track_keys.is_some())
+    }
+
+    /// `siren on|off`: only an emergency vehicle (a kind in or derived from `EMERGENCY_KINDS`,
+    /// every kind of a `one_of`) carries one. `Some(None)` where none is stated.
+    fn siren(&mut self, siren: Option<(&ast::Ident, Span)>, kinds: &[String], is_static: bool) -> Option<Option<bool>> {
+        let Some((word, span)) = siren else { return Some(None) };
+        let on = super::word(self, word, &[("on", true), ("off", false)], "siren setting")?;
+        let emergency = |k: &String| {
+            EMERGENCY_KINDS.contains(&k.as_str()) || self.kinds.get(k).is_some_and(|(kind, _)| kind.emergency)
+        };
+        if is_static || !kinds.iter().all(emergency) {
+            let none = kinds.iter().find(|k| is_static || !emergency(k)).map_or("", String::as_str);
+            self.err(
+                Diagnostic::error("E0170", format!("`{none}` has no siren"))
+                    .label(span, "siren on a kind that is not an emergency vehicle")
+                    .help("only ambulance, fire_truck, police_car and kinds derived from them carry a siren"),
+            );
+            return None;
+        }
+        Some(Some(on))
     }
 
     fn track(&mut self, t: &ast::Track, duration: Option<f64>) -> Option<Vec<Keyframe>> {

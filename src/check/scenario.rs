@@ -248,6 +248,9 @@ pub struct Agent {
     pub goal: Option<Goal>,
     /// Replayed keyframes (from the box-stream importer); `place` is `Place::Track` then.
     pub track: Option<Vec<Keyframe>>,
+    /// `siren on|off` as stated (emergency vehicles only); unstated, an emergency vehicle's is on.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub siren: Option<bool>,
     #[serde(skip)]
     pub span: Span,
     #[serde(skip)]

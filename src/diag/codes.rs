@@ -264,6 +264,17 @@ post-impact poses. An agent can therefore take part in one conflict only, as `at
 Keep one conflict per agent, or stage the second crash with another agent.",
     },
     Code {
+        code: "E0170",
+        title: "siren on a kind without one",
+        explanation: "`siren on` and `siren off` are for emergency vehicles: `ambulance`, `fire_truck`,\n\
+`police_car` and kinds derived from them, whose siren is on unless stated. With it on, cross\n\
+traffic holds for them at junctions and vehicles ahead pull over; `siren off` makes one an\n\
+ordinary vehicle. Any other kind has no siren.\n
+    agent amb: ambulance { at west.in[1], 60 m before center; speed 50 km/h; siren off }  // fine
+    agent car: sedan { at west.in[1], 20 m before center; siren on }  // error
+    kind my_amb: ambulance { length 7.0 m }   // derived: `siren off` is fine on it",
+    },
+    Code {
         code: "E0201",
         title: "placement off a valid surface",
         explanation: "Each class has surfaces it may start on: vehicles on lanes or shoulders; pedestrians\n\

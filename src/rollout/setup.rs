@@ -118,7 +118,7 @@ pub(crate) fn build_actor(
     };
     let mut a = base_actor(info, p.pose, p.motion, p.class, Drive::Mover);
     a.span = Some(p.span);
-    a.emergency = a.vehicle && is_emergency(c, &p.kind);
+    a.emergency = a.vehicle && is_emergency(c, &p.kind) && ca.siren != Some(false);
     let pos = DVec2::new(p.pose.x, p.pose.y);
     let goal = ca.goal.as_ref();
     let fail = |errs: &mut Vec<Diagnostic>, msg: String, help: &str| errs.push(goal_error(ca, msg, help));

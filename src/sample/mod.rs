@@ -47,6 +47,9 @@ pub struct ConcreteAgent {
     pub speed: f64,
     pub goal: Option<Goal<f64>>,
     pub track: Option<Vec<Keyframe>>,
+    /// `siren on|off` as stated (`Agent::siren`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub siren: Option<bool>,
     #[serde(skip)]
     pub span: crate::source::Span,
     #[serde(skip)]
@@ -100,6 +103,7 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
                     stop_span: g.stop_span,
                 }),
                 track: a.track.clone(),
+                siren: a.siren,
                 span: a.span,
                 place_span: a.place_span,
             }

@@ -143,17 +143,28 @@ impl KindRef {
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub enum AgentStmt {
-    At { place: Placement, span: Span },
-    Speed { value: Value, span: Span },
+    At {
+        place: Placement,
+        span: Span,
+    },
+    Speed {
+        value: Value,
+        span: Span,
+    },
     Size(SizeStmt),
     Goal(Goal),
     Track(Track),
+    /// `siren on|off` (the word as written, checked by the checker).
+    Siren {
+        value: Ident,
+        span: Span,
+    },
 }
 
 impl AgentStmt {
     pub fn span(&self) -> Span {
         match self {
-            AgentStmt::At { span, .. } | AgentStmt::Speed { span, .. } => *span,
+            AgentStmt::At { span, .. } | AgentStmt::Speed { span, .. } | AgentStmt::Siren { span, .. } => *span,
             AgentStmt::Size(s) => s.span,
             AgentStmt::Goal(g) => g.span,
             AgentStmt::Track(t) => t.span,

@@ -44,6 +44,7 @@ const KEYWORDS: &[&str] = &[
     "turn",
     "start",
     "track",
+    "siren",
     "yaw",
     "conflict",
     "at_fault",
@@ -250,6 +251,7 @@ fn begins_statement(r: &Rule) -> bool {
             | Rule::size_key
             | Rule::kw_goal
             | Rule::kw_track
+            | Rule::kw_siren
             | Rule::kw_lateral
             | Rule::kw_stop
             | Rule::kw_turn
