@@ -156,3 +156,15 @@ fn a_siren_is_on_or_off_and_only_on_emergency_kinds() {
     );
     assert_eq!(err(&derived), None);
 }
+
+#[test]
+fn cross_traffic_drives_around_a_car_stalled_in_the_junction() {
+    let f = front_of("tests/rollout-cases/car-stalled-in-a-junction-cross-traffic-drives-around.scn");
+    let t = &f.tracks;
+    let (car, stalled) = (idx(t, "car"), idx(t, "stalled"));
+    let tr = trace(t, car);
+    assert_eq!(touches(t, car, stalled), None, "{tr}");
+    assert!(slowest(t, car) > 5.0, "the car slowed to {:.2} m/s\n{tr}", slowest(t, car));
+    let end = t.poses[car][t.frames - 1];
+    assert!(end.x > t.poses[stalled][0].x + 10.0, "the car is not past the stalled one\n{tr}");
+}

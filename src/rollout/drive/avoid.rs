@@ -8,9 +8,9 @@ use crate::rollout::frame::Sim;
 use crate::rollout::kinematics::slip_tan;
 use crate::rollout::path::Foot;
 
-/// The most a pass may move off the lane's centre line where the paving round the obstacle is
-/// unknown (in a junction), m.
-const OPEN_SHIFT: f64 = 3.5;
+/// How far the paving reaches either side of the lane's centre line where the paving round the
+/// obstacle is unknown (in a junction: at least the next lane), m.
+const OPEN_SHIFT: f64 = 5.0;
 /// The margin kept round our box in the band the obstacle must leave (`drive`'s), m.
 const BAND_MARGIN: f64 = 0.25;
 /// Clearance kept from the paving's edge, m.
@@ -70,8 +70,8 @@ impl Sim<'_, '_> {
         // to build up first).
         let standoff = 1.5 * need / slip_tan(a) + 2.0;
         let side = (target - a.d0).signum();
-        // Set out so as to be over just before it (the reference moves over at
-        // `PASS_LAT_RATE`), not a long way back in the oncoming lane.
+        // Set out so as to be over before car-following toward it slows us (the reference moves
+        // over at `PASS_LAT_RATE`), not a long way back in the oncoming lane.
         let set_out = st.v * (target - st.d).abs() / PASS_LAT_RATE + standoff + SET_OUT_M;
         if near - (st.s + a.hl) > set_out {
             return Some(Avoid { target: None, standoff: 0.0 });

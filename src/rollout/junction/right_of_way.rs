@@ -48,7 +48,9 @@ impl Sim<'_, '_> {
     /// far its front may go while it holds (stop line, else short of the zone).
     pub(crate) fn zone_rank(&self, i: usize, enter: f64, meet: f64, leave: f64, t: f64) -> Rank {
         let (a, st) = (&self.actors[i], &self.cur[i]);
-        if st.s > leave || st.frozen || st.stopped {
+        // One standing for good (`Actor::blocker`) takes no turn: it is driven around
+        // (tests/rollout-cases/car-stalled-in-a-junction-cross-traffic-drives-around.scn).
+        if st.s > leave || st.frozen || st.stopped || a.blocker {
             return None;
         }
         if let StopGoal::Front(sf) | StopGoal::Centre(sf) = a.stop
