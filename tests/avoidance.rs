@@ -168,3 +168,23 @@ fn cross_traffic_drives_around_a_car_stalled_in_the_junction() {
     let end = t.poses[car][t.frames - 1];
     assert!(end.x > t.poses[stalled][0].x + 10.0, "the car is not past the stalled one\n{tr}");
 }
+
+/// `away_from` a standing object: the car eases to the far side of its lane as it nears the
+/// debris on the lane's right edge, and goes by without touching or slowing.
+#[test]
+fn away_from_a_standing_object_eases_to_the_far_side_of_the_lane() {
+    let text = "scenario t {\n    seed 2\n    duration 8 s\n    rate 10 Hz\n    egos [car]\n    \
+                road straight { lanes 1; lane_width 3.5 m; speed_limit 50 km/h; length 300 m }\n    \
+                object junk: debris { at west.in[1], 20 m after center offset 1.3 m right }\n    \
+                agent car: sedan {\n        at west.in[1], 50 m before center\n        speed 40 km/h\n        \
+                goal { speed 40 km/h; lateral away_from junk }\n    }\n}\n";
+    let f = front_of_text(text).unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| &d.message).collect::<Vec<_>>()));
+    let t = &f.tracks;
+    let (car, junk) = (idx(t, "car"), idx(t, "junk"));
+    let tr = trace(t, car);
+    assert_eq!(touches(t, car, junk), None, "{tr}");
+    assert!(slowest(t, car) > 10.0, "the car slowed to {:.2} m/s\n{tr}", slowest(t, car));
+    let lane_y = t.poses[car][0].y;
+    let beside = (0..t.frames).find(|&k| t.poses[car][k].x > t.poses[junk][0].x).expect("the car reaches the debris");
+    assert!(t.poses[car][beside].y > lane_y + 0.4, "the car did not ease away\n{tr}");
+}
