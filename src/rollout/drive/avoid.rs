@@ -33,6 +33,13 @@ pub(crate) struct Blocking {
     pub hi: f64,
 }
 
+impl Blocking {
+    /// Whether it reaches into the offsets `lo..hi` of our route.
+    fn meets(&self, (lo, hi): (f64, f64)) -> bool {
+        self.lj - self.ext_lat < hi && self.lj + self.ext_lat > lo
+    }
+}
+
 /// What `Sim::avoid` decides for one step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Avoid {
@@ -54,8 +61,7 @@ impl Sim<'_, '_> {
         self.blocking(i, look, seen);
         let m = BAND_MARGIN;
         let here = (a.d0 - a.hw - m, a.d0 + a.hw + m);
-        let meets = |b: &Blocking, (lo, hi): (f64, f64)| b.lj - b.ext_lat < hi && b.lj + b.ext_lat > lo;
-        if !seen.iter().any(|b| meets(b, here)) {
+        if !seen.iter().any(|b| b.meets(here)) {
             return None;
         }
         // Left first: on a tie, pass on the overtaking side.
@@ -132,14 +138,13 @@ impl Sim<'_, '_> {
         let m = BAND_MARGIN;
         let band =
             |tg: f64| if side > 0.0 { (a.d0 - a.hw - m, tg + a.hw + m) } else { (tg - a.hw - m, a.d0 + a.hw + m) };
-        let meets = |b: &Blocking, (lo, hi): (f64, f64)| b.lj - b.ext_lat < hi && b.lj + b.ext_lat > lo;
         let mut target = a.d0;
         // Each obstacle cleared may put the next one (a taper's cones) in the band: a few
         // rounds settle it.
         for _ in 0..6 {
             let next = seen
                 .iter()
-                .filter(|b| meets(b, band(target)))
+                .filter(|b| b.meets(band(target)))
                 .map(|b| b.lj + side * (b.ext_lat + a.hw + PASS_CLEARANCE))
                 .fold(target, |t, d| if side > 0.0 { t.max(d) } else { t.min(d) });
             if next == target {
@@ -147,7 +152,7 @@ impl Sim<'_, '_> {
             }
             target = next;
         }
-        let within = seen.iter().filter(|b| meets(b, band(target)));
+        let within = seen.iter().filter(|b| b.meets(band(target)));
         let (lo, hi) =
             within.clone().fold((a.d0 - OPEN_SHIFT, a.d0 + OPEN_SHIFT), |(l, h), b| (l.max(b.lo), h.min(b.hi)));
         if target - a.hw < lo + EDGE_CLEAR || target + a.hw > hi - EDGE_CLEAR {
