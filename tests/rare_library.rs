@@ -170,3 +170,48 @@ fn a_wheelchair_user_crosses_mid_block_and_the_ego_waits_for_it() {
     }
     no_overlap(&t);
 }
+
+#[test]
+fn cross_traffic_drives_around_a_car_stalled_in_the_junction() {
+    let t = tracks("stalled_in_junction");
+    let (stalled, ego, east) = (idx(&t, "stalled"), idx(&t, "ego"), idx(&t, "eastbound"));
+    let s = t.poses[stalled][0];
+    assert!(t.poses[stalled].iter().all(|p| *p == s), "the stalled car moves");
+    // The northbound ego goes by in the southbound half (x < 0), without stopping.
+    for f in 0..t.frames {
+        if (t.poses[ego][f].y - s.y).abs() < 4.0 {
+            assert!(t.poses[ego][f].x < 0.0, "the ego is not in the free half beside the stalled car at frame {f}");
+        }
+    }
+    assert!(t.poses[ego][t.frames - 1].y > s.y + 15.0, "the ego did not get past");
+    // The eastbound car passes it too.
+    assert!(t.poses[east][t.frames - 1].x > s.x + 5.0, "the eastbound car did not get past");
+    for (who, floor) in [(ego, 6.9), (east, 4.0)] {
+        assert!(slowest(&t, who) > floor, "{} slowed to {:.2} m/s", t.agents[who].name, slowest(&t, who));
+    }
+    no_overlap(&t);
+}
+
+#[test]
+fn cars_ahead_and_oncoming_pull_over_for_a_fire_truck_from_behind() {
+    let t = tracks("fire_truck_from_behind");
+    let engine = idx(&t, "engine");
+    // Each is over to its right and at rest when the truck goes by, and back in lane, moving,
+    // at the end. Eastbound lane centre y = -1.75, westbound y = 1.75.
+    for (name, lane_y, right) in [("ego", -1.75, -1.0), ("ahead", -1.75, -1.0), ("oncoming", 1.75, 1.0)] {
+        let i = idx(&t, name);
+        let meet = (1..t.frames)
+            .find(|&f| {
+                let (e0, e1, c) = (t.poses[engine][f - 1].x, t.poses[engine][f].x, t.poses[i][f].x);
+                (e0 - c).signum() != (e1 - c).signum()
+            })
+            .unwrap_or_else(|| panic!("the truck never passes {name}"));
+        let y = t.poses[i][meet].y;
+        assert!((y - lane_y) * right > 1.5, "{name} is at y = {y:.2} as the truck passes (frame {meet})");
+        assert!(t.speeds[i][meet] < 0.5, "{name} moves at {:.2} m/s as the truck passes", t.speeds[i][meet]);
+        let end = t.frames - 1;
+        assert!((t.poses[i][end].y - lane_y).abs() < 0.2 && t.speeds[i][end] > 3.0, "{name} did not go on");
+    }
+    assert!(slowest(&t, engine) > 12.5, "the truck slowed to {:.2} m/s", slowest(&t, engine));
+    no_overlap(&t);
+}
