@@ -1,5 +1,5 @@
 //! `rocc text` and the rare-scene vocabulary: canned model replies (an in-process fake server,
-//! no model) that use postures, behaviour settings, triggers and goal phases each yield a
+//! no model) that use postures, behaviour settings, triggers, goal phases and sirens each yield a
 //! scenario that checks; the goal grammars admit triggers and phases; the grammar export has
 //! the new rules.
 
@@ -188,6 +188,26 @@ fn unknown_words_in_the_schema_are_sent_back_for_correction() {
 }
 
 #[test]
+fn a_siren_from_the_schema_is_written_and_checked() {
+    // A truck 20 m behind a car, on a straight road.
+    let scene = |siren: Value, kind: &str| {
+        let mut truck = lane("truck", kind, "west", "in", 50.0, 50.0);
+        truck["siren"] = siren;
+        straight(vec![truck, lane("ego", "sedan", "west", "in", 30.0, 30.0)])
+    };
+    let goals = "truck: goal { speed 50 km/h }\nego: goal { speed 30 km/h }\n";
+    for (siren, says) in [(json!(false), "siren off"), (json!(true), "siren on")] {
+        let text = accepted(&scene(siren, "fire_truck"), &[goals], Plan::Joint);
+        assert!(text.contains(&format!("        {says}\n")), "{text}");
+    }
+    // On a kind that has none it is the checker's E0170, for the repair loop.
+    let fake = serve(vec![chat(&scene(json!(false), "van").to_string()), chat(goals)]);
+    let (out, _) = llm::text_to_scenario("a van", &opts(&fake.url, Plan::Joint), "scene.scn", &std::env::temp_dir());
+    let Outcome::Rejected { diags, .. } = out else { panic!("{out:?}") };
+    assert_eq!(diags[0].code, "E0170", "{}", diags[0].message);
+}
+
+#[test]
 fn goal_grammars_admit_triggers_and_one_phase() {
     let single = gbnf::Grammar::parse(&llm::goals::single_grammar());
     for block in [
@@ -225,12 +245,12 @@ fn goal_grammars_admit_triggers_and_one_phase() {
 fn the_grammar_export_has_the_rare_vocabulary() {
     for (format, def) in [(rocc::grammar::Format::Gbnf, " ::= "), (rocc::grammar::Format::Lark, ": ")] {
         let g = rocc::grammar::print(&rocc::grammar::language(), format);
-        for rule in ["posture_stmt", "behaviour", "behaviour_set", "trigger", "kw_when", "kw_under"] {
+        for rule in ["posture_stmt", "behaviour", "behaviour_set", "trigger", "kw_when", "kw_under", "siren_stmt"] {
             let rule = if def == ": " { rule.to_string() } else { rule.replace('_', "-") };
             assert!(g.lines().any(|l| l.starts_with(&format!("{rule}{def}"))), "{format:?} has no rule `{rule}`");
         }
     }
     let g = gbnf::Grammar::parse(&rocc::grammar::print(&rocc::grammar::language(), rocc::grammar::Format::Gbnf));
-    let scene = "scenario s {\n    duration 4 s\n    road straight { lanes 1 }\n    agent kid: child {\n        at west.in[1], 5 m before center\n        posture kneeling\n        goal { speed 1 m/s; lateral cross; start when ego within 10 m }\n        goal { speed 2 m/s; start when ego ttc under 2 s }\n        behaviour { yield never; reaction 1 s }\n    }\n}\n";
+    let scene = "scenario s {\n    duration 4 s\n    road straight { lanes 1 }\n    agent kid: child {\n        at west.in[1], 5 m before center\n        posture kneeling\n        goal { speed 1 m/s; lateral cross; start when ego within 10 m }\n        goal { speed 2 m/s; start when ego ttc under 2 s }\n        behaviour { yield never; reaction 1 s }\n    }\n    agent amb: ambulance { at east.in[1], 40 m before center; speed 30 km/h; siren off }\n}\n";
     assert!(g.accepts(scene), "the GBNF rejects the rare vocabulary");
 }

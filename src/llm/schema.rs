@@ -81,6 +81,9 @@ pub struct AgentSpec {
     /// When the agent's goal starts (in place of `start after`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub start_when: Option<TriggerSpec>,
+    /// An emergency vehicle's siren (on unless `false`); `None` writes nothing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub siren: Option<bool>,
 }
 
 /// How an agent departs from careful behaviour (the `.scn` `behaviour { ... }` block).
@@ -176,6 +179,7 @@ pub fn json_schema(kinds: &[String]) -> Value {
                         "speed_kmh": {"type": "number", "minimum": 0, "maximum": 130},
                         "ego": {"type": "boolean"},
                         "posture": {"enum": POSTURES},
+                        "siren": {"type": "boolean"},
                         "behaviour": {
                             "type": "object",
                             "properties": {
@@ -432,6 +436,9 @@ pub fn emit(s: &Schema, goals: &[Option<String>], is_static: &dyn Fn(&str) -> bo
             if let Some(b) = a.behaviour.as_ref().and_then(behaviour) {
                 out.push_str(&format!("        {b}\n"));
             }
+            if let Some(on) = a.siren {
+                out.push_str(&format!("        siren {}\n", if on { "on" } else { "off" }));
+            }
         }
         out.push_str("    }\n");
     }
@@ -489,6 +496,9 @@ pub fn describe(s: &Schema, a: &AgentSpec) -> String {
     }
     if let Some(t) = &a.start_when {
         words.push_str(&format!(", its goal will {}", trigger(t)));
+    }
+    if let Some(on) = a.siren {
+        words.push_str(if on { ", siren on" } else { ", siren off" });
     }
     words
 }
