@@ -374,6 +374,65 @@ tracks have no phases.\n
     goal { speed 0 m/s; start when car headway under 1.5 s }     // fine: brakes to a stop
     goal { speed 4 m/s; turn left; start after 1 s }             // error: a turn in a phase",
     },
+    // ---- near misses (E0190-E0195) ----
+    Code {
+        code: "E0190",
+        title: "near-miss gap out of range",
+        explanation: "`gap` is the least distance between the two boxes as the passer goes by, 0.2..3 m.\n\
+Closer than 0.2 m is contact within the boxes' tolerance (stage a `conflict`); farther than\n\
+3 m is not a near miss.\n
+    near_miss { passer a; passed b; gap 0.5 m; at 4 s }     // fine
+    near_miss { passer a; passed b; gap -0.5 m }            // error: below 0
+    near_miss { passer a; passed b; gap 50 m }              // error: not near",
+    },
+    Code {
+        code: "E0191",
+        title: "near miss without a pair that can pass",
+        explanation: "A near miss names two different agents, and its passer steers to pass: it moves and\n\
+follows a goal (not static, not a recorded `track`). The passed agent may be anything.\n
+    near_miss { passer a; passed a; gap 0.5 m }              // error: one agent
+    near_miss { passer cone; passed a; gap 0.5 m }           // error: `cone` is static",
+    },
+    Code {
+        code: "E0192",
+        title: "near-miss field of the wrong kind",
+        explanation: "`passer` and `passed` take agent names, `side` takes `left` or `right` (the side of the\n\
+passed agent the passer goes by; without it, the side the passer starts on), `gap` a length and\n\
+`at` a time within the clip (half the clip without it).\n
+    near_miss { passer a; passed b; gap 0.5 m; side left; at 4 s }   // fine
+    near_miss { passer a; passed b; gap 0.5 m; side front }          // error: not a side",
+    },
+    Code {
+        code: "E0193",
+        title: "a pair that crashes and misses at the same time",
+        explanation: "A near miss has no contact; a `conflict` of the same two agents within 1.5 s of it is a\n\
+contradiction. Both blocks are shown.\n
+    conflict { at_fault a; struck b; impact sideswipe; point left; at 4 s }
+    near_miss { passer a; passed b; gap 0.5 m; at 4 s }      // error: same pair, same time",
+    },
+    Code {
+        code: "E0194",
+        title: "passer already staged",
+        explanation: "A near miss is staged like a crash: its passer leaves its goal for one planned approach.\n\
+A passer that is in a conflict, or passes in another near miss, cannot follow two; stage the\n\
+second with another agent.\n
+    near_miss { passer a; passed b; gap 0.5 m; at 2 s }
+    near_miss { passer a; passed c; gap 0.5 m; at 5 s }      // error: `a` passes twice",
+    },
+    Code {
+        code: "E0195",
+        title: "near miss cannot be staged",
+        explanation: "The passer comes alongside the passed agent, parallel, its box `gap` from the stated side,\n\
+at the stated time, then returns to its route. The rolled-out boxes are measured: the least\n\
+gap over the clip may be at most 0.15 m below `gap` and never contact, and within 0.5 s of `at`\n\
+the two must come within `gap` + 0.15 m. Otherwise the scene is refused, saying what happened:\n\
+the passer cannot reach the passed agent in time within its limits, or they touch, or they\n\
+pass too close or too far. Start them closer, give them speeds that bring them level, pick the\n\
+other `side`, or move `at`.\n
+    // v1 in the outer lane, v2 in the inner one: v1 would cut across v2 to reach its far side
+    near_miss { passer v1; passed v2; gap 0.4 m; side left; at 3 s }    // error: they touch
+    near_miss { passer v1; passed v2; gap 0.4 m; side right; at 3 s }   // fine",
+    },
     Code {
         code: "E0201",
         title: "placement off a valid surface",

@@ -175,7 +175,11 @@ pub(crate) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
     };
     let sizes = ((2.0 * st.hl, 2.0 * st.hw), (2.0 * af.hl, 2.0 * af.hw));
     let start = to_struck(pa[0], ps[0]);
-    let (rel_pos0, rel_yaw, delta0) = relative(k.c.impact, k.c.point, sizes.0, sizes.1, start, 0.0);
+    let (rel_pos0, rel_yaw, delta0) = match k.gap {
+        Some(gap) => super::near::alongside(k.c.point, sizes.0, sizes.1, start.1, gap),
+        None => relative(k.c.impact, k.c.point, sizes.0, sizes.1, start, 0.0),
+    };
+    let swipe = k.c.impact == Impact::Sideswipe && k.gap.is_none();
     // First frame pass 1 already has them touching: the intercept must leave before it.
     let natural = (0..p1.frames).find(|&f| {
         let a = Obb { center: DVec2::new(pa[f].x, pa[f].y), yaw: pa[f].yaw, length: 2.0 * af.hl, width: 2.0 * af.hw };
@@ -218,9 +222,9 @@ pub(crate) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
             let v_end0 = 2.0 * DVec2::new(s.x, s.y).distance(g0) / tau - v;
             // Sideswipes: where the corner first touches depends on the relative motion.
             let (v_rel, v_lat) = (v_end0 * rel_cos - p1.speeds[k.st][fi], (v_end0 * rel_sin).abs());
-            let drift = if k.c.impact == Impact::Sideswipe { v_rel * delta0 / v_lat.max(0.3) } else { 0.0 };
+            let drift = if swipe { v_rel * delta0 / v_lat.max(0.3) } else { 0.0 };
             // Only a sideswipe's pose depends on the drift: any other is the one at drift 0.
-            let (rel_pos, delta) = if k.c.impact == Impact::Sideswipe {
+            let (rel_pos, delta) = if swipe {
                 let (p, _, d) = relative(k.c.impact, k.c.point, sizes.0, sizes.1, start, drift);
                 (p, d)
             } else {
@@ -243,7 +247,7 @@ pub(crate) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
             let k_curve = curve.max_curvature();
             let lat = v.max(v_end).powi(2) * k_curve;
             // Closing speed along the approach: the at-fault's motion into the struck box.
-            let inward = if k.c.impact == Impact::Sideswipe {
+            let inward = if swipe {
                 let side = if rel_pos.y >= 0.0 { -1.0 } else { 1.0 };
                 DVec2::new(0.0, side).rotate(struck_dir)
             } else {
