@@ -113,7 +113,7 @@ impl Checker {
 
         let conflicts: Vec<Option<Conflict>> =
             conflicts_ast.iter().map(|c| self.conflict(c, &order, &agents, duration_s)).collect();
-        self.one_conflict_each(&conflicts, &conflicts_ast, &order);
+        self.conflicts_in_order(&conflicts, &conflicts_ast, &order, duration_s);
         let near: Vec<Option<NearMiss>> =
             near_ast.iter().map(|c| self.near_miss(c, &order, &agents, duration_s)).collect();
         self.near_misses_apart(&near, &conflicts, &order, duration_s);

@@ -257,13 +257,33 @@ reaches a side or a corner, never the middle of the front or rear face.\n
     },
     Code {
         code: "E0121",
-        title: "agent in two conflicts",
-        explanation: "A conflict latches its pair at the frame of deepest overlap: from then on both hold their\n\
-post-impact poses. An agent can therefore take part in one conflict only, as `at_fault` or as\n\
-`struck`; a second block naming it is rejected, and both blocks are shown.\n
-    conflict { at_fault a; struck b; impact rear_end; point rear }
-    conflict { at_fault c; struck b; impact angle; point left }      // error: `b` is already struck\n\n\
-Keep one conflict per agent, or stage the second crash with another agent.",
+        title: "agent strikes twice",
+        explanation: "An at-fault agent leaves its goal for one staged approach to the agent it strikes, so an\n\
+agent is `at_fault` in one conflict only; it may be struck in any number of others (a pile-up).\n\
+Both blocks are shown.\n
+    conflict { at_fault a; struck b; impact rear_end; point rear; at 2 s }
+    conflict { at_fault a; struck c; impact angle; point left; at 4 s }     // error: `a` strikes twice\n\n\
+Keep one strike per agent, or let another agent strike.",
+    },
+    Code {
+        code: "E0122",
+        title: "crashes in an order that cannot happen",
+        explanation: "A crash holds its pair from the contact on (motion after an impact is not simulated), so\n\
+an agent that is struck stands still from then on and cannot strike anyone later. An agent's\n\
+own strike comes before, or at the same time as, every crash that strikes it. A chain is\n\
+written front first: the middle car strikes the car ahead, then the one behind strikes it.\n
+    conflict { at_fault mid; struck lead; impact rear_end; point rear; at 2 s }
+    conflict { at_fault tail; struck mid; impact rear_end; point rear; at 3 s }   // fine: a chain
+    conflict { at_fault tail; struck mid; impact rear_end; point rear; at 2 s }
+    conflict { at_fault mid; struck lead; impact rear_end; point rear; at 3 s }   // error: `mid` is struck first",
+    },
+    Code {
+        code: "E0123",
+        title: "a pair that crashes twice",
+        explanation: "A crash holds its pair from the contact on, so two agents touch once: a second conflict\n\
+between the same two (either way round) is refused, and both blocks are shown.\n
+    conflict { at_fault a; struck b; impact rear_end; point rear; at 2 s }
+    conflict { at_fault b; struck a; impact angle; point left; at 4 s }     // error: the same pair",
     },
     // ---- postures and track feasibility (E0130-E0134) ----
     Code {
