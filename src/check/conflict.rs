@@ -81,6 +81,27 @@ impl Checker {
         }
     }
 
+    /// The fields of a `conflict` or `near_miss` block by key; a key given twice is E0105 (the
+    /// second value is ignored) and the block is not ok.
+    pub(super) fn fields_once<'a>(
+        &mut self,
+        c: &'a ast::Conflict,
+        block: &str,
+    ) -> (BTreeMap<&'a str, &'a ast::ConflictField>, bool) {
+        let mut fields: BTreeMap<&str, &ast::ConflictField> = BTreeMap::new();
+        let mut ok = true;
+        for f in &c.fields {
+            if let Some(first) = fields.get(f.key.as_str()) {
+                let first = first.span;
+                self.dup(&format!("{block} field `{}`", f.key), first, f.span);
+                ok = false;
+                continue;
+            }
+            fields.insert(&f.key, f);
+        }
+        (fields, ok)
+    }
+
     pub(super) fn conflict(
         &mut self,
         c: &ast::Conflict,
@@ -88,17 +109,7 @@ impl Checker {
         agents: &[Option<Agent>],
         duration: Option<f64>,
     ) -> Option<Conflict> {
-        let mut fields: BTreeMap<&str, &ast::ConflictField> = BTreeMap::new();
-        let mut ok = true;
-        for f in &c.fields {
-            if let Some(first) = fields.get(f.key.as_str()) {
-                let first = first.span;
-                self.dup(&format!("conflict field `{}`", f.key), first, f.span);
-                ok = false;
-                continue;
-            }
-            fields.insert(&f.key, f);
-        }
+        let (fields, mut ok) = self.fields_once(c, "conflict");
         let ident = |c: &mut Checker, key: &str| -> Option<&ast::Ident> {
             let f = fields.get(key)?;
             match &f.value {

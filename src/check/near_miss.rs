@@ -5,7 +5,6 @@ use super::units::Dim;
 use super::{Checker, MAX_DURATION_S, word};
 use crate::diag::Diagnostic;
 use crate::syntax::ast;
-use std::collections::BTreeMap;
 
 /// The gaps a near miss may ask for, m: below the least, box tolerances make it a graze (stage a
 /// `conflict`); beyond the most, two agents are not near.
@@ -23,17 +22,7 @@ impl Checker {
         agents: &[Option<Agent>],
         duration: Option<f64>,
     ) -> Option<NearMiss> {
-        let mut fields: BTreeMap<&str, &ast::ConflictField> = BTreeMap::new();
-        let mut ok = true;
-        for f in &c.fields {
-            if let Some(first) = fields.get(f.key.as_str()) {
-                let first = first.span;
-                self.dup(&format!("near_miss field `{}`", f.key), first, f.span);
-                ok = false;
-                continue;
-            }
-            fields.insert(&f.key, f);
-        }
+        let (fields, mut ok) = self.fields_once(c, "near_miss");
         let missing: Vec<&str> = ["passer", "passed", "gap"].into_iter().filter(|k| !fields.contains_key(k)).collect();
         if !missing.is_empty() {
             self.err(
