@@ -1,8 +1,7 @@
-//! Staged near misses: the passer's pose alongside the passed box at the stated gap (planned
-//! and driven like a striker's contact pose, `plan::choose` and `Sim::intercept`), its release
-//! back to its own route at the pass, and why a staging is refused (E0195).
+//! Staged near misses (their pose alongside the passed box is `plan::alongside`, planned and
+//! driven like a striker's contact pose): the passer's release back to its own route at the
+//! pass, the gap between two boxes, and why a staging is refused (E0195).
 
-use crate::check::scenario::Point;
 use crate::diag::Diagnostic;
 use crate::geom::Obb;
 use crate::rollout::Tracks;
@@ -16,27 +15,6 @@ use glam::DVec2;
 pub const GAP_TOL_M: f64 = 0.15;
 /// How far from the stated time the pass may come, s.
 pub const TIME_TOL_S: f64 = 0.5;
-
-/// The passer's pose at the pass in the passed frame: level with it, parallel (same direction
-/// or the other way, as it starts), its side `gap` from the passed box's `point` side. No
-/// penetration is planned (the third value, as `plan::relative` returns it).
-pub(crate) fn alongside(
-    point: Point,
-    passed: (f64, f64),
-    passer: (f64, f64),
-    start_yaw: f64,
-    gap: f64,
-) -> (DVec2, f64, f64) {
-    let side = if point == Point::Right { -1.0 } else { 1.0 };
-    let yaw = if start_yaw.cos() >= 0.0 { 0.0 } else { std::f64::consts::PI };
-    (DVec2::new(0.0, side * (passed.1 / 2.0 + gap + passer.1 / 2.0)), yaw, 0.0)
-}
-
-/// The side of `passed` the passer starts on, where the file leaves it open.
-pub(crate) fn start_side(passer: DVec2, passed: DVec2, passed_yaw: f64) -> Point {
-    let rel = (passer - passed).rotate(DVec2::from_angle(-passed_yaw));
-    if rel.y >= 0.0 { Point::Left } else { Point::Right }
-}
 
 /// Distance between two boxes, 0 where they overlap: the least of each one's corners to the
 /// other's edges (two convex polygons apart are nearest at a corner of one of them).

@@ -14,9 +14,9 @@ use crate::rollout::junction::order::order_crossings;
 use crate::rollout::junction::zones::{assign_crossings, assign_yields};
 use crate::rollout::setup::{Routes, background_actor, build_actor, face_the_striker};
 use crate::rollout::staging::near::near_errors;
+use crate::rollout::staging::plan;
 use crate::rollout::staging::plan::Plan;
 use crate::rollout::staging::refusals::{forced_braking, forced_error, staging_errors, stopped_dead};
-use crate::rollout::staging::{near, plan};
 use crate::rollout::traffic;
 use crate::rollout::turn_check::check_turns;
 use crate::sample::Concrete;
@@ -147,13 +147,13 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
 }
 
 /// The near misses as staged approaches: each passer comes alongside its passed agent like a
-/// striker to its contact pose (`near::alongside`), on the stated side or the one it starts on.
+/// striker to its contact pose (`plan::alongside`), on the stated side or the one it starts on.
 fn near_confs(c: &Concrete, actors: &[Actor], track_of: &[Option<usize>]) -> Vec<Conf> {
     let mut confs = vec![];
     for (index, n) in c.near_misses.iter().enumerate() {
         let (Some(Some(af)), Some(Some(st))) = (track_of.get(n.passer), track_of.get(n.passed)) else { continue };
         let (a, b) = (initial(&actors[*af]), initial(&actors[*st]));
-        let point = n.side.unwrap_or_else(|| near::start_side(a.pos, b.pos, b.yaw));
+        let point = n.side.unwrap_or_else(|| plan::start_side(a.pos, b.pos, b.yaw));
         let k =
             Conflict { at_fault: n.passer, struck: n.passed, impact: Impact::Sideswipe, point, at: n.at, span: n.span };
         confs.push(Conf { index, af: *af, st: *st, c: k, gap: Some(n.gap) });
