@@ -237,6 +237,7 @@ fn scene(specs: Vec<Spec>, conflicts: Vec<Conflict>, traffic: Option<Traffic>, d
         agents,
         rows: vec![],
         conflicts,
+        near_misses: vec![],
         traffic,
         kinds: Default::default(),
     };

@@ -50,6 +50,9 @@ pub struct Scenario {
     pub agents: Vec<Agent>,
     pub rows: Vec<Row>,
     pub conflicts: Vec<Conflict>,
+    /// `near_miss` blocks: passes within a gap, staged without contact.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub near_misses: Vec<NearMiss>,
     pub traffic: Option<Traffic>,
     /// `expect` lines, evaluated on the tracks by `rocc test` (`crate::expect`).
     #[serde(default)]
@@ -428,6 +431,22 @@ pub enum Point {
     FrontRight,
     RearLeft,
     RearRight,
+}
+
+/// A near miss: `passer` comes alongside `passed`, on `passed`'s `side`, its box `gap` metres
+/// from `passed`'s at `at`, without touching it (docs/language.md, "Near misses").
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NearMiss {
+    pub passer: usize,
+    pub passed: usize,
+    /// Least box-to-box distance, m.
+    pub gap: f64,
+    /// `Point::Left` or `Point::Right` of the passed agent; `None`: the side the passer starts on.
+    pub side: Option<Point>,
+    /// Time of the closest pass, s.
+    pub at: Option<f64>,
+    #[serde(skip)]
+    pub span: Span,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

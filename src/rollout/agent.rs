@@ -218,6 +218,9 @@ pub(crate) struct Conf {
     pub af: usize,
     pub st: usize,
     pub c: crate::check::scenario::Conflict,
+    /// A near miss (`rollout::staging::near`): the gap its passer (`af`) passes `st` at, m.
+    /// `c` then carries the pair, the side and the time; it is staged without contact.
+    pub gap: Option<f64>,
 }
 
 pub(crate) fn initial(a: &Actor) -> State {
