@@ -18,6 +18,7 @@ mod posture;
 mod road;
 pub mod scenario;
 mod scene;
+mod signals;
 pub mod summary;
 pub mod track;
 mod trigger;

@@ -98,6 +98,8 @@ pub(crate) struct Actor {
     pub approach: Option<usize>,
     /// A vehicle's sweep through its first junction (`assign_bends`).
     pub bend: Option<std::sync::Arc<Bend>>,
+    /// The traffic signal it answers to (`assign_signals`).
+    pub signal: Option<crate::rollout::junction::signals::Face>,
 }
 
 /// A goal phase as the rollout runs it: its goal speed, from its start time once its trigger

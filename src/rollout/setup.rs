@@ -81,6 +81,7 @@ pub(crate) fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Cl
         in_conflict: false,
         approach: None,
         bend: None,
+        signal: None,
         info,
     }
 }
