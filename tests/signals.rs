@@ -152,6 +152,11 @@ fn walkers_wait_for_the_walk_signal_and_cross_on_it() {
         let end = t.frames - 1;
         assert!((t.poses[i][end].x - x0).abs() > 7.0, "{name} crosses on the walk signal");
     }
+    // One who ignores signals crosses the south arm before its walk signal (the same as the
+    // north crosswalk's), at a gap in traffic.
+    let w3 = idx(t, "w3");
+    let gone = (0..first_walk).find(|&k| (t.poses[w3][k].x - t.poses[w3][0].x).abs() > 7.0);
+    assert!(gone.is_some(), "w3 crosses before the walk signal");
     // Without signals they step off at once.
     let free = front_of(&unsignalled(&case("walkers-cross-on-walk")));
     let w1 = idx(&free.tracks, "w1");
