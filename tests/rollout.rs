@@ -205,6 +205,7 @@ fn scene(specs: Vec<Spec>, conflicts: Vec<Conflict>, traffic: Option<Traffic>, d
             track: s.track.clone(),
             behaviour: Default::default(),
             phases: vec![],
+            siren: None,
             span: Default::default(),
             place_span: Default::default(),
         })

@@ -29,6 +29,7 @@ impl Checker {
         let mut posture: Option<(&ast::Ident, Span)> = None;
         let mut behaviour: Option<&ast::Behaviour> = None;
         let mut phases: Vec<&ast::Goal> = vec![];
+        let mut siren: Option<(&ast::Ident, Span)> = None;
         for st in &a.stmts {
             let (slot_first, what): (Option<Span>, &str) = match st {
                 ast::AgentStmt::At { place: p, span } => (place.replace((p, *span)).map(|x| x.1), "placement `at`"),
@@ -45,6 +46,7 @@ impl Checker {
                 ast::AgentStmt::Track(t) => (track.replace(t).map(|x| x.span), "`track`"),
                 ast::AgentStmt::Posture { word, span } => (posture.replace((word, *span)).map(|x| x.1), "`posture`"),
                 ast::AgentStmt::Behaviour(b) => (behaviour.replace(b).map(|x| x.span), "`behaviour`"),
+                ast::AgentStmt::Siren { value, span } => (siren.replace((value, *span)).map(|x| x.1), "`siren`"),
             };
             if let Some(first) = slot_first {
                 self.dup(what, first, st.span());
@@ -143,6 +145,7 @@ impl Checker {
             None => Some(Behaviour::default()),
         };
         let (kinds, class, motion) = kind?;
+        let siren = self.siren(siren, &kinds, is_static);
         Some(Agent {
             name: a.name.name.clone(),
             kinds,
@@ -159,12 +162,33 @@ impl Checker {
             posture: posture?,
             behaviour: behaviour_c?,
             phases: phases_c?,
+            siren: siren?,
             span,
             place_span: place_span.unwrap_or(span),
         })
         // A size or track that was given but invalid has been reported: no agent then.
         .filter(|_| size.iter().all(|s| s.is_none_or(|x| x.is_some())))
         .filter(|_| track.is_none() || track_keys.is_some())
+    }
+
+    /// `siren on|off`: only an emergency vehicle (a kind in or derived from `EMERGENCY_KINDS`,
+    /// every kind of a `one_of`) carries one. `Some(None)` where none is stated.
+    fn siren(&mut self, siren: Option<(&ast::Ident, Span)>, kinds: &[String], is_static: bool) -> Option<Option<bool>> {
+        let Some((word, span)) = siren else { return Some(None) };
+        let on = super::word(self, word, &[("on", true), ("off", false)], "siren setting")?;
+        let emergency = |k: &String| {
+            EMERGENCY_KINDS.contains(&k.as_str()) || self.kinds.get(k).is_some_and(|(kind, _)| kind.emergency)
+        };
+        if is_static || !kinds.iter().all(emergency) {
+            let none = kinds.iter().find(|k| is_static || !emergency(k)).map_or("", String::as_str);
+            self.err(
+                Diagnostic::error("E0170", format!("`{none}` has no siren"))
+                    .label(span, "siren on a kind that is not an emergency vehicle")
+                    .help("only ambulance, fire_truck, police_car and kinds derived from them carry a siren"),
+            );
+            return None;
+        }
+        Some(Some(on))
     }
 
     fn track(

@@ -242,32 +242,6 @@ impl Checker {
         }
         ok.then_some(Some(out))
     }
-
-    /// Checks on goals that name other agents, once every agent's class is known.
-    pub(super) fn goal_refs(&mut self, a: &Agent, ast_a: &ast::Agent, agents: &[Option<Agent>]) {
-        let Some(g) = &a.goal else { return };
-        if let Lateral::AwayFrom(i) = g.lateral
-            && let Some(other) = &agents[i]
-            && other.motion == Motion::Static
-        {
-            let span = find_goal_span(ast_a, "lateral");
-            self.err(
-                Diagnostic::error("E0113", format!("`{}` never moves, so nothing approaches", other.name))
-                    .label(span, "away_from a static thing")
-                    .help("`away_from` names an approaching mover; to pass an object use `change_lane`"),
-            );
-        }
-    }
-}
-
-fn find_goal_span(a: &ast::Agent, key: &str) -> Span {
-    a.stmts
-        .iter()
-        .find_map(|s| match s {
-            ast::AgentStmt::Goal(g) => g.stmts.iter().find(|x| x.keyword() == key).map(|x| x.span()),
-            _ => None,
-        })
-        .unwrap_or(a.span)
 }
 
 fn lateral_name(l: Lateral) -> &'static str {

@@ -282,6 +282,9 @@ pub struct Agent {
     /// Later goal blocks, in order: each takes over from the one before once it starts.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub phases: Vec<Phase>,
+    /// `siren on|off` as stated (emergency vehicles only); unstated, an emergency vehicle's is on.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub siren: Option<bool>,
     #[serde(skip)]
     pub span: Span,
     #[serde(skip)]

@@ -102,11 +102,6 @@ impl Checker {
             agents_ast.iter().map(|a| self.agent(a, road.as_ref(), &order, duration_s, &mut used_kinds)).collect();
         let rows: Vec<Option<Row>> = rows_ast.iter().map(|r| self.row(r, road.as_ref(), &mut used_kinds)).collect();
 
-        // Goals that refer to other agents, now that classes are known.
-        for (a, ast_a) in agents.iter().zip(&agents_ast) {
-            let Some(a) = a else { continue };
-            self.goal_refs(a, ast_a, &agents);
-        }
         self.trigger_refs(&agents, &agents_ast, road.as_ref());
 
         let conflicts: Vec<Option<Conflict>> =

@@ -375,6 +375,17 @@ tracks have no phases.\n
     goal { speed 4 m/s; turn left; start after 1 s }             // error: a turn in a phase",
     },
     Code {
+        code: "E0170",
+        title: "siren on a kind without one",
+        explanation: "`siren on` and `siren off` are for emergency vehicles: `ambulance`, `fire_truck`,\n\
+`police_car` and kinds derived from them, whose siren is on unless stated. With it on, cross\n\
+traffic holds for them at junctions and vehicles ahead pull over; `siren off` makes one an\n\
+ordinary vehicle. Any other kind has no siren.\n
+    agent amb: ambulance { at west.in[1], 60 m before center; speed 50 km/h; siren off }  // fine
+    agent car: sedan { at west.in[1], 20 m before center; siren on }  // error
+    kind my_amb: ambulance { length 7.0 m }   // derived: `siren off` is fine on it",
+    },
+    Code {
         code: "E0201",
         title: "placement off a valid surface",
         explanation: "Each class starts where it can physically be: moving vehicles on lanes, shoulders or\n\

@@ -8,6 +8,7 @@ use crate::place::Pose;
 use crate::road::route::Junction;
 use crate::rollout::junction::bend::Bend;
 use crate::rollout::path::Path;
+use crate::rollout::room::Room;
 use crate::rollout::{Limits, TrackAgent};
 use glam::DVec2;
 
@@ -100,6 +101,17 @@ pub(crate) struct Actor {
     pub bend: Option<std::sync::Arc<Bend>>,
     /// The traffic signal it answers to (`assign_signals`).
     pub signal: Option<crate::rollout::junction::signals::Face>,
+    /// Stands where it is for good (an object, a static kind, a vehicle with neither speed nor
+    /// a goal that moves it): vehicles pass it where there is room (`Sim::avoid`).
+    pub blocker: bool,
+    /// The paving round a blocker standing in a lane.
+    pub room: Option<Room>,
+    /// A vehicle's offset when it pulls over: onto the shoulder, or to the right of its lane.
+    pub pull: f64,
+    /// Half the width of a vehicle's start lane, m.
+    pub lane_hw: f64,
+    /// A vehicle's lane is the only one of its direction (a two-lane road).
+    pub single: bool,
 }
 
 /// A goal phase as the rollout runs it: its goal speed, from its start time once its trigger

@@ -7,7 +7,9 @@ use crate::rollout::Tracks;
 use crate::rollout::agent::Rank;
 use crate::rollout::agent::initial;
 use crate::rollout::agent::{Actor, Conf, Drive, Lat, State};
+use crate::rollout::drive::avoid::Blocking;
 use crate::rollout::drive::index::{AlongIndexes, Near};
+use crate::rollout::drive::siren::Yield;
 use crate::rollout::kinematics::{replay, steer};
 use crate::rollout::path::Foot;
 use crate::rollout::staging::plan::Plan;
@@ -72,6 +74,12 @@ pub(crate) struct Facts {
     pub(crate) near: Vec<Near>,
     /// This frame: agents whose triggers fired (`fire_triggers`), and whether for a phase.
     pub(crate) fired: Vec<(usize, bool)>,
+    /// Agents that stand for good (`Actor::blocker`), for `avoid`.
+    pub(crate) blockers: Vec<usize>,
+    /// Emergency vehicles that drive (`Actor::emergency`), for `siren_for`.
+    pub(crate) sirens: Vec<usize>,
+    /// Per agent, this frame: the emergency vehicle it makes way for (`siren_for`).
+    pub(crate) siren_for: Vec<Option<Yield>>,
 }
 
 /// Where a run starts and what it keeps (`Sim::keep_states`, `Sim::resume`).
@@ -102,6 +110,8 @@ pub(crate) struct Scratch {
     pub(crate) proj: Vec<Foot<DVec2>>,
     /// A striker's braking course (`braking_course`).
     pub(crate) course: Vec<(f64, DVec2, f64)>,
+    /// The obstacles `avoid` sees.
+    pub(crate) blocking: Vec<Blocking>,
     /// Per striker, each bystander that held it back at full speed: when first, and for how
     /// many frames.
     pub(crate) blocked_by: Vec<Vec<(usize, f64, u32)>>,
@@ -115,6 +125,7 @@ impl Scratch {
             cand: Vec::with_capacity(agents + 1),
             proj: Vec::with_capacity(agents + 1),
             course: Vec::with_capacity(COURSE_STEPS),
+            blocking: Vec::with_capacity(16),
             blocked_by: vec![Vec::new(); agents],
         }
     }
@@ -196,6 +207,11 @@ impl<'a, 'b> Sim<'a, 'b> {
                 easing: Vec::with_capacity(actors.len()),
                 near: Vec::with_capacity(actors.len()),
                 fired: Vec::with_capacity(actors.len()),
+                blockers: (0..actors.len()).filter(|&i| actors[i].blocker).collect(),
+                sirens: (0..actors.len())
+                    .filter(|&i| actors[i].emergency && matches!(actors[i].drive, Drive::Mover))
+                    .collect(),
+                siren_for: vec![None; actors.len()],
             },
             any_trigger: actors.iter().any(|a| a.trigger.is_some() || !a.phases.is_empty()),
             approach_slot,
@@ -253,9 +269,14 @@ impl<'a, 'b> Sim<'a, 'b> {
                     (*d, *y) = (DVec2::from_angle(st.yaw), Some(st.yaw.to_bits()));
                 }
             }
+            if !self.facts.sirens.is_empty() {
+                for i in 0..self.actors.len() {
+                    self.facts.siren_for[i] = self.siren_for(i);
+                }
+            }
             self.facts.easing.clear();
             for (j, (o, b)) in self.cur.iter().zip(self.actors.iter()).enumerate() {
-                if o.triggered && matches!(b.lateral, Lat::Away { .. }) {
+                if (o.triggered && matches!(b.lateral, Lat::Away { .. })) || self.facts.siren_for[j].is_some() {
                     self.facts.easing.push(j);
                 }
             }

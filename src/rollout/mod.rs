@@ -35,6 +35,7 @@ mod frame;
 mod junction;
 mod kinematics;
 mod path;
+mod room;
 mod safety;
 mod setup;
 mod staging;

@@ -12,6 +12,7 @@ use crate::rollout::agent::{Actor, Conf, Drive, Lat, Stage, StopGoal};
 use crate::rollout::junction::dry_run::junction_curvature;
 use crate::rollout::path::Path;
 use crate::rollout::path::Resampler;
+use crate::rollout::room::{room_at, single_lane};
 use crate::rollout::traffic;
 use crate::rollout::{TrackAgent, limits};
 use crate::sample::{Concrete, ConcreteAgent};
@@ -82,6 +83,11 @@ pub(crate) fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Cl
         approach: None,
         bend: None,
         signal: None,
+        blocker: false,
+        room: None,
+        pull: 0.0,
+        lane_hw: 1.75,
+        single: false,
         info,
     }
 }
@@ -109,11 +115,14 @@ pub(crate) fn build_actor(
         return base_actor(info, p.pose, p.motion, p.class, Drive::Replay(keys.clone()));
     }
     let Some(ca) = ca.filter(|_| !p.is_object && p.motion != Motion::Static) else {
-        return base_actor(info, p.pose, p.motion, p.class, Drive::Static);
+        let mut a = base_actor(info, p.pose, p.motion, p.class, Drive::Static);
+        a.blocker = true;
+        a.room = room_at(map, DVec2::new(p.pose.x, p.pose.y));
+        return a;
     };
     let mut a = base_actor(info, p.pose, p.motion, p.class, Drive::Mover);
     a.span = Some(p.span);
-    a.emergency = a.vehicle && is_emergency(c, &p.kind);
+    a.emergency = a.vehicle && is_emergency(c, &p.kind) && ca.siren != Some(false);
     let pos = DVec2::new(p.pose.x, p.pose.y);
     let goal = ca.goal.as_ref();
     let fail = |errs: &mut Vec<Diagnostic>, msg: String, help: &str| errs.push(goal_error(ca, msg, help));
@@ -166,10 +175,7 @@ pub(crate) fn build_actor(
         None => a.v0,
     };
     let lane = lane_here.map(|l| &map.lanes[l]);
-    let aside = |lane: Option<&crate::road::map::Lane>, hw: f64, d0: f64| -> f64 {
-        let (w, sh) = lane.map(|l| (l.width, l.shoulder_right)).unwrap_or((3.5, 0.0));
-        (-(w / 2.0 + sh - hw - 0.2)).min(d0)
-    };
+    let aside = pull_offset;
     a.lateral = match lateral {
         Lateral::HoldLane | Lateral::Cross => Lat::Hold,
         Lateral::ChangeLane(_) => Lat::Shift { target: 0.0, dur: LANE_CHANGE_S },
@@ -199,7 +205,27 @@ pub(crate) fn build_actor(
         },
         Some(Stop::After(dist)) => StopGoal::Centre(a.s0 + dist.max(0.0)),
     };
+    if a.vehicle {
+        a.pull = pull_offset(lane, a.hw, a.d0);
+        a.lane_hw = lane.map_or(1.75, |l| l.width / 2.0);
+        a.single = lane_here.is_some_and(|l| single_lane(map, l));
+        // Stalled: no speed, and no goal that would set it going.
+        a.blocker = a.v0 < 0.05
+            && a.v_goal < 0.05
+            && matches!((&a.stop, &a.lateral), (StopGoal::None, Lat::Hold))
+            && goal.and_then(|g| g.turn).is_none();
+        if a.blocker {
+            a.room = room_at(map, pos);
+        }
+    }
     a
+}
+
+/// Where a vehicle in `lane` (centre offset `d0`, half width `hw`) pulls over to: onto the
+/// shoulder, or as far right in its lane as leaves 0.2 m; never left of where it is.
+fn pull_offset(lane: Option<&crate::road::map::Lane>, hw: f64, d0: f64) -> f64 {
+    let (w, sh) = lane.map(|l| (l.width, l.shoulder_right)).unwrap_or((3.5, 0.0));
+    (-(w / 2.0 + sh - hw - 0.2)).min(d0)
 }
 
 /// What set-up needs of the lane a vehicle's route starts on: its speed limit, the stop line
@@ -344,6 +370,9 @@ pub(crate) fn background_actor(map: &Map, s: traffic::Spawn, duration: f64, rout
     a.v0 = s.speed;
     a.v_hold = s.speed;
     a.v_goal = s.target;
+    a.pull = pull_offset(Some(lane), a.hw, 0.0);
+    a.lane_hw = lane.width / 2.0;
+    a.single = single_lane(map, s.lane);
     a
 }
 

@@ -51,6 +51,9 @@ pub struct ConcreteAgent {
     pub behaviour: Behaviour,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub phases: Vec<Phase<f64>>,
+    /// `siren on|off` as stated (`Agent::siren`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub siren: Option<bool>,
     #[serde(skip)]
     pub span: crate::source::Span,
     #[serde(skip)]
@@ -111,6 +114,7 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
                     .iter()
                     .map(|p| Phase { speed: r.draw(p.speed), start_after: p.start_after, start_when: p.start_when })
                     .collect(),
+                siren: a.siren,
                 span: a.span,
                 place_span: a.place_span,
             }

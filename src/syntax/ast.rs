@@ -162,12 +162,17 @@ pub enum AgentStmt {
         span: Span,
     },
     Behaviour(Behaviour),
+    /// `siren on|off` (the word as written, checked by the checker).
+    Siren {
+        value: Ident,
+        span: Span,
+    },
 }
 
 impl AgentStmt {
     pub fn span(&self) -> Span {
         match self {
-            AgentStmt::At { span, .. } | AgentStmt::Speed { span, .. } => *span,
+            AgentStmt::At { span, .. } | AgentStmt::Speed { span, .. } | AgentStmt::Siren { span, .. } => *span,
             AgentStmt::Size(s) => s.span,
             AgentStmt::Goal(g) => g.span,
             AgentStmt::Track(t) => t.span,

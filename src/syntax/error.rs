@@ -44,6 +44,7 @@ const KEYWORDS: &[&str] = &[
     "turn",
     "start",
     "track",
+    "siren",
     "yaw",
     "posture",
     "conflict",
@@ -256,6 +257,7 @@ fn begins_statement(r: &Rule) -> bool {
             | Rule::kw_goal
             | Rule::kw_track
             | Rule::kw_posture
+            | Rule::kw_siren
             | Rule::kw_lateral
             | Rule::kw_stop
             | Rule::kw_turn

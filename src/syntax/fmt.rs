@@ -158,6 +158,7 @@ fn agent_stmt(s: &AgentStmt) -> Doc {
     match s {
         AgentStmt::At { place, span } => Doc::Line { span: *span, text: format!("at {}", placement(place)) },
         AgentStmt::Speed { value, span } => Doc::Line { span: *span, text: format!("speed {}", val(value)) },
+        AgentStmt::Siren { value, span } => Doc::Line { span: *span, text: format!("siren {}", value.name) },
         AgentStmt::Size(s) => size(s),
         AgentStmt::Goal(g) => Doc::Block {
             header: "goal".into(),

@@ -235,6 +235,7 @@ impl Builder {
         match p.as_rule() {
             Rule::at_stmt => AgentStmt::At { place: self.placement(last(p)), span },
             Rule::speed_stmt => AgentStmt::Speed { value: self.value(last(p)), span },
+            Rule::siren_stmt => AgentStmt::Siren { value: self.ident(last(p)), span },
             Rule::size_stmt => AgentStmt::Size(self.size(p)),
             Rule::goal => {
                 let stmts = inner(p).into_iter().skip(1).map(|q| self.goal_stmt(q)).collect();

@@ -3,16 +3,19 @@
 //! contact poses ahead, its stop goals; then its body moved, a kinematic bicycle or a holonomic
 //! step.
 
+pub(crate) mod avoid;
 pub(crate) mod follow;
 pub(crate) mod index;
 pub(crate) mod neighbours;
 pub(crate) mod pair;
+pub(crate) mod siren;
 
 use crate::geom::{Obb, wrap_angle};
 use crate::rollout::agent::{Lat, State, StopGoal};
 use crate::rollout::drive::follow::{idm_free, stop_law};
 use crate::rollout::drive::neighbours::Corridor;
 use crate::rollout::drive::pair::{Constraint, Step};
+use crate::rollout::drive::siren::MOVE_OVER_SPEED;
 use crate::rollout::frame::{Scratch, Sim};
 use crate::rollout::kinematics::{band_meets, look_ahead, pursuit, quintic, slip_tan, turn_toward};
 use crate::rollout::path::Foot;
@@ -25,11 +28,11 @@ const WALK_ASIDE: f64 = 0.2;
 /// How far a vehicle's lateral reference may lead its body's offset (m).
 const MAX_LEAD: f64 = 0.5;
 /// Lateral speed of a vehicle squeezing past an agent that eases aside for it (m/s).
-const PASS_LAT_RATE: f64 = 1.0;
+pub(crate) const PASS_LAT_RATE: f64 = 1.0;
 /// Side clearance kept while passing it (m).
-const PASS_CLEARANCE: f64 = 0.4;
+pub(crate) const PASS_CLEARANCE: f64 = 0.4;
 /// The most a pass may move off the lane's centre line (m): half into the next lane.
-const PASS_MAX_SHIFT: f64 = 2.5;
+pub(crate) const PASS_MAX_SHIFT: f64 = 2.5;
 
 /// A need to brake for others, m/s2 below zero, that a late reactor notices (`react`).
 const BRAKE_NEED: f64 = -0.5;
@@ -58,8 +61,10 @@ struct LateralPlan {
     phase: f64,
     /// The reference offset after this step.
     d_next: f64,
-    /// Where a pass of one easing aside for us heads.
+    /// Where a pass of one easing aside for us (or of an obstacle) heads.
     pass_target: Option<f64>,
+    /// Held back from passing an obstacle: how far short of it to wait (`Avoid::standoff`).
+    standoff: f64,
 }
 
 impl Sim<'_, '_> {
@@ -74,9 +79,15 @@ impl Sim<'_, '_> {
             return State { v: 0.0, ..st };
         }
         let active = a.active(&st, t);
-        let v_des = if active { a.goal_speed(&st) } else { a.v_hold }.min(a.path.cap(st.s));
-        let lateral = self.lateral(i, active);
-        let LateralPlan { target, triggered, mut phase, mut d_next, pass_target, .. } = lateral;
+        let mut v_des = if active { a.goal_speed(&st) } else { a.v_hold }.min(a.path.cap(st.s));
+        // Making way for an emergency vehicle: over at a moderate pace, then stopped till it
+        // has passed.
+        if let Some(y) = self.facts.siren_for[i] {
+            let over = (st.off - y.offset).abs() < 0.3;
+            v_des = if over { 0.0 } else { v_des.min(st.v.max(3.0)).min(MOVE_OVER_SPEED) };
+        }
+        let lateral = self.lateral(sc, i, active);
+        let LateralPlan { target, triggered, mut phase, mut d_next, pass_target, standoff, .. } = lateral;
         let margin = if a.vehicle { 0.25 } else { 0.1 };
         // Till the reference is there: the profile's clock runs out while a creeping car's
         // reference is held back by its body (`MAX_LEAD`), and the target lane must still be
@@ -144,6 +155,7 @@ impl Sim<'_, '_> {
             shortest,
             named,
             clearing,
+            standoff,
         };
         let way = self.in_the_way(sc, &s);
         // What others ask of us (the agents in our way, strikers ahead, our holds) is answered
@@ -195,7 +207,7 @@ impl Sim<'_, '_> {
 
     /// Lateral: where the profile would put us next, and where a pass of one easing aside for
     /// us heads.
-    fn lateral(&self, i: usize, active: bool) -> LateralPlan {
+    fn lateral(&self, sc: &mut Scratch, i: usize, active: bool) -> LateralPlan {
         let (a, st, dt) = (&self.actors[i], self.cur[i], self.dt);
         let lim = a.lim;
         let mut triggered = st.triggered;
@@ -203,31 +215,52 @@ impl Sim<'_, '_> {
             Lat::Hold => (None, 1.0),
             Lat::Shift { target, dur } => (active.then_some(target), dur),
             Lat::Away { who, target, dur } => {
-                if active && !triggered {
+                // Away from something standing: eased to the far side of our lane from it once it
+                // is near ahead.
+                let stands = self.actors[who].blocker;
+                let mut to = target;
+                if (active && !triggered) || stands {
                     let o = &self.cur[who];
                     let Foot { s: sk, d: lk, beyond, .. } =
                         a.path.frenet(o.pos, st.s + (o.pos - st.pos).dot(DVec2::from_angle(st.yaw)));
                     let behind = st.s - sk;
                     let closing = o.v - st.v;
-                    triggered = beyond < 1.0
-                        && behind > 0.0
-                        && behind < 40.0f64.max(closing * 5.0)
-                        && (lk - st.d).abs() < 4.0
-                        && (closing > 0.0 || behind < 15.0);
+                    if stands {
+                        to = if lk < a.d0 { a.d0 + (a.lane_hw - a.hw - 0.2).max(0.0) } else { a.pull };
+                    }
+                    triggered = triggered
+                        || (active
+                            && beyond < 1.0
+                            && (lk - st.d).abs() < 4.0
+                            && if stands {
+                                -behind > 0.0 && -behind < 40.0f64.max(st.v * 5.0)
+                            } else {
+                                behind > 0.0 && behind < 40.0f64.max(closing * 5.0) && (closing > 0.0 || behind < 15.0)
+                            });
                 }
-                (triggered.then_some(target), dur)
+                (triggered.then_some(to), dur)
             }
         };
         let mut phase = st.phase;
         let mut d_next = st.d;
         let mut pass_target = None;
+        let mut standoff = 0.0;
         if let Some(tg) = target {
             phase = (st.phase + dt / dur).min(1.0);
             d_next = a.d0 + (tg - a.d0) * quintic(phase);
         } else if a.vehicle && matches!(a.lateral, Lat::Hold) {
-            // Squeeze past whoever is easing aside for us (`away_from`), then settle back.
+            // Pull over for an emergency vehicle; squeeze past whoever is easing aside for us
+            // (`away_from`, or for our siren) or round what stands in our lane; then settle back.
             let look = st.v * st.v / (2.0 * lim.brake) + 2.5 * st.v + 15.0;
-            let tg = self.pass_offset(i, look).unwrap_or(a.d0);
+            let tg = if let Some(y) = self.facts.siren_for[i] {
+                y.offset
+            } else if let Some(tg) = self.pass_offset(i, look) {
+                tg
+            } else {
+                let avoid = self.avoid(i, look, &mut sc.blocking);
+                standoff = avoid.map_or(0.0, |v| if v.target.is_none() { v.standoff } else { 0.0 });
+                avoid.and_then(|v| v.target).unwrap_or(a.d0)
+            };
             pass_target = Some(tg);
             d_next = st.d + (tg - st.d).clamp(-PASS_LAT_RATE * dt, PASS_LAT_RATE * dt);
         }
@@ -242,7 +275,7 @@ impl Sim<'_, '_> {
             // point its nose ever more steeply into the next lane, past the gap acceptance.
             d_next = d_next.clamp(st.d.min(st.off - MAX_LEAD), st.d.max(st.off + MAX_LEAD));
         }
-        LateralPlan { target, dur, triggered, phase, d_next, pass_target }
+        LateralPlan { target, dur, triggered, phase, d_next, pass_target, standoff }
     }
 
     /// Every agent in the way of step `s`, each one's `Constraint` folded.
@@ -369,7 +402,10 @@ impl Sim<'_, '_> {
         let mut best: Option<f64> = None;
         for &j in &self.facts.easing {
             let (o, b) = (&self.cur[j], &self.actors[j]);
-            if j == i || !matches!(b.lateral, Lat::Away { who, .. } if who == i) {
+            // Easing for us: by its goal, or for our siren when it goes our way.
+            let by_goal = matches!(b.lateral, Lat::Away { who, .. } if who == i);
+            let by_siren = self.facts.siren_for[j].is_some_and(|y| y.to == i) && self.facts.dirs[j].dot(fwd) > 0.0;
+            if j == i || !(by_goal || by_siren) {
                 continue;
             }
             let ahead = (o.pos - st.pos).dot(fwd);
@@ -385,7 +421,15 @@ impl Sim<'_, '_> {
             let ext_lat = b.hl * rel.sin().abs() + b.hw * rel.cos().abs();
             // It eases toward its right (negative offsets); pass on the side it leaves.
             let side = if lj > a.d0 + 0.05 { -1.0 } else { 1.0 };
-            let d = lj + side * (ext_lat + a.hw + PASS_CLEARANCE);
+            let mut d = lj + side * (ext_lat + a.hw + PASS_CLEARANCE);
+            if by_siren {
+                // Only one in our way asks us over, and never toward it (one in the next lane
+                // moving off to its far side, or onto the shoulder, leaves us our lane).
+                if lj - ext_lat > a.d0 + a.hw + 0.25 || lj + ext_lat < a.d0 - a.hw - 0.25 {
+                    continue;
+                }
+                d = if side > 0.0 { d.max(a.d0) } else { d.min(a.d0) };
+            }
             if (d - a.d0).abs() > PASS_MAX_SHIFT {
                 continue;
             }

@@ -51,6 +51,8 @@ pub(crate) struct Step<'s> {
     pub named: Option<usize>,
     /// Clearing a junction for an emergency vehicle.
     pub clearing: bool,
+    /// Held back from passing an obstacle: how far short of one to wait (`Avoid::standoff`).
+    pub standoff: f64,
 }
 
 /// Agent `j` as seen from our route this step.
@@ -236,6 +238,7 @@ impl Sim<'_, '_> {
         };
         if a.vehicle
             && ds > -(a.hl + b.hl)
+            && self.sweep_laid(s, b)
             && let Some(bd) = &a.bend
             && let Some(at) = stands()
                 .iter()
@@ -285,6 +288,13 @@ impl Sim<'_, '_> {
         way
     }
 
+    /// Whether our junction sweep, laid along our lane's centre line, is where we drive past `b`:
+    /// not while we pass round it, off that line, as round a car stalled in the junction
+    /// (tests/rollout-cases/car-stalled-in-a-junction-cross-traffic-drives-around.scn).
+    fn sweep_laid(&self, s: &Step, b: &Actor) -> bool {
+        !b.blocker || (s.st.d - s.a.d0).abs() < 0.3
+    }
+
     /// Our junction sweep (the dry run's) reaching `x`: through its slices, or its exact boxes where
     /// the slices miss one standing.
     fn sweep_hits(&self, s: &Step, x: &Other, in_sweep: bool, way: &mut Way) {
@@ -301,6 +311,7 @@ impl Sim<'_, '_> {
         // The slices are then searched at least two box lengths on.
         let sweep_hi = (sj + ext_lon + a.hl + 2.0 * b.hl).max(st.s + 2.0 * (a.hl + b.hl) + 5.0);
         if !way.in_cur
+            && self.sweep_laid(s, b)
             && a.vehicle
             && in_sweep
             && ds > 0.0
@@ -326,6 +337,7 @@ impl Sim<'_, '_> {
         // for our tail.
         if !way.in_cur
             && !way.swept
+            && self.sweep_laid(s, b)
             && a.vehicle
             && o.v < 0.5
             && let Some(bd) = &a.bend
@@ -505,7 +517,14 @@ impl Sim<'_, '_> {
         if !obstacle {
             return Constraint::FREE;
         }
-        let s0 = if is_named { 2.0 } else { lim.min_gap };
+        // Waiting to pass an obstacle, far enough back to steer out round it from a standstill.
+        let s0 = if is_named {
+            2.0
+        } else if b.blocker {
+            lim.min_gap.max(s.standoff)
+        } else {
+            lim.min_gap
+        };
         // A striker coming at us does not stop for us: it comes on to its target, where the
         // latch stops it. Braking for it where it is now, a motorcycle met a bus overtaking
         // into its lane at 18 m/s and stopped at 13 m/s2. The reach only slows us: where we

@@ -52,7 +52,9 @@ impl Sim<'_, '_> {
     /// far its front may go while it holds (stop line, else short of the zone).
     pub(crate) fn zone_rank(&self, i: usize, enter: f64, meet: f64, leave: f64, t: f64) -> Rank {
         let (a, st) = (&self.actors[i], &self.cur[i]);
-        if st.s > leave || st.frozen || st.stopped {
+        // One standing for good (`Actor::blocker`) takes no turn: it is driven around
+        // (tests/rollout-cases/car-stalled-in-a-junction-cross-traffic-drives-around.scn).
+        if st.s > leave || st.frozen || st.stopped || a.blocker {
             return None;
         }
         if let StopGoal::Front(sf) | StopGoal::Centre(sf) = a.stop
@@ -94,7 +96,13 @@ impl Sim<'_, '_> {
     /// zone with these bounds): what it reads (`cur`, `behind`, the emergency holds) is settled
     /// before the right-of-way rule runs, and `ranks` is cleared each frame.
     pub(crate) fn rank(&self, ranks: &mut [Option<Rank>], i: usize, enter: f64, meet: f64, leave: f64, t: f64) -> Rank {
-        let same = |c: &Crossing| c.enter.to_bits() == enter.to_bits() && c.leave.to_bits() == leave.to_bits();
+        // Keyed by all three bounds: two crossings may share `enter` and `leave` and differ in
+        // `meet` (a car passing a standing one beside a turning bus met a stale rank).
+        let same = |c: &Crossing| {
+            c.enter.to_bits() == enter.to_bits()
+                && c.meet.to_bits() == meet.to_bits()
+                && c.leave.to_bits() == leave.to_bits()
+        };
         let Some(k) = self.actors[i].crossings.iter().position(same) else {
             return self.zone_rank(i, enter, meet, leave, t);
         };

@@ -1,0 +1,195 @@
+//! Passing what stands in the lane for good (`Actor::blocker`: a wreck, a double-parked or
+//! stalled car, a cone): a vehicle nudges over within its lane, or moves into the next lane or
+//! onto the shoulder once the oncoming traffic there leaves it time, and stops behind it only
+//! where the paving leaves no room (`Sim::avoid`).
+
+use crate::rollout::drive::{PASS_CLEARANCE, PASS_LAT_RATE};
+use crate::rollout::frame::Sim;
+use crate::rollout::kinematics::slip_tan;
+use crate::rollout::path::Foot;
+
+/// How far the paving reaches either side of the lane's centre line where the paving round the
+/// obstacle is unknown (in a junction: at least the next lane), m.
+const OPEN_SHIFT: f64 = 5.0;
+/// The margin kept round our box in the band the obstacle must leave (`drive`'s), m.
+const BAND_MARGIN: f64 = 0.25;
+/// Clearance kept from the paving's edge, m.
+const EDGE_CLEAR: f64 = 0.1;
+/// Time an oncoming vehicle must still be away from the end of the pass when we would be past
+/// it, s.
+const ONCOMING_GAP_S: f64 = 3.0;
+/// Distance beyond the move's own length at which a pass sets out, m.
+const SET_OUT_M: f64 = 5.0;
+
+/// One obstacle seen from our route.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Blocking {
+    pub sj: f64,
+    pub lj: f64,
+    pub ext_lon: f64,
+    pub ext_lat: f64,
+    /// The paving round it, as offsets on our route.
+    pub lo: f64,
+    pub hi: f64,
+}
+
+impl Blocking {
+    /// Whether it reaches into the offsets `lo..hi` of our route.
+    fn meets(&self, (lo, hi): (f64, f64)) -> bool {
+        self.lj - self.ext_lat < hi && self.lj + self.ext_lat > lo
+    }
+}
+
+/// What `Sim::avoid` decides for one step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Avoid {
+    /// The offset the pass heads for, once it may go.
+    pub target: Option<f64>,
+    /// Held back by oncoming traffic: how far short of the obstacle to wait, so that the box
+    /// can still steer out round it from a standstill, m (0 where there is no room at all).
+    pub standoff: f64,
+}
+
+impl Sim<'_, '_> {
+    /// How vehicle `i` gets past whatever stands for good in the band it drives, within `look`
+    /// ahead: `None` where nothing does.
+    pub(crate) fn avoid(&self, i: usize, look: f64, seen: &mut Vec<Blocking>) -> Option<Avoid> {
+        let (a, st) = (&self.actors[i], &self.cur[i]);
+        if !a.vehicle || a.in_conflict || a.blocker || self.facts.blockers.is_empty() {
+            return None;
+        }
+        self.blocking(i, look, seen);
+        let m = BAND_MARGIN;
+        let here = (a.d0 - a.hw - m, a.d0 + a.hw + m);
+        if !seen.iter().any(|b| b.meets(here)) {
+            return None;
+        }
+        // Left first: on a tie, pass on the overtaking side.
+        let pick = [1.0, -1.0]
+            .into_iter()
+            .filter_map(|side| self.pass_side(i, side, seen))
+            .reduce(|p, q| if (q.0 - a.d0).abs() < (p.0 - a.d0).abs() - 1e-9 { q } else { p });
+        let Some((target, need, far, near)) = pick else {
+            return Some(Avoid { target: None, standoff: 0.0 });
+        };
+        // Steering out from a standstill takes more than the slip angle's run (the heading has
+        // to build up first).
+        let standoff = 1.5 * need / slip_tan(a) + 2.0;
+        let side = (target - a.d0).signum();
+        // Set out so as to be over before car-following toward it slows us (the reference moves
+        // over at `PASS_LAT_RATE`), not a long way back in the oncoming lane.
+        let set_out = st.v * (target - st.d).abs() / PASS_LAT_RATE + standoff + SET_OUT_M;
+        if near - (st.s + a.hl) > set_out {
+            return Some(Avoid { target: None, standoff: 0.0 });
+        }
+        // Within our lane, or with the body already over the line: go. Short of the line a pass
+        // that has set out still turns back for oncoming traffic.
+        let (elo, ehi) =
+            if side > 0.0 { (a.d0 + a.lane_hw, target + a.hw + m) } else { (target - a.hw - m, a.d0 - a.lane_hw) };
+        let over = if side > 0.0 { st.off + a.hw > a.d0 + a.lane_hw } else { st.off - a.hw < a.d0 - a.lane_hw };
+        if elo >= ehi || over || self.oncoming_clear(i, (elo, ehi), far) {
+            Some(Avoid { target: Some(target), standoff })
+        } else {
+            Some(Avoid { target: None, standoff })
+        }
+    }
+
+    /// Every obstacle within `look` ahead of vehicle `i` (or beside it, till its rear is a metre
+    /// past), projected onto its route.
+    fn blocking(&self, i: usize, look: f64, seen: &mut Vec<Blocking>) {
+        let (a, st) = (&self.actors[i], &self.cur[i]);
+        let fwd = self.facts.dirs[i];
+        seen.clear();
+        for &j in &self.facts.blockers {
+            let (o, b) = (&self.cur[j], &self.actors[j]);
+            let dp = o.pos - st.pos;
+            let ahead = dp.dot(fwd);
+            if j == i
+                || ahead < -(a.hl + b.radius + 1.0)
+                || ahead > look + a.hl + b.radius
+                || fwd.perp_dot(dp).abs() > 2.0 * OPEN_SHIFT + a.hw + b.radius
+                || self.exempt(i, j)
+            {
+                continue;
+            }
+            let Foot { s: sj, d: lj, beyond, dir: th } = a.path.frenet_dir(o.pos, st.s + ahead);
+            let (cr, sr) = (self.facts.dirs[j].dot(th), th.perp_dot(self.facts.dirs[j]));
+            let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
+            let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
+            if beyond > 0.5 || sj + ext_lon < st.s - a.hl - 1.0 {
+                continue;
+            }
+            // The paving round it in our offsets: its lane runs our way or the other.
+            let (lo, hi) = match b.room {
+                Some(r) if r.dir.dot(th) > 0.7 => (lj - r.off - r.right, lj - r.off + r.left),
+                Some(r) if r.dir.dot(th) < -0.7 => (lj + r.off - r.left, lj + r.off + r.right),
+                _ => (f64::NEG_INFINITY, f64::INFINITY),
+            };
+            seen.push(Blocking { sj, lj, ext_lon, ext_lat, lo, hi });
+        }
+    }
+
+    /// Passing on `side` (+1 left, -1 right): the offset clear of every obstacle in the band
+    /// swept on the way there, how far our box must move before the nearest leaves its band,
+    /// and where the first of them begins and the last ends along our route; `None` where that
+    /// leaves the paving.
+    fn pass_side(&self, i: usize, side: f64, seen: &[Blocking]) -> Option<(f64, f64, f64, f64)> {
+        let a = &self.actors[i];
+        let m = BAND_MARGIN;
+        let band =
+            |tg: f64| if side > 0.0 { (a.d0 - a.hw - m, tg + a.hw + m) } else { (tg - a.hw - m, a.d0 + a.hw + m) };
+        let mut target = a.d0;
+        // Each obstacle cleared may put the next one (a taper's cones) in the band: a few
+        // rounds settle it.
+        for _ in 0..6 {
+            let next = seen
+                .iter()
+                .filter(|b| b.meets(band(target)))
+                .map(|b| b.lj + side * (b.ext_lat + a.hw + PASS_CLEARANCE))
+                .fold(target, |t, d| if side > 0.0 { t.max(d) } else { t.min(d) });
+            if next == target {
+                break;
+            }
+            target = next;
+        }
+        let within = seen.iter().filter(|b| b.meets(band(target)));
+        let (lo, hi) =
+            within.clone().fold((a.d0 - OPEN_SHIFT, a.d0 + OPEN_SHIFT), |(l, h), b| (l.max(b.lo), h.min(b.hi)));
+        if target - a.hw < lo + EDGE_CLEAR || target + a.hw > hi - EDGE_CLEAR {
+            return None;
+        }
+        let need = within.clone().map(|b| side * (b.lj - a.d0) + b.ext_lat + a.hw + m).fold(0.0, f64::max);
+        let far = within.clone().map(|b| b.sj + b.ext_lon).fold(f64::NEG_INFINITY, f64::max);
+        let near = within.map(|b| b.sj - b.ext_lon).fold(f64::INFINITY, f64::min);
+        Some((target, need, far, near))
+    }
+
+    /// Whether no vehicle coming toward vehicle `i` in the offsets `band` of its route would
+    /// reach the end of its pass (`far`, arc length) before it is past, with `ONCOMING_GAP_S` to
+    /// spare, accelerating toward its goal speed.
+    fn oncoming_clear(&self, i: usize, band: (f64, f64), far: f64) -> bool {
+        let (a, st) = (&self.actors[i], &self.cur[i]);
+        let fwd = self.facts.dirs[i];
+        let dist = far + a.hl + 1.0 - st.s;
+        let (v, acc, top) = (st.v, a.lim.accel, a.v_goal.max(1.0));
+        let t_us = if v >= top {
+            dist / v
+        } else {
+            let (t1, d1) = ((top - v) / acc, (top * top - v * v) / (2.0 * acc));
+            if d1 >= dist { ((v * v + 2.0 * acc * dist).sqrt() - v) / acc } else { t1 + (dist - d1) / top }
+        };
+        self.facts.near.iter().enumerate().all(|(k, n)| {
+            let dp = n.pos - st.pos;
+            let ahead = dp.dot(fwd);
+            if k == i || !self.actors[k].vehicle || n.dir.dot(fwd) > -0.5 || ahead < 0.0 || self.actors[k].blocker {
+                return true;
+            }
+            let Foot { s: sk, d: lk, beyond, .. } = a.path.frenet(n.pos, st.s + ahead);
+            if beyond > 0.5 || lk + n.hw < band.0 || lk - n.hw > band.1 {
+                return true;
+            }
+            let front = sk - n.hl - far;
+            front > 2.0 && front / n.v.max(0.1) > t_us + ONCOMING_GAP_S
+        })
+    }
+}
