@@ -258,3 +258,26 @@ pub(crate) struct ZoneRank {
     /// How far its front may go while it holds, m.
     pub rem: f64,
 }
+
+/// One obstacle seen from our route.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Blocking {
+    /// Its station and offset on our route, m.
+    pub sj: f64,
+    pub lj: f64,
+    /// Its half extents along and across our route, m.
+    pub ext_lon: f64,
+    pub ext_lat: f64,
+    /// The paving round it, as offsets on our route.
+    pub lo: f64,
+    pub hi: f64,
+}
+
+/// How a vehicle makes way for an emergency vehicle (`Sim::siren_for`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Yield {
+    /// The emergency vehicle.
+    pub to: usize,
+    /// The offset it moves over to.
+    pub offset: f64,
+}
