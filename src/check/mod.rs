@@ -19,6 +19,7 @@ mod posture;
 mod road;
 pub mod scenario;
 mod scene;
+mod signals;
 pub mod summary;
 pub mod track;
 mod trigger;

@@ -583,6 +583,34 @@ imported with `rocc import boxes`) has no map to check against.\n
     road straight { lanes 1; sidewalks on }
     agent v: sedan { track { 0 s: (-20 m, -1.75 m) yaw 0 deg; 1 s: (-10 m, -6 m) yaw 0 deg } }   // error: on a sidewalk",
     },
+    // ---- traffic signals (E0230) ----
+    Code {
+        code: "E0230",
+        title: "signals on a road without a signalled junction",
+        explanation: "Traffic signals stand at a junction whose approaches have stop lines: `four_way` and\n\
+`t_junction`. A straight road, a curve, a merge or a roundabout has no such junction, so\n\
+`signals on` there would hold nobody and is refused.\n
+    road four_way { signals on }      // fine
+    road straight { signals on }      // error",
+    },
+    Code {
+        code: "E0231",
+        title: "a signal cycle that cannot run",
+        explanation: "A signal cycle's times (`signal_green`, `signal_yellow`, `signal_all_red`,\n\
+`signal_offset`) are single times within 0..600 s, and green must be longer than 0 s: a cycle\n\
+with no green keeps every approach red forever.\n
+    road four_way { signals on; signal_green 25 s; signal_yellow 4 s }   // fine
+    road four_way { signals on; signal_green 0 s }                       // error: red forever
+    road four_way { signals on; signal_yellow -3 s }                     // error: negative",
+    },
+    Code {
+        code: "E0232",
+        title: "a signal cycle without signals",
+        explanation: "`signal_green`, `signal_yellow`, `signal_all_red` and `signal_offset` time the signals\n\
+that `signals on` puts up; without it they time nothing.\n
+    road four_way { signals on; signal_green 30 s }   // fine
+    road four_way { signal_green 30 s }               // error",
+    },
     Code {
         code: "E0301",
         title: "unknown ego",

@@ -99,6 +99,8 @@ pub(crate) struct Actor {
     pub approach: Option<usize>,
     /// A vehicle's sweep through its first junction (`assign_bends`).
     pub bend: Option<std::sync::Arc<Bend>>,
+    /// The traffic signal it answers to (`assign_signals`).
+    pub signal: Option<crate::rollout::junction::signals::Face>,
     /// Stands where it is for good (an object, a static kind, a vehicle with neither speed nor
     /// a goal that moves it): vehicles pass it where there is room (`Sim::avoid`).
     pub blocker: bool,

@@ -282,6 +282,11 @@ impl<'a, 'b> Sim<'a, 'b> {
             // vehicle as not coming.
             for i in 0..self.actors.len() {
                 self.facts.yielding[i] = self.yield_state(i);
+                // A red (or a yellow it can stop for) holds it as an emergency vehicle would.
+                if let Some(rem) = self.signal_hold(i, t) {
+                    let y = &mut self.facts.yielding[i].0;
+                    *y = Some(y.map_or(rem, |h| h.min(rem)));
+                }
             }
             self.queue_heads();
             sc.ranks.fill(None);

@@ -64,6 +64,7 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
     assign_bends(map, &mut actors, dt);
     assign_yields(map, &mut actors, &confs);
     assign_crossings(map, &mut actors, &confs);
+    crate::rollout::junction::signals::assign_signals(map, &mut actors);
     order_crossings(&mut actors, &mut errs);
     if !errs.is_empty() {
         return Err(errs);
