@@ -28,6 +28,7 @@ fn road(template: Template) -> Road {
         length: if template.has_junction() { 60.0 } else { 120.0 },
         radius: if template == Template::Roundabout { 15.0 } else { 100.0 },
         angle: 45f64.to_radians(),
+        signals: None,
     }
 }
 

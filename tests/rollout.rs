@@ -188,6 +188,7 @@ fn scene(specs: Vec<Spec>, conflicts: Vec<Conflict>, traffic: Option<Traffic>, d
         length: 300.0,
         radius: 0.0,
         angle: 0.0,
+        signals: None,
     };
     let agents: Vec<ConcreteAgent> = specs
         .iter()
@@ -237,6 +238,7 @@ fn scene(specs: Vec<Spec>, conflicts: Vec<Conflict>, traffic: Option<Traffic>, d
         agents,
         rows: vec![],
         conflicts,
+        near_misses: vec![],
         traffic,
         kinds: Default::default(),
     };

@@ -9,11 +9,12 @@ use crate::syntax::ast;
 use std::collections::BTreeMap;
 
 /// The settings, with what each takes.
-const SETTINGS: [(&str, &str); 4] = [
+const SETTINGS: [(&str, &str); 5] = [
     ("yield", "`always` or `never`"),
     ("stop_line", "`obey` or `ignore`"),
     ("reaction", "a time, e.g. `reaction 1.5 s`"),
     ("speeding", "a share over the limit, e.g. `speeding 20 %`"),
+    ("signal", "`obey` or `ignore`"),
 ];
 
 impl Checker {
@@ -59,6 +60,9 @@ impl Checker {
                 }
                 ("stop_line", ast::FieldValue::Ident(w)) if w.name == "obey" || w.name == "ignore" => {
                     out.stop_line = w.name == "obey"
+                }
+                ("signal", ast::FieldValue::Ident(w)) if w.name == "obey" || w.name == "ignore" => {
+                    out.signal = w.name == "obey"
                 }
                 ("reaction", ast::FieldValue::Value(v)) => {
                     match self.fixed(v, Dim::Time, "reaction time", 0.0, 5.0, "0..5 s") {

@@ -4,43 +4,102 @@ use super::scenario::*;
 use super::units::Dim;
 use super::{Checker, MAX_DURATION_S, word};
 use crate::diag::Diagnostic;
-use crate::source::Span;
 use crate::syntax::ast;
 use std::collections::BTreeMap;
 
 impl Checker {
-    /// A crash latches its pair from the impact on, so an agent takes part in one conflict only:
-    /// a second block naming it (as at_fault or struck) is rejected, pointing at both.
-    pub(super) fn one_conflict_each(
+    /// A crash latches its pair from the impact on, so an agent's crashes must be possible in
+    /// that light: it strikes once (one intercept, E0121), a pair touches once (E0123), and an
+    /// agent strikes before anything strikes it (it stands still from its first contact, E0122).
+    /// Struck any number of times, in any order, is fine: a pile-up into a car that has stopped.
+    pub(super) fn conflicts_in_order(
         &mut self,
         conflicts: &[Option<Conflict>],
         asts: &[&ast::Conflict],
         order: &[&str],
+        duration: Option<f64>,
     ) {
-        // Agent index -> the block of its first conflict.
-        let mut first: BTreeMap<usize, Span> = BTreeMap::new();
-        for (c, ca) in conflicts.iter().zip(asts) {
-            let Some(c) = c else { continue };
-            for (who, key) in [(c.at_fault, "at_fault"), (c.struck, "struck")] {
-                let field = ca.fields.iter().find(|f| f.key == key).map_or(ca.span, |f| f.span);
-                match first.get(&who) {
-                    None => {
-                        first.insert(who, ca.span);
-                    }
-                    Some(&block) => {
-                        let name = order[who];
-                        self.err(
-                            Diagnostic::error("E0121", format!("`{name}` is in two conflicts"))
-                                .label(field, format!("`{name}` named again here, as {key}"))
-                                .label(block, format!("first conflict of `{name}`"))
-                                .help(format!(
-                                    "a crash holds its pair from the impact on; keep one conflict for `{name}`, or stage the second crash with another agent"
-                                )),
-                        );
-                    }
-                }
+        let when = |c: &Conflict| c.at.unwrap_or(duration.unwrap_or(0.0) / 2.0);
+        let field = |ca: &ast::Conflict, key: &str| ca.fields.iter().find(|f| f.key == key).map_or(ca.span, |f| f.span);
+        let all: Vec<(&Conflict, &ast::Conflict)> =
+            conflicts.iter().zip(asts).filter_map(|(c, a)| c.as_ref().map(|c| (c, *a))).collect();
+        for (i, &(c, ca)) in all.iter().enumerate() {
+            let name = order[c.at_fault];
+            let earlier = &all[..i];
+            if let Some((_, first)) = earlier.iter().find(|(e, _)| e.at_fault == c.at_fault) {
+                self.err(
+                    Diagnostic::error("E0121", format!("`{name}` strikes in two conflicts"))
+                        .label(field(ca, "at_fault"), format!("`{name}` at fault again here"))
+                        .label(first.span, format!("first conflict `{name}` strikes in"))
+                        .help(format!(
+                            "an at-fault agent makes one staged approach; keep one strike for `{name}`, or let another agent strike"
+                        )),
+                );
+                continue;
+            }
+            let same_pair = |e: &Conflict| {
+                (e.at_fault, e.struck) == (c.at_fault, c.struck) || (e.at_fault, e.struck) == (c.struck, c.at_fault)
+            };
+            if let Some((_, first)) = earlier.iter().find(|(e, _)| same_pair(e)) {
+                let other = order[c.struck];
+                self.err(
+                    Diagnostic::error("E0123", format!("`{name}` and `{other}` crash twice"))
+                        .label(ca.span, "second crash of the pair")
+                        .label(first.span, "first crash of the pair")
+                        .help(
+                            "a crash holds its pair from the contact on, so a pair touches once; keep one of the two",
+                        ),
+                );
+                continue;
+            }
+            // Struck before its own strike: it stands still from then on and cannot strike.
+            let struck_first = all
+                .iter()
+                .filter(|(e, _)| e.struck == c.at_fault && when(e) < when(c))
+                .min_by(|a, b| when(a.0).total_cmp(&when(b.0)));
+            if let Some((e, ea)) = struck_first {
+                self.err(
+                    Diagnostic::error(
+                        "E0122",
+                        format!(
+                            "`{name}` cannot strike `{}` at {:.1} s: `{}` strikes `{name}` at {:.1} s",
+                            order[c.struck],
+                            when(c),
+                            order[e.at_fault],
+                            when(e)
+                        ),
+                    )
+                    .label(field(ca, "at_fault"), format!("`{name}` strikes here"))
+                    .label(field(ea, "struck"), format!("`{name}` is struck first"))
+                    .help(format!(
+                        "a crash holds its pair from the contact on (motion after an impact is not simulated): `{name}` \
+                         must strike first, so move its strike to {:.1} s or before, or the crash that strikes it later",
+                        when(e)
+                    )),
+                );
             }
         }
+    }
+
+    /// The fields of a `conflict` or `near_miss` block by key; a key given twice is E0105 (the
+    /// second value is ignored) and the block is not ok.
+    pub(super) fn fields_once<'a>(
+        &mut self,
+        c: &'a ast::Conflict,
+        block: &str,
+    ) -> (BTreeMap<&'a str, &'a ast::ConflictField>, bool) {
+        let mut fields: BTreeMap<&str, &ast::ConflictField> = BTreeMap::new();
+        let mut ok = true;
+        for f in &c.fields {
+            if let Some(first) = fields.get(f.key.as_str()) {
+                let first = first.span;
+                self.dup(&format!("{block} field `{}`", f.key), first, f.span);
+                ok = false;
+                continue;
+            }
+            fields.insert(&f.key, f);
+        }
+        (fields, ok)
     }
 
     pub(super) fn conflict(
@@ -50,17 +109,7 @@ impl Checker {
         agents: &[Option<Agent>],
         duration: Option<f64>,
     ) -> Option<Conflict> {
-        let mut fields: BTreeMap<&str, &ast::ConflictField> = BTreeMap::new();
-        let mut ok = true;
-        for f in &c.fields {
-            if let Some(first) = fields.get(f.key.as_str()) {
-                let first = first.span;
-                self.dup(&format!("conflict field `{}`", f.key), first, f.span);
-                ok = false;
-                continue;
-            }
-            fields.insert(&f.key, f);
-        }
+        let (fields, mut ok) = self.fields_once(c, "conflict");
         let ident = |c: &mut Checker, key: &str| -> Option<&ast::Ident> {
             let f = fields.get(key)?;
             match &f.value {

@@ -13,17 +13,20 @@ mod expect;
 mod goal;
 mod kinds;
 pub mod load;
+mod near_miss;
 mod placement;
 mod posture;
 mod road;
 pub mod scenario;
 mod scene;
+mod signals;
 pub mod summary;
 pub mod track;
 mod trigger;
 pub mod units;
 
 pub use conflict::points_for;
+pub use near_miss::GAP_RANGE;
 pub use road::{CURVE_MARGIN_M, ISLAND_MIN_M, SIDEWALK_WIDTH_M, lane_count, min_radius};
 
 use crate::diag::{Diagnostic, did_you_mean};

@@ -35,6 +35,7 @@ impl Checker {
                 _ => 100.0,
             },
             angle: 45f64.to_radians(),
+            signals: None,
         };
         let mut allowed =
             vec!["lanes", "lane_width", "speed_limit", "shoulder", "median", "crosswalks", "sidewalks", "length"];
@@ -52,8 +53,13 @@ impl Checker {
         let mut seen: BTreeMap<&str, Span> = BTreeMap::new();
         let mut ok = true;
         let mut radius_span = None;
+        let mut signal_params = Vec::new();
         for p in &r.params {
             let n = p.name.name.as_str();
+            if super::signals::PARAMS.contains(&n) {
+                signal_params.push(p);
+                continue;
+            }
             if !allowed.contains(&n) {
                 let all = ROAD_PARAMS;
                 let msg = if all.contains(&n) {
@@ -154,6 +160,10 @@ impl Checker {
         }
         if ok {
             ok = self.radius_fits(&road, r, radius_span);
+        }
+        match self.signals(template, &signal_params) {
+            Ok(s) => road.signals = s,
+            Err(()) => ok = false,
         }
         ok.then_some(road)
     }

@@ -50,6 +50,9 @@ pub struct Scenario {
     pub agents: Vec<Agent>,
     pub rows: Vec<Row>,
     pub conflicts: Vec<Conflict>,
+    /// `near_miss` blocks: passes within a gap, staged without contact.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub near_misses: Vec<NearMiss>,
     pub traffic: Option<Traffic>,
     /// `expect` lines, evaluated on the tracks by `rocc test` (`crate::expect`).
     #[serde(default)]
@@ -163,6 +166,26 @@ pub struct Road {
     pub radius: f64,
     /// Curve deflection angle (rad).
     pub angle: f64,
+    /// Traffic signals at the junction (`signals on`); `None`: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub signals: Option<Signals>,
+}
+
+/// A junction's signal cycle (`road four_way { signals on; signal_green 20 s }`), s: two phases,
+/// the north-south approaches then the east-west ones, each green, then yellow, then all red.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Signals {
+    pub green: f64,
+    pub yellow: f64,
+    pub all_red: f64,
+    /// Time into the cycle at the clip's start.
+    pub offset: f64,
+}
+
+impl Default for Signals {
+    fn default() -> Self {
+        Signals { green: 20.0, yellow: 3.0, all_red: 1.0, offset: 0.0 }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -430,6 +453,22 @@ pub enum Point {
     RearRight,
 }
 
+/// A near miss: `passer` comes alongside `passed`, on `passed`'s `side`, its box `gap` metres
+/// from `passed`'s at `at`, without touching it (docs/language.md, "Near misses").
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NearMiss {
+    pub passer: usize,
+    pub passed: usize,
+    /// Least box-to-box distance, m.
+    pub gap: f64,
+    /// `Point::Left` or `Point::Right` of the passed agent; `None`: the side the passer starts on.
+    pub side: Option<Point>,
+    /// Time of the closest pass, s.
+    pub at: Option<f64>,
+    #[serde(skip)]
+    pub span: Span,
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Conflict {
     pub at_fault: usize,
@@ -540,11 +579,19 @@ pub struct Behaviour {
     pub reaction: f64,
     /// `speeding P %`: share over the lane's speed limit it drives at.
     pub speeding: f64,
+    /// `signal obey|ignore`: stops for a red (and a yellow it can stop for) or, a walker, waits
+    /// for the walk signal; `ignore` goes through regardless.
+    #[serde(default = "obeys")]
+    pub signal: bool,
+}
+
+fn obeys() -> bool {
+    true
 }
 
 impl Default for Behaviour {
     fn default() -> Self {
-        Behaviour { yields: true, stop_line: true, reaction: 0.0, speeding: 0.0 }
+        Behaviour { yields: true, stop_line: true, reaction: 0.0, speeding: 0.0, signal: true }
     }
 }
 

@@ -19,6 +19,7 @@ impl Checker {
         let mut agents_ast = vec![];
         let mut rows_ast = vec![];
         let mut conflicts_ast = vec![];
+        let mut near_ast = vec![];
         let mut expects_ast = vec![];
         let mut first_span: BTreeMap<&str, Span> = BTreeMap::new();
         for st in &s.stmts {
@@ -64,6 +65,7 @@ impl Checker {
                 ast::ScenarioStmt::Agent(a) => agents_ast.push(a),
                 ast::ScenarioStmt::Row(r) => rows_ast.push(r),
                 ast::ScenarioStmt::Conflict(c) => conflicts_ast.push(c),
+                ast::ScenarioStmt::NearMiss(c) => near_ast.push(c),
                 ast::ScenarioStmt::Expect(e) => expects_ast.extend(&e.items),
             }
         }
@@ -106,7 +108,10 @@ impl Checker {
 
         let conflicts: Vec<Option<Conflict>> =
             conflicts_ast.iter().map(|c| self.conflict(c, &order, &agents, duration_s)).collect();
-        self.one_conflict_each(&conflicts, &conflicts_ast, &order);
+        self.conflicts_in_order(&conflicts, &conflicts_ast, &order, duration_s);
+        let near: Vec<Option<NearMiss>> =
+            near_ast.iter().map(|c| self.near_miss(c, &order, &agents, duration_s)).collect();
+        self.near_misses_apart(&near, &conflicts, &order, duration_s);
         let egos = self.egos(egos_stmt, &order, &agents, header);
         let expects = self.expects(&expects_ast, &order, &agents, road.as_ref(), duration_s);
 
@@ -123,6 +128,7 @@ impl Checker {
             agents: agents.into_iter().collect::<Option<Vec<_>>>()?,
             rows: rows.into_iter().collect::<Option<Vec<_>>>()?,
             conflicts: conflicts.into_iter().collect::<Option<Vec<_>>>()?,
+            near_misses: near.into_iter().collect::<Option<Vec<_>>>()?,
             traffic,
             expects: expects?,
             kinds: used_kinds,

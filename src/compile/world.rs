@@ -2,7 +2,9 @@
 //! (`boxes.json`), and the map as vectors (`scene.json`), from the scenario's tracks and map.
 
 use crate::geom::wrap_angle;
-use crate::output::{BoxMotion, EgoRecord, FrameWorld, Motion, SceneMap, ego2global, instance_id, yaw_quaternion};
+use crate::output::{
+    BoxMotion, EgoRecord, FrameWorld, Motion, SceneMap, SignalState, ego2global, instance_id, yaw_quaternion,
+};
 use crate::place::Pose;
 use crate::raster::layout::class_index;
 use crate::road::Map;
@@ -54,7 +56,11 @@ impl ClipWorld<'_> {
             })
             .collect();
         let timestamp_us = (f as f64 * 1e6 / t.rate).round() as u64;
-        FrameWorld { timestamp_us, ego, boxes }
+        let signals = self.map.signals.as_ref().map_or_else(Vec::new, |plan| {
+            let lane = |id: crate::check::scenario::LaneId| format!("{}.in[{}]", id.arm.name(), id.index);
+            plan.lights(f as f64 / t.rate).map(|(h, light)| SignalState { lane: lane(h.id), light }).collect()
+        });
+        FrameWorld { timestamp_us, ego, boxes, signals }
     }
 
     pub fn scene(&self) -> SceneMap {

@@ -257,13 +257,33 @@ reaches a side or a corner, never the middle of the front or rear face.\n
     },
     Code {
         code: "E0121",
-        title: "agent in two conflicts",
-        explanation: "A conflict latches its pair at the frame of deepest overlap: from then on both hold their\n\
-post-impact poses. An agent can therefore take part in one conflict only, as `at_fault` or as\n\
-`struck`; a second block naming it is rejected, and both blocks are shown.\n
-    conflict { at_fault a; struck b; impact rear_end; point rear }
-    conflict { at_fault c; struck b; impact angle; point left }      // error: `b` is already struck\n\n\
-Keep one conflict per agent, or stage the second crash with another agent.",
+        title: "agent strikes twice",
+        explanation: "An at-fault agent leaves its goal for one staged approach to the agent it strikes, so an\n\
+agent is `at_fault` in one conflict only; it may be struck in any number of others (a pile-up).\n\
+Both blocks are shown.\n
+    conflict { at_fault a; struck b; impact rear_end; point rear; at 2 s }
+    conflict { at_fault a; struck c; impact angle; point left; at 4 s }     // error: `a` strikes twice\n\n\
+Keep one strike per agent, or let another agent strike.",
+    },
+    Code {
+        code: "E0122",
+        title: "crashes in an order that cannot happen",
+        explanation: "A crash holds its pair from the contact on (motion after an impact is not simulated), so\n\
+an agent that is struck stands still from then on and cannot strike anyone later. An agent's\n\
+own strike comes before, or at the same time as, every crash that strikes it. A chain is\n\
+written front first: the middle car strikes the car ahead, then the one behind strikes it.\n
+    conflict { at_fault mid; struck lead; impact rear_end; point rear; at 2 s }
+    conflict { at_fault tail; struck mid; impact rear_end; point rear; at 3 s }   // fine: a chain
+    conflict { at_fault tail; struck mid; impact rear_end; point rear; at 2 s }
+    conflict { at_fault mid; struck lead; impact rear_end; point rear; at 3 s }   // error: `mid` is struck first",
+    },
+    Code {
+        code: "E0123",
+        title: "a pair that crashes twice",
+        explanation: "A crash holds its pair from the contact on, so two agents touch once: a second conflict\n\
+between the same two (either way round) is refused, and both blocks are shown.\n
+    conflict { at_fault a; struck b; impact rear_end; point rear; at 2 s }
+    conflict { at_fault b; struck a; impact angle; point left; at 4 s }     // error: the same pair",
     },
     // ---- postures and track feasibility (E0130-E0134) ----
     Code {
@@ -373,6 +393,65 @@ tracks have no phases.\n
     goal { speed 10 m/s }
     goal { speed 0 m/s; start when car headway under 1.5 s }     // fine: brakes to a stop
     goal { speed 4 m/s; turn left; start after 1 s }             // error: a turn in a phase",
+    },
+    // ---- near misses (E0190-E0195) ----
+    Code {
+        code: "E0190",
+        title: "near-miss gap out of range",
+        explanation: "`gap` is the least distance between the two boxes as the passer goes by, 0.2..3 m.\n\
+Closer than 0.2 m is contact within the boxes' tolerance (stage a `conflict`); farther than\n\
+3 m is not a near miss.\n
+    near_miss { passer a; passed b; gap 0.5 m; at 4 s }     // fine
+    near_miss { passer a; passed b; gap -0.5 m }            // error: below 0
+    near_miss { passer a; passed b; gap 50 m }              // error: not near",
+    },
+    Code {
+        code: "E0191",
+        title: "near miss without a pair that can pass",
+        explanation: "A near miss names two different agents, and its passer steers to pass: it moves and\n\
+follows a goal (not static, not a recorded `track`). The passed agent may be anything.\n
+    near_miss { passer a; passed a; gap 0.5 m }              // error: one agent
+    near_miss { passer cone; passed a; gap 0.5 m }           // error: `cone` is static",
+    },
+    Code {
+        code: "E0192",
+        title: "near-miss field of the wrong kind",
+        explanation: "`passer` and `passed` take agent names, `side` takes `left` or `right` (the side of the\n\
+passed agent the passer goes by; without it, the side the passer starts on), `gap` a length and\n\
+`at` a time within the clip (half the clip without it).\n
+    near_miss { passer a; passed b; gap 0.5 m; side left; at 4 s }   // fine
+    near_miss { passer a; passed b; gap 0.5 m; side front }          // error: not a side",
+    },
+    Code {
+        code: "E0193",
+        title: "a pair that crashes and misses at the same time",
+        explanation: "A near miss has no contact; a `conflict` of the same two agents within 1.5 s of it is a\n\
+contradiction. Both blocks are shown.\n
+    conflict { at_fault a; struck b; impact sideswipe; point left; at 4 s }
+    near_miss { passer a; passed b; gap 0.5 m; at 4 s }      // error: same pair, same time",
+    },
+    Code {
+        code: "E0194",
+        title: "passer already staged",
+        explanation: "A near miss is staged like a crash: its passer leaves its goal for one planned approach.\n\
+A passer that is in a conflict, or passes in another near miss, cannot follow two; stage the\n\
+second with another agent.\n
+    near_miss { passer a; passed b; gap 0.5 m; at 2 s }
+    near_miss { passer a; passed c; gap 0.5 m; at 5 s }      // error: `a` passes twice",
+    },
+    Code {
+        code: "E0195",
+        title: "near miss cannot be staged",
+        explanation: "The passer comes alongside the passed agent, parallel, its box `gap` from the stated side,\n\
+at the stated time, then returns to its route. The rolled-out boxes are measured: the least\n\
+gap over the clip may be at most 0.15 m below `gap` and never contact, and within 0.5 s of `at`\n\
+the two must come within `gap` + 0.15 m. Otherwise the scene is refused, saying what happened:\n\
+the passer cannot reach the passed agent in time within its limits, or they touch, or they\n\
+pass too close or too far. Start them closer, give them speeds that bring them level, pick the\n\
+other `side`, or move `at`.\n
+    // v1 in the outer lane, v2 in the inner one: v1 would cut across v2 to reach its far side
+    near_miss { passer v1; passed v2; gap 0.4 m; side left; at 3 s }    // error: they touch
+    near_miss { passer v1; passed v2; gap 0.4 m; side right; at 3 s }   // fine",
     },
     Code {
         code: "E0170",
@@ -503,6 +582,34 @@ or the junction (a sidewalk, the median, off the road). A scene on `road none` (
 imported with `rocc import boxes`) has no map to check against.\n
     road straight { lanes 1; sidewalks on }
     agent v: sedan { track { 0 s: (-20 m, -1.75 m) yaw 0 deg; 1 s: (-10 m, -6 m) yaw 0 deg } }   // error: on a sidewalk",
+    },
+    // ---- traffic signals (E0230) ----
+    Code {
+        code: "E0230",
+        title: "signals on a road without a signalled junction",
+        explanation: "Traffic signals stand at a junction whose approaches have stop lines: `four_way` and\n\
+`t_junction`. A straight road, a curve, a merge or a roundabout has no such junction, so\n\
+`signals on` there would hold nobody and is refused.\n
+    road four_way { signals on }      // fine
+    road straight { signals on }      // error",
+    },
+    Code {
+        code: "E0231",
+        title: "a signal cycle that cannot run",
+        explanation: "A signal cycle's times (`signal_green`, `signal_yellow`, `signal_all_red`,\n\
+`signal_offset`) are single times within 0..600 s, and green must be longer than 0 s: a cycle\n\
+with no green keeps every approach red forever.\n
+    road four_way { signals on; signal_green 25 s; signal_yellow 4 s }   // fine
+    road four_way { signals on; signal_green 0 s }                       // error: red forever
+    road four_way { signals on; signal_yellow -3 s }                     // error: negative",
+    },
+    Code {
+        code: "E0232",
+        title: "a signal cycle without signals",
+        explanation: "`signal_green`, `signal_yellow`, `signal_all_red` and `signal_offset` time the signals\n\
+that `signals on` puts up; without it they time nothing.\n
+    road four_way { signals on; signal_green 30 s }   // fine
+    road four_way { signal_green 30 s }               // error",
     },
     Code {
         code: "E0301",

@@ -65,6 +65,16 @@ pub struct FrameWorld {
     pub timestamp_us: u64,
     pub ego: EgoRecord,
     pub boxes: Vec<Option<BoxMotion>>,
+    /// Each approach lane's signal (`signals on`), in `SignalPlan::heads` order.
+    pub signals: Vec<SignalState>,
+}
+
+/// What one approach lane's signal shows at one frame.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SignalState {
+    /// The lane, as a placement names it: `south.in[1]`.
+    pub lane: String,
+    pub light: crate::road::signals::Light,
 }
 
 /// The instance id of agent `agent` of scenario `scenario`: FNV-1a of both names, hex.

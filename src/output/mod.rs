@@ -18,7 +18,7 @@ pub use npz::{NpyElem, Npz};
 pub use paint::{CHANNEL_COLOURS, SIDE as PREVIEW_SIDE, STRUCTURE_COLOUR, paint_bev, paint_lidar, paint_occ, palette};
 pub use preview::{render_preview, write_preview_png};
 
-pub use ego::{BoxMotion, EgoRecord, FrameWorld, Motion, ego2global, instance_id, yaw_quaternion};
+pub use ego::{BoxMotion, EgoRecord, FrameWorld, Motion, SignalState, ego2global, instance_id, yaw_quaternion};
 pub use vector_map::{Points, SceneMap, read_scene_json, write_scene_json};
 
 /// A temporary of an interrupted write, as found in an output directory.
@@ -128,6 +128,8 @@ struct FrameRecord {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     ego: Option<EgoRecord>,
     boxes: Vec<BoxRecord>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    signals: Vec<SignalState>,
 }
 
 impl BoxRecord {
@@ -201,6 +203,7 @@ pub fn boxes_json_with(frames: &[FrameBoxes], worlds: Option<&[FrameWorld]>) -> 
                 timestamp_us: w.map(|w| w.timestamp_us),
                 ego: w.map(|w| w.ego.clone()),
                 boxes,
+                signals: w.map(|w| w.signals.clone()).unwrap_or_default(),
             }
         })
         .collect();

@@ -3,7 +3,7 @@
 //! centrelines (lanes and junction connectors, in the direction of travel), lane dividers (the
 //! painted lines of BEV channel 15, each dash its own polyline), road boundaries (the outline of
 //! road blocks and junctions, BEV channel 17), crosswalks (closed outlines, channel 16) and stop
-//! lines (two points each).
+//! lines (two points each); and the junction's signals, where it has them.
 
 use crate::geom::{Polygon, point_in_polygon};
 use crate::road::Map;
@@ -26,6 +26,10 @@ pub struct SceneMap {
     pub road_boundaries: Vec<Points>,
     pub crosswalks: Vec<Points>,
     pub stop_lines: Vec<Points>,
+    /// The junction's signals: the cycle and each approach lane's head (`signals on`); each
+    /// frame's lights are in `boxes.json`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub signals: Option<crate::road::signals::SignalPlan>,
 }
 
 fn pts(line: &[DVec2]) -> Points {
@@ -50,6 +54,7 @@ impl SceneMap {
             road_boundaries: road_boundaries(map),
             crosswalks: map.crosswalk_polygons.iter().map(closed).collect(),
             stop_lines: map.stop_lines.iter().map(|s| pts(&[s.a, s.b])).collect(),
+            signals: map.signals.clone(),
         }
     }
 }

@@ -39,6 +39,9 @@ pub struct Map {
 
     /// Axis-aligned bounds of everything above: (min, max).
     pub bounds: (DVec2, DVec2),
+    /// Traffic signals at the junction (`signals on`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub signals: Option<crate::road::signals::SignalPlan>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -13,6 +13,7 @@ mod merge;
 mod roundabout;
 pub mod route;
 pub(crate) mod shape;
+pub mod signals;
 mod straight;
 
 pub use map::Map;
@@ -31,6 +32,7 @@ pub fn build(road: &Road) -> Map {
         Template::None => Map::default(),
     };
     map.bounds = bounds(&map);
+    map.signals = road.signals.map(|c| signals::plan(c, &map));
     map
 }
 

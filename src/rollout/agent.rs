@@ -99,6 +99,8 @@ pub(crate) struct Actor {
     pub approach: Option<usize>,
     /// A vehicle's sweep through its first junction (`assign_bends`).
     pub bend: Option<std::sync::Arc<Bend>>,
+    /// The traffic signal it answers to (`assign_signals`).
+    pub signal: Option<crate::rollout::junction::signals::Face>,
     /// Stands where it is for good (an object, a static kind, a vehicle with neither speed nor
     /// a goal that moves it): vehicles pass it where there is room (`Sim::avoid`).
     pub blocker: bool,
@@ -218,6 +220,9 @@ pub(crate) struct Conf {
     pub af: usize,
     pub st: usize,
     pub c: crate::check::scenario::Conflict,
+    /// A near miss (`rollout::staging::near`): the gap its passer (`af`) passes `st` at, m.
+    /// `c` then carries the pair, the side and the time; it is staged without contact.
+    pub gap: Option<f64>,
 }
 
 pub(crate) fn initial(a: &Actor) -> State {
@@ -255,4 +260,27 @@ pub(crate) struct ZoneRank {
     pub eta: f64,
     /// How far its front may go while it holds, m.
     pub rem: f64,
+}
+
+/// One obstacle seen from our route.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Blocking {
+    /// Its station and offset on our route, m.
+    pub sj: f64,
+    pub lj: f64,
+    /// Its half extents along and across our route, m.
+    pub ext_lon: f64,
+    pub ext_lat: f64,
+    /// The paving round it, as offsets on our route.
+    pub lo: f64,
+    pub hi: f64,
+}
+
+/// How a vehicle makes way for an emergency vehicle (`Sim::siren_for`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Yield {
+    /// The emergency vehicle.
+    pub to: usize,
+    /// The offset it moves over to.
+    pub offset: f64,
 }

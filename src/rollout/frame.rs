@@ -6,10 +6,8 @@ use crate::place::Pose;
 use crate::rollout::Tracks;
 use crate::rollout::agent::Rank;
 use crate::rollout::agent::initial;
-use crate::rollout::agent::{Actor, Conf, Drive, Lat, State};
-use crate::rollout::drive::avoid::Blocking;
+use crate::rollout::agent::{Actor, Blocking, Conf, Drive, Lat, State, Yield};
 use crate::rollout::drive::index::{AlongIndexes, Near};
-use crate::rollout::drive::siren::Yield;
 use crate::rollout::kinematics::{replay, steer};
 use crate::rollout::path::Foot;
 use crate::rollout::staging::plan::Plan;
@@ -284,6 +282,11 @@ impl<'a, 'b> Sim<'a, 'b> {
             // vehicle as not coming.
             for i in 0..self.actors.len() {
                 self.facts.yielding[i] = self.yield_state(i);
+                // A red (or a yellow it can stop for) holds it as an emergency vehicle would.
+                if let Some(rem) = self.signal_hold(i, t) {
+                    let y = &mut self.facts.yielding[i].0;
+                    *y = Some(y.map_or(rem, |h| h.min(rem)));
+                }
             }
             self.queue_heads();
             sc.ranks.fill(None);

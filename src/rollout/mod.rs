@@ -18,6 +18,8 @@
 //!   arrive, then those stopped or queued for something else; names break ties), the other
 //!   holding short of it; a walker about to cross waits at the kerb while a vehicle could not
 //!   stop comfortably for it;
+//! - signals (`signals on`): a vehicle holds at its stop line on a red, or a yellow it can stop
+//!   for comfortably, and a walker on a crosswalk waits at the kerb for the walk signal;
 //! - car-following keeps Gipps's safe speed: able to stop, at emergency braking, behind where the
 //!   leader could stop (within its clearance to its partner, for a conflict agent that the crash
 //!   latch may stop dead); a striker keeps out of bystanders' stopping envelopes;

@@ -82,6 +82,7 @@ pub(crate) fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Cl
         in_conflict: false,
         approach: None,
         bend: None,
+        signal: None,
         blocker: false,
         room: None,
         pull: 0.0,

@@ -21,6 +21,8 @@ pub struct Concrete {
     pub agents: Vec<ConcreteAgent>,
     pub rows: Vec<ConcreteRow>,
     pub conflicts: Vec<Conflict>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub near_misses: Vec<NearMiss>,
     pub traffic: Option<Traffic>,
     /// The kinds the scenario names, with their size priors: rows draw each element's kind and
     /// box from them when the place pass lays the row out.
@@ -147,6 +149,7 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
         agents,
         rows,
         conflicts: s.conflicts.clone(),
+        near_misses: s.near_misses.clone(),
         traffic: s.traffic,
         kinds: s.kinds.clone(),
     }

@@ -55,14 +55,29 @@ pub struct Scenario {
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub enum ScenarioStmt {
-    Seed { value: u64, literal: String, span: Span },
-    Duration { value: Value, span: Span },
-    Rate { value: Value, span: Span },
-    Egos { egos: Egos, span: Span },
+    Seed {
+        value: u64,
+        literal: String,
+        span: Span,
+    },
+    Duration {
+        value: Value,
+        span: Span,
+    },
+    Rate {
+        value: Value,
+        span: Span,
+    },
+    Egos {
+        egos: Egos,
+        span: Span,
+    },
     Road(Road),
     Agent(Agent),
     Row(Row),
     Conflict(Conflict),
+    /// `near_miss { passer ..; passed ..; gap ..; side ..; at .. }`: the same key-value shape.
+    NearMiss(Conflict),
     Traffic(ParamBlock),
     Expect(ExpectBlock),
 }
@@ -78,6 +93,7 @@ impl ScenarioStmt {
             ScenarioStmt::Agent(a) => a.span,
             ScenarioStmt::Row(r) => r.span,
             ScenarioStmt::Conflict(c) => c.span,
+            ScenarioStmt::NearMiss(c) => c.span,
             ScenarioStmt::Traffic(t) => t.span,
             ScenarioStmt::Expect(e) => e.span,
         }

@@ -52,6 +52,9 @@ const KEYWORDS: &[&str] = &[
     "struck",
     "impact",
     "point",
+    "near_miss",
+    "passer",
+    "passed",
     "motion",
     "on",
     "off",
@@ -64,6 +67,7 @@ fn rule_words(r: &Rule) -> &'static [&'static str] {
     match r {
         Rule::size_key => &["length", "width", "height"],
         Rule::conflict_key => &["at_fault", "struck", "impact", "point", "at"],
+        Rule::near_miss_key => &["passer", "passed", "gap", "side", "at"],
         Rule::lane_dir => &["in", "out"],
         Rule::rel => &["before", "after"],
         Rule::switch => &["on", "off"],
@@ -103,6 +107,8 @@ fn rule_name(r: &Rule) -> Option<String> {
             Rule::param => "a parameter",
             Rule::keyframe => "a keyframe `TIME: (X, Y) yaw ANGLE`",
             Rule::conflict_field => "a conflict field",
+            Rule::near_miss_key => "a near_miss field (passer, passed, gap, side, at)",
+            Rule::near_miss_field => "a near_miss field",
             Rule::exp_bound => "`at_least` or `at_most`",
             Rule::exp_when => "`during A..B s` or `by T s`",
             _ => return Some(s.replace('_', " ")),
@@ -264,6 +270,8 @@ fn begins_statement(r: &Rule) -> bool {
             | Rule::kw_start
             | Rule::kw_motion
             | Rule::conflict_key
+            | Rule::kw_near_miss
+            | Rule::near_miss_key
             | Rule::kw_scenario
             | Rule::kw_kind
             | Rule::kw_use
@@ -307,7 +315,10 @@ fn last_word_start(text: &str) -> usize {
 }
 
 fn is_block_keyword(w: &str) -> bool {
-    matches!(w, "agent" | "object" | "row" | "road" | "conflict" | "traffic" | "scenario" | "kind" | "use")
+    matches!(
+        w,
+        "agent" | "object" | "row" | "road" | "conflict" | "near_miss" | "traffic" | "scenario" | "kind" | "use"
+    )
 }
 
 /// The braces before a position, comments and strings skipped.

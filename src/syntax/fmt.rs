@@ -102,32 +102,38 @@ fn scenario_stmt(s: &ScenarioStmt) -> Doc {
             placement(&r.to),
             val(&r.every)
         )),
-        ScenarioStmt::Conflict(c) => Doc::Block {
-            header: "conflict".into(),
-            span: c.span,
-            items: c
-                .fields
-                .iter()
-                .map(|f| Doc::Line {
-                    span: f.span,
-                    text: format!(
-                        "{} {}",
-                        f.key,
-                        match &f.value {
-                            FieldValue::Ident(i) => i.name.clone(),
-                            FieldValue::Value(v) => val(v),
-                        }
-                    ),
-                })
-                .collect(),
-            fit: true,
-        },
+        ScenarioStmt::Conflict(c) => key_fields("conflict", c),
+        ScenarioStmt::NearMiss(c) => key_fields("near_miss", c),
         ScenarioStmt::Expect(e) => Doc::Block {
             header: "expect".into(),
             span: e.span,
             items: e.items.iter().map(|x| Doc::Line { span: x.span, text: expectation(x) }).collect(),
             fit: false,
         },
+    }
+}
+
+/// A `conflict` or `near_miss` block, one `KEY VALUE` line per field.
+fn key_fields(header: &str, c: &Conflict) -> Doc {
+    Doc::Block {
+        header: header.into(),
+        span: c.span,
+        items: c
+            .fields
+            .iter()
+            .map(|f| Doc::Line {
+                span: f.span,
+                text: format!(
+                    "{} {}",
+                    f.key,
+                    match &f.value {
+                        FieldValue::Ident(i) => i.name.clone(),
+                        FieldValue::Value(v) => val(v),
+                    }
+                ),
+            })
+            .collect(),
+        fit: true,
     }
 }
 

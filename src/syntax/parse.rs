@@ -35,6 +35,26 @@ impl Builder {
         Span::new(self.file, s.start(), s.end())
     }
 
+    /// A `conflict` or `near_miss` block: its keyword, then `KEY VALUE` fields.
+    fn key_fields(&self, p: P<'_>, span: Span) -> Conflict {
+        let fields = inner(p)
+            .into_iter()
+            .skip(1)
+            .map(|f| {
+                let span = self.span(&f);
+                let mut it = inner(f).into_iter();
+                let k = it.next().expect("grammar: block field key");
+                let v = it.next().expect("grammar: block field value");
+                let value = match v.as_rule() {
+                    Rule::ident => FieldValue::Ident(self.ident(v)),
+                    _ => FieldValue::Value(self.value(v)),
+                };
+                ConflictField { key: k.as_str().to_string(), key_span: self.span(&k), value, span }
+            })
+            .collect();
+        Conflict { fields, span }
+    }
+
     fn ident(&self, p: P<'_>) -> Ident {
         debug_assert_eq!(p.as_rule(), Rule::ident);
         Ident { name: p.as_str().to_string(), span: self.span(&p) }
@@ -127,24 +147,8 @@ impl Builder {
                     span,
                 })
             }
-            Rule::conflict => {
-                let fields = inner(p)
-                    .into_iter()
-                    .skip(1)
-                    .map(|f| {
-                        let span = self.span(&f);
-                        let mut it = inner(f).into_iter();
-                        let k = it.next().expect("grammar: conflict key");
-                        let v = it.next().expect("grammar: conflict value");
-                        let value = match v.as_rule() {
-                            Rule::ident => FieldValue::Ident(self.ident(v)),
-                            _ => FieldValue::Value(self.value(v)),
-                        };
-                        ConflictField { key: k.as_str().to_string(), key_span: self.span(&k), value, span }
-                    })
-                    .collect();
-                ScenarioStmt::Conflict(Conflict { fields, span })
-            }
+            Rule::conflict => ScenarioStmt::Conflict(self.key_fields(p, span)),
+            Rule::near_miss => ScenarioStmt::NearMiss(self.key_fields(p, span)),
             Rule::expect_block => {
                 let items = inner(p).into_iter().skip(1).map(|q| self.expectation(q)).collect();
                 ScenarioStmt::Expect(ExpectBlock { items, span })

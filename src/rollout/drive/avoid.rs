@@ -3,6 +3,7 @@
 //! onto the shoulder once the oncoming traffic there leaves it time, and stops behind it only
 //! where the paving leaves no room (`Sim::avoid`).
 
+use crate::rollout::agent::Blocking;
 use crate::rollout::drive::{PASS_CLEARANCE, PASS_LAT_RATE};
 use crate::rollout::frame::Sim;
 use crate::rollout::kinematics::slip_tan;
@@ -20,18 +21,6 @@ const EDGE_CLEAR: f64 = 0.1;
 const ONCOMING_GAP_S: f64 = 3.0;
 /// Distance beyond the move's own length at which a pass sets out, m.
 const SET_OUT_M: f64 = 5.0;
-
-/// One obstacle seen from our route.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Blocking {
-    pub sj: f64,
-    pub lj: f64,
-    pub ext_lon: f64,
-    pub ext_lat: f64,
-    /// The paving round it, as offsets on our route.
-    pub lo: f64,
-    pub hi: f64,
-}
 
 impl Blocking {
     /// Whether it reaches into the offsets `lo..hi` of our route.

@@ -2,7 +2,7 @@
 //! from behind, and on a two-lane road one it comes toward, pulls over and stops till it has
 //! passed. At junctions cross traffic holds for it as well (`Actor::yield_to`).
 
-use crate::rollout::agent::{Drive, Lat};
+use crate::rollout::agent::{Drive, Lat, Yield};
 use crate::rollout::drive::{PASS_CLEARANCE, PASS_MAX_SHIFT};
 use crate::rollout::frame::Sim;
 use crate::rollout::path::Foot;
@@ -13,15 +13,6 @@ const HEARD_M: f64 = 60.0;
 const HEARD_S: f64 = 6.0;
 /// The speed a vehicle keeps at most while it moves over, before it stops, m/s.
 pub(crate) const MOVE_OVER_SPEED: f64 = 8.0;
-
-/// How a vehicle makes way for an emergency vehicle (`Sim::siren_for`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Yield {
-    /// The emergency vehicle.
-    pub to: usize,
-    /// The offset it moves over to.
-    pub offset: f64,
-}
 
 impl Sim<'_, '_> {
     /// The emergency vehicle, siren on and moving, that vehicle `i` makes way for this frame: the

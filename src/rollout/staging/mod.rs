@@ -1,7 +1,9 @@
 //! Staged conflicts: the contact geometry and the choice of impact time (`plan`), the rollout's
 //! two passes that stage them (`passes`), the striker's intercept and the crash latch
-//! (`strike`), and why a staging is refused (`refusals`).
+//! (`strike`), and why a staging is refused (`refusals`); near misses, staged the same way
+//! without contact (`near`).
 
+pub(crate) mod near;
 pub(crate) mod passes;
 pub(crate) mod plan;
 pub(crate) mod refusals;

@@ -1,6 +1,7 @@
 //! The rollout's passes: set up, pass 1 (everyone's natural motion), the staging plans chosen
 //! from it, pass 2 (the strikers on their intercepts), planned again where a staging fails.
 
+use crate::check::scenario::{Conflict, Impact};
 use crate::diag::Diagnostic;
 use crate::geom::Obb;
 use crate::place::Placed;
@@ -12,6 +13,7 @@ use crate::rollout::junction::dry_run::assign_bends;
 use crate::rollout::junction::order::order_crossings;
 use crate::rollout::junction::zones::{assign_crossings, assign_yields};
 use crate::rollout::setup::{Routes, background_actor, build_actor, face_the_striker};
+use crate::rollout::staging::near::near_errors;
 use crate::rollout::staging::plan;
 use crate::rollout::staging::plan::Plan;
 use crate::rollout::staging::refusals::{forced_braking, forced_error, staging_errors, stopped_dead};
@@ -51,9 +53,10 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         if af == st || confs.iter().any(|x: &Conf| x.af == *af) {
             continue;
         }
-        confs.push(Conf { index, af: *af, st: *st, c: k.clone() });
+        confs.push(Conf { index, af: *af, st: *st, c: k.clone(), gap: None });
     }
-    for k in &confs {
+    confs.extend(near_confs(c, &actors, &track_of));
+    for k in confs.iter().filter(|k| k.gap.is_none()) {
         face_the_striker(&mut actors, k);
     }
     let frames = c.frame_count();
@@ -61,6 +64,7 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
     assign_bends(map, &mut actors, dt);
     assign_yields(map, &mut actors, &confs);
     assign_crossings(map, &mut actors, &confs);
+    crate::rollout::junction::signals::assign_signals(map, &mut actors);
     order_crossings(&mut actors, &mut errs);
     if !errs.is_empty() {
         return Err(errs);
@@ -91,7 +95,9 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
             out = empty_tracks(&actors, c.rate, frames);
             let report =
                 Sim::new(&actors, &confs, &plans, Some(&pass1), dt).resume(&pass1, &states, start).run(&mut out);
-            let failed = staging_errors(&actors, &confs, &plans, &out, &report.blocked_by, (dt, frames, c.duration));
+            let mut failed =
+                staging_errors(&actors, &confs, &plans, &out, &report.blocked_by, (dt, frames, c.duration));
+            failed.extend(near_errors(&actors, &confs, &plans, &out, (dt, c.duration)));
             let forced = forced_braking(&actors, &confs, &plans, &out);
             if failed.is_empty() && report.first_hard.is_none() && forced.is_none() {
                 break;
@@ -139,6 +145,21 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         return Err(errs);
     }
     Ok(out)
+}
+
+/// The near misses as staged approaches: each passer comes alongside its passed agent like a
+/// striker to its contact pose (`plan::alongside`), on the stated side or the one it starts on.
+fn near_confs(c: &Concrete, actors: &[Actor], track_of: &[Option<usize>]) -> Vec<Conf> {
+    let mut confs = vec![];
+    for (index, n) in c.near_misses.iter().enumerate() {
+        let (Some(Some(af)), Some(Some(st))) = (track_of.get(n.passer), track_of.get(n.passed)) else { continue };
+        let (a, b) = (initial(&actors[*af]), initial(&actors[*st]));
+        let point = n.side.unwrap_or_else(|| plan::start_side(a.pos, b.pos, b.yaw));
+        let k =
+            Conflict { at_fault: n.passer, struck: n.passed, impact: Impact::Sideswipe, point, at: n.at, span: n.span };
+        confs.push(Conf { index, af: *af, st: *st, c: k, gap: Some(n.gap) });
+    }
+    confs
 }
 
 /// How many times a staging that fails is planned again (`plan::choose` away from the impact

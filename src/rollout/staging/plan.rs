@@ -146,6 +146,27 @@ pub(crate) fn relative(
     (face + n * (al - delta), phi, delta)
 }
 
+/// The passer's pose at the pass in the passed frame: level with it, parallel (same direction
+/// or the other way, as it starts), its side `gap` from the passed box's `point` side. No
+/// penetration is planned (the third value, as `plan::relative` returns it).
+pub(crate) fn alongside(
+    point: Point,
+    passed: (f64, f64),
+    passer: (f64, f64),
+    start_yaw: f64,
+    gap: f64,
+) -> (DVec2, f64, f64) {
+    let side = if point == Point::Right { -1.0 } else { 1.0 };
+    let yaw = if start_yaw.cos() >= 0.0 { 0.0 } else { std::f64::consts::PI };
+    (DVec2::new(0.0, side * (passed.1 / 2.0 + gap + passer.1 / 2.0)), yaw, 0.0)
+}
+
+/// The side of `passed` the passer starts on, where the file leaves it open.
+pub(crate) fn start_side(passer: DVec2, passed: DVec2, passed_yaw: f64) -> Point {
+    let rel = (passer - passed).rotate(DVec2::from_angle(-passed_yaw));
+    if rel.y >= 0.0 { Point::Left } else { Point::Right }
+}
+
 /// A latched contact shallower than this is a graze, not the crash asked for, m (a plan aims
 /// at 0.12 to 0.25 m): a sideswipe at 23 m/s that latched 2.5 mm of overlap was labelled a crash.
 pub const MIN_DEPTH: f64 = 0.05;
@@ -175,7 +196,11 @@ pub(crate) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
     };
     let sizes = ((2.0 * st.hl, 2.0 * st.hw), (2.0 * af.hl, 2.0 * af.hw));
     let start = to_struck(pa[0], ps[0]);
-    let (rel_pos0, rel_yaw, delta0) = relative(k.c.impact, k.c.point, sizes.0, sizes.1, start, 0.0);
+    let (rel_pos0, rel_yaw, delta0) = match k.gap {
+        Some(gap) => alongside(k.c.point, sizes.0, sizes.1, start.1, gap),
+        None => relative(k.c.impact, k.c.point, sizes.0, sizes.1, start, 0.0),
+    };
+    let swipe = k.c.impact == Impact::Sideswipe && k.gap.is_none();
     // First frame pass 1 already has them touching: the intercept must leave before it.
     let natural = (0..p1.frames).find(|&f| {
         let a = Obb { center: DVec2::new(pa[f].x, pa[f].y), yaw: pa[f].yaw, length: 2.0 * af.hl, width: 2.0 * af.hw };
@@ -218,9 +243,9 @@ pub(crate) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
             let v_end0 = 2.0 * DVec2::new(s.x, s.y).distance(g0) / tau - v;
             // Sideswipes: where the corner first touches depends on the relative motion.
             let (v_rel, v_lat) = (v_end0 * rel_cos - p1.speeds[k.st][fi], (v_end0 * rel_sin).abs());
-            let drift = if k.c.impact == Impact::Sideswipe { v_rel * delta0 / v_lat.max(0.3) } else { 0.0 };
+            let drift = if swipe { v_rel * delta0 / v_lat.max(0.3) } else { 0.0 };
             // Only a sideswipe's pose depends on the drift: any other is the one at drift 0.
-            let (rel_pos, delta) = if k.c.impact == Impact::Sideswipe {
+            let (rel_pos, delta) = if swipe {
                 let (p, _, d) = relative(k.c.impact, k.c.point, sizes.0, sizes.1, start, drift);
                 (p, d)
             } else {
@@ -243,7 +268,7 @@ pub(crate) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
             let k_curve = curve.max_curvature();
             let lat = v.max(v_end).powi(2) * k_curve;
             // Closing speed along the approach: the at-fault's motion into the struck box.
-            let inward = if k.c.impact == Impact::Sideswipe {
+            let inward = if swipe {
                 let side = if rel_pos.y >= 0.0 { -1.0 } else { 1.0 };
                 DVec2::new(0.0, side).rotate(struck_dir)
             } else {

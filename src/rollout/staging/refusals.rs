@@ -127,7 +127,7 @@ pub(crate) fn staging_errors(
     (dt, frames, duration): (f64, usize, f64),
 ) -> Vec<(usize, Diagnostic)> {
     let mut errs = vec![];
-    for (ki, (k, _)) in confs.iter().zip(plans).enumerate().filter(|(_, (_, p))| p.is_some()) {
+    for (ki, (k, _)) in confs.iter().zip(plans).enumerate().filter(|(_, (k, p))| p.is_some() && k.gap.is_none()) {
         let t_req = plan::requested_time(&k.c, dt, frames, duration);
         let rec = out.impacts.iter().find(|r| r.conflict == k.index);
         let hit = rec.map(|r| r.frame as f64 * dt);
@@ -240,7 +240,7 @@ mod tests {
                 at: None,
                 span: Default::default(),
             };
-            let confs = [Conf { index: 0, af: 0, st: 2, c }];
+            let confs = [Conf { index: 0, af: 0, st: 2, c, gap: None }];
             let plan = Plan {
                 struck: 2,
                 rel_pos: DVec2::ZERO,

@@ -29,7 +29,7 @@ impl Sim<'_, '_> {
     /// struck (pass 2): once the two touch, the latch stops both dead.
     pub(crate) fn crash_partner(&self, j: usize, t: f64) -> Option<usize> {
         self.confs.iter().zip(self.plans).enumerate().find_map(|(k, (c, p))| {
-            let pending = !self.latched[k] && p.as_ref().is_some_and(|p| t >= p.t_depart - 1e-9);
+            let pending = c.gap.is_none() && !self.latched[k] && p.as_ref().is_some_and(|p| t >= p.t_depart - 1e-9);
             match (pending, c.af == j, c.st == j) {
                 (true, true, _) => Some(c.st),
                 (true, _, true) => Some(c.af),
@@ -264,9 +264,17 @@ impl Sim<'_, '_> {
     /// shrink) freezes both agents there.
     pub(crate) fn latch(&mut self, f: usize, out: &mut Tracks) {
         let t = f as f64 * self.dt;
-        for (k, conf) in self.confs.iter().enumerate() {
-            let Some(plan) = self.plans.get(k).and_then(|p| p.as_ref()) else { continue };
+        let (confs, plans) = (self.confs, self.plans);
+        for (k, conf) in confs.iter().enumerate() {
+            let Some(plan) = plans.get(k).and_then(|p| p.as_ref()) else { continue };
             if self.latched[k] {
+                continue;
+            }
+            // A near miss has no contact to latch: at the pass its passer drives on.
+            if conf.gap.is_some() {
+                if t >= plan.t_impact - 0.5 * self.dt {
+                    self.release(k);
+                }
                 continue;
             }
             let (af, st) = (conf.af, conf.st);

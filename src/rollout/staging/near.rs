@@ -1,0 +1,107 @@
+//! Staged near misses (their pose alongside the passed box is `plan::alongside`, planned and
+//! driven like a striker's contact pose): the passer's release back to its own route at the
+//! pass, the gap between two boxes, and why a staging is refused (E0195).
+
+use crate::diag::Diagnostic;
+use crate::geom::Obb;
+use crate::rollout::Tracks;
+use crate::rollout::agent::{Actor, Conf};
+use crate::rollout::frame::Sim;
+use crate::rollout::staging::plan;
+use crate::rollout::staging::plan::Plan;
+use glam::DVec2;
+
+/// How far the measured least gap may be from the stated one, m.
+pub const GAP_TOL_M: f64 = 0.15;
+/// How far from the stated time the pass may come, s.
+pub const TIME_TOL_S: f64 = 0.5;
+
+/// Distance between two boxes, 0 where they overlap: the least of each one's corners to the
+/// other's edges (two convex polygons apart are nearest at a corner of one of them).
+pub fn box_gap(a: &Obb, b: &Obb) -> f64 {
+    if a.overlaps(b) {
+        return 0.0;
+    }
+    let to_edges = |p: DVec2, o: &Obb| {
+        let c = o.corners();
+        (0..4)
+            .map(|i| {
+                let (u, w) = (c[i], c[(i + 1) % 4]);
+                let t = ((p - u).dot(w - u) / (w - u).length_squared()).clamp(0.0, 1.0);
+                p.distance(u + (w - u) * t)
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    let ab = a.corners().iter().map(|&p| to_edges(p, b)).fold(f64::INFINITY, f64::min);
+    let ba = b.corners().iter().map(|&p| to_edges(p, a)).fold(f64::INFINITY, f64::min);
+    ab.min(ba)
+}
+
+impl Sim<'_, '_> {
+    /// At the pass the passer leaves its approach and drives its own route again, from where it
+    /// is: its place along the route and its offset are taken from its pose (its approach left
+    /// them where it departed), and its lateral goal brings it back to its lane.
+    pub(crate) fn release(&mut self, k: usize) {
+        let i = self.confs[k].af;
+        self.latched[k] = true;
+        let (path, st) = (&self.actors[i].path, self.next[i]);
+        let mut s = st.s;
+        for _ in 0..3 {
+            let (q, h) = path.at(s);
+            s += (st.pos - q).dot(DVec2::from_angle(h));
+        }
+        let foot = path.frenet(st.pos, s);
+        self.next[i].s = foot.s;
+        self.next[i].off = foot.d;
+    }
+}
+
+/// Near misses that did not come off as stated, measured on the tracks: the least gap between
+/// the pair over the clip below the stated gap by more than `GAP_TOL_M` (or contact), or no frame
+/// within `TIME_TOL_S` of the stated time at which they pass within the gap and tolerance.
+pub(crate) fn near_errors(
+    actors: &[Actor],
+    confs: &[Conf],
+    plans: &[Option<Plan>],
+    out: &Tracks,
+    (dt, duration): (f64, f64),
+) -> Vec<(usize, Diagnostic)> {
+    let bx = |k: usize, f: usize| {
+        let (p, s) = (out.poses[k][f], out.agents[k].size);
+        Obb { center: DVec2::new(p.x, p.y), yaw: p.yaw, length: s[0], width: s[1] }
+    };
+    let mut errs = vec![];
+    for (ki, k) in confs.iter().enumerate() {
+        let Some(gap) = k.gap else { continue };
+        let t_req = plan::requested_time(&k.c, dt, out.frames, duration);
+        let gaps: Vec<f64> = (0..out.frames).map(|f| box_gap(&bx(k.af, f), &bx(k.st, f))).collect();
+        let (f_min, least) =
+            gaps.iter().copied().enumerate().fold((0, f64::INFINITY), |m, (f, g)| if g < m.1 { (f, g) } else { m });
+        let near_time = (0..out.frames)
+            .filter(|&f| (f as f64 * dt - t_req).abs() <= TIME_TOL_S + 1e-9)
+            .map(|f| gaps[f])
+            .fold(f64::INFINITY, f64::min);
+        let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
+        let what = if plans[ki].is_none() {
+            format!("`{a}` has no way to come alongside `{b}` near {t_req:.1} s")
+        } else if least <= 0.0 {
+            format!("they touch at {:.1} s", f_min as f64 * dt)
+        } else if least < gap - GAP_TOL_M {
+            format!("they come within {least:.2} m at {:.1} s", f_min as f64 * dt)
+        } else if near_time > gap + GAP_TOL_M {
+            format!("within {TIME_TOL_S} s of {t_req:.1} s they come no closer than {near_time:.2} m")
+        } else {
+            continue;
+        };
+        errs.push((
+            ki,
+            Diagnostic::error("E0195", format!("`{a}` passing `{b}` within {gap} m cannot be staged: {what}"))
+                .label(k.c.span, format!("asks for a {gap} m pass at {t_req:.1} s"))
+                .help(format!(
+                    "`{a}` must be able to come level with `{b}` at that time within its limits, with room on that \
+                     side: start them closer, give them speeds that bring them level, pick the other `side`, or move `at`"
+                )),
+        ));
+    }
+    errs
+}
