@@ -25,3 +25,4 @@ pub mod sample;
 pub mod source;
 pub mod syntax;
 pub mod view;
+pub mod visibility;

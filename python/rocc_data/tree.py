@@ -209,6 +209,20 @@ class Frame:
         return self.clip.stage == "lidar"
 
     @property
+    def has_visibility(self):
+        return self.has_occupancy and self.clip.manifest.get("visibility") is not None
+
+    @property
+    def labels(self):
+        """Occ3D's `gts/NNNNNN/labels.npz` (`rocc compile --visibility`): `semantics` (the
+        occupancy labels), `mask_lidar` and `mask_camera`, each (400, 400, 32) uint8, the masks
+        0 or 1 (Occ3D's loaders cast them with `.astype(bool)`); None without `--visibility`."""
+        if not self.has_visibility:
+            return None
+        with np.load(self._file(f"gts/{self.index:06d}/labels.npz")) as z:
+            return {k: z[k] for k in z.files}
+
+    @property
     def bev(self):
         """The BEV `.npz`: gt_bev_masks (18, 400, 400) int8, gt_aux_bev (7, 400, 400) int32,
         structure (400, 400) int8."""

@@ -24,9 +24,10 @@ use rocc::backend::{Background, OccInput, Occupancy, OccupancyBackend, Procedura
 use rocc::compile::{Front, Options, batch, frame_boxes, front};
 use rocc::fsio::Fnv1a;
 use rocc::lidar::{Rig, scan, write_bin, write_pcd};
-use rocc::output::write_npz;
+use rocc::output::{DEFLATE, Deflate, write_labels, write_npz, write_npz_with};
 use rocc::raster::{Bev, Rasterizer};
 use rocc::source::SourceMap;
+use rocc::visibility::{CameraRig, Masks, masks_into};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -288,8 +289,20 @@ fn bench_stages() {
             format!("{rays} rays/frame, {:.2} M rays/s", fps * rays as f64 / 1e6)
         });
     }
+    let cameras = CameraRig::nuplan();
+    let vis_work = |i: usize| {
+        thread_local!(static M: std::cell::RefCell<Masks> = std::cell::RefCell::new(Masks::default()));
+        M.with(|m| masks_into(&occs[i], &rig, &cameras, &mut m.borrow_mut()));
+    };
+    report("visibility (both masks)", &vis_work, &|_| String::new());
     let dir = std::env::temp_dir().join(format!("rocc-bench-{}", std::process::id()));
     let _ = std::fs::create_dir_all(&dir);
+    let mut masks = Masks::default();
+    masks_into(&occs[0], &rig, &cameras, &mut masks);
+    let labels = |i: usize| {
+        let _ = write_labels(&dir.join(format!("g{i}.npz")), &occs[i], &masks);
+    };
+    report("write labels.npz", &labels, &|_| String::new());
     let npz = |i: usize| {
         let _ = write_npz(&dir.join(format!("b{i}.npz")), &bevs[i]);
     };
@@ -423,9 +436,10 @@ fn bench_clip() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// BEV `.npz` writes: rocc's writer (fdeflate) against ndarray-npy's (zlib through the zip
-/// crate) at deflate levels 0 (stored), 1, 2, 6 (its default) and 9, on the ambulance example's
-/// first 16 frames, one core: the writers take turns, 5 rounds, median ms per file, bytes per file.
+/// BEV `.npz` writes: rocc's writer (fdeflate, and miniz_oxide's RLE strategy at levels 1-3; `*`
+/// marks the one rocc writes with) against ndarray-npy's (zlib through the zip crate) at deflate
+/// levels 0 (stored), 1, 2, 6 (its default) and 9, on the ambulance example's first 16 frames,
+/// one core: the writers take turns, 5 rounds, median ms per file, bytes per file.
 fn bench_npz() {
     use ndarray_npy::NpzWriter;
     use rocc::raster::layout::{KEY_AUX, KEY_MASKS, KEY_STRUCTURE};
@@ -458,13 +472,32 @@ fn bench_npz() {
         })
     };
     type Writer<'a> = Box<dyn Fn(&Path, &Bev) -> std::io::Result<u64> + 'a>;
-    let writers: Vec<(String, Writer)> =
-        std::iter::once(("rocc (fdeflate)".to_string(), Box::new(|p: &Path, b: &Bev| write_npz(p, b)) as Box<_>))
-            .chain(
-                [0i64, 1, 2, 6, 9]
-                    .map(|l| (format!("zlib level {l}"), Box::new(move |p: &Path, b: &Bev| zlib(p, b, l)) as Box<_>)),
-            )
-            .collect();
+    let ours = [
+        Deflate::Fdeflate,
+        Deflate::Rle(1),
+        Deflate::Rle(2),
+        Deflate::Zlib(2),
+        Deflate::ZlibRsRle(1),
+        Deflate::ZlibRsRle(2),
+        Deflate::ZlibRsRle(3),
+    ]
+    .map(|how| {
+        let name = match how {
+            Deflate::Fdeflate => "rocc fdeflate".to_string(),
+            Deflate::Rle(l) => format!("rocc rle {l}"),
+            Deflate::Zlib(l) => format!("rocc level {l}"),
+            Deflate::ZlibRsRle(l) => format!("rocc zlib-rs rle {l}"),
+        };
+        let mark = if how == DEFLATE { " *" } else { "" };
+        (format!("{name}{mark}"), Box::new(move |p: &Path, b: &Bev| write_npz_with(p, b, how)) as Writer)
+    });
+    let writers: Vec<(String, Writer)> = ours
+        .into_iter()
+        .chain(
+            [0i64, 1, 2, 6, 9]
+                .map(|l| (format!("zlib level {l}"), Box::new(move |p: &Path, b: &Bev| zlib(p, b, l)) as Box<_>)),
+        )
+        .collect();
     let mut times = vec![Vec::new(); writers.len()];
     let mut cpu = vec![Vec::new(); writers.len()];
     let mut bytes = vec![0u64; writers.len()];

@@ -6,6 +6,7 @@ use clap::ValueEnum;
 use rocc::compile::{OccBackend, Options, Stage, StaticBev, batch};
 use rocc::diag::Diagnostic;
 use rocc::lidar::Rig;
+use rocc::visibility::CameraRig;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -65,6 +66,14 @@ pub struct Args {
     /// Also write `flow/NNNNNN.npz`: each moving agent's velocity on its voxels (docs/output.md).
     #[arg(long)]
     flow: bool,
+    /// Also write Occ3D's `gts/NNNNNN/labels.npz`: the labels with LiDAR and camera visibility
+    /// masks (docs/output.md).
+    #[arg(long)]
+    visibility: bool,
+    /// `--visibility`: the camera rig (RON; default the bundled nominal nuPlan rig,
+    /// rigs/nuplan_cameras.ron).
+    #[arg(long)]
+    camera_rig: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -94,6 +103,17 @@ pub fn run(a: Args) -> Result<(), Failure> {
             .help("drop `--stage bev` or use `--stage occ` (see `rocc explain E0430`)")
             .into());
     }
+    if a.visibility && matches!(a.stage, StageArg::Bev) {
+        return Err(Diagnostic::error("E0432", "`--visibility` needs the occupancy, which `--stage bev` leaves out")
+            .help("drop `--stage bev` or use `--stage occ` (see `rocc explain E0432`)")
+            .into());
+    }
+    if a.camera_rig.is_some() && !a.visibility {
+        return Err(Diagnostic::error("E0433", "`--camera-rig` is only used by `--visibility`")
+            .help("add `--visibility`, or drop `--camera-rig` (see `rocc explain E0433`)")
+            .into());
+    }
+    let visibility = a.visibility.then(|| CameraRig::load(a.camera_rig.as_deref())).transpose()?;
     let opts = Options {
         stage: match a.stage {
             StageArg::Bev => Stage::Bev,
@@ -117,6 +137,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
             a.grounded_config.as_deref(),
         )?,
         flow: a.flow,
+        visibility,
     };
     let shard = a.shard.as_deref().map(batch::parse_shard).transpose().map_err(|m| {
         Diagnostic::error("E0402", format!("--shard {m}"))

@@ -12,9 +12,9 @@ use crate::backend::flow::{Flow, flow_into, ground_velocity, to_ego_axes};
 use crate::backend::{Background, OccInput, Occupancy, occ_frame_path, write_npy};
 use crate::lidar::{bin_frame_path, pcd_frame_path, scan, write_bin, write_pcd};
 use crate::output::{
-    FrameBoxes, FrameWorld, Manifest, OutputFile, PREVIEW_SIDE, StageTiming, flow_frame_path, paint_bev, paint_lidar,
-    paint_occ, write_bev_frame, write_boxes_json, write_boxes_json_with, write_flow, write_gif, write_manifest,
-    write_preview_png, write_scene_json, write_sheet,
+    FrameBoxes, FrameWorld, Manifest, OutputFile, PREVIEW_SIDE, StageTiming, flow_frame_path, labels_frame_path,
+    paint_bev, paint_lidar, paint_occ, write_bev_frame, write_boxes_json, write_boxes_json_with, write_flow, write_gif,
+    write_labels, write_manifest, write_preview_png, write_scene_json, write_sheet,
 };
 use crate::place::Pose;
 use crate::raster::layout::{HALF_EXTENT_M, box_reaches_patch};
@@ -22,6 +22,7 @@ use crate::raster::{Bev, Rasterizer};
 use crate::sample::Rng;
 use crate::source::SourceMap;
 use crate::view::{AgentState, EgoBox, to_ego};
+use crate::visibility::{Masks, masks_into};
 use rayon::prelude::*;
 use std::io;
 use std::path::{Path, PathBuf};
@@ -80,6 +81,7 @@ struct Clock {
     bev: AtomicU64,
     occ: AtomicU64,
     lidar: AtomicU64,
+    visibility: AtomicU64,
     write: AtomicU64,
     preview: AtomicU64,
 }
@@ -99,6 +101,8 @@ struct Scratch {
     /// Allocated on first use: only with `--flow`.
     flow: Flow,
     velocities: Vec<[f64; 2]>,
+    /// Allocated on first use: only with `--visibility`.
+    masks: Masks,
 }
 
 /// Per-frame results kept for the clip-level files.
@@ -147,14 +151,22 @@ fn expected_manifest(ci: &ClipInput, opts: &Options, backend: &str) -> Manifest 
         m.grounded_config = Some(c.display().to_string());
     }
     m.flow = opts.flow && opts.stage >= Stage::Occ;
-    m.build_key = build_key(ci.sources, (opts.stage >= Stage::Lidar).then_some(&opts.rig));
+    let cameras = opts.visibility.as_ref().filter(|_| opts.stage >= Stage::Occ);
+    m.visibility = cameras.map(|c| c.name.clone());
+    // `mask_lidar` casts the LiDAR rig's rays at stage occ too.
+    let rig = (opts.stage >= Stage::Lidar || cameras.is_some()).then_some(&opts.rig);
+    m.build_key = build_key(ci.sources, rig, cameras);
     m
 }
 
 /// What, besides the fields compared by name, decides a clip's bytes: the compiler version, the
 /// output format (`output::FORMAT`), every loaded source (an edited import or prelude changes the scene) and the effective rig
-/// (`--lidar-resolution` changes the rig but not its name).
-fn build_key(sources: &SourceMap, rig: Option<&crate::lidar::Rig>) -> String {
+/// (`--lidar-resolution` changes the rig but not its name) and, with `--visibility`, the camera rig.
+fn build_key(
+    sources: &SourceMap,
+    rig: Option<&crate::lidar::Rig>,
+    cameras: Option<&crate::visibility::CameraRig>,
+) -> String {
     let mut bytes = Vec::new();
     let mut field = |b: &[u8]| {
         bytes.extend_from_slice(&(b.len() as u64).to_le_bytes());
@@ -168,6 +180,9 @@ fn build_key(sources: &SourceMap, rig: Option<&crate::lidar::Rig>) -> String {
     }
     if let Some(r) = rig {
         field(serde_json::to_string(r).unwrap_or_default().as_bytes());
+    }
+    if let Some(c) = cameras {
+        field(serde_json::to_string(c).unwrap_or_default().as_bytes());
     }
     crate::fsio::input_hash(&bytes)
 }
@@ -188,6 +203,7 @@ fn complete(dir: &Path, want: &Manifest) -> Option<Manifest> {
         && m.ego == want.ego
         && m.static_bev == want.static_bev
         && m.flow == want.flow
+        && m.visibility == want.visibility
         // An edited clip is not what this input compiles to.
         && m.edits.is_empty();
     let files_ok = m
@@ -345,6 +361,7 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
                 occ: Occupancy::empty(),
                 flow: Flow::default(),
                 velocities: Vec::new(),
+                masks: Masks::default(),
             },
             |s, (n, &f)| -> io::Result<FrameOut> {
                 let t0 = Instant::now();
@@ -389,6 +406,13 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
                         files.push(OutputFile { path: rel(dir, &path), bytes: write_flow(&path, &s.flow)? });
                     }
                     t3 = Clock::add(&clock.write, t4);
+                    if let Some(cameras) = &opts.visibility {
+                        masks_into(&s.occ, &opts.rig, cameras, &mut s.masks);
+                        let t5 = Clock::add(&clock.visibility, t3);
+                        let path = labels_frame_path(dir, f);
+                        files.push(OutputFile { path: rel(dir, &path), bytes: write_labels(&path, &s.occ, &s.masks)? });
+                        t3 = Clock::add(&clock.write, t5);
+                    }
                     if preview {
                         let mut img = vec![0u8; PREVIEW_SIDE * PREVIEW_SIDE];
                         paint_occ(&s.occ, &mut img);
@@ -470,6 +494,9 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
     }
     if opts.stage >= Stage::Lidar {
         timings.push(("lidar", &clock.lidar));
+    }
+    if opts.stage >= Stage::Occ && opts.visibility.is_some() {
+        timings.push(("visibility", &clock.visibility));
     }
     timings.extend([("write", &clock.write), ("preview", &clock.preview)]);
     manifest.timings =

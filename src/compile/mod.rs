@@ -72,6 +72,9 @@ pub struct Options {
     pub backend: OccBackend,
     /// Per-voxel velocity of moving agents, `flow/NNNNNN.npz` (`--flow`, stage occ and up).
     pub flow: bool,
+    /// Occ3D's `gts/NNNNNN/labels.npz` with LiDAR and camera visibility masks, the cameras
+    /// from this rig (`--visibility`, `--camera-rig`; stage occ and up).
+    pub visibility: Option<crate::visibility::CameraRig>,
 }
 
 /// `--backend`: the procedural default (shapes by `mode`), or loaded grounded weights.
@@ -134,6 +137,7 @@ impl Default for Options {
             static_bev: None,
             backend: OccBackend::Procedural,
             flow: false,
+            visibility: None,
         }
     }
 }

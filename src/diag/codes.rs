@@ -697,6 +697,32 @@ re-run the same command: complete clips are kept and the index is rebuilt.\n
     $ rocc compile scenarios/ -o out --stage bev --flow     // error: no occupancy to give flow to",
     },
     Code {
+        code: "E0431",
+        title: "bad camera rig",
+        explanation: "`--camera-rig FILE` (used by `--visibility` for `mask_camera`) is a RON file in the form of\n\
+rigs/nuplan_cameras.ron: `name`, `ray_stride_px` (one ray per that many pixels, 1 up to the\n\
+smallest image side) and `cameras`, each with `name`, `origin` (x, y, z in metres, ego frame),\n\
+`yaw_deg`, `pitch_deg` (positive looks down), `hfov_deg` (1 to 170) and `width`, `height`\n\
+(pixels, 1 to 16384). The file could not be read, did not parse, or broke one of these rules.\n
+    $ rocc compile scene.scn -o out --visibility --camera-rig my_cameras.ron",
+    },
+    Code {
+        code: "E0432",
+        title: "--visibility without occupancy",
+        explanation: "`--visibility` writes Occ3D's `gts/NNNNNN/labels.npz` (the occupancy labels with LiDAR and\n\
+camera visibility masks, docs/output.md \"Visibility\"), so it needs the occupancy stage:\n\
+`--stage occ` or `--stage lidar` (the default).\n
+    $ rocc compile scenarios/ -o out --visibility                 // fine: all stages
+    $ rocc compile scenarios/ -o out --stage bev --visibility     // error: no occupancy",
+    },
+    Code {
+        code: "E0433",
+        title: "--camera-rig without --visibility",
+        explanation: "`--camera-rig FILE` only chooses the cameras of `--visibility`'s `mask_camera`; without\n\
+`--visibility` nothing would use it.\n
+    $ rocc compile scene.scn -o out --visibility --camera-rig my_cameras.ron",
+    },
+    Code {
         code: "E0701",
         title: "unreadable occupancy frame",
         explanation: "`rocc eval occ` reads occupancy frames as a dense `.npy` of shape (400, 400, 32) (rocc's\n\

@@ -18,6 +18,7 @@ use crate::raster::layout::{HALF_EXTENT_M, box_reaches_patch};
 use crate::raster::{Bev, Rasterizer, keep_static};
 use crate::road::Map;
 use crate::view::{EgoBox, EgoFrame};
+use crate::visibility::CameraRig;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -339,6 +340,18 @@ pub fn edit_clip(dir: &Path, edits: &[Edit], o: &ClipEdit) -> Result<Manifest, V
         }
         _ => Rig::nuplan(),
     };
+    // The masks follow the edited occupancy; only the bundled camera rig can be rebuilt here.
+    let visibility = match &manifest.visibility {
+        Some(name) if *name != CameraRig::nuplan().name => {
+            return Err(clip_err(
+                dir,
+                format!("its visibility masks were cast with camera rig `{name}`"),
+                "recompile the clip with `--visibility --camera-rig FILE` instead of editing it",
+            ));
+        }
+        Some(_) => Some(CameraRig::nuplan()),
+        None => None,
+    };
     let previews = manifest.files.iter().any(|f| f.path.starts_with("preview/"));
     let opts = Options {
         stage,
@@ -353,6 +366,7 @@ pub fn edit_clip(dir: &Path, edits: &[Edit], o: &ClipEdit) -> Result<Manifest, V
         backend,
         // Edited boxes have no tracks to take a velocity from.
         flow: false,
+        visibility,
     };
     let background =
         if stage >= Stage::Occ { Background::generate(&front.map, front.concrete.seed) } else { Background::none() };

@@ -58,7 +58,16 @@ fn floor_i64(x: f64) -> i64 {
 pub fn cast(labels: &[u8], o: [f64; 3], d: [f64; 3], t_max: f64) -> Option<Hit> {
     let (t_in, t_out) = clip_to_grid(o, d, t_max)?;
     let axis = if t_in > 0.0 { entry_axis(o, d, t_in) } else { 3 };
-    walk(labels, o, d, t_in, t_out, axis, [0, 0, 0], [NX as i64, NY as i64, NZ as i64])
+    walk(labels, o, d, t_in, t_out, axis, [0, 0, 0], [NX as i64, NY as i64, NZ as i64], |_| {})
+}
+
+/// `cast`, calling `seen` with the flat index (`layout::flat`) of every free voxel the ray
+/// passes through before its hit (or before `t_max` or the grid's edge), in order: the free
+/// space a sensor observes along the ray (`crate::visibility`).
+pub fn traverse(labels: &[u8], o: [f64; 3], d: [f64; 3], t_max: f64, seen: impl FnMut(usize)) -> Option<Hit> {
+    let (t_in, t_out) = clip_to_grid(o, d, t_max)?;
+    let axis = if t_in > 0.0 { entry_axis(o, d, t_in) } else { 3 };
+    walk(labels, o, d, t_in, t_out, axis, [0, 0, 0], [NX as i64, NY as i64, NZ as i64], seen)
 }
 
 /// Columns per block side in `Skip`.
@@ -185,7 +194,7 @@ impl Skip {
             } else if z_low < top {
                 let lo = [idx[0] * B as i64, idx[1] * B as i64, 0];
                 let hi = [lo[0] + B as i64, lo[1] + B as i64, NZ as i64];
-                if let Some(h) = walk(labels, o, d, t, t_end, axis, lo, hi) {
+                if let Some(h) = walk(labels, o, d, t, t_end, axis, lo, hi, |_| {}) {
                     return Some(h);
                 }
             }
@@ -226,7 +235,8 @@ fn ground_hit(labels: &[u8], o: [f64; 3], d: [f64; 3], tg: f64, t_out: f64) -> O
 }
 
 /// The voxel walk from distance `t_in` to `t_out` inside voxel index box [lo, hi); `axis` is
-/// the face the ray entered through at `t_in`.
+/// the face the ray entered through at `t_in`; `seen` gets each free voxel passed (the LiDAR
+/// passes a no-op, which compiles away).
 #[allow(clippy::too_many_arguments)]
 fn walk(
     labels: &[u8],
@@ -237,6 +247,7 @@ fn walk(
     axis: usize,
     lo: [i64; 3],
     hi: [i64; 3],
+    mut seen: impl FnMut(usize),
 ) -> Option<Hit> {
     let n = hi;
     let mut idx = [0i64; 3];
@@ -271,12 +282,14 @@ fn walk(
         } else {
             2
         };
-        let label = labels[flat(i as usize, j as usize, k as usize)];
+        let at = flat(i as usize, j as usize, k as usize);
+        let label = labels[at];
         if label != 0 {
             let tn = [tx, ty, tz][a];
             let voxel = [i as usize, j as usize, k as usize];
             return Some(Hit { t, t_exit: tn.min(t_out.max(t)), voxel, label, axis });
         }
+        seen(at);
         match a {
             0 => {
                 t = tx;

@@ -99,6 +99,34 @@ pub fn scan(occ: &Occupancy, rig: &Rig, seed: u64, frame: usize) -> PointCloud {
     PointCloud { points }
 }
 
+/// The ego-frame direction of the ray at elevation (cos, sin) `e` and azimuth (cos, sin) `a` of
+/// a sensor turned by `rot` (`Sensor::rotation`).
+#[inline]
+pub fn ray_dir(rot: &[[f64; 3]; 3], (ce, se): (f64, f64), (ca, sa): (f64, f64)) -> [f64; 3] {
+    let l = [ce * ca, ce * sa, se];
+    [
+        rot[0][0] * l[0] + rot[0][1] * l[1] + rot[0][2] * l[2],
+        rot[1][0] * l[0] + rot[1][1] * l[1] + rot[1][2] * l[2],
+        rot[2][0] * l[0] + rot[2][1] * l[1] + rot[2][2] * l[2],
+    ]
+}
+
+/// Call `f(origin, direction)` for every ray of `rig` (sensor, beam, azimuth order), the rays
+/// `scan` fires.
+pub fn for_each_ray(rig: &Rig, mut f: impl FnMut([f64; 3], [f64; 3])) {
+    for sensor in &rig.sensors {
+        let (rot, o) = (sensor.rotation(), rig.sensor_origin(sensor));
+        let trig: Vec<(f64, f64)> =
+            sensor.azimuths(rig.horizontal_resolution_deg).map(|az| (az.cos(), az.sin())).collect();
+        for el in &sensor.elevations_deg {
+            let e = (el.to_radians().cos(), el.to_radians().sin());
+            for &a in &trig {
+                f(o, ray_dir(&rot, e, a));
+            }
+        }
+    }
+}
+
 #[allow(clippy::too_many_arguments)]
 fn fire_beam(
     labels: &[u8],
@@ -117,12 +145,7 @@ fn fire_beam(
     let (ce, se) = (el.cos(), el.sin());
     let mut out = Vec::new();
     for &(ca, sa) in trig {
-        let l = [ce * ca, ce * sa, se];
-        let d = [
-            rot[0][0] * l[0] + rot[0][1] * l[1] + rot[0][2] * l[2],
-            rot[1][0] * l[0] + rot[1][1] * l[1] + rot[1][2] * l[2],
-            rot[2][0] * l[0] + rot[2][1] * l[1] + rot[2][2] * l[2],
-        ];
+        let d = ray_dir(&rot, (ce, se), (ca, sa));
         // Three uniforms per ray, hit or not; the two normals (Box-Muller) only for returns.
         let (u_drop, u1, u2) = (rng.unit(), rng.unit(), rng.unit());
         let Some(h) = skip.cast(labels, o, d, rig.max_range) else { continue };

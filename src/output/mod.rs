@@ -7,6 +7,7 @@
 mod anim;
 mod ego;
 mod flow;
+mod labels;
 mod npz;
 mod paint;
 mod preview;
@@ -14,7 +15,8 @@ mod vector_map;
 
 pub use anim::{write_gif, write_sheet};
 pub use flow::{FLOW_KEY, flow_frame_path, write_flow};
-pub use npz::{NpyElem, Npz};
+pub use labels::{MASK_CAMERA_KEY, MASK_LIDAR_KEY, SEMANTICS_KEY, labels_frame_path, write_labels};
+pub use npz::{DEFLATE, Deflate, NpyElem, Npz};
 pub use paint::{CHANNEL_COLOURS, SIDE as PREVIEW_SIDE, STRUCTURE_COLOUR, paint_bev, paint_lidar, paint_occ, palette};
 pub use preview::{render_preview, write_preview_png};
 
@@ -50,7 +52,12 @@ fn npz_err(e: impl std::fmt::Display) -> io::Error {
 /// Write one BEV as a compressed `.npz` with keys `gt_bev_masks` (int8, 18x400x400),
 /// `gt_aux_bev` (int32, 7x400x400) and `structure` (int8, 400x400). Returns the size in bytes.
 pub fn write_npz(path: &Path, bev: &Bev) -> io::Result<u64> {
-    let mut npz = Npz::default();
+    write_npz_with(path, bev, DEFLATE)
+}
+
+/// `write_npz` with the members deflated by `how` (`bench npz` compares them).
+pub fn write_npz_with(path: &Path, bev: &Bev, how: Deflate) -> io::Result<u64> {
+    let mut npz = Npz::with_deflate(how);
     npz.add(KEY_MASKS, bev.masks.shape(), std_slice(&bev.masks)?)?;
     npz.add(KEY_AUX, bev.aux.shape(), std_slice(&bev.aux)?)?;
     npz.add(KEY_STRUCTURE, bev.structure.shape(), std_slice(&bev.structure)?)?;
@@ -300,6 +307,9 @@ pub struct Manifest {
     /// Whether `flow/` was written (`--flow`).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub flow: bool,
+    /// With `--visibility`: the camera rig's name (`gts/` holds the labels and masks).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub visibility: Option<String>,
     /// Box edits applied by `rocc edit` after compilation, in order (`insert sedan at 10,-3.5 yaw 0`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub edits: Vec<String>,
@@ -328,6 +338,7 @@ impl Manifest {
             weights: None,
             grounded_config: None,
             flow: false,
+            visibility: None,
             edits: Vec::new(),
         }
     }

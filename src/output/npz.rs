@@ -1,10 +1,15 @@
 //! The `.npz` container, written directly: a zip archive (no zip64, fixed 1980-01-01 timestamps,
-//! so the bytes depend only on the arrays) of `.npy` v1.0 members, each deflated by `fdeflate`.
-//! `fdeflate` codes runs of zeros with one fixed Huffman table and never searches for matches:
-//! BEV arrays are mostly zeros, so it runs several times faster than zlib's levels at a few
-//! times their size (`bench npz` measures both; docs/benchmarks.md has the figures). numpy's
-//! `np.load` and `ndarray_npy::NpzReader` read the result.
+//! so the bytes depend only on the arrays) of `.npy` v1.0 members, each raw-deflated by the
+//! coder `DEFLATE` names: zlib-rs with zlib's RLE strategy, which codes runs of the previous
+//! byte and searches for nothing else. BEV arrays are mostly zeros: it takes about 1 ms more CPU
+//! per BEV frame than `fdeflate`'s zero-run coder for a quarter of its size, within 2x of zlib
+//! level 6's (`bench npz` measures every coder here against zlib's levels; docs/benchmarks.md
+//! has the figures). numpy's `np.load` and `ndarray_npy::NpzReader` read the result.
 
+use miniz_oxide::deflate::core::{
+    CompressionStrategy, CompressorOxide, TDEFLFlush, TDEFLStatus, compress_to_output,
+    create_comp_flags_from_zip_params,
+};
 use std::io::{self, Write};
 
 /// An element type `.npy` can hold, and its `descr` (little-endian where it has an order).
@@ -70,13 +75,148 @@ struct Member {
 /// Elements checksummed and deflated per step, so both passes find them in cache.
 const STEP: usize = 1 << 16;
 
+/// How members are deflated. `bench npz` measures each against zlib's levels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Deflate {
+    /// `fdeflate`: one fixed Huffman table for runs of zeros, no match search.
+    Fdeflate,
+    /// miniz_oxide at this level (1-3 in `bench npz`) with the RLE strategy: matches only at
+    /// distance 1, so runs of any value cost a few bits, and dynamic Huffman tables. Level 1
+    /// takes miniz_oxide's fast path, which does not look at the strategy (it is `Zlib(1)`).
+    Rle(u8),
+    /// miniz_oxide at this level with the default strategy: zlib's levels, raw deflate.
+    Zlib(u8),
+    /// zlib-rs (zlib-ng's coder, under `zip`) at this level with the RLE strategy: zlib's
+    /// `deflate_rle`, which scans for runs of the previous byte and never hashes.
+    ZlibRsRle(u8),
+}
+
+/// The deflate rocc writes with: on BEV frames zlib-rs's RLE strategy is the fastest coder
+/// whose files stay within 2x of zlib level 6's (docs/benchmarks.md, `bench npz`).
+pub const DEFLATE: Deflate = Deflate::ZlibRsRle(1);
+
+/// One member's raw deflate stream being built.
+enum Deflater {
+    Fdeflate(fdeflate::Compressor<Vec<u8>>),
+    Oxide(Box<CompressorOxide>, Vec<u8>),
+    /// The coder, a scratch block it writes into, and what it wrote so far.
+    ZlibRs(zlib_rs::Deflate, Box<[u8; SCRATCH]>, Vec<u8>),
+}
+
+/// Output block of the zlib-rs coder.
+const SCRATCH: usize = 1 << 16;
+
+impl Deflater {
+    fn new(how: Deflate) -> io::Result<Self> {
+        Ok(match how {
+            Deflate::Fdeflate => Self::Fdeflate(fdeflate::Compressor::new(Vec::new())?),
+            Deflate::Rle(level) => Self::oxide(level, CompressionStrategy::RLE),
+            Deflate::Zlib(level) => Self::oxide(level, CompressionStrategy::Default),
+            Deflate::ZlibRsRle(level) => {
+                let config = zlib_rs::DeflateConfig {
+                    level: level.into(),
+                    window_bits: -15,
+                    strategy: zlib_rs::Strategy::Rle,
+                    ..zlib_rs::DeflateConfig::default()
+                };
+                Self::ZlibRs(zlib_rs::Deflate::new_with_config(config), Box::new([0; SCRATCH]), Vec::new())
+            }
+        })
+    }
+
+    fn oxide(level: u8, strategy: CompressionStrategy) -> Self {
+        // Negative window bits: a raw deflate stream, with no zlib header or trailer.
+        let flags = create_comp_flags_from_zip_params(level.into(), -15, strategy as i32);
+        Self::Oxide(Box::new(CompressorOxide::new(flags)), Vec::new())
+    }
+
+    fn write(&mut self, bytes: &[u8]) -> io::Result<()> {
+        match self {
+            Self::Fdeflate(z) => z.write_data(bytes),
+            Self::Oxide(z, out) => oxide_step(z, out, bytes, TDEFLFlush::None),
+            Self::ZlibRs(z, buf, out) => zlib_rs_step(z, buf, out, bytes, zlib_rs::DeflateFlush::NoFlush),
+        }
+    }
+
+    fn finish(self) -> io::Result<Vec<u8>> {
+        match self {
+            Self::Fdeflate(z) => {
+                let zlib = z.finish()?;
+                // A zlib stream is a 2-byte header, the raw deflate data a zip member holds,
+                // and an Adler-32 trailer.
+                Ok(zlib.get(2..zlib.len().saturating_sub(4)).unwrap_or_default().to_vec())
+            }
+            Self::Oxide(mut z, mut out) => {
+                oxide_step(&mut z, &mut out, &[], TDEFLFlush::Finish)?;
+                Ok(out)
+            }
+            Self::ZlibRs(mut z, mut buf, mut out) => {
+                zlib_rs_step(&mut z, &mut buf, &mut out, &[], zlib_rs::DeflateFlush::Finish)?;
+                Ok(out)
+            }
+        }
+    }
+}
+
+/// Feed `bytes` to miniz_oxide, appending what it emits to `out`.
+fn oxide_step(z: &mut CompressorOxide, out: &mut Vec<u8>, bytes: &[u8], flush: TDEFLFlush) -> io::Result<()> {
+    let (status, used) = compress_to_output(z, bytes, flush, |b| {
+        out.extend_from_slice(b);
+        true
+    });
+    let done = if flush == TDEFLFlush::Finish { TDEFLStatus::Done } else { TDEFLStatus::Okay };
+    if status != done || used != bytes.len() {
+        return Err(io::Error::other(format!("npz: deflate stopped ({status:?}, {used} of {} bytes)", bytes.len())));
+    }
+    Ok(())
+}
+
+/// Feed `bytes` to zlib-rs through `buf`, appending what it emits to `out`; with `Finish`, until
+/// the stream is closed.
+fn zlib_rs_step(
+    z: &mut zlib_rs::Deflate,
+    buf: &mut [u8; SCRATCH],
+    out: &mut Vec<u8>,
+    mut bytes: &[u8],
+    flush: zlib_rs::DeflateFlush,
+) -> io::Result<()> {
+    let finish = flush == zlib_rs::DeflateFlush::Finish;
+    loop {
+        let (in0, out0) = (z.total_in(), z.total_out());
+        let status =
+            z.compress(bytes, &mut buf[..], flush).map_err(|e| io::Error::other(format!("npz: deflate: {e:?}")))?;
+        let wrote = (z.total_out() - out0) as usize;
+        out.extend_from_slice(&buf[..wrote]);
+        bytes = &bytes[(z.total_in() - in0) as usize..];
+        // Done when the input is taken and the block was not filled (more may be pending then).
+        let drained = bytes.is_empty() && wrote < SCRATCH;
+        if (finish && status == zlib_rs::Status::StreamEnd) || (!finish && drained) {
+            return Ok(());
+        }
+        if status == zlib_rs::Status::BufError && wrote == 0 {
+            return Err(io::Error::other("npz: deflate made no progress"));
+        }
+    }
+}
+
 /// An `.npz` being built in memory; `finish` writes it out.
-#[derive(Default)]
 pub struct Npz {
     members: Vec<Member>,
+    deflate: Deflate,
+}
+
+impl Default for Npz {
+    fn default() -> Self {
+        Self::with_deflate(DEFLATE)
+    }
 }
 
 impl Npz {
+    /// An empty archive whose members `how` deflates.
+    pub fn with_deflate(how: Deflate) -> Self {
+        Self { members: Vec::new(), deflate: how }
+    }
+
     /// Add `data` (C order, `shape`) as member `name.npy`.
     pub fn add<T: NpyElem>(&mut self, name: &str, shape: &[usize], data: &[T]) -> io::Result<()> {
         if shape.iter().product::<usize>() != data.len() {
@@ -84,19 +224,16 @@ impl Npz {
         }
         let header = npy_header(T::DESCR, shape);
         let mut crc = crc32fast::Hasher::new();
-        let mut z = fdeflate::Compressor::new(Vec::new())?;
+        let mut z = Deflater::new(self.deflate)?;
         crc.update(&header);
-        z.write_data(&header)?;
+        z.write(&header)?;
         let mut buf = Vec::new();
         for chunk in data.chunks(STEP) {
             let bytes = le_bytes(chunk, &mut buf);
             crc.update(bytes);
-            z.write_data(bytes)?;
+            z.write(bytes)?;
         }
-        let zlib = z.finish()?;
-        // A zlib stream is a 2-byte header, the raw deflate data a zip member holds, and an
-        // Adler-32 trailer.
-        let deflated = zlib.get(2..zlib.len().saturating_sub(4)).unwrap_or_default().to_vec();
+        let deflated = z.finish()?;
         let raw = (header.len() + std::mem::size_of_val(data)) as u64;
         self.members.push(Member { name: format!("{name}.npy"), crc: crc.finalize(), raw, deflated });
         Ok(())
@@ -169,18 +306,20 @@ mod tests {
         let a = Array3::from_shape_fn((3, 50, 70), |(c, i, j)| ((c * 7 + i * j) % 5) as i8 - 2);
         let b = Array1::from_shape_fn(200_000, |i| if i % 1000 == 0 { -(i as i32) } else { 0 });
         let f = Array1::from_shape_fn(9, |i| i as f32 * 0.5);
-        let mut npz = Npz::default();
-        npz.add("a", &[3, 50, 70], a.as_slice().unwrap()).unwrap();
-        npz.add("b", &[200_000], b.as_slice().unwrap()).unwrap();
-        npz.add("f", &[9], f.as_slice().unwrap()).unwrap();
-        let mut bytes = Vec::new();
-        npz.finish(&mut bytes).unwrap();
-        let mut r = NpzReader::new(std::io::Cursor::new(bytes)).unwrap();
-        assert_eq!(r.names().unwrap(), vec!["a", "b", "f"]);
-        let ra: Array3<i8> = r.by_name("a").unwrap();
-        let rb: Array1<i32> = r.by_name("b").unwrap();
-        let rf: Array1<f32> = r.by_name("f").unwrap();
-        assert_eq!((ra, rb, rf), (a, b, f));
+        for how in [Deflate::Fdeflate, Deflate::Rle(1), Deflate::Rle(2), Deflate::Zlib(2), Deflate::ZlibRsRle(1)] {
+            let mut npz = Npz::with_deflate(how);
+            npz.add("a", &[3, 50, 70], a.as_slice().unwrap()).unwrap();
+            npz.add("b", &[200_000], b.as_slice().unwrap()).unwrap();
+            npz.add("f", &[9], f.as_slice().unwrap()).unwrap();
+            let mut bytes = Vec::new();
+            npz.finish(&mut bytes).unwrap();
+            let mut r = NpzReader::new(std::io::Cursor::new(bytes)).unwrap();
+            assert_eq!(r.names().unwrap(), vec!["a", "b", "f"], "{how:?}");
+            let ra: Array3<i8> = r.by_name("a").unwrap();
+            let rb: Array1<i32> = r.by_name("b").unwrap();
+            let rf: Array1<f32> = r.by_name("f").unwrap();
+            assert_eq!((&ra, &rb, &rf), (&a, &b, &f), "{how:?}");
+        }
     }
 
     #[test]
