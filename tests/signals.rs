@@ -200,3 +200,50 @@ fn boxes_json_and_scene_json_carry_the_signals() {
     assert_eq!(scene["signals"]["cycle"]["green"], 6.0);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The scene `name` with an `expect` block of `lines`, judged on its tracks: each line's text
+/// and its failure's label (`None` when it holds).
+fn judged(text: &str, lines: &str) -> Vec<(String, Option<String>)> {
+    let end = text.trim_end().rfind('}').expect("scenario's closing brace");
+    let f = front_of(&format!("{}    expect {{\n{lines}\n    }}\n}}\n", &text[..end]));
+    let contacts = rocc::expect::geometry::contacts(&f);
+    f.scenario
+        .expects
+        .iter()
+        .map(|x| {
+            let d = rocc::expect::eval::judge(&f, x, &contacts);
+            (x.text.clone(), d.map(|d| format!("{} {}", d.code, d.labels[0].text)))
+        })
+        .collect()
+}
+
+#[test]
+fn enters_names_the_light_at_the_stop_line() {
+    let runner = judged(
+        &case("red-light-runner"),
+        "        enters runner on red\n        enters runner on green during 0..8 s\n        enters runner on red by 1 s",
+    );
+    assert_eq!(runner[0], ("enters runner on red".to_string(), None), "the runner crosses on red");
+    let (_, miss) = &runner[1];
+    let miss = miss.as_deref().expect("not on green");
+    assert!(miss.starts_with("E1004 it enters at t = ") && miss.ends_with(" s on red"), "{miss}");
+    let (_, early) = &runner[2];
+    assert!(early.as_deref().is_some_and(|m| m.ends_with("on red, outside the window")), "{early:?}");
+    // Its compliant twin waits out the red, which lasts past the end of the clip.
+    let twin = judged(&compliant(&case("red-light-runner")), "        enters runner on red");
+    let miss = twin[0].1.as_deref().expect("the twin never enters");
+    assert!(miss.starts_with("E1004 it never enters: its front stays "), "{miss}");
+    // The car of red-then-green stops for the red and enters on the green at 9 s.
+    let car =
+        judged(&case("red-then-green"), "        enters car on green during 8..14 s\n        enters car on yellow");
+    assert_eq!(car[0].1, None, "{car:?}");
+    assert!(car[1].1.as_deref().is_some_and(|m| m.contains("on green")), "{car:?}");
+}
+
+#[test]
+fn enters_formats_back_to_itself() {
+    let src = "scenario x {\n    duration 8 s\n    road four_way { lanes 1; signals on }\n    agent a: sedan { at south.in[1], 30 m before stop_line }\n    expect {\n        enters a on red during 1..8 s\n        enters a on green\n    }\n}\n";
+    let once = rocc::syntax::format_source(src).expect("formats");
+    assert!(once.contains("enters a on red during 1..8 s\n") && once.contains("enters a on green\n"), "{once}");
+    assert_eq!(rocc::syntax::format_source(&once).expect("formats again"), once);
+}

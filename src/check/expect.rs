@@ -1,6 +1,7 @@
 //! `expect { ... }`: what a scenario is for, stated on its tracks and evaluated after the rollout
 //! by `rocc test` (`crate::expect`). Names and landmarks resolve as in goals; windows lie within
-//! the clip (E1001); landmarks need an agent placed on a lane of a road that has them (E1002).
+//! the clip (E1001); landmarks need an agent placed on a lane of a road that has them, and
+//! `enters` one on an in-lane of a road with signals (E1002).
 
 use super::scenario::*;
 use super::units::Dim;
@@ -63,6 +64,11 @@ impl Checker {
             ast::ExpectWhat::Reach { agent, landmark } => {
                 let (agent, lane, landmark) = self.on_lane(agent, landmark, order, agents, road)?;
                 ExpectWhat::Reach { agent, lane, landmark }
+            }
+            ast::ExpectWhat::Enters { agent, light } => {
+                let l = word(self, light, &LIGHTS, "light");
+                let (agent, lane) = self.signalled_lane(agent, order, agents, road)?;
+                ExpectWhat::Enters { agent, lane, light: l? }
             }
         };
         let (from, to) = window?;
@@ -150,5 +156,33 @@ impl Checker {
             return None;
         }
         Some((i, lane, l))
+    }
+
+    /// An agent placed on an in-lane of a road with traffic signals: the lane whose signal
+    /// `enters` reads.
+    fn signalled_lane(
+        &mut self,
+        agent: &ast::Ident,
+        order: &[&str],
+        agents: &[Option<Agent>],
+        road: Option<&Road>,
+    ) -> Option<(usize, LaneId)> {
+        let i = self.resolve(agent, order)?;
+        let a = agents.get(i)?.as_ref()?;
+        let bad = match (&a.place, road) {
+            (_, None) => "the scenario has no road, so no traffic signals".to_string(),
+            (_, Some(r)) if r.signals.is_none() => format!("the {} road has no traffic signals", r.template.name()),
+            (Place::Lane { lane, .. }, _) if lane.dir == Dir::Out => {
+                format!("`{}` starts on an out-lane, which has no signal", agent.name)
+            }
+            (Place::Lane { lane, .. }, _) => return Some((i, *lane)),
+            _ => format!("`{}` is not placed on a lane", agent.name),
+        };
+        self.err(
+            Diagnostic::error("E1002", bad)
+                .label(agent.span, "read at this agent's own stop line")
+                .help("`enters` needs an agent placed `at ARM.in[N], ...` on a road with `signals on`"),
+        );
+        None
     }
 }

@@ -521,6 +521,27 @@ pub const TURNS: [(&str, Turn); 4] =
 pub const SIDES: [(&str, Side); 2] = [("left", Side::Left), ("right", Side::Right)];
 pub const LANDMARKS: [(&str, Landmark); 3] =
     [("center", Landmark::Center), ("junction", Landmark::Junction), ("stop_line", Landmark::StopLine)];
+/// What a signal head shows (`crate::road::signals`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Light {
+    Green,
+    Yellow,
+    Red,
+}
+
+impl Light {
+    pub fn name(self) -> &'static str {
+        match self {
+            Light::Green => "green",
+            Light::Yellow => "yellow",
+            Light::Red => "red",
+        }
+    }
+}
+
+pub const LIGHTS: [(&str, Light); 3] = [("red", Light::Red), ("yellow", Light::Yellow), ("green", Light::Green)];
+
 pub const MOTIONS: [(&str, Motion); 3] =
     [("vehicle", Motion::Vehicle), ("holonomic", Motion::Holonomic), ("static", Motion::Static)];
 
@@ -640,4 +661,7 @@ pub enum ExpectWhat {
     Reach { agent: usize, lane: LaneId, landmark: Landmark },
     /// Its speed within the window, m/s.
     Speed { agent: usize, at_least: bool, ms: f64 },
+    /// Its front passes the stop line of `lane` within the window while that lane's signal
+    /// shows `light`.
+    Enters { agent: usize, lane: LaneId, light: Light },
 }

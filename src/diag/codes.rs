@@ -1302,13 +1302,27 @@ A must be placed on a lane (`at south.in[1], ...`) of a road that has the landma
 are on in-lanes of four_way, t_junction and roundabout roads; `junction` needs a junction;\n\
 `center` is on every road.\n
     road straight { lanes 2 }
-    expect { stopped ego before stop_line }     // error: a straight road has no stop lines",
+    expect { stopped ego before stop_line }     // error: a straight road has no stop lines\n\n\
+`enters A on LIGHT` reads the signal of A's own approach, so A must be placed on an in-lane of a\n\
+road with `signals on`.\n
+    road four_way { lanes 1 }
+    expect { enters runner on red }     // error: the road has no traffic signals",
     },
     Code {
         code: "E1003",
         title: "expectation names one agent twice",
         explanation: "`contact`, `no_contact` and `gap` relate two different agents.\n
     expect { gap ego with ego at_least 2 m }     // error",
+    },
+    Code {
+        code: "E1004",
+        title: "agent did not enter on the expected light",
+        explanation: "`enters A on red|yellow|green [during A..B s | by T s]` holds when the front of A's box first\n\
+passes its stop line (measured along the lane A starts in, as `reach` measures it) within the\n\
+window, while the signal of that lane shows the light. The report gives when it entered and the\n\
+light it saw, or how far short of the line it stayed. See docs/library-testing.md.\n
+    enters runner on red     // a red-light runner
+    enters ego on green during 8..14 s",
     },
     Code {
         code: "E1010",

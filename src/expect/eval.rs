@@ -2,9 +2,10 @@
 //! the line, saying what happened instead: when, and the value measured.
 
 use super::geometry::{Contact, box_distance, footprint, past_landmark, side_hit, touching};
-use crate::check::scenario::{Expect, ExpectWhat, LANDMARKS, Landmark, LaneId, Point};
+use crate::check::scenario::{Expect, ExpectWhat, LANDMARKS, Landmark, LaneId, Light, Point};
 use crate::compile::Front;
 use crate::diag::Diagnostic;
+use crate::road::signals;
 use std::ops::RangeInclusive;
 
 /// Below this speed (m/s) an agent counts as stopped.
@@ -31,6 +32,7 @@ pub fn judge(front: &Front, x: &Expect, contacts: &[Contact]) -> Option<Diagnost
         }
         ExpectWhat::Stopped { agent, lane, landmark } => j.stopped(agent, lane, landmark),
         ExpectWhat::Reach { agent, lane, landmark } => j.reach(agent, lane, landmark),
+        ExpectWhat::Enters { agent, lane, light } => j.enters(agent, lane, light),
     }?;
     let (code, what, help) = miss;
     Some(Diagnostic::error(code, format!("expectation failed: {}", x.text)).label(x.span, what).help(help))
@@ -139,6 +141,34 @@ impl Judge<'_> {
             self.t(f)
         );
         Some(("E1014", what, "measured along the lane the agent starts in, from the front of its box"))
+    }
+
+    /// The first frame of the clip at which the front is past its stop line (measured as for
+    /// `reach`, with `stopped`'s slack, so a car held at its line does not enter) and the light
+    /// its lane's head shows then; a miss when that frame lies outside the window or the light
+    /// differs.
+    fn enters(&self, agent: usize, lane: LaneId, light: Light) -> Option<Miss> {
+        const HELP: &str = "the light of the agent's own approach as its front reaches its stop line";
+        let front = self.front;
+        let Some((plan, head)) =
+            front.map.signals.as_ref().and_then(|p| Some((p, p.heads.iter().find(|h| h.id == lane)?)))
+        else {
+            return Some(("E1002", "the map has no signal on this agent's lane".to_string(), HELP));
+        };
+        let past = |f: usize| past_landmark(front, agent, f, lane, Landmark::StopLine).unwrap_or(f64::NEG_INFINITY);
+        let Some(f) = (0..front.tracks.frames).find(|&f| past(f) > SLACK) else {
+            let f = self.frames.clone().reduce(|best, f| if past(f) > past(best) { f } else { best })?;
+            let what = format!(
+                "it never enters: its front stays {:.2} m short of the stop line (nearest at {})",
+                -past(f),
+                self.t(f)
+            );
+            return Some(("E1004", what, HELP));
+        };
+        let seen = signals::light(&plan.cycle, head.phase, f as f64 / front.tracks.rate);
+        let outside = if self.frames.contains(&f) { "" } else { ", outside the window" };
+        let what = format!("it enters at {} on {}{outside}", self.t(f), seen.name());
+        (seen != light || !outside.is_empty()).then_some(("E1004", what, HELP))
     }
 
     /// The least distance between two boxes over the window, and its first frame.

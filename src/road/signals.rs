@@ -2,28 +2,10 @@
 //! cycle that lights them (north-south first, then east-west: green, yellow, all red each), and
 //! the walk signals of the crosswalks, lit with the green parallel to them.
 
+pub use crate::check::scenario::Light;
 use crate::check::scenario::{Arm, LaneId, Signals};
 use crate::road::Map;
 use serde::{Deserialize, Serialize};
-
-/// What a signal head shows.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Light {
-    Green,
-    Yellow,
-    Red,
-}
-
-impl Light {
-    pub fn name(self) -> &'static str {
-        match self {
-            Light::Green => "green",
-            Light::Yellow => "yellow",
-            Light::Red => "red",
-        }
-    }
-}
 
 /// The signal of one approach lane, at its stop line.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -480,7 +480,10 @@ impl Expectation {
         match &self.what {
             ExpectWhat::Contact { a, b, .. } | ExpectWhat::Gap { a, b, .. } => vec![a, b],
             ExpectWhat::NoContact { pair } => pair.iter().flat_map(|(a, b)| [a, b]).collect(),
-            ExpectWhat::Stopped { agent, .. } | ExpectWhat::Reach { agent, .. } | ExpectWhat::Speed { agent, .. } => {
+            ExpectWhat::Stopped { agent, .. }
+            | ExpectWhat::Reach { agent, .. }
+            | ExpectWhat::Speed { agent, .. }
+            | ExpectWhat::Enters { agent, .. } => {
                 vec![agent]
             }
         }
@@ -501,6 +504,8 @@ pub enum ExpectWhat {
     Reach { agent: Ident, landmark: Ident },
     /// `speed A at_least|at_most SPEED`.
     Speed { agent: Ident, bound: Bound, value: Value },
+    /// `enters A on red|yellow|green`: the light of A's own approach as A's front passes its stop line.
+    Enters { agent: Ident, light: Ident },
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]

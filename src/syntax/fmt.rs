@@ -153,6 +153,7 @@ pub fn expectation(x: &Expectation) -> String {
         ExpectWhat::Stopped { agent, landmark } => format!("stopped {} before {}", agent.name, landmark.name),
         ExpectWhat::Reach { agent, landmark } => format!("reach {} {}", agent.name, landmark.name),
         ExpectWhat::Speed { agent, bound: k, value } => format!("speed {} {} {}", agent.name, bound(k), val(value)),
+        ExpectWhat::Enters { agent, light } => format!("enters {} on {}", agent.name, light.name),
     };
     if let Some(w) = &x.window {
         s.push_str(&format!(" {} {}", if w.by { "by" } else { "during" }, val(&w.value)));

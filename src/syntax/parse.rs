@@ -205,6 +205,7 @@ impl Builder {
                 bound: bound.expect("grammar: speed bound"),
                 value: value.expect("grammar: speed value"),
             },
+            Rule::exp_enters => ExpectWhat::Enters { agent: name(0), light: name(1) },
             r => unreachable!("grammar: expectation {r:?}"),
         };
         Expectation { what, window, span }
