@@ -100,7 +100,7 @@ pub(crate) struct Actor {
     /// A vehicle's sweep through its first junction (`assign_bends`).
     pub bend: Option<std::sync::Arc<Bend>>,
     /// The traffic signal it answers to (`assign_signals`).
-    pub signal: Option<crate::rollout::junction::signals::Face>,
+    pub signal: Option<Face>,
     /// Stands where it is for good (an object, a static kind, a vehicle with neither speed nor
     /// a goal that moves it): vehicles pass it where there is room (`Sim::avoid`).
     pub blocker: bool,
@@ -283,4 +283,11 @@ pub(crate) struct Yield {
     pub to: usize,
     /// The offset it moves over to.
     pub offset: f64,
+}
+
+/// The signal an agent answers to: the cycle and the phase whose green lets it go.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Face {
+    pub cycle: crate::check::scenario::Signals,
+    pub phase: u8,
 }

@@ -2,23 +2,15 @@
 //! lane's head; a walker on a crosswalk, that crosswalk's walk signal), and each frame how far it
 //! may go while its signal holds it. Scenes: `tests/signal-cases/`.
 
-use crate::check::scenario::Signals;
 use crate::road::Map;
 use crate::road::signals::{Light, light, phase_of};
-use crate::rollout::agent::{Actor, Drive};
+use crate::rollout::agent::{Actor, Drive, Face};
 use crate::rollout::frame::Sim;
 use crate::rollout::junction::right_of_way::YIELD_BRAKE;
 use crate::rollout::kinematics::can_stop;
 
 /// How near a crosswalk's walking line a crossing walker's kerb must be to cross on it, m.
 const ON_CROSSWALK_M: f64 = 2.5;
-
-/// The signal an agent answers to: the cycle and the phase whose green lets it go.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Face {
-    pub cycle: Signals,
-    pub phase: u8,
-}
 
 /// Give each vehicle approaching the signalled junction its lane's head, and each walker
 /// crossing on a crosswalk that crosswalk's walk signal (lit with the parallel green).
