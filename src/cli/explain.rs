@@ -10,7 +10,7 @@ pub struct Args {
 
 pub fn run(a: Args) -> Result<(), Failure> {
     let Some(code) = a.code else {
-        for c in codes::CODES {
+        for c in codes::all() {
             outln!("{}  {}", c.code, c.title)?;
         }
         return Ok(());

@@ -1,0 +1,153 @@
+//! E02xx: road and placement.
+
+use super::Code;
+
+pub const CODES: &[Code] = &[
+    Code {
+        code: "E0201",
+        title: "placement off a valid surface",
+        explanation: "Each class starts where it can physically be: moving vehicles on lanes, shoulders or\n\
+the junction; moving bicycles also on sidewalks and crosswalks; people, animals and static things\n\
+of any class (cones, debris, a wreck) anywhere on the map or within 10 m of it, lanes included.\n
+    agent ego: sedan { at sidewalk(east.out), 10 m after center }   // error
+    object injured: adult { at west.in[1], 5 m before center; posture lying }   // fine
+    object c: traffic_cone { at (500 m, 500 m) }                    // error: far off the map",
+    },
+    Code {
+        code: "E0202",
+        title: "initial boxes overlap",
+        explanation: "Two agents' boxes overlap at their initial placement. Both are named with their spans;\n\
+move one further along the lane, to another lane, or shorten the boxes.\n
+    agent a: sedan { at west.in[1], 20 m before center }
+    agent b: sedan { at west.in[1], 22 m before center }   // error: a sedan is ~4.7 m long
+    agent b: sedan { at west.in[1], 30 m before center }   // fine",
+    },
+    Code {
+        code: "E0203",
+        title: "placement off the road",
+        explanation: "A lane-relative placement lies beyond the end of the lane (the road is `length` long;\n\
+default 120 m, junction arms 60 m), or a crosswalk/sidewalk named by the placement does not\n\
+exist because `crosswalks`/`sidewalks` is off.\n
+    road straight { lanes 1 }                                     // 120 m: 60 m each side
+    agent ego: sedan { at west.in[1], 70 m before center }        // error: lane ends 60 m before
+    agent p: pedestrian { at crosswalk(west), 50 % }              // error: `crosswalks` is off",
+    },
+    Code {
+        code: "E0204",
+        title: "goal cannot be met on this map",
+        explanation: "An agent's goal asks for something the road does not offer from where the agent starts:\n\
+a `turn` where its lane has no junction connector of that kind, a `change_lane` toward a lane\n\
+that does not exist, `stop at stop_line` on a lane with no stop line ahead, `cross` with no\n\
+road nearby to cross, a turn whose junction path is more than 3 times tighter than the\n\
+kind's turning radius (derived from its length: a bus turns on about 10 m), or a turn that,\n\
+driven on that radius, puts a wheel more than 0.25 m off the drivable surface (a sedan's\n\
+U-turn on a one-lane four_way; overhangs beyond the axles may sweep over the kerb).\n
+    road straight { lanes 1 }\n    agent ego: sedan { at west.in[1], 20 m before center; goal { turn left } }   // error\n\n\
+Place the agent on a lane that reaches a junction offering the turn, or change the goal.",
+    },
+    Code {
+        code: "E0205",
+        title: "conflict makes no contact near its time, or not as asked",
+        explanation: "A `conflict` is staged by steering the at-fault agent, within its motion limits, into\n\
+the struck agent so that they touch within 1.5 s of `at` (mid-clip without `at`). When the two\n\
+are too far apart for that, or their motion keeps them apart, the crash would be silently missing\n\
+from the clip; instead `rocc check` and `rocc compile` report it at the conflict. The same goes\n\
+for a crash that happens but not as written: the contact must lie on the struck agent's `point`\n\
+side (the thirds of each face of its box; any face of a struck object) and on the at-fault\n\
+agent's striking face (its front, or its side for a `sideswipe`), at least 5 cm deep: a\n\
+`rear_end` on `rear` that the struck car, its way blocked by the striker, drives into front\n\
+first is refused, not labelled a rear-end, and so is a 3 mm graze. A staging that fails is\n\
+planned again with its impact away from the times already tried, up to three times, before\n\
+this error, which then says what the first plan (nearest `at`) did. The at-fault agent is\n\
+reckless toward the struck agent only: it slows for any other agent in its way (a walker on\n\
+the course it would brake on, a car whose stopping distance it would cut into, a car coming\n\
+the other way), and when that makes it miss, the help names the agent that held it back\n\
+longest. Nor may a staging have one of the pair stopped dead, beyond its braking, short of\n\
+another agent (by the last-resort overlap guard): when the first plan does and no plan tried\n\
+does better, it is refused, naming the agent it would have run into. Nor may it make anyone\n\
+brake beyond their limit (8 m/s2 for a car) within 1 m of the striker: a striker cutting across\n\
+a lane a few metres ahead of a car, or turning back across the lane of one coming the other\n\
+way, leaves it no room its brakes could stop it in. Other agents brake for where a striker\n\
+will stand (its contact pose, where the crash stops it dead), not only for where it is; when\n\
+that is not enough under any plan tried, the error names who would have to brake, how hard,\n\
+and for whom.\n
+    agent a: sedan { at west.in[1], 50 m before center; speed 30 km/h }
+    agent b: sedan { at west.in[1], 50 m after center; speed 30 km/h }
+    conflict { at_fault a; struck b; impact rear_end; point rear; at 0.5 s }   // error: 100 m apart\n\n\
+Start the pair closer, give them speeds that bring them together by then, or move `at` later.",
+    },
+    Code {
+        code: "E0206",
+        title: "`stop behind` names an agent that is not ahead",
+        explanation: "`stop behind NAME` queues behind a leader, so NAME must be ahead of the agent on its route\n\
+(its lane, or the lane its `change_lane` moves it to, continued through the junction by its\n\
+`turn`, or straight on; an agent off the lanes goes along its heading). Judged on the placed poses, NAME qualifies when its centre is further\n\
+along that route and either inside the route's corridor (half the lane width plus half its own\n\
+width: a cyclist at the lane edge counts, a car in the next lane does not), or it will enter the\n\
+corridor ahead: a walker or animal with `lateral cross`, a vehicle with `change_lane` toward it,\n\
+or a vehicle whose own route merges into it heading the same way (a ramp, a turn into the exit\n\
+lane). A leader behind the agent, or on another road or lane with no such relation, would be\n\
+ignored by the controller, so it is an error. A replayed track is not judged.\n
+    agent a: sedan { at west.in[1], 30 m before center; goal { stop behind b } }
+    agent b: sedan { at west.in[1], 50 m before center }     // error: b is behind a
+    agent b: sedan { at east.in[1], 10 m before center }     // error: the other direction
+    agent b: sedan { at west.in[1], 10 m before center }     // fine: ahead on a's lane",
+    },
+    Code {
+        code: "E0207",
+        title: "two vehicles placed with no order to cross",
+        explanation: "Vehicles whose junction paths cross take turns: one holds short of the stretch the two\n\
+paths share while the other crosses. Two placed so near that stretch, and so fast, that neither can\n\
+stop short of it within emergency braking (8 m/s2 for a car or bus) are judged at the start on\n\
+their boxes, laid along their paths as they steer through the junction: if one can give way,\n\
+braking that hard while the other goes on at its placed speed (or slowed to a quarter, half or\n\
+three quarters of it), without the boxes meeting, it does so. If neither can, and braking both\n\
+they still meet, or stop each in the other's way, no order keeps them apart, and `rocc check`\n\
+reports both, with when each would be struck. A vehicle with `start after`, or one whose stop\n\
+goal lies short of the stretch, can hold and is not judged; nor is a conflict pair.\n
+    road four_way { lanes 1; speed_limit 50 km/h }
+    agent a: sedan { at south.in[1], 5 m before stop_line; speed 14 m/s; goal { turn straight } }
+    agent b: sedan { at west.in[1], 2 m before stop_line; speed 14 m/s; goal { turn straight } }   // error
+    agent a: sedan { at south.in[1], 25 m before stop_line; speed 14 m/s; goal { turn straight } } // fine\n\n\
+Start one further back or slower, or delay it with `start after`. To stage the crash the two are\n\
+headed for, write a `conflict`.",
+    },
+    // ---- track keyframes on the map (E0210) ----
+    Code {
+        code: "E0210",
+        title: "vehicle track off the road",
+        explanation: "A moving vehicle's `track` keyframe lies where it cannot drive: not on a lane, the shoulder\n\
+or the junction (a sidewalk, the median, off the road). A scene on `road none` (recorded tracks\n\
+imported with `rocc import boxes`) has no map to check against.\n
+    road straight { lanes 1; sidewalks on }
+    agent v: sedan { track { 0 s: (-20 m, -1.75 m) yaw 0 deg; 1 s: (-10 m, -6 m) yaw 0 deg } }   // error: on a sidewalk",
+    },
+    // ---- traffic signals (E0230) ----
+    Code {
+        code: "E0230",
+        title: "signals on a road without a signalled junction",
+        explanation: "Traffic signals stand at a junction whose approaches have stop lines: `four_way` and\n\
+`t_junction`. A straight road, a curve, a merge or a roundabout has no such junction, so\n\
+`signals on` there would hold nobody and is refused.\n
+    road four_way { signals on }      // fine
+    road straight { signals on }      // error",
+    },
+    Code {
+        code: "E0231",
+        title: "a signal cycle that cannot run",
+        explanation: "A signal cycle's times (`signal_green`, `signal_yellow`, `signal_all_red`,\n\
+`signal_offset`) are single times within 0..600 s, and green must be longer than 0 s: a cycle\n\
+with no green keeps every approach red forever.\n
+    road four_way { signals on; signal_green 25 s; signal_yellow 4 s }   // fine
+    road four_way { signals on; signal_green 0 s }                       // error: red forever
+    road four_way { signals on; signal_yellow -3 s }                     // error: negative",
+    },
+    Code {
+        code: "E0232",
+        title: "a signal cycle without signals",
+        explanation: "`signal_green`, `signal_yellow`, `signal_all_red` and `signal_offset` time the signals\n\
+that `signals on` puts up; without it they time nothing.\n
+    road four_way { signals on; signal_green 30 s }   // fine
+    road four_way { signal_green 30 s }               // error",
+    },
+];
