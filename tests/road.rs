@@ -29,6 +29,7 @@ fn road(template: Template) -> Road {
         radius: if template == Template::Roundabout { 15.0 } else { 100.0 },
         angle: 45f64.to_radians(),
         signals: None,
+        kerb: Default::default(),
     }
 }
 
