@@ -14,7 +14,7 @@ use super::map::{KerbPlace, KerbRef, Map};
 use super::shape::strip;
 use crate::check::kerb::{DRIVEWAY_APRON_M, DRIVEWAY_WIDTH_M};
 use crate::check::scenario::{Arm, Dir, Road};
-use crate::geom::Polyline;
+use crate::geom::{Polyline, wrap_angle};
 use glam::DVec2;
 use std::f64::consts::{FRAC_PI_2, PI};
 
@@ -45,7 +45,7 @@ pub(crate) fn lay(road: &Road, map: &mut Map) {
             map.walkways.push(strip_at(0.0, start));
         }
         shift_sidewalk(map, p.arm, p.dir, ax.offset_point(0.0, sg * p.width) - ax.offset_point(0.0, 0.0));
-        let travel = ax.pose_at(0.0).1 + if p.dir == Dir::In { PI } else { 0.0 };
+        let travel = wrap_angle(ax.pose_at(0.0).1 + if p.dir == Dir::In { PI } else { 0.0 });
         for slot in 1..=road.parking_slots() {
             let (lo, hi) = road.slot_stretch(slot);
             map.kerb_places.push(KerbPlace {
@@ -63,7 +63,7 @@ pub(crate) fn lay(road: &Road, map: &mut Map) {
         map.kerb_places.push(KerbPlace {
             at: KerbRef::Driveway(index),
             centre: ax.offset_point(d.at, sg * (kerb + SIDEWALK + DRIVEWAY_APRON_M / 2.0)),
-            yaw: ax.pose_at(0.0).1 + sg * FRAC_PI_2,
+            yaw: wrap_angle(ax.pose_at(0.0).1 + sg * FRAC_PI_2),
         });
     }
 }
