@@ -140,3 +140,24 @@ fn reverse_and_kerbside_files_are_canonically_formatted() {
         assert_eq!(rocc::syntax::format_source(&text).expect("formats"), text, "run `rocc fmt {}`", p.display());
     }
 }
+
+/// Occupancy grounds parking areas like the road: the procedural background (trees, buildings,
+/// poles) never stands on a parking lane or a driveway, whatever the seed.
+#[test]
+fn no_background_stands_on_a_parking_lane_or_a_driveway() {
+    let f = load("parked-street-with-a-crosswalk");
+    let mut seen = 0;
+    for seed in 0..8 {
+        let bg = rocc::backend::Background::generate(&f.map, seed);
+        seen += bg.items.len();
+        for it in &bg.items {
+            let o = rocc::geom::Obb { center: DVec2::new(it.x, it.y), yaw: it.yaw, length: it.l, width: it.w };
+            for poly in &f.map.carparks {
+                for c in o.corners().into_iter().chain([o.center]) {
+                    assert!(!rocc::geom::point_in_polygon(c, poly), "seed {seed}: {:?} on a parking area", it.kind);
+                }
+            }
+        }
+    }
+    assert!(seen > 0, "no background at all");
+}
