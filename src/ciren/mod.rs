@@ -5,7 +5,8 @@
 //! source fields; or a diagnostic saying exactly why the case cannot be represented.
 //!
 //! `case.rs` reads the XML into a plain `CirenCase`; `narrative.rs` reads the Summary with fixed
-//! rules; `record.rs` maps a case, and `safe.rs` a SAFE extraction, to a plain `Crash`
+//! rules; `record/` maps a case (field decoders, a pair of vehicles, a vehicle and an object),
+//! and `safe/` a SAFE extraction (its `point_of_impact` rules in `safe/poi.rs`), to a plain `Crash`
 //! (`crash.rs`); `emit.rs` writes the `.scn` and keeps it only once the checker and the rollout
 //! agree that the latched contact is on the coded sides. The VLM route (`extract.rs`) sends the sketch and summary to a vision model, checks and
 //! repairs the scene like `rocc text`, and merges the conflict of a separate greedy call by span
