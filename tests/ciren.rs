@@ -487,3 +487,97 @@ proptest::proptest! {
         let _ = std::fs::remove_dir_all(&d);
     }
 }
+
+// ------------------------------------------------------------------ force direction
+
+/// The coded force per (vehicle, event), read from the record's `VehicleExteriorForm` CDC rows
+/// with roxmltree, independently of the importer: clock direction and total delta-V (km/h).
+fn coded_forces(xml: &str) -> Vec<(u32, u32, Option<u32>, Option<f64>)> {
+    let doc = roxmltree::Document::parse(xml).expect("xml");
+    let mut out = vec![];
+    for f in doc.descendants().filter(|n| n.has_tag_name("VehicleExteriorForm")) {
+        let v: u32 = f.attribute("VehicleNumber").and_then(|x| x.parse().ok()).expect("vehicle");
+        for e in f.descendants().filter(|n| n.has_tag_name("CDCevent")) {
+            let ev: u32 = e.attribute("eventNumber").and_then(|x| x.parse().ok()).expect("event");
+            let clock = e.children().find(|n| n.has_tag_name("ClockDirection")).and_then(|n| n.text());
+            let h = clock.and_then(|t| t.trim().parse::<u32>().ok()).filter(|h| (1..=12).contains(h));
+            let dv = e
+                .descendants()
+                .find(|n| n.has_tag_name("Total"))
+                .and_then(|n| n.attribute("value"))
+                .and_then(|x| x.parse::<f64>().ok())
+                .filter(|x| *x > 0.0 && *x < 250.0);
+            out.push((v, ev, h, dv));
+        }
+    }
+    out
+}
+
+/// Curb weight (kg) of vehicle `v` in its `GeneralVehicleForm`.
+fn curb_weight(xml: &str, v: u32) -> Option<f64> {
+    let doc = roxmltree::Document::parse(xml).expect("xml");
+    let g = doc
+        .descendants()
+        .find(|n| n.has_tag_name("GeneralVehicleForm") && n.attribute("VehicleNumber") == Some(&v.to_string()))?;
+    g.descendants().find(|n| n.has_tag_name("CurbWeight"))?.attribute("value")?.parse().ok()
+}
+
+/// Velocity of agent `i` over the frame leading into frame `f`, m/s.
+fn vel(t: &Tracks, i: usize, f: usize) -> glam::DVec2 {
+    let (p0, p1) = (t.poses[i][f - 1], t.poses[i][f]);
+    glam::DVec2::new(p1.x - p0.x, p1.y - p0.y) * t.rate
+}
+
+/// The clock direction (0.5..12.5) of the force on agent `a` from agent `b`, measured from the
+/// boxes' relative velocity over the frame leading into contact `f`: the force on `a` comes
+/// from where `a` moves relative to `b` (12 straight ahead, 3 the right side).
+fn measured_clock(t: &Tracks, a: usize, b: usize, f: usize) -> f64 {
+    let rel = (vel(t, a, f) - vel(t, b, f)).rotate(glam::DVec2::from_angle(-t.poses[a][f - 1].yaw));
+    let h = (-rel.y.atan2(rel.x).to_degrees()).rem_euclid(360.0) / 30.0;
+    if h < 0.5 { h + 12.0 } else { h }
+}
+
+fn clock_gap(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(12.0);
+    d.min(12.0 - d)
+}
+
+/// Every coded clock direction is met within one hour at its contact, and where a delta-V and
+/// both curb weights (or a fixed object) are coded, the closing speed at contact is within 25%
+/// of the momentum balance with a common velocity after: `dv * (m1 + m2) / m2`.
+#[test]
+fn each_impact_meets_its_coded_clock_direction_and_delta_v() {
+    let mut checked = (0, 0);
+    for p in dirs("tests/fixtures/ciren-cases", true) {
+        let xml = std::fs::read_to_string(p.join("crash_report.xml")).expect("xml");
+        let mut sources = SourceMap::default();
+        let imp = ciren::import_case(&p, &mut sources).unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+        let scen = rocc::check::check_text(&imp.file_name(), &imp.staged.text, Path::new("."), &mut sources)
+            .unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+        let t = rocc::compile::front(scen, None).expect("front").tracks;
+        let id = &imp.crash.id;
+        for (v, ev, h, dv) in coded_forces(&xml) {
+            let a = t.agents.iter().position(|x| x.name == format!("v{v}")).expect("agent");
+            let rec = &t.impacts[ev as usize - 1];
+            assert!(rec.at_fault == a || rec.struck == a, "{id}: event {ev} is not v{v}'s");
+            let b = if rec.at_fault == a { rec.struck } else { rec.at_fault };
+            if let Some(h) = h {
+                let m = measured_clock(&t, a, b, rec.frame);
+                assert!(clock_gap(m, f64::from(h)) <= 1.0, "{id}: v{v} coded {h} o'clock, measured {m:.2}");
+                checked.0 += 1;
+            }
+            let m_other = if t.agents[b].name.starts_with("obj") {
+                Some(None)
+            } else {
+                curb_weight(&xml, t.agents[b].name[1..].parse().expect("vN")).map(Some)
+            };
+            if let (Some(dv), Some(m_self), Some(m_other)) = (dv, curb_weight(&xml, v), m_other) {
+                let want = m_other.map_or(dv, |m| dv * (m_self + m) / m);
+                let got = (vel(&t, a, rec.frame) - vel(&t, b, rec.frame)).length() * 3.6;
+                assert!((got - want).abs() <= 0.25 * want, "{id}: closing {got:.1} km/h, delta-V asks {want:.1}");
+                checked.1 += 1;
+            }
+        }
+    }
+    assert!(checked.0 >= 6 && checked.1 >= 3, "checked {checked:?}");
+}

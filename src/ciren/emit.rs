@@ -238,10 +238,63 @@ pub fn on_coded_sides(
     }
 }
 
+/// Rounds of speed adjustment toward the coded force (clock direction, delta-V).
+const FORCE_ROUNDS: usize = 4;
+
 /// Emit, check and roll out; keep the first staging whose latched contact is on the coded
-/// sides. An error says what the last attempt did.
+/// sides and meets the coded force. When the sides are right but the force is not, the
+/// speeds `impact::propose` derives from the contact's headings are taken and the staging
+/// starts again (at most `FORCE_ROUNDS` times). An error says what the last attempt did.
 pub fn stage(c: &Crash) -> Result<Staged, Vec<Diagnostic>> {
+    let mut crash = c.clone();
     let mut last = String::new();
+    for _ in 0..FORCE_ROUNDS {
+        match stage_sides(&crash, &mut last)? {
+            Some((staged, tracks, rec)) => match super::impact::check(&crash, &tracks, &rec) {
+                Ok(()) => return Ok(staged),
+                Err(m) => {
+                    last = m;
+                    let Some(speeds) = super::impact::propose(&crash, &tracks, &rec) else { break };
+                    set_speeds(&mut crash, &speeds);
+                }
+            },
+            None => break,
+        }
+    }
+    Err(vec![
+        Diagnostic::error(
+            "E0805",
+            format!(
+                "case {}: rocc could not stage {}'s {} into {}'s {} side: {last}",
+                c.id,
+                c.conflict.at_fault,
+                c.conflict.face.name(),
+                c.conflict.struck,
+                c.conflict.point.name()
+            ),
+        )
+        .help("nothing is written for this case; `rocc explain E0805` lists what the staging can and cannot do"),
+    ])
+}
+
+/// Take the speeds the coded force asks, said in each vehicle's notes.
+fn set_speeds(c: &mut Crash, speeds: &[(String, f64)]) {
+    const NOTE: &str = "speed at contact set by the coded force";
+    for (name, kmh) in speeds {
+        if let Some(v) = c.vehicles.iter_mut().find(|v| &v.name == name) {
+            v.speed_kmh = (kmh * 10.0).round() / 10.0;
+            v.notes.retain(|n| !n.starts_with(NOTE));
+            v.notes.push(format!("{NOTE} (clock direction, delta-V): {} km/h", num(v.speed_kmh)));
+        }
+    }
+}
+
+/// The first staging whose latched contact is on the coded sides, with its tracks and impact;
+/// `None` (and `last` saying why) when none is.
+fn stage_sides(
+    c: &Crash,
+    last: &mut String,
+) -> Result<Option<(Staged, crate::rollout::Tracks, crate::rollout::ImpactRecord)>, Vec<Diagnostic>> {
     let tries = LAGS.iter().flat_map(|&lag| TIMES.iter().map(move |&t| (t, lag)));
     for (t, lag) in tries {
         let st = Staging { t_impact: t, lag };
@@ -266,17 +319,17 @@ pub fn stage(c: &Crash) -> Result<Staged, Vec<Diagnostic>> {
         let front = match crate::compile::front(scen, None) {
             Ok(f) => f,
             Err(d) => {
-                last = d.iter().map(|x| format!("{}: {}", x.code, x.message)).collect::<Vec<_>>().join("; ");
+                *last = d.iter().map(|x| format!("{}: {}", x.code, x.message)).collect::<Vec<_>>().join("; ");
                 continue;
             }
         };
-        let Some(rec) = front.tracks.impacts.first() else {
-            last = format!("no contact at {} s", num(t));
+        let Some(rec) = front.tracks.impacts.first().cloned() else {
+            *last = format!("no contact at {} s", num(t));
             continue;
         };
         let size = front.tracks.agents[rec.at_fault].size;
         if rec.depth < crate::rollout::MIN_DEPTH {
-            last = format!("only a {:.2} m graze at {} s", rec.depth, num(t));
+            *last = format!("only a {:.2} m graze at {} s", rec.depth, num(t));
             continue;
         }
         match on_coded_sides(
@@ -288,29 +341,17 @@ pub fn stage(c: &Crash) -> Result<Staged, Vec<Diagnostic>> {
             size,
         ) {
             Ok(()) => {
-                return Ok(Staged {
+                let staged = Staged {
                     text,
                     staging: st,
                     frame: rec.frame,
                     time: rec.frame as f64 / front.tracks.rate,
                     struck_side: rec.struck_side,
-                });
+                };
+                return Ok(Some((staged, front.tracks, rec)));
             }
-            Err(m) => last = m,
+            Err(m) => *last = m,
         }
     }
-    Err(vec![
-        Diagnostic::error(
-            "E0805",
-            format!(
-                "case {}: rocc could not stage {}'s {} into {}'s {} side: {last}",
-                c.id,
-                c.conflict.at_fault,
-                c.conflict.face.name(),
-                c.conflict.struck,
-                c.conflict.point.name()
-            ),
-        )
-        .help("nothing is written for this case; `rocc explain E0805` lists what the staging can and cannot do"),
-    ])
+    Ok(None)
 }

@@ -17,6 +17,7 @@ pub mod crash;
 pub mod descriptor;
 pub mod emit;
 pub mod extract;
+pub mod impact;
 pub mod narrative;
 pub mod record;
 pub mod safe;

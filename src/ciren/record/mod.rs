@@ -9,6 +9,7 @@
 
 mod ctx;
 mod fields;
+mod force;
 mod object;
 mod pair;
 
@@ -169,5 +170,8 @@ pub fn map_case(case: &CirenCase, file: u32) -> Result<Mapped, Vec<Diagnostic>> 
         ));
         object::single_vehicle(&mut cx, &story, header, me, own_area, &area_c, &contacted)
     }
-    .map(|crash| Mapped { crash, warnings: cx.warnings })
+    .map(|mut crash| {
+        force::annotate(&cx, &mut crash, ev.number);
+        Mapped { crash, warnings: cx.warnings }
+    })
 }

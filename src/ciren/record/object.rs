@@ -131,6 +131,8 @@ pub(super) fn single_vehicle(
         vehicles: vec![v],
         objects: vec![obj],
         conflict: ConflictDesc {
+            clocks: Vec::new(),
+            closing: None,
             at_fault: format!("v{}", me.number),
             struck: "obj1".into(),
             impact: Impact::Object,

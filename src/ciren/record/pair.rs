@@ -328,6 +328,8 @@ pub(super) fn two_vehicles(
         mans[i].0 = man;
     }
     let conflict = ConflictDesc {
+        clocks: Vec::new(),
+        closing: None,
         at_fault: format!("v{af_no}"),
         struck: format!("v{st_no}"),
         impact,

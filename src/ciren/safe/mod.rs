@@ -712,6 +712,8 @@ fn map(cx: &mut Ctx, root: &Value, path: &Path) -> Result<Crash, Vec<Diagnostic>
         vehicles,
         objects: Vec::new(),
         conflict: ConflictDesc {
+            clocks: Vec::new(),
+            closing: None,
             at_fault: format!("v{striker}"),
             struck: format!("v{struck}"),
             impact,
