@@ -99,6 +99,8 @@ pub struct RoadDesc {
     /// A centre turn lane or a median strip, m.
     pub median: f64,
     pub shoulder: f64,
+    /// Quarter turns counter-clockwise from the source's compass frame into rocc's.
+    pub turns: i32,
     /// Why: one line per choice, citing the source.
     pub notes: Vec<String>,
 }
@@ -253,7 +255,8 @@ pub struct Crash {
     pub road: RoadDesc,
     pub vehicles: Vec<VehicleDesc>,
     pub objects: Vec<ObjectDesc>,
-    pub conflict: ConflictDesc,
+    /// The staged contacts in time order (the record's event order).
+    pub conflicts: Vec<ConflictDesc>,
 }
 
 impl Crash {

@@ -8,7 +8,7 @@
 //! relative velocity of the other body, so it comes from where the vehicle moves relative to
 //! that body: the clock of `v_self - v_other` in the vehicle's frame (12 ahead, 3 the right).
 
-use super::crash::{Crash, Manoeuvre};
+use super::crash::{ConflictDesc, Crash, Manoeuvre};
 use crate::rollout::{ImpactRecord, Tracks};
 use glam::DVec2;
 
@@ -72,22 +72,31 @@ fn agent(t: &Tracks, name: &str) -> Option<usize> {
     t.agents.iter().position(|a| a.name == name)
 }
 
+/// How a contact misses its coded force.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Miss {
+    /// The clock directions are met; only the closing speed is off.
+    pub closing_only: bool,
+    pub message: String,
+}
+
 /// Whether the contact meets the conflict's coded force; the error says how it misses.
-pub fn check(c: &Crash, t: &Tracks, rec: &ImpactRecord) -> Result<(), String> {
-    let k = &c.conflict;
+pub fn check(k: &ConflictDesc, t: &Tracks, rec: &ImpactRecord) -> Result<(), Miss> {
     let f = rec.frame;
     for cl in &k.clocks {
         let other = if cl.vehicle == k.at_fault { &k.struck } else { &k.at_fault };
         let (Some(a), Some(b)) = (agent(t, &cl.vehicle), agent(t, other)) else { continue };
         let h = clock_of(t, a, b, f);
         if clock_gap(h, f64::from(cl.hour)) > CLOCK_TOLERANCE_H {
-            return Err(format!("the force on {} comes from {h:.1} o'clock, coded {} o'clock", cl.vehicle, cl.hour));
+            let message = format!("the force on {} comes from {h:.1} o'clock, coded {} o'clock", cl.vehicle, cl.hour);
+            return Err(Miss { closing_only: false, message });
         }
     }
     if let Some(cl) = &k.closing {
         let got = (velocity(t, rec.at_fault, f) - velocity(t, rec.struck, f)).length() * 3.6;
         if (got - cl.kmh).abs() > CLOSING_TOLERANCE * cl.kmh {
-            return Err(format!("the closing speed is {got:.0} km/h, the coded delta-V asks {:.0}", cl.kmh));
+            let message = format!("the closing speed is {got:.0} km/h, the coded delta-V asks {:.0}", cl.kmh);
+            return Err(Miss { closing_only: true, message });
         }
     }
     Ok(())
@@ -96,8 +105,7 @@ pub fn check(c: &Crash, t: &Tracks, rec: &ImpactRecord) -> Result<(), String> {
 /// Speeds (km/h, by vehicle name) that turn the measured relative velocity at `rec` toward the
 /// coded clock direction and closing speed, given the headings the staging met with; `None`
 /// when no bounded speeds do. Offsets up to 0.75 h from the coded hour are tried, nearest first.
-pub fn propose(c: &Crash, t: &Tracks, rec: &ImpactRecord) -> Option<Vec<(String, f64)>> {
-    let k = &c.conflict;
+pub fn propose(c: &Crash, k: &ConflictDesc, t: &Tracks, rec: &ImpactRecord) -> Option<Vec<(String, f64)>> {
     let f = rec.frame;
     let (a_name, b_name, hour) = match k.clocks.first() {
         Some(cl) if cl.vehicle == k.at_fault => (k.at_fault.clone(), k.struck.clone(), Some(cl.hour)),

@@ -50,7 +50,14 @@ pub fn import_case(path: &Path, sources: &mut SourceMap) -> Result<Imported, Vec
     let (case, file) = read_case(path, sources)?;
     let mapped = record::map_case(&case, file)?;
     let staged = stage(&mapped.crash)?;
-    Ok(Imported { crash: mapped.crash, staged, warnings: mapped.warnings })
+    let mut warnings = mapped.warnings;
+    for s in &staged.shortfalls {
+        warnings.push(Diagnostic::warning("E0806", format!("case {}: {s}", case.id)).help(
+            "the sides and the clock direction are met; the rollout's staging sets the striker's speed in \
+                 its last seconds, so the closing speed is the staging's",
+        ));
+    }
+    Ok(Imported { crash: mapped.crash, staged, warnings })
 }
 
 /// Read, map, emit and verify one SAFE extraction (`*.json`).

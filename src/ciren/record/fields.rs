@@ -4,7 +4,7 @@
 use super::ctx::Ctx;
 use crate::check::scenario::Point;
 use crate::ciren::case::{CaseVehicle, CirenCase, Coded};
-use crate::ciren::crash::{Compass, Manoeuvre};
+use crate::ciren::crash::{Compass, Manoeuvre, Template, t_junction_turn};
 use crate::ciren::narrative::{self, LanePos, Move, Narrative};
 use crate::diag::Diagnostic;
 
@@ -330,4 +330,35 @@ pub(super) fn cx_class(case: &CirenCase, n: u32) -> Option<Coded> {
             .find(|e| e.contacted.as_ref().is_some_and(|c| c.text.ends_with(&format!("#{n}"))))
             .and_then(|e| e.contacted_class.clone())
     })
+}
+
+/// The manoeuvre a template can hold for a vehicle starting on `arm.in[lane]`: turns off a road
+/// without a junction, lane changes with no lane to go to and merges off a merge are driven
+/// straight on, and a T's missing leg is avoided; each fallback said in `notes`.
+pub(super) fn fit_manoeuvre(
+    template: Template,
+    arm: &str,
+    lane: u32,
+    lanes: u32,
+    man: Manoeuvre,
+    notes: &mut Vec<String>,
+) -> Manoeuvre {
+    let junction = template.has_junction();
+    let man = match man {
+        Manoeuvre::TurnLeft | Manoeuvre::TurnRight if !junction => {
+            notes.push("a turn off a road without a junction is driven straight on".into());
+            Manoeuvre::Straight
+        }
+        Manoeuvre::ChangeLaneLeft if lane <= 1 => {
+            notes.push("no lane to its left: straight on; the staging moves it into the conflict".into());
+            Manoeuvre::Straight
+        }
+        Manoeuvre::ChangeLaneRight if lane >= lanes => {
+            notes.push("no lane to its right: straight on; the staging moves it into the conflict".into());
+            Manoeuvre::Straight
+        }
+        Manoeuvre::Merge if template != Template::Merge => Manoeuvre::Straight,
+        m => m,
+    };
+    t_junction_turn(template, arm, man, notes)
 }

@@ -19,9 +19,9 @@ fn mass(cx: &Ctx, crash: &Crash, name: &str) -> Option<(f64, String)> {
     Some((kg, format!("V{n} {} prior {} kg", v.kind, num(kg))))
 }
 
-/// Fill the conflict's clocks and closing speed from the CDC rows of `event`.
-pub(super) fn annotate(cx: &Ctx, crash: &mut Crash, event: u32) {
-    let k = crash.conflict.clone();
+/// Fill conflict `i`'s clocks and closing speed from the CDC rows of `event`.
+pub(super) fn annotate(cx: &Ctx, crash: &mut Crash, i: usize, event: u32) {
+    let k = crash.conflicts[i].clone();
     let pair = [k.at_fault.clone(), k.struck.clone()];
     let rows: Vec<_> =
         cx.case.cdc.iter().filter(|r| r.event == event && pair.contains(&format!("v{}", r.vehicle))).collect();
@@ -58,5 +58,5 @@ pub(super) fn annotate(cx: &Ctx, crash: &mut Crash, event: u32) {
         out.closing = Some(Closing { kmh: c });
         break;
     }
-    crash.conflict = out;
+    crash.conflicts[i] = out;
 }

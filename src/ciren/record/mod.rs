@@ -8,14 +8,16 @@
 //! narrated is a warning (E0807), never silent.
 
 mod ctx;
+mod events;
 mod fields;
 mod force;
 mod object;
 mod pair;
 
-use crate::ciren::case::{CirenCase, Coded, Event};
+use crate::ciren::case::CirenCase;
 use crate::ciren::narrative::{self, Narrative};
 use crate::diag::Diagnostic;
+use crate::source::Span;
 use ctx::Ctx;
 pub use ctx::Mapped;
 pub use fields::{Area, TURN_KMH, area, kind_for};
@@ -79,54 +81,9 @@ pub fn map_case(case: &CirenCase, file: u32) -> Result<Mapped, Vec<Diagnostic>> 
         ));
     }
 
-    // The first-ranked event is the one staged.
-    let mut events: Vec<&Event> = case.events.iter().collect();
-    events.sort_by_key(|e| (e.rank.unwrap_or(u32::MAX), e.number, e.vehicle));
-    let Some(ev) = events.first().copied() else {
-        return Err(cx.err(
-            "E0802",
-            "no Events/EventSum row: the record codes no collision".into(),
-            None,
-            "a case needs at least one EventSum with AreaOfDamage, Contacted and ContactedAreaOfDamage",
-        ));
-    };
-    for other in events.iter().skip(1) {
-        let d = Diagnostic::warning(
-            "E0806",
-            format!(
-                "case {}: event {} of V{} is not staged; rocc stages the first-ranked event",
-                case.id, other.number, other.vehicle
-            ),
-        )
-        .label(cx.tag_span(&other.range, "EventSum"), "left out")
-        .help("one conflict per scenario: the later contacts of a multi-event crash are not recreated");
-        cx.warnings.push(d);
-    }
-    let ev_span = cx.tag_span(&ev.range, "EventSum");
-    let need = |c: &Option<Coded>, what: &str| {
-        c.clone().ok_or_else(|| {
-            cx.err(
-                "E0802",
-                format!("EventSum of V{} has no {what}", ev.vehicle),
-                Some((ev_span, "this event")),
-                "the event's damage areas and contacted party are required",
-            )
-        })
-    };
-    let area_c = need(&ev.area, "AreaOfDamage")?;
-    let contacted = need(&ev.contacted, "Contacted")?;
-    let own_area =
-        area(&area_c).ok_or_else(|| cx.unknown("AreaOfDamage", &area_c, "known CDC areas: F, B, L, R, T, U"))?;
-    let vehicle = |n: u32| case.vehicles.iter().find(|v| v.number == n);
-    let Some(me) = vehicle(ev.vehicle) else {
-        return Err(cx.err(
-            "E0802",
-            format!("the event names V{} but the record has no GeneralVehicleForm for it", ev.vehicle),
-            Some((ev_span, "this event")),
-            "each vehicle of the event needs its GeneralVehicleForm (body type, pre-crash data)",
-        ));
-    };
-
+    // Every contact in time order; the first-ranked one sets the road.
+    let (contacts, primary) = events::contacts(&cx)?;
+    let c0 = &contacts[primary];
     let mut header = vec![
         format!("CIREN case {}, imported by `rocc ciren import` from {}.", case.id, case.path),
         format!(
@@ -135,43 +92,27 @@ pub fn map_case(case: &CirenCase, file: u32) -> Result<Mapped, Vec<Diagnostic>> 
             config.cite("Configuration")
         ),
     ];
-    let contacted_t = contacted.lower();
-    let other_no: Option<u32> =
-        contacted_t.split('#').nth(1).and_then(|n| n.trim().split(|c: char| !c.is_ascii_digit()).next()?.parse().ok());
-
-    if let Some(on) = other_no.filter(|_| contacted_t.contains("vehicle")) {
-        let other_area_c = need(&ev.contacted_area, "ContactedAreaOfDamage")?;
-        let other_area = area(&other_area_c)
-            .ok_or_else(|| cx.unknown("ContactedAreaOfDamage", &other_area_c, "known CDC areas: F, B, L, R, T, U"))?;
-        let Some(other) = vehicle(on) else {
-            return Err(cx.err(
-                "E0802",
-                format!("V{} contacted V{on}, which has no GeneralVehicleForm", ev.vehicle),
-                Some((cx.span(&contacted), "this vehicle")),
-                "each vehicle of the event needs its GeneralVehicleForm (body type, pre-crash data)",
-            ));
-        };
-        header.push(format!(
-            "EventSum {}: V{} {}, {}, {}.",
-            ev.number,
-            ev.vehicle,
-            area_c.cite("AreaOfDamage"),
-            contacted.cite("Contacted"),
-            other_area_c.cite("ContactedAreaOfDamage")
-        ));
-        pair::two_vehicles(&mut cx, &story, header, (me, own_area, &area_c), (other, other_area, &other_area_c))
-    } else {
-        header.push(format!(
-            "EventSum {}: V{} {}, {}.",
-            ev.number,
-            ev.vehicle,
-            area_c.cite("AreaOfDamage"),
-            contacted.cite("Contacted")
-        ));
-        object::single_vehicle(&mut cx, &story, header, me, own_area, &area_c, &contacted)
+    header.push(c0.cite());
+    let mut crash = match &c0.other {
+        events::Party::Vehicle(other, oa, oc) => {
+            pair::two_vehicles(&mut cx, &story, header, (c0.me, c0.own, &c0.own_c), (other, *oa, oc))?
+        }
+        events::Party::Object => {
+            object::single_vehicle(&mut cx, &story, header, c0.me, c0.own, &c0.own_c, &c0.contacted)?
+        }
+    };
+    // The others join in time order around it.
+    let mut conflicts = Vec::new();
+    for (i, c) in contacts.iter().enumerate() {
+        let k = if i == primary { crash.conflicts[0].clone() } else { events::join(&mut cx, &story, &mut crash, c)? };
+        conflicts.push(k);
     }
-    .map(|mut crash| {
-        force::annotate(&cx, &mut crash, ev.number);
-        Mapped { crash, warnings: cx.warnings }
-    })
+    crash.conflicts = conflicts;
+    let spans: Vec<(u32, Span)> =
+        contacts.iter().map(|c| (c.ev.number, cx.tag_span(&c.ev.range, "EventSum"))).collect();
+    events::check_order(&cx, &crash, &spans)?;
+    for (i, c) in contacts.iter().enumerate() {
+        force::annotate(&cx, &mut crash, i, c.ev.number);
+    }
+    Ok(Mapped { crash, warnings: cx.warnings })
 }

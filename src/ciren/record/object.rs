@@ -118,6 +118,7 @@ pub(super) fn single_vehicle(
             speed_limit_kmh: limit,
             median: 0.0,
             shoulder: 1.0,
+            turns: dir.turns_to(Compass::East),
             notes: vec![
                 format!(
                     "road {}: {rel}; {}",
@@ -130,7 +131,7 @@ pub(super) fn single_vehicle(
         },
         vehicles: vec![v],
         objects: vec![obj],
-        conflict: ConflictDesc {
+        conflicts: vec![ConflictDesc {
             clocks: Vec::new(),
             closing: None,
             at_fault: format!("v{}", me.number),
@@ -143,6 +144,6 @@ pub(super) fn single_vehicle(
                 me.number,
                 own_c.cite("AreaOfDamage")
             )],
-        },
+        }],
     })
 }

@@ -7,7 +7,6 @@ use crate::check::scenario::{Impact, Point};
 use crate::ciren::case::{CaseVehicle, Coded};
 use crate::ciren::crash::{
     Compass, ConflictDesc, Crash, Face, Manoeuvre, RoadDesc, Template, VehicleDesc, approach_arm, man_word,
-    t_junction_turn,
 };
 use crate::ciren::narrative::{Junction, Narrative};
 use crate::diag::Diagnostic;
@@ -294,25 +293,7 @@ pub(super) fn two_vehicles(
             ));
         }
         notes.push(format!("travels {} ({dir_cite}) -> {arm}.in[{lane}]: {lane_cite}", dir.name()));
-        // Manoeuvres the template cannot hold fall back to straight on, said so.
-        let junction = template.has_junction();
-        man = match man {
-            Manoeuvre::TurnLeft | Manoeuvre::TurnRight if !junction => {
-                notes.push("a turn off a road without a junction is driven straight on".into());
-                Manoeuvre::Straight
-            }
-            Manoeuvre::ChangeLaneLeft if lane <= 1 => {
-                notes.push("no lane to its left: straight on; the staging moves it into the conflict".into());
-                Manoeuvre::Straight
-            }
-            Manoeuvre::ChangeLaneRight if lane >= lanes => {
-                notes.push("no lane to its right: straight on; the staging moves it into the conflict".into());
-                Manoeuvre::Straight
-            }
-            Manoeuvre::Merge if template != Template::Merge => Manoeuvre::Straight,
-            m => m,
-        };
-        man = t_junction_turn(template, arm, man, &mut notes);
+        man = fit_manoeuvre(template, arm, lane, lanes, man, &mut notes);
         notes.push(format!("manoeuvre {}: {man_cite}", man_word(man)));
         let (speed, speed_cite) = speed_of(cx, v, limit, man);
         notes.push(format!("speed: {speed_cite}"));
@@ -351,10 +332,73 @@ pub(super) fn two_vehicles(
             speed_limit_kmh: limit,
             median,
             shoulder: 0.0,
+            turns: q,
             notes: road_notes,
         },
         vehicles,
         objects: Vec::new(),
-        conflict,
+        conflicts: vec![conflict],
     })
+}
+
+/// A vehicle a later contact brings: on the crash's road, travelling as narrated (rotated into
+/// rocc's frame), else as the contact suggests beside `partner` (behind it for a rear end, the
+/// other way for a head-on, across it at a junction); a rear-end striker starts in its
+/// partner's lane.
+pub(super) fn extra_vehicle(
+    cx: &mut Ctx,
+    story: &Narrative,
+    crash: &Crash,
+    v: &CaseVehicle,
+    partner: &str,
+    impact: Impact,
+) -> Result<VehicleDesc, Vec<Diagnostic>> {
+    let road = &crash.road;
+    let p = crash.vehicle(partner).expect("partner in the crash");
+    // The partner's travel in rocc's frame: it comes from its arm (the merge's roads run east).
+    let p_dir = Compass::parse(p.arm).map_or(Compass::East, Compass::opposite);
+    let fallback = match impact {
+        Impact::HeadOn => p_dir.opposite(),
+        Impact::Angle if road.template.has_junction() => p_dir.rotate(1),
+        _ => p_dir,
+    };
+    let back = fallback.rotate(-road.turns);
+    let (dir, dir_cite) = travel_of(cx, story, v, back, &format!("{} assumed beside {partner}", back.name()));
+    let rdir = dir.rotate(road.turns);
+    let text = story.vehicle(v.number);
+    let (man, man_cite) = manoeuvre(v, text);
+    let mut notes = Vec::new();
+    let (kind, kind_cite) = vehicle_kind(cx, v, cx_class(cx.case, v.number).as_ref())?;
+    notes.push(format!("v{}: {kind_cite}", v.number));
+    let (arm, lane, lane_cite): (&'static str, u32, String) = if impact == Impact::RearEnd && rdir == p_dir {
+        (p.arm, p.lane, format!("behind {partner}, in its lane"))
+    } else if road.template == Template::Merge {
+        let (l, c) = lane_index(text.and_then(|t| t.lane.as_ref()), road.lanes);
+        ("main", l, format!("on the main road: {c}"))
+    } else {
+        let (l, c) = lane_index(text.and_then(|t| t.lane.as_ref()), road.lanes);
+        (approach_arm(rdir), l, c)
+    };
+    let across = matches!(road.template, Template::Straight | Template::Curve { .. })
+        && matches!(rdir, Compass::North | Compass::South);
+    if across || (road.template == Template::TJunction && arm == "north") {
+        return Err(cx.err(
+            "E0804",
+            format!(
+                "V{} travels {} ({dir_cite}): the {} road rocc builds for the first-ranked event has no arm it \
+                 could come from",
+                v.number,
+                dir.name(),
+                road.template.name()
+            ),
+            cx.case.summary.as_ref().map(|s| (cx.span(s), "the directions are narrated here")),
+            "check the case's Summary; a scene with more roads is written by hand",
+        ));
+    }
+    notes.push(format!("travels {} ({dir_cite}) -> {arm}.in[{lane}]: {lane_cite}", dir.name()));
+    let man = fit_manoeuvre(road.template, arm, lane, road.lanes, man, &mut notes);
+    notes.push(format!("manoeuvre {}: {man_cite}", man_word(man)));
+    let (speed, speed_cite) = speed_of(cx, v, road.speed_limit_kmh, man);
+    notes.push(format!("speed: {speed_cite}"));
+    Ok(VehicleDesc { name: format!("v{}", v.number), kind, arm, lane, speed_kmh: speed, manoeuvre: man, notes })
 }

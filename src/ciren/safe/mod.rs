@@ -707,11 +707,12 @@ fn map(cx: &mut Ctx, root: &Value, path: &Path) -> Result<Crash, Vec<Diagnostic>
             speed_limit_kmh: limit,
             median: if centre { 3.5 } else { 0.0 },
             shoulder: 0.0,
+            turns: q,
             notes: road_notes,
         },
         vehicles,
         objects: Vec::new(),
-        conflict: ConflictDesc {
+        conflicts: vec![ConflictDesc {
             clocks: Vec::new(),
             closing: None,
             at_fault: format!("v{striker}"),
@@ -720,7 +721,7 @@ fn map(cx: &mut Ctx, root: &Value, path: &Path) -> Result<Crash, Vec<Diagnostic>
             point,
             face,
             notes: conflict_notes,
-        },
+        }],
     })
 }
 
