@@ -239,6 +239,7 @@ fn bad_safe_extractions_give_specific_diagnostics() {
         ("safe_bad_direction.json", "E0803"),
         ("safe_unknown_vehicle.json", "E0803"),
         ("safe_undecidable.json", "E0808"),
+        ("safe_two_impacts.json", "E0804"),
     ];
     for (f, code) in cases {
         let mut sources = SourceMap::default();

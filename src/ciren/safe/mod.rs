@@ -309,7 +309,25 @@ fn map(cx: &mut Ctx, root: &Value, path: &Path) -> Result<Crash, Vec<Diagnostic>
     };
 
     // The conflict.
-    let conflict = dsl.get("Conflict").filter(|c| c.is_object()).ok_or_else(|| {
+    // A list of impacts: one is read like a block; more would meet the same two vehicles again.
+    let conflict = match dsl.get("Conflict") {
+        Some(Value::Array(list)) if list.len() > 1 => {
+            return Err(cx.err(
+                "E0804",
+                "Conflict",
+                format!(
+                    "`Conflict` lists {} impacts between the extraction's two vehicles; rocc stages a pair's \
+                     contact once (a struck agent holds from its contact on)",
+                    list.len()
+                ),
+                "keep the first impact, or import the case record with `rocc ciren import`, which stages every \
+                 event a chain allows",
+            ));
+        }
+        Some(Value::Array(list)) => list.first(),
+        other => other,
+    };
+    let conflict = conflict.filter(|c| c.is_object()).ok_or_else(|| {
         cx.err(
             "E0802",
             "dsl",

@@ -58,7 +58,7 @@ non-collision, a pedestrian record, a contact by a vehicle's back, top or underc
 strikes with a front or a side), a fixed object rocc has no kind for (ditch, embankment, curb),
 a side impact with a tree, a T-junction approached from its missing leg, a vehicle travelling
 across a road the record codes without a junction (out of a driveway: write it by hand on a
-`t_junction`), or a SAFE extraction with one vehicle or more than two. For records with several
+`t_junction`), or a SAFE extraction with one vehicle, more than two, or several impacts. For records with several
 events: a vehicle that strikes in two events, or strikes after it was struck, a pair that meets
 in two events (a struck agent holds from its contact on), a later event involving neither
 vehicle of the first-ranked one, or a fixed object struck beside other contacts.
