@@ -148,7 +148,13 @@ pub(crate) fn build_actor(
     } else if lateral == Lateral::Cross {
         match cross_line(map, pos) {
             Some((yaw, len, kerb)) => {
-                a.path = Path::straight(pos, yaw, len);
+                // An animal bounds on past the far verge instead of pulling up on it, so that it
+                // crosses at its goal speed (scenarios/rare/deer_leaps_onto_rural_road.scn).
+                let run_on = match goal.and_then(|g| g.speed) {
+                    Some(v) if a.lim == crate::rollout::ANIMAL => v * v / a.lim.brake,
+                    _ => 0.0,
+                };
+                a.path = Path::straight(pos, yaw, len + run_on);
                 a.kerb = Some(kerb);
             }
             None => {

@@ -8,6 +8,7 @@ pub(crate) mod follow;
 pub(crate) mod index;
 pub(crate) mod neighbours;
 pub(crate) mod pair;
+pub(crate) mod settle;
 pub(crate) mod siren;
 
 use crate::geom::{Obb, wrap_angle};
