@@ -274,6 +274,8 @@ pub(crate) struct Blocking {
     /// The paving round it, as offsets on our route.
     pub lo: f64,
     pub hi: f64,
+    /// Its speed along our route: 0 standing, a slow mover's pace (`drive::overtake`), m/s.
+    pub v: f64,
 }
 
 /// How a vehicle makes way for an emergency vehicle (`Sim::siren_for`).

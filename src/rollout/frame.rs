@@ -74,6 +74,8 @@ pub(crate) struct Facts {
     pub(crate) fired: Vec<(usize, bool)>,
     /// Agents that stand for good (`Actor::blocker`), for `avoid`.
     pub(crate) blockers: Vec<usize>,
+    /// Slow moving road users others may pass (`drive::overtake`), for `avoid`.
+    pub(crate) slow: Vec<usize>,
     /// Emergency vehicles that drive (`Actor::emergency`), for `siren_for`.
     pub(crate) sirens: Vec<usize>,
     /// Per agent, this frame: the emergency vehicle it makes way for (`siren_for`).
@@ -206,6 +208,7 @@ impl<'a, 'b> Sim<'a, 'b> {
                 near: Vec::with_capacity(actors.len()),
                 fired: Vec::with_capacity(actors.len()),
                 blockers: (0..actors.len()).filter(|&i| actors[i].blocker).collect(),
+                slow: crate::rollout::drive::overtake::slow_movers(actors),
                 sirens: (0..actors.len())
                     .filter(|&i| actors[i].emergency && matches!(actors[i].drive, Drive::Mover))
                     .collect(),

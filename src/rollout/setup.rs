@@ -220,7 +220,7 @@ pub(crate) fn build_actor(
             && a.v_goal < 0.05
             && matches!((&a.stop, &a.lateral), (StopGoal::None, Lat::Hold))
             && goal.and_then(|g| g.turn).is_none();
-        if a.blocker {
+        if a.blocker || a.v_goal > 0.05 {
             a.room = room_at(map, pos);
         }
     }

@@ -7,6 +7,7 @@ pub(crate) mod avoid;
 pub(crate) mod follow;
 pub(crate) mod index;
 pub(crate) mod neighbours;
+pub(crate) mod overtake;
 pub(crate) mod pair;
 pub(crate) mod settle;
 pub(crate) mod siren;
