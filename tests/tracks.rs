@@ -185,3 +185,43 @@ fn keyframes_in_lane_coordinates_mix_with_world_ones_and_are_checked_like_them()
     assert_eq!(code("0 s: west.in[2], 50 m before center; 1 s: west.in[2], 90 m after center"), "E0203");
     assert_eq!(code("0 s: west.in[2], 40..45 m before center"), "E0117");
 }
+
+#[test]
+fn a_track_on_a_trigger_counts_its_keyframes_from_when_it_fires_and_is_checked_like_any() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/behaviour-cases/car-pulls-out-from-the-shoulder-on-a-trigger.scn");
+    let src = std::fs::read_to_string(&path).expect("scene");
+    let mut sources = SourceMap::default();
+    let s = check::check_text("t.scn", &src, Path::new("."), &mut sources).expect("checks");
+    let f = front(s, None).unwrap_or_else(|d| panic!("{d:?}"));
+    let t = &f.tracks;
+    let (car, ego) = (t.agents.iter().position(|a| a.name == "parked").expect("parked"), 1);
+    // It fires on the first frame the ego is within 30 m; its keyframes count one step later.
+    let dist = |k: usize| (t.poses[car][k].x - t.poses[ego][k].x).hypot(t.poses[car][k].y - t.poses[ego][k].y);
+    let fired = (0..t.frames).find(|&k| dist(k) <= 30.0).expect("the ego comes within 30 m");
+    assert!(fired > 10, "fired at frame {fired}");
+    let first = t.poses[car][0];
+    assert!((0..=fired).all(|k| t.poses[car][k] == first), "it moved before its trigger");
+    // west.in[1] runs east 1.75 m south of the centre line.
+    for (key_t, x, y, yaw) in [(1.0, -8.5, -4.15, 8.0), (2.0, -4.5, -3.25, 12.0), (3.0, 1.5, -2.05, 4.0)] {
+        let p = t.poses[car][fired + (key_t * t.rate) as usize];
+        assert!(
+            (p.x - x).abs() < 1e-6 && (p.y - y).abs() < 1e-6 && (p.yaw - f64::to_radians(yaw)).abs() < 1e-6,
+            "keyframe {key_t} s: {p:?}"
+        );
+    }
+    // Feasibility and surface as for any track; triggers as for any start.
+    let code = |from: &str, to: &str| run(&src.replacen(from, to, 1)).expect_err(to)[0].code;
+    assert_eq!(code("1 s: west.in[1], 8.5 m before", "1 s: west.in[1], 80 m after"), "E0132");
+    assert_eq!(code("4 s: west.in[1], 9.5 m after", "4 s: west.in[1], 120 m after"), "E0131");
+    assert_eq!(code("shoulder 2.5 m", "shoulder 0.5 m"), "E0210");
+    assert_eq!(code("track when ego within 30 m {", "track when ego within 30 s {"), "E0101");
+    assert_eq!(code("track when ego within 30 m {", "track when ego near 30 m {"), "E0150");
+    assert_eq!(code("track when ego within 30 m {", "track when parked within 30 m {"), "E0151");
+    let cycle = src.replacen(
+        "speed 40 km/h\n        goal { speed 40 km/h }",
+        "speed 40 km/h\n        goal { speed 40 km/h; start when parked starts }",
+        1,
+    );
+    assert_eq!(run(&cycle).expect_err("a cycle")[0].code, "E0151");
+}

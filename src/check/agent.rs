@@ -117,8 +117,9 @@ impl Checker {
                 size[i] = Some(self.bounded(v, Dim::Length, what, 0.05, 40.0, "0.05..40 m"));
             }
         }
-        let goal_c = match (goal, motion) {
-            (Some(g), Some(m)) if !is_static => self.goal(g, m, class?, place.as_ref(), road, order, &a.name),
+        let goal_c = match (goal, motion, track.and_then(|t| t.when.as_ref())) {
+            (Some(g), Some(m), _) if !is_static => self.goal(g, m, class?, place.as_ref(), road, order, &a.name),
+            (None, _, Some(w)) => self.track_trigger(w, order),
             _ => Some(None),
         };
         let posture = self.posture(posture, class, motion);
@@ -189,6 +190,22 @@ impl Checker {
             return None;
         }
         Some(Some(on))
+    }
+
+    /// `track when NAME CONDITION`: its trigger, carried as the `start when` of an otherwise
+    /// empty goal, so that triggers read it like any start (cycles E0151, E0154) and the
+    /// rollout starts the replay when it fires.
+    fn track_trigger(&mut self, w: &ast::Trigger, order: &[&str]) -> Option<Option<Goal>> {
+        let start_when = Some(self.trigger(w, order)?);
+        Some(Some(Goal {
+            speed: None,
+            lateral: Lateral::HoldLane,
+            stop: None,
+            turn: None,
+            start_after: 0.0,
+            start_when,
+            stop_span: Span::default(),
+        }))
     }
 
     fn track(

@@ -274,7 +274,9 @@ pub struct Agent {
     /// Initial speed, m/s.
     pub speed: Dist,
     pub goal: Option<Goal>,
-    /// Replayed keyframes (from the box-stream importer); `place` is `Place::Track` then.
+    /// Replayed keyframes (from the box-stream importer); `place` is `Place::Track` then. A
+    /// track that starts on a trigger (`track when ...`) carries it as `goal`'s `start_when`,
+    /// its only part; its keyframe times count from when it fires.
     pub track: Option<Vec<Keyframe>>,
     /// A person's or an animal's posture, which sets its box (`sample` applies it).
     #[serde(default, skip_serializing_if = "Posture::is_standing")]

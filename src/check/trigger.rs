@@ -195,8 +195,15 @@ fn cycle_from(edges: &[Vec<usize>], start: usize) -> Option<Vec<usize>> {
     None
 }
 
-/// The `start when` of agent `a` (any goal block) that names `who`.
+/// The `start when` of agent `a` (any goal block), or its `track when`, that names `who`.
 fn trigger_span(a: &ast::Agent, who: &str) -> crate::source::Span {
+    let track = a.stmts.iter().find_map(|s| match s {
+        ast::AgentStmt::Track(t) => t.when.as_ref().filter(|w| w.who.name == who).map(|w| w.span),
+        _ => None,
+    });
+    if let Some(span) = track {
+        return span;
+    }
     a.stmts
         .iter()
         .filter_map(|s| match s {

@@ -212,6 +212,9 @@ pub(crate) struct State {
     pub alarm: f64,
     /// How many of its goal phases have started (`Actor::phases`).
     pub stage: u8,
+    /// When its trigger fired, s (0 without one): a triggered track counts its keyframe times
+    /// from it.
+    pub since: f64,
 }
 
 /// A conflict with its agents as track indices.
@@ -243,6 +246,7 @@ pub(crate) fn initial(a: &Actor) -> State {
         frozen: false,
         give_way: false,
         go: a.trigger.is_none(),
+        since: 0.0,
         alarm: 0.0,
         stage: 0,
     }

@@ -353,8 +353,10 @@ impl<'a, 'b> Sim<'a, 'b> {
         let st = self.cur[i];
         match &a.drive {
             Drive::Static => st,
+            // A track on a trigger stands at its first keyframe till the trigger fires.
+            Drive::Replay(_) if !st.go => State { v: 0.0, ..st },
             Drive::Replay(keys) => {
-                let (p, yaw) = replay(keys, t + self.dt);
+                let (p, yaw) = replay(keys, t + self.dt - st.since);
                 State { pos: p, yaw, v: p.distance(st.pos) / self.dt, ..st }
             }
             Drive::Mover if st.frozen => State { v: 0.0, ..st },

@@ -112,7 +112,11 @@ pub(crate) fn build_actor(
     // A recorded track is what happened: it is replayed even for a kind that never moves by
     // itself (a cone carried on a pickup), so an imported clip reproduces its boxes exactly.
     if let Some(keys) = ca.filter(|_| !p.is_object).and_then(|ca| ca.track.as_ref()).filter(|k| !k.is_empty()) {
-        return base_actor(info, p.pose, p.motion, p.class, Drive::Replay(keys.clone()));
+        let mut a = base_actor(info, p.pose, p.motion, p.class, Drive::Replay(keys.clone()));
+        // `track when ...`: the replay starts when its trigger fires.
+        let when = ca.and_then(|ca| ca.goal.as_ref()?.start_when);
+        a.trigger = when.and_then(|t| crate::rollout::trigger::on_tracks(t, track_of));
+        return a;
     }
     let Some(ca) = ca.filter(|_| !p.is_object && p.motion != Motion::Static) else {
         let mut a = base_actor(info, p.pose, p.motion, p.class, Drive::Static);
@@ -220,7 +224,7 @@ pub(crate) fn build_actor(
             && a.v_goal < 0.05
             && matches!((&a.stop, &a.lateral), (StopGoal::None, Lat::Hold))
             && goal.and_then(|g| g.turn).is_none();
-        if a.blocker || a.v_goal > 0.05 {
+        if a.blocker {
             a.room = room_at(map, pos);
         }
     }

@@ -50,6 +50,7 @@ impl Sim<'_, '_> {
                 self.cur[i].stage += 1;
             } else {
                 self.cur[i].go = true;
+                self.cur[i].since = t;
             }
         }
     }
