@@ -139,8 +139,25 @@ impl Checker {
                 );
                 None
             }
-            (false, _) => phases.iter().map(|g| self.phase(g, order)).collect::<Vec<_>>().into_iter().collect(),
+            (false, _) => {
+                let vehicle = motion == Some(Motion::Vehicle);
+                phases.iter().map(|g| self.phase(g, order, vehicle)).collect::<Vec<_>>().into_iter().collect()
+            }
         };
+        // A phase pulls over from its lane: not from a lane change, a crossing or an easing aside.
+        if let (Some(Some(g)), Some(ps)) = (&goal_c, &phases_c)
+            && g.lateral != Lateral::HoldLane
+            && let Some(k) = ps.iter().position(|p| p.pull_over)
+        {
+            self.err(
+                Diagnostic::error(
+                    "E0155",
+                    format!("`{}` pulls over in a goal phase after another lateral move", a.name.name),
+                )
+                .label(phases[k].span, "pulls over here")
+                .help("a phase pulls over from a goal that holds its lane; drop one of the two lateral moves"),
+            );
+        }
         let behaviour_c = match behaviour {
             Some(b) => self.behaviour(b, &a.name.name, motion, is_static, goal),
             None => Some(Behaviour::default()),

@@ -628,9 +628,16 @@ impl Behaviour {
 /// goal before it has started.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Phase<V = Dist> {
-    pub speed: V,
+    /// The goal speed from its start; `None` keeps the one before.
+    pub speed: Option<V>,
     pub start_after: f64,
     pub start_when: Option<Trigger>,
+    /// `stop after DIST`: stops that far on from where the phase starts, m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stop_after: Option<f64>,
+    /// `lateral pull_to_shoulder` (vehicles): pulls over from its start.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub pull_over: bool,
 }
 
 // ---- expectations (`expect { ... }`) ----

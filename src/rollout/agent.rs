@@ -121,6 +121,13 @@ pub(crate) struct Stage {
     pub v_goal: f64,
     pub start: f64,
     pub trigger: Option<Trigger>,
+    /// Stops this far on from where the phase that states it starts (`State::stage_s`), m;
+    /// later phases keep it.
+    pub stop_after: Option<f64>,
+    /// The phase states its own stop: `State::stage_s` is taken at its start.
+    pub own_stop: bool,
+    /// Pulls over (`Actor::pull`), from this phase on.
+    pub pull: bool,
 }
 
 /// The stretch that two vehicles' junction paths share, seen from one of them: route arc
@@ -183,6 +190,12 @@ impl Actor {
         }
     }
 
+    /// The goal phase it is in, if any.
+    #[inline]
+    pub(crate) fn stage(&self, st: &State) -> Option<&Stage> {
+        st.stage.checked_sub(1).and_then(|k| self.phases.get(k as usize))
+    }
+
     pub(crate) fn obb(&self, st: &State) -> Obb {
         Obb { center: st.pos, yaw: st.yaw, length: 2.0 * self.hl, width: 2.0 * self.hw }
     }
@@ -215,6 +228,8 @@ pub(crate) struct State {
     /// When its trigger fired, s (0 without one): a triggered track counts its keyframe times
     /// from it.
     pub since: f64,
+    /// Arc length where the goal phase with the stop it keeps started (`Stage::stop_after`).
+    pub stage_s: f64,
 }
 
 /// A conflict with its agents as track indices.
@@ -247,6 +262,7 @@ pub(crate) fn initial(a: &Actor) -> State {
         give_way: false,
         go: a.trigger.is_none(),
         since: 0.0,
+        stage_s: 0.0,
         alarm: 0.0,
         stage: 0,
     }

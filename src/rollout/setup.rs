@@ -135,14 +135,24 @@ pub(crate) fn build_actor(
     a.start = goal.map(|g| g.start_after.max(0.0)).unwrap_or(0.0);
     a.trigger = goal.and_then(|g| g.start_when).and_then(|t| crate::rollout::trigger::on_tracks(t, track_of));
     a.behaviour = ca.behaviour;
+    // Each phase keeps the speed, stop and pull-over of the one before unless it states its own.
+    let mut prev =
+        Stage { v_goal: f64::NAN, start: 0.0, trigger: None, stop_after: None, own_stop: false, pull: false };
     a.phases = ca
         .phases
         .iter()
         .take(u8::MAX as usize)
-        .map(|p| Stage {
-            v_goal: p.speed.max(0.0),
-            start: p.start_after.max(0.0),
-            trigger: p.start_when.and_then(|t| crate::rollout::trigger::on_tracks(t, track_of)),
+        .map(|p| {
+            let v_goal = p.speed.map_or(prev.v_goal, |v| v.max(0.0));
+            prev = Stage {
+                v_goal,
+                start: p.start_after.max(0.0),
+                trigger: p.start_when.and_then(|t| crate::rollout::trigger::on_tracks(t, track_of)),
+                stop_after: p.stop_after.or(prev.stop_after),
+                own_stop: p.stop_after.is_some(),
+                pull: p.pull_over || prev.pull,
+            };
+            prev
         })
         .collect();
     let lateral = goal.map(|g| g.lateral).unwrap_or(Lateral::HoldLane);
@@ -184,6 +194,11 @@ pub(crate) fn build_actor(
         None if lateral == Lateral::Cross && a.v0 < 0.05 => WALK_SPEED,
         None => a.v0,
     };
+    let mut v = a.v_goal;
+    for p in &mut a.phases {
+        p.v_goal = if p.v_goal.is_nan() { v } else { p.v_goal };
+        v = p.v_goal;
+    }
     let lane = lane_here.map(|l| &map.lanes[l]);
     let aside = pull_offset;
     a.lateral = match lateral {
