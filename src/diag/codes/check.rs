@@ -275,6 +275,16 @@ Give each keyframe the heading of the travel, or check that x and y are not swap
     },
     // ---- triggers and behaviour (E0150-E0169) ----
     Code {
+        code: "E0135",
+        title: "recorded box dropped",
+        explanation: "A warning of `rocc import boxes`: a recorded box that no body could have followed from the\n\
+boxes before it (a detector's glitch: a box jumping metres in one frame) breaks a limit of the\n\
+track checks (E0131-E0134). It is dropped and the track is interpolated across it; where the\n\
+box jumps and stays, the rest of the track becomes an agent of its own (`NAME_from_FRAME`).\n\
+The warning names the track, the clip frame and the limit.\n
+    rocc import boxes glitchy.json --convention nuplan -o scene.scn   // warning E0135 per dropped box",
+    },
+    Code {
         code: "E0150",
         title: "unknown or malformed trigger condition",
         explanation: "`start when NAME CONDITION` starts a goal when a condition on agent NAME holds. The\n\
