@@ -10,6 +10,7 @@ use crate::rollout::drive::{PASS_CLEARANCE, PASS_LAT_RATE};
 use crate::rollout::frame::Sim;
 use crate::rollout::kinematics::slip_tan;
 use crate::rollout::path::Foot;
+use glam::DVec2;
 
 /// How far the paving reaches either side of the lane's centre line where the paving round the
 /// obstacle is unknown (in a junction: at least the next lane), m.
@@ -105,10 +106,7 @@ impl Sim<'_, '_> {
             {
                 continue;
             }
-            let Foot { s: sj, d: lj, beyond, dir: th } = a.path.frenet_dir(o.pos, st.s + ahead);
-            let (cr, sr) = (self.facts.dirs[j].dot(th), th.perp_dot(self.facts.dirs[j]));
-            let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
-            let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
+            let (Foot { s: sj, d: lj, beyond, dir: th }, ext_lon, ext_lat) = self.on_route(i, j, ahead);
             if beyond > 0.5 || sj + ext_lon < st.s - a.hl - 1.0 {
                 continue;
             }
@@ -120,6 +118,16 @@ impl Sim<'_, '_> {
             };
             seen.push(Blocking { sj, lj, ext_lon, ext_lat, lo, hi, v: 0.0 });
         }
+    }
+
+    /// Agent `j` on vehicle `i`'s route, `ahead` m along it: the foot of its centre, and its box's
+    /// half extents along and across the route.
+    pub(crate) fn on_route(&self, i: usize, j: usize, ahead: f64) -> (Foot<DVec2>, f64, f64) {
+        let (a, st, b) = (&self.actors[i], &self.cur[i], &self.actors[j]);
+        let foot = a.path.frenet_dir(self.cur[j].pos, st.s + ahead);
+        let th = foot.dir;
+        let (cr, sr) = (self.facts.dirs[j].dot(th), th.perp_dot(self.facts.dirs[j]));
+        (foot, b.hl * cr.abs() + b.hw * sr.abs(), b.hl * sr.abs() + b.hw * cr.abs())
     }
 
     /// Passing on `side` (+1 left, -1 right): the offset clear of every obstacle in the band

@@ -84,10 +84,8 @@ impl Sim<'_, '_> {
             {
                 continue;
             }
-            let Foot { s: sj, d: lj, beyond, dir: th } = a.path.frenet_dir(o.pos, st.s + ahead);
-            let (cr, sr) = (self.facts.dirs[j].dot(th), th.perp_dot(self.facts.dirs[j]));
-            let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
-            let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
+            let (Foot { s: sj, d: lj, beyond, dir: th }, ext_lon, ext_lat) = self.on_route(i, j, ahead);
+            let cr = self.facts.dirs[j].dot(th);
             // No pass toward a junction, nor out of sight round a bend.
             let clear_to = sj + ext_lon + CLEAR_RUN_M;
             let before_junction = a.junction.as_ref().is_some_and(|jn| st.s < jn.exit && clear_to > jn.stop);
