@@ -277,7 +277,9 @@ pub struct Agent {
     /// Initial speed, m/s.
     pub speed: Dist,
     pub goal: Option<Goal>,
-    /// Replayed keyframes (from the box-stream importer); `place` is `Place::Track` then.
+    /// Replayed keyframes (from the box-stream importer); `place` is `Place::Track` then. A
+    /// track that starts on a trigger (`track when ...`) carries it as `goal`'s `start_when`,
+    /// its only part; its keyframe times count from when it fires.
     pub track: Option<Vec<Keyframe>>,
     /// A person's or an animal's posture, which sets its box (`sample` applies it).
     #[serde(default, skip_serializing_if = "Posture::is_standing")]
@@ -642,9 +644,16 @@ impl Behaviour {
 /// goal before it has started.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Phase<V = Dist> {
-    pub speed: V,
+    /// The goal speed from its start; `None` keeps the one before.
+    pub speed: Option<V>,
     pub start_after: f64,
     pub start_when: Option<Trigger>,
+    /// `stop after DIST`: stops that far on from where the phase starts, m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stop_after: Option<f64>,
+    /// `lateral pull_to_shoulder` (vehicles): pulls over from its start.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub pull_over: bool,
 }
 
 // ---- expectations (`expect { ... }`) ----

@@ -76,6 +76,8 @@ pub(crate) struct Facts {
     pub(crate) fired: Vec<(usize, bool)>,
     /// Agents that stand for good (`Actor::blocker`), for `avoid`.
     pub(crate) blockers: Vec<usize>,
+    /// Slow moving road users others may pass (`drive::overtake`), for `avoid`.
+    pub(crate) slow: Vec<usize>,
     /// Emergency vehicles that drive (`Actor::emergency`), for `siren_for`.
     pub(crate) sirens: Vec<usize>,
     /// Per agent, this frame: the emergency vehicle it makes way for (`siren_for`).
@@ -208,6 +210,7 @@ impl<'a, 'b> Sim<'a, 'b> {
                 near: Vec::with_capacity(actors.len()),
                 fired: Vec::with_capacity(actors.len()),
                 blockers: (0..actors.len()).filter(|&i| actors[i].blocker).collect(),
+                slow: crate::rollout::drive::overtake::slow_movers(actors),
                 sirens: (0..actors.len())
                     .filter(|&i| actors[i].emergency && matches!(actors[i].drive, Drive::Mover))
                     .collect(),
@@ -354,8 +357,10 @@ impl<'a, 'b> Sim<'a, 'b> {
         let st = self.cur[i];
         match &a.drive {
             Drive::Static => st,
+            // A track on a trigger stands at its first keyframe till the trigger fires.
+            Drive::Replay(_) if !st.go => State { v: 0.0, ..st },
             Drive::Replay(keys) => {
-                let (p, yaw) = replay(keys, t + self.dt);
+                let (p, yaw) = replay(keys, t + self.dt - st.since);
                 State { pos: p, yaw, v: p.distance(st.pos) / self.dt, ..st }
             }
             Drive::Mover if st.frozen => State { v: 0.0, ..st },

@@ -128,9 +128,18 @@ pub fn limits(class: Class, motion: Motion) -> Limits {
         (Motion::Vehicle, _) => {
             Limits { accel: 2.5, brake: 3.0, brake_max: 8.0, yaw_rate: 1.2, lat_acc: 3.0, headway: 1.2, min_gap: 2.0 }
         }
-        _ => Limits { accel: 1.5, brake: 2.0, brake_max: 4.0, yaw_rate: 3.0, lat_acc: 4.0, headway: 0.8, min_gap: 0.8 },
+        (Motion::Holonomic, Class::Pedestrian) | (Motion::Static, _) => {
+            Limits { accel: 1.5, brake: 2.0, brake_max: 4.0, yaw_rate: 3.0, lat_acc: 4.0, headway: 0.8, min_gap: 0.8 }
+        }
+        (Motion::Holonomic, _) => ANIMAL,
     }
 }
+
+/// Animals (walking kinds that are not pedestrians: `animal`, `dog`, a `deer` derived from
+/// them; a `stroller` shares their class and motion, hence their limits) bound off: a deer reaches 8 m/s in about a second and stops or turns as sharply
+/// (scenarios/rare/deer_leaps_onto_rural_road.scn).
+pub const ANIMAL: Limits =
+    Limits { accel: 8.0, brake: 5.0, brake_max: 10.0, yaw_rate: 4.0, lat_acc: 6.0, headway: 0.8, min_gap: 0.8 };
 
 impl Tracks {
     /// Feed every pose, speed and impact (frame and depth) to `h`, bit for bit: the digest that

@@ -115,7 +115,13 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
                 phases: a
                     .phases
                     .iter()
-                    .map(|p| Phase { speed: r.draw(p.speed), start_after: p.start_after, start_when: p.start_when })
+                    .map(|p| Phase {
+                        speed: p.speed.map(|v| r.draw(v)),
+                        start_after: p.start_after,
+                        start_when: p.start_when,
+                        stop_after: p.stop_after,
+                        pull_over: p.pull_over,
+                    })
                     .collect(),
                 siren: a.siren,
                 span: a.span,

@@ -429,6 +429,8 @@ pub struct BehaviourSet {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Track {
     pub keys: Vec<Keyframe>,
+    /// `track when NAME CONDITION { ... }`: keyframe times count from when it fires.
+    pub when: Option<Trigger>,
     pub span: Span,
 }
 

@@ -187,7 +187,7 @@ fn agent_stmt(s: &AgentStmt) -> Doc {
             fit: true,
         },
         AgentStmt::Track(t) => Doc::Block {
-            header: "track".into(),
+            header: t.when.as_ref().map_or("track".into(), |w| format!("track {}", trigger(w))),
             span: t.span,
             items: t
                 .keys
@@ -223,19 +223,22 @@ fn goal_stmt(s: &GoalStmt) -> String {
         },
         GoalStmt::Turn { turn, .. } => format!("turn {}", turn.name),
         GoalStmt::Start { after, .. } => format!("start after {}", val(after)),
-        GoalStmt::StartWhen { trigger: w, .. } => {
-            let tail = match (&w.value, &w.landmark) {
-                (Some(v), _) => format!(" {}{}", if w.under { "under " } else { "" }, val(v)),
-                (None, Some(l)) => format!(" {}", l.name),
-                (None, None) => String::new(),
-            };
-            format!("start when {} {}{tail}", w.who.name, w.cond.name)
-        }
+        GoalStmt::StartWhen { trigger: w, .. } => format!("start {}", trigger(w)),
         GoalStmt::Reverse { to: ReverseTo::Dist(v), .. } => format!("reverse {}", val(v)),
         GoalStmt::Reverse { to: ReverseTo::Into(l), .. } => {
             format!("reverse into {}.{}[{}]", l.arm.name, if l.dir == Dir::In { "in" } else { "out" }, l.index)
         }
     }
+}
+
+/// `when NAME CONDITION [under] [VALUE | LANDMARK]`.
+fn trigger(w: &Trigger) -> String {
+    let tail = match (&w.value, &w.landmark) {
+        (Some(v), _) => format!(" {}{}", if w.under { "under " } else { "" }, val(v)),
+        (None, Some(l)) => format!(" {}", l.name),
+        (None, None) => String::new(),
+    };
+    format!("when {} {}{tail}", w.who.name, w.cond.name)
 }
 
 fn size(s: &SizeStmt) -> Doc {

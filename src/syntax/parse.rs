@@ -282,9 +282,11 @@ impl Builder {
                 AgentStmt::Goal(Goal { stmts, span })
             }
             Rule::track => {
-                let keys = inner(p)
+                let parts = inner(p);
+                let when = parts.iter().find(|q| q.as_rule() == Rule::trigger).map(|q| self.trigger(q.clone()));
+                let keys = parts
                     .into_iter()
-                    .skip(1)
+                    .filter(|q| q.as_rule() == Rule::keyframe)
                     .map(|k| {
                         let span = self.span(&k);
                         let parts = inner(k);
@@ -298,7 +300,7 @@ impl Builder {
                         Keyframe { t, pose: KeyPose::World { x, y, yaw }, span }
                     })
                     .collect();
-                AgentStmt::Track(Track { keys, span })
+                AgentStmt::Track(Track { keys, when, span })
             }
             Rule::posture_stmt => AgentStmt::Posture { word: self.ident(last(p)), span },
             Rule::behaviour => {

@@ -275,6 +275,16 @@ Give each keyframe the heading of the travel, or check that x and y are not swap
     },
     // ---- triggers and behaviour (E0150-E0169) ----
     Code {
+        code: "E0135",
+        title: "recorded box dropped",
+        explanation: "A warning of `rocc import boxes`: a recorded box that no body could have followed from the\n\
+boxes before it (a detector's glitch: a box jumping metres in one frame) breaks a limit of the\n\
+track checks (E0131-E0134). It is dropped and the track is interpolated across it; where the\n\
+box jumps and stays, the rest of the track becomes an agent of its own (`NAME_from_FRAME`).\n\
+The warning names the track, the clip frame and the limit.\n
+    rocc import boxes glitchy.json --convention nuplan -o scene.scn   // warning E0135 per dropped box",
+    },
+    Code {
         code: "E0150",
         title: "unknown or malformed trigger condition",
         explanation: "`start when NAME CONDITION` starts a goal when a condition on agent NAME holds. The\n\
@@ -330,11 +340,14 @@ moves, `reaches stop_line` a vehicle placed on an in-lane of a road with stop li
         title: "invalid goal phase",
         explanation: "A later `goal` block of an agent is a phase: it takes over from the goal before it once its\n\
 `start` holds (`start after T` counts from the clip's start, `start when ...` is a trigger),\n\
-and only after that goal has started. A phase gives one `speed` and one `start`, nothing else:\n\
-turns, lateral moves and stops belong to the first goal block. Static things and replayed\n\
-tracks have no phases.\n
+and only after that goal has started. A phase gives a `start` and what changes then, each at\n\
+most once: a `speed`, `stop after DIST` (counted from where the phase starts) and, for a vehicle\n\
+whose first goal holds its lane, `lateral pull_to_shoulder`; without a `speed` it keeps the one\n\
+before. Turns, lane changes, crossings and the other stops belong to the first goal block.\n\
+Static things and replayed tracks have no phases.\n
     goal { speed 10 m/s }
     goal { speed 0 m/s; start when car headway under 1.5 s }     // fine: brakes to a stop
+    goal { lateral pull_to_shoulder; stop after 40 m; start after 3 s }  // fine: pulls over
     goal { speed 4 m/s; turn left; start after 1 s }             // error: a turn in a phase",
     },
     // ---- near misses (E0190-E0195) ----
