@@ -229,6 +229,7 @@ impl Checker {
             speed: None,
             lateral: Lateral::HoldLane,
             stop: None,
+            reverse: None,
             turn: None,
             start_after: 0.0,
             start_when,
