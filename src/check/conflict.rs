@@ -194,7 +194,8 @@ impl Checker {
                 None
             }
         };
-        let (at_fault, struck, impact, point, at) = (at_fault?, struck?, impact?, point?, at?);
+        let after = self.after_impact(&fields);
+        let (at_fault, struck, impact, point, at, after) = (at_fault?, struck?, impact?, point?, at?, after?);
         if at_fault.0 == struck.0 {
             self.err(
                 Diagnostic::error("E0114", "a conflict needs two different agents")
@@ -225,7 +226,7 @@ impl Checker {
                 ok = false;
             }
         }
-        ok.then_some(Conflict { at_fault: at_fault.0, struck: struck.0, impact, point, at, span: c.span })
+        ok.then_some(Conflict { at_fault: at_fault.0, struck: struck.0, impact, point, at, after, span: c.span })
     }
 }
 

@@ -7,7 +7,8 @@ pub const CODES: &[Code] = &[
         code: "E0101",
         title: "unit of the wrong dimension",
         explanation: "Numbers carry units and each statement expects one dimension:
-  length m, cm, km; speed m/s, km/h, mph; time s, ms; angle deg, rad; frequency Hz; ratio %.\n\
+  length m, cm, km; speed m/s, km/h, mph; time s, ms; angle deg, rad; frequency Hz; ratio %;
+  mass kg.\n\
 Bare numbers are counts.\n
     speed 5 m          // error: a speed needs m/s, km/h or mph\n    speed 5 m/s        // fine",
     },

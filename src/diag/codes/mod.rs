@@ -16,6 +16,7 @@ mod check;
 mod ciren;
 mod compile;
 mod expect;
+mod impact;
 mod import;
 mod io;
 mod learn;
@@ -34,6 +35,7 @@ pub fn all() -> impl Iterator<Item = &'static Code> {
     [
         syntax::CODES,
         check::CODES,
+        impact::CODES,
         place::CODES,
         compile::CODES,
         io::CODES,
