@@ -117,7 +117,7 @@ fn import_all(inputs: &[PathBuf], out: &Path, import: Importer, mut failed: usiz
 fn what_happened(imp: &Imported) -> String {
     let k = &imp.crash.conflict;
     format!(
-        "{}'s {} into {} ({}{}), latched at {:.1} s",
+        "{}'s {} into {} ({}{}), impact at {:.1} s",
         k.at_fault,
         k.face.name(),
         k.struck,
