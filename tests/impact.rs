@@ -220,7 +220,7 @@ fn stated_masses_weigh_in_the_impact() {
     let heavy = pushed(&text.replace("mass 2600 kg", "mass 6000 kg"));
     assert!(light > heavy + 1.0, "a 1500 kg van gained {light:.2} m/s, a 6000 kg one {heavy:.2}");
     let kinds = "kind armoured_van: van { mass 6000 kg }\nkind long_armoured_van: armoured_van { length 6.0 m }\n";
-    let derived = text.replace("mass 2600 kg; ", "").replace("agent van: van", "agent van: long_armoured_van");
+    let derived = text.replace("        mass 2600 kg\n", "").replace("agent van: van", "agent van: long_armoured_van");
     let f = front_of(&format!("{kinds}{derived}"));
     let van = f.concrete.agents.iter().find(|a| a.name == "van").expect("van");
     assert_eq!(van.mass, Some(6000.0));

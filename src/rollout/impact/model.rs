@@ -150,6 +150,18 @@ mod tests {
         assert!((o.a.0.x + 1.0).abs() < 1e-9, "bounces back at e v: {:?}", o.a);
     }
 
+    /// A bias larger than the rebound sets the parting speed, with momentum still conserved;
+    /// a pair already parting that fast exchanges nothing.
+    #[test]
+    fn bias_sets_the_least_parting_speed() {
+        let (a, b) = (car(0.0, 0.0, 10.0, 0.0), car(4.6, 0.0, 8.0, 0.0));
+        let o = resolve(&a, &b, DVec2::new(2.3, 0.0), DVec2::X, K, 1.5);
+        assert!((o.b.0.x - o.a.0.x - 1.5).abs() < 1e-9, "{o:?}");
+        assert!((o.a.0.x + o.b.0.x - 18.0).abs() < 1e-9);
+        let (a, b) = (car(0.0, 0.0, 8.0, 0.0), car(4.6, 0.0, 10.0, 0.0));
+        assert_eq!(resolve(&a, &b, DVec2::new(2.3, 0.0), DVec2::X, K, 1.5).impulse, DVec2::ZERO);
+    }
+
     /// Bodies already moving apart exchange nothing.
     #[test]
     fn separating_bodies_exchange_nothing() {
