@@ -8,7 +8,7 @@ use crate::rollout::agent::Rank;
 use crate::rollout::agent::initial;
 use crate::rollout::agent::{Actor, Blocking, Conf, Drive, Lat, State, Yield};
 use crate::rollout::drive::index::{AlongIndexes, Near};
-use crate::rollout::impact::motion::Wrecks;
+use crate::rollout::impact::bodies::Wrecks;
 use crate::rollout::kinematics::{replay, steer};
 use crate::rollout::path::Foot;
 use crate::rollout::staging::plan::Plan;

@@ -4,6 +4,7 @@
 //! A conflict that asks for `after latch` holds its pair at the contact instead
 //! (`staging::strike`).
 
+pub(crate) mod bodies;
 pub(crate) mod model;
 pub(crate) mod motion;
 
