@@ -30,6 +30,7 @@ impl Checker {
         let mut behaviour: Option<&ast::Behaviour> = None;
         let mut phases: Vec<&ast::Goal> = vec![];
         let mut siren: Option<(&ast::Ident, Span)> = None;
+        let mut mass: Option<(&ast::Value, Span)> = None;
         for st in &a.stmts {
             let (slot_first, what): (Option<Span>, &str) = match st {
                 ast::AgentStmt::At { place: p, span } => (place.replace((p, *span)).map(|x| x.1), "placement `at`"),
@@ -47,6 +48,7 @@ impl Checker {
                 ast::AgentStmt::Posture { word, span } => (posture.replace((word, *span)).map(|x| x.1), "`posture`"),
                 ast::AgentStmt::Behaviour(b) => (behaviour.replace(b).map(|x| x.span), "`behaviour`"),
                 ast::AgentStmt::Siren { value, span } => (siren.replace((value, *span)).map(|x| x.1), "`siren`"),
+                ast::AgentStmt::Mass { value, span } => (mass.replace((value, *span)).map(|x| x.1), "`mass`"),
             };
             if let Some(first) = slot_first {
                 self.dup(what, first, st.span());
@@ -175,6 +177,10 @@ impl Checker {
         };
         let (kinds, class, motion) = kind?;
         let siren = self.siren(siren, &kinds, is_static);
+        let mass = match mass {
+            Some((v, span)) => self.mass(v, span, &a.name.name, is_static).map(Some),
+            None => Some(None),
+        };
         Some(Agent {
             name: a.name.name.clone(),
             kinds,
@@ -192,6 +198,7 @@ impl Checker {
             behaviour: behaviour_c?,
             phases: phases_c?,
             siren: siren?,
+            mass: mass?,
             span,
             place_span: place_span.unwrap_or(span),
         })

@@ -11,6 +11,7 @@ pub mod classes;
 mod conflict;
 mod expect;
 mod goal;
+mod impact;
 pub mod kerb;
 mod kinds;
 pub mod load;

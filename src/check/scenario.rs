@@ -252,6 +252,9 @@ pub struct Kind {
     /// (`kind my_amb: ambulance { ... }`). Derived by the checker, so not serialised.
     #[serde(skip)]
     pub emergency: bool,
+    /// `mass`, kg, stated on the kind or the kind it derives from.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass: Option<f64>,
 }
 
 /// The stdlib kinds that drive with lights and siren (cross traffic gives them the junction);
@@ -293,6 +296,9 @@ pub struct Agent {
     /// `siren on|off` as stated (emergency vehicles only); unstated, an emergency vehicle's is on.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub siren: Option<bool>,
+    /// Mass, kg, as the agent or its kind states it (`mass 1500 kg`); class priors otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass: Option<f64>,
     #[serde(skip)]
     pub span: Span,
     #[serde(skip)]
@@ -496,8 +502,29 @@ pub struct Conflict {
     pub point: Point,
     /// Target time of impact, s.
     pub at: Option<f64>,
+    /// What follows the contact (`after`, `restitution`, `friction`).
+    #[serde(default, skip_serializing_if = "AfterImpact::is_default")]
+    pub after: AfterImpact,
     #[serde(skip)]
     pub span: Span,
+}
+
+/// What follows a conflict's contact: the bodies move on from it (the default), or the pair
+/// holds where it met (`after latch`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct AfterImpact {
+    /// `after latch`: the pair holds at its deepest overlap for the rest of the clip.
+    pub latch: bool,
+    /// `restitution`, 0..1; `rollout::impact::RESTITUTION` when unstated.
+    pub restitution: Option<f64>,
+    /// `friction` between the two bodies, 0..1.5; `rollout::impact::BODY_FRICTION` when unstated.
+    pub friction: Option<f64>,
+}
+
+impl AfterImpact {
+    pub fn is_default(&self) -> bool {
+        *self == AfterImpact::default()
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

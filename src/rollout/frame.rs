@@ -9,6 +9,7 @@ use crate::rollout::agent::Rank;
 use crate::rollout::agent::initial;
 use crate::rollout::agent::{Actor, Blocking, Conf, Drive, Lat, State, Yield};
 use crate::rollout::drive::index::{AlongIndexes, Near};
+use crate::rollout::impact::bodies::Wrecks;
 use crate::rollout::kinematics::{replay, steer};
 use crate::rollout::path::Foot;
 use crate::rollout::staging::plan::Plan;
@@ -47,6 +48,8 @@ pub(crate) struct Sim<'a, 'b> {
     pub(crate) pairs: Vec<(usize, usize)>,
     /// Some agent starts on a trigger (`fire_triggers`).
     pub(crate) any_trigger: bool,
+    /// Masses, and the bodies moving on from an impact (`rollout::impact`).
+    pub(crate) wreck: Wrecks,
 }
 
 /// What every agent's step reads of this frame besides the states: derived from `Sim::cur`
@@ -159,6 +162,7 @@ pub(crate) fn empty_tracks(actors: &[Actor], rate: f64, frames: usize) -> Tracks
         poses: actors.iter().map(|_| Vec::with_capacity(frames)).collect(),
         speeds: actors.iter().map(|_| Vec::with_capacity(frames)).collect(),
         impacts: vec![],
+        contacts: vec![],
     }
 }
 
@@ -216,6 +220,7 @@ impl<'a, 'b> Sim<'a, 'b> {
                     .collect(),
                 siren_for: vec![None; actors.len()],
             },
+            wreck: Wrecks::new(actors),
             any_trigger: actors.iter().any(|a| a.trigger.is_some() || !a.phases.is_empty()),
             approach_slot,
             cross_at,
@@ -317,8 +322,10 @@ impl<'a, 'b> Sim<'a, 'b> {
             for i in 0..self.actors.len() {
                 self.next[i] = self.step(&mut sc, i, t, f);
             }
+            self.slide();
             self.resolve_overlaps(f);
             self.latch(f, out);
+            self.collide(f, out);
             std::mem::swap(&mut self.cur, &mut self.next);
             self.record(out);
         }
@@ -345,10 +352,13 @@ impl<'a, 'b> Sim<'a, 'b> {
         }
     }
 
-    /// Conflict pairs may come close and overlap; nobody else may.
+    /// Conflict pairs may come close and overlap; nobody else may, except where one moves on
+    /// from an impact (its contacts are impacts: `collide`).
     #[inline]
     pub(crate) fn exempt(&self, i: usize, j: usize) -> bool {
-        self.confs.iter().any(|k| (k.af == i && k.st == j) || (k.af == j && k.st == i))
+        self.wreck.moving(i)
+            || self.wreck.moving(j)
+            || self.confs.iter().any(|k| (k.af == i && k.st == j) || (k.af == j && k.st == i))
     }
 
     /// The state of agent `i` at `t + dt`, from everyone's state at `t` (frame `f - 1`).

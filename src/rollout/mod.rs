@@ -34,6 +34,7 @@
 mod agent;
 mod drive;
 mod frame;
+pub mod impact;
 mod junction;
 mod kinematics;
 mod path;
@@ -66,6 +67,10 @@ pub struct Tracks {
     /// `[agent][frame]`, m/s along the heading.
     pub speeds: Vec<Vec<f64>>,
     pub impacts: Vec<ImpactRecord>,
+    /// Every impact resolved by the impact model, in order: staged contacts and those that
+    /// follow from the motion after them (`rollout::impact`).
+    #[serde(default)]
+    pub contacts: Vec<impact::Contact>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -142,6 +147,11 @@ pub const ANIMAL: Limits =
     Limits { accel: 8.0, brake: 5.0, brake_max: 10.0, yaw_rate: 4.0, lat_acc: 6.0, headway: 0.8, min_gap: 0.8 };
 
 impl Tracks {
+    /// The first frame at which agent `i` is in an impact the impact model resolved.
+    pub fn first_contact(&self, i: usize) -> Option<usize> {
+        self.contacts.iter().filter(|c| c.a == i || c.b == i).map(|c| c.frame).min()
+    }
+
     /// Feed every pose, speed and impact (frame and depth) to `h`, bit for bit: the digest that
     /// pins the rollout (`bench rollout`, the pin test), which a change that claims to change
     /// nothing must leave as it is.

@@ -56,6 +56,9 @@ pub struct ConcreteAgent {
     /// `siren on|off` as stated (`Agent::siren`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub siren: Option<bool>,
+    /// Mass in kg as the agent or its kind states it (`rollout::impact`); class priors otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass: Option<f64>,
     #[serde(skip)]
     pub span: crate::source::Span,
     #[serde(skip)]
@@ -124,6 +127,7 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
                     })
                     .collect(),
                 siren: a.siren,
+                mass: a.mass.or(k.mass),
                 span: a.span,
                 place_span: a.place_span,
             }

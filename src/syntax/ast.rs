@@ -41,7 +41,15 @@ pub struct KindDecl {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub enum KindStmt {
     Size(SizeStmt),
-    Motion { motion: Ident, span: Span },
+    Motion {
+        motion: Ident,
+        span: Span,
+    },
+    /// `mass VALUE` (kg).
+    Mass {
+        value: Value,
+        span: Span,
+    },
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -195,6 +203,11 @@ pub enum AgentStmt {
         value: Ident,
         span: Span,
     },
+    /// `mass VALUE` (kg).
+    Mass {
+        value: Value,
+        span: Span,
+    },
 }
 
 impl AgentStmt {
@@ -206,6 +219,7 @@ impl AgentStmt {
             AgentStmt::Track(t) => t.span,
             AgentStmt::Posture { span, .. } => *span,
             AgentStmt::Behaviour(b) => b.span,
+            AgentStmt::Mass { span, .. } => *span,
         }
     }
 }

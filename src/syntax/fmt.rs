@@ -53,6 +53,7 @@ fn item(it: &Item) -> Doc {
                     KindStmt::Motion { motion, span } => {
                         Doc::Line { span: *span, text: format!("motion {}", motion.name) }
                     }
+                    KindStmt::Mass { value, span } => Doc::Line { span: *span, text: format!("mass {}", val(value)) },
                 })
                 .collect(),
             fit: true,
@@ -163,6 +164,7 @@ fn agent_stmt(s: &AgentStmt) -> Doc {
         AgentStmt::At { place, span } => Doc::Line { span: *span, text: format!("at {}", placement(place)) },
         AgentStmt::Speed { value, span } => Doc::Line { span: *span, text: format!("speed {}", val(value)) },
         AgentStmt::Siren { value, span } => Doc::Line { span: *span, text: format!("siren {}", value.name) },
+        AgentStmt::Mass { value, span } => Doc::Line { span: *span, text: format!("mass {}", val(value)) },
         AgentStmt::Size(s) => size(s),
         AgentStmt::Goal(g) => Doc::Block {
             header: "goal".into(),

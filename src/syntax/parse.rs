@@ -75,6 +75,7 @@ impl Builder {
                 let stmts = it
                     .map(|q| match q.as_rule() {
                         Rule::size_stmt => KindStmt::Size(self.size(q)),
+                        Rule::mass_stmt => KindStmt::Mass { span: self.span(&q), value: self.value(last(q)) },
                         Rule::motion_stmt => {
                             let span = self.span(&q);
                             let m = inner(q).pop().expect("grammar: motion word");
@@ -276,6 +277,7 @@ impl Builder {
             Rule::at_stmt => AgentStmt::At { place: self.placement(last(p)), span },
             Rule::speed_stmt => AgentStmt::Speed { value: self.value(last(p)), span },
             Rule::siren_stmt => AgentStmt::Siren { value: self.ident(last(p)), span },
+            Rule::mass_stmt => AgentStmt::Mass { value: self.value(last(p)), span },
             Rule::size_stmt => AgentStmt::Size(self.size(p)),
             Rule::goal => {
                 let stmts = inner(p).into_iter().skip(1).map(|q| self.goal_stmt(q)).collect();

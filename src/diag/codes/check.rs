@@ -7,7 +7,8 @@ pub const CODES: &[Code] = &[
         code: "E0101",
         title: "unit of the wrong dimension",
         explanation: "Numbers carry units and each statement expects one dimension:
-  length m, cm, km; speed m/s, km/h, mph; time s, ms; angle deg, rad; frequency Hz; ratio %.\n\
+  length m, cm, km; speed m/s, km/h, mph; time s, ms; angle deg, rad; frequency Hz; ratio %;
+  mass kg.\n\
 Bare numbers are counts.\n
     speed 5 m          // error: a speed needs m/s, km/h or mph\n    speed 5 m/s        // fine",
     },
@@ -211,8 +212,8 @@ Keep one strike per agent, or let another agent strike.",
     Code {
         code: "E0122",
         title: "crashes in an order that cannot happen",
-        explanation: "A crash holds its pair from the contact on (motion after an impact is not simulated), so\n\
-an agent that is struck stands still from then on and cannot strike anyone later. An agent's\n\
+        explanation: "An agent that is struck is no longer driven from the contact on (it slides to rest, or\n\
+holds `after latch`), so it cannot strike anyone later. An agent's\n\
 own strike comes before, or at the same time as, every crash that strikes it. A chain is\n\
 written front first: the middle car strikes the car ahead, then the one behind strikes it.\n
     conflict { at_fault mid; struck lead; impact rear_end; point rear; at 2 s }
@@ -223,7 +224,7 @@ written front first: the middle car strikes the car ahead, then the one behind s
     Code {
         code: "E0123",
         title: "a pair that crashes twice",
-        explanation: "A crash holds its pair from the contact on, so two agents touch once: a second conflict\n\
+        explanation: "A pair is staged to crash once (after it, neither is driven): a second conflict\n\
 between the same two (either way round) is refused, and both blocks are shown.\n
     conflict { at_fault a; struck b; impact rear_end; point rear; at 2 s }
     conflict { at_fault b; struck a; impact angle; point left; at 4 s }     // error: the same pair",
