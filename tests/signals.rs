@@ -247,3 +247,48 @@ fn enters_formats_back_to_itself() {
     assert!(once.contains("enters a on red during 1..8 s\n") && once.contains("enters a on green\n"), "{once}");
     assert_eq!(rocc::syntax::format_source(&once).expect("formats again"), once);
 }
+
+fn rare(name: &str) -> String {
+    std::fs::read_to_string(format!("scenarios/rare/{name}.scn")).expect("rare scene")
+}
+
+#[test]
+fn the_rare_red_light_runner_crosses_on_red_while_the_ego_crosses_on_green() {
+    let f = front_of(&rare("red_light_runner"));
+    let t = &f.tracks;
+    let (runner, ego) = (idx(t, "runner"), idx(t, "ego"));
+    let over = (0..t.frames).find(|&k| past_line(&f, runner, k) > 0.0).expect("the runner crosses its line");
+    assert_eq!(light_of(&f, runner, over), Light::Red, "it crosses on red");
+    assert_eq!(light_of(&f, ego, over), Light::Green, "while the ego has green");
+    assert!(t.speeds[runner].iter().all(|v| *v > 11.9), "the runner never slows for its red");
+    // The ego, on its way in on the green, brakes for the runner inside and does not stop.
+    let slowest = t.speeds[ego].iter().cloned().fold(f64::INFINITY, f64::min);
+    assert!(slowest < 10.0 && slowest > 3.0, "the ego's slowest is {slowest:.2} m/s");
+    let into = (0..t.frames).find(|&k| past_line(&f, ego, k) > 0.0).expect("the ego enters");
+    assert_eq!(light_of(&f, ego, into), Light::Green);
+    for k in 0..t.frames {
+        let (a, b) = (t.poses[runner][k], t.poses[ego][k]);
+        assert!((a.x - b.x).hypot(a.y - b.y) > 3.0, "frame {k}: the two cars meet");
+    }
+}
+
+#[test]
+fn the_rare_cyclist_waits_at_the_red_between_the_car_ahead_and_the_ego() {
+    let f = front_of(&rare("cyclist_waits_at_red_between_cars"));
+    let t = &f.tracks;
+    let (front, rider, ego) = (idx(t, "front"), idx(t, "rider"), idx(t, "ego"));
+    let green = first_green(&f, front);
+    let k = green - 1;
+    let nose = |i: usize| past_line(&f, i, k);
+    let tail = |i: usize| nose(i) - t.agents[i].size[0];
+    for i in [front, rider, ego] {
+        assert!(t.speeds[i][k] < 0.1 && nose(i) < 0.0, "{} stands short of the line at the red", t.agents[i].name);
+    }
+    assert!(tail(front) > nose(rider) + 0.5 && tail(rider) > nose(ego) + 0.5, "car, cyclist, ego in that order");
+    // The cyclist rides in the lane between them, not beside them.
+    assert!((t.poses[rider][k].x - t.poses[front][k].x).abs() < 0.5);
+    for i in [front, rider] {
+        let into = (0..t.frames).find(|&j| past_line(&f, i, j) > 0.0).expect("enters");
+        assert_eq!(light_of(&f, i, into), Light::Green, "{} enters on the green", t.agents[i].name);
+    }
+}

@@ -47,6 +47,8 @@ impl Checker {
                 ast::AgentStmt::Posture { word, span } => (posture.replace((word, *span)).map(|x| x.1), "`posture`"),
                 ast::AgentStmt::Behaviour(b) => (behaviour.replace(b).map(|x| x.span), "`behaviour`"),
                 ast::AgentStmt::Siren { value, span } => (siren.replace((value, *span)).map(|x| x.1), "`siren`"),
+                // Read with the other agents (`Checker::flaggers`).
+                ast::AgentStmt::Flag(_) => (None, "`flag`"),
             };
             if let Some(first) = slot_first {
                 self.dup(what, first, st.span());

@@ -10,6 +10,7 @@ mod behaviour;
 pub mod classes;
 mod conflict;
 mod expect;
+mod flagger;
 mod goal;
 mod kinds;
 pub mod load;

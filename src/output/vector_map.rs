@@ -30,6 +30,18 @@ pub struct SceneMap {
     /// frame's lights are in `boxes.json`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub signals: Option<crate::road::signals::SignalPlan>,
+    /// People directing traffic (`flag { ... }`) and the lanes each faces; what each shows per
+    /// frame is its box's `flag` in `boxes.json`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub flaggers: Vec<FlaggerRecord>,
+}
+
+/// A flagger in `scene.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FlaggerRecord {
+    pub agent: String,
+    /// The approach lanes it directs, as a placement names them (`west.in[1]`).
+    pub faces: Vec<String>,
 }
 
 fn pts(line: &[DVec2]) -> Points {
@@ -55,6 +67,7 @@ impl SceneMap {
             crosswalks: map.crosswalk_polygons.iter().map(closed).collect(),
             stop_lines: map.stop_lines.iter().map(|s| pts(&[s.a, s.b])).collect(),
             signals: map.signals.clone(),
+            flaggers: vec![],
         }
     }
 }

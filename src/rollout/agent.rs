@@ -101,6 +101,10 @@ pub(crate) struct Actor {
     pub bend: Option<std::sync::Arc<Bend>>,
     /// The traffic signal it answers to (`assign_signals`).
     pub signal: Option<Face>,
+    /// A flagger's stop/go program (`rollout::flagger`).
+    pub flag: Option<Box<crate::rollout::flagger::FlagRun>>,
+    /// The flaggers ahead that this vehicle answers to (`assign_flaggers`).
+    pub flaggers: Vec<crate::rollout::flagger::Facing>,
     /// Stands where it is for good (an object, a static kind, a vehicle with neither speed nor
     /// a goal that moves it): vehicles pass it where there is room (`Sim::avoid`).
     pub blocker: bool,
@@ -212,6 +216,8 @@ pub(crate) struct State {
     pub alarm: f64,
     /// How many of its goal phases have started (`Actor::phases`).
     pub stage: u8,
+    /// A flagger's step (`Sim::fire_flags`).
+    pub flag: u8,
 }
 
 /// A conflict with its agents as track indices.
@@ -245,6 +251,7 @@ pub(crate) fn initial(a: &Actor) -> State {
         go: a.trigger.is_none(),
         alarm: 0.0,
         stage: 0,
+        flag: 0,
     }
 }
 

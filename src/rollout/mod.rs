@@ -19,7 +19,8 @@
 //!   holding short of it; a walker about to cross waits at the kerb while a vehicle could not
 //!   stop comfortably for it;
 //! - signals (`signals on`): a vehicle holds at its stop line on a red, or a yellow it can stop
-//!   for comfortably, and a walker on a crosswalk waits at the kerb for the walk signal;
+//!   for comfortably, and a walker on a crosswalk waits at the kerb for the walk signal; a
+//!   flagger's stop holds the vehicles it faces short of it as a red does;
 //! - car-following keeps Gipps's safe speed: able to stop, at emergency braking, behind where the
 //!   leader could stop (within its clearance to its partner, for a conflict agent that the crash
 //!   latch may stop dead); a striker keeps out of bystanders' stopping envelopes;
@@ -33,6 +34,7 @@
 
 mod agent;
 mod drive;
+mod flagger;
 mod frame;
 mod junction;
 mod kinematics;
@@ -66,6 +68,20 @@ pub struct Tracks {
     /// `[agent][frame]`, m/s along the heading.
     pub speeds: Vec<Vec<f64>>,
     pub impacts: Vec<ImpactRecord>,
+    /// Each flagger's state per frame (`flag { ... }`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub flags: Vec<FlagTrack>,
+}
+
+/// What one flagger shows over the clip.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FlagTrack {
+    /// Track index (into `Tracks::agents`).
+    pub agent: usize,
+    /// The lanes it faces, as a placement names them (`west.in[1]`).
+    pub faces: Vec<String>,
+    /// Per frame: `go` (true) or `stop`.
+    pub go: Vec<bool>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -208,6 +208,21 @@ fn agent_stmt(s: &AgentStmt) -> Doc {
             fit: false,
         },
         AgentStmt::Posture { word, span } => Doc::Line { span: *span, text: format!("posture {}", word.name) },
+        AgentStmt::Flag(f) => Doc::Block {
+            header: "flag".into(),
+            span: f.span,
+            items: f.steps.iter().map(|x| Doc::Line { span: x.span, text: flag_step(x) }).collect(),
+            fit: true,
+        },
+    }
+}
+
+fn flag_step(x: &FlagStep) -> String {
+    match &x.when {
+        FlagWhen::Start => x.state.name.clone(),
+        FlagWhen::After(v) => format!("{} after {}", x.state.name, val(v)),
+        FlagWhen::For(v) => format!("{} {}", x.state.name, val(v)),
+        FlagWhen::When(w) => format!("{} {}", x.state.name, trigger(w)),
     }
 }
 
@@ -226,15 +241,18 @@ fn goal_stmt(s: &GoalStmt) -> String {
         },
         GoalStmt::Turn { turn, .. } => format!("turn {}", turn.name),
         GoalStmt::Start { after, .. } => format!("start after {}", val(after)),
-        GoalStmt::StartWhen { trigger: w, .. } => {
-            let tail = match (&w.value, &w.landmark) {
-                (Some(v), _) => format!(" {}{}", if w.under { "under " } else { "" }, val(v)),
-                (None, Some(l)) => format!(" {}", l.name),
-                (None, None) => String::new(),
-            };
-            format!("start when {} {}{tail}", w.who.name, w.cond.name)
-        }
+        GoalStmt::StartWhen { trigger: w, .. } => format!("start {}", trigger(w)),
     }
+}
+
+/// `when NAME CONDITION [under] [VALUE | LANDMARK]`.
+fn trigger(w: &Trigger) -> String {
+    let tail = match (&w.value, &w.landmark) {
+        (Some(v), _) => format!(" {}{}", if w.under { "under " } else { "" }, val(v)),
+        (None, Some(l)) => format!(" {}", l.name),
+        (None, None) => String::new(),
+    };
+    format!("when {} {}{tail}", w.who.name, w.cond.name)
 }
 
 fn size(s: &SizeStmt) -> Doc {

@@ -150,4 +150,37 @@ that `signals on` puts up; without it they time nothing.\n
     road four_way { signals on; signal_green 30 s }   // fine
     road four_way { signal_green 30 s }               // error",
     },
+    // ---- flaggers (E0270-E0272) ----
+    Code {
+        code: "E0270",
+        title: "a flagger that is not a standing person",
+        explanation: "`flag { ... }` makes an agent a flagger: a person (a kind of class pedestrian) who\n\
+stands where it is placed and directs traffic. A vehicle, an object or an animal cannot; nor can\n\
+a person with a goal, a speed or a replayed track.\n
+    agent f: adult { at west.in[1], 20 m before center offset 3 m right heading 180 deg; flag { stop } }   // fine
+    agent f: sedan { at west.in[1], 20 m before center; flag { stop } }                                   // error",
+    },
+    Code {
+        code: "E0271",
+        title: "a flag program that cannot run",
+        explanation: "A `flag` block lists the states a flagger shows, `stop` or `go`, in order. Either the\n\
+first is shown from the start and each later one begins `after` a clip time (in order, within\n\
+the clip) or `when` a trigger condition holds; or every state has a length and they repeat as a\n\
+cycle. An empty block, another word, a first state with a time, or a mix of the two forms is\n\
+refused.\n
+    flag { stop; go after 8 s; stop when car within 20 m }   // fine
+    flag { stop 20 s; go 15 s }                              // fine: a cycle
+    flag { stop; go 15 s }                                   // error: `after` or `when` after the first",
+    },
+    Code {
+        code: "E0272",
+        title: "a flagger facing no approach",
+        explanation: "A flagger directs the traffic that comes toward its face: the lanes it stands on or\n\
+beside (within a metre of their paving, shoulder included) whose traffic heads within 60\n\
+degrees of straight at it. `heading` is its world yaw: on a `straight` road, one facing\n\
+eastbound traffic on `west.in` has `heading 180 deg`. A flagger off the road, or facing the way\n\
+the traffic goes, directs nobody.\n
+    agent f: adult { at west.in[1], 20 m before center offset 3 m right heading 180 deg; flag { stop } }   // fine
+    agent f: adult { at west.in[1], 20 m before center offset 3 m right heading 0 deg; flag { stop } }     // error",
+    },
 ];
