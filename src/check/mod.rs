@@ -20,6 +20,7 @@ mod posture;
 mod road;
 pub mod scenario;
 mod scene;
+mod signal_phases;
 mod signals;
 pub mod summary;
 pub mod track;

@@ -183,11 +183,33 @@ pub struct Signals {
     pub all_red: f64,
     /// Time into the cycle at the clip's start.
     pub offset: f64,
+    /// Per-approach greens (`signal_north 0..20 s`), indexed north, east, south, west: each
+    /// green's start and end, s into a cycle of `period`; all `None` for the two-phase cycle.
+    #[serde(default, skip_serializing_if = "no_windows")]
+    pub windows: [Option<[f64; 2]>; 4],
+    /// The length of a cycle of per-approach greens, s (0 for the two-phase cycle).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub period: f64,
+}
+
+impl Signals {
+    /// The two-phase cycle: no approach states its own green.
+    pub fn two_phase(&self) -> bool {
+        no_windows(&self.windows)
+    }
+}
+
+fn no_windows(w: &[Option<[f64; 2]>; 4]) -> bool {
+    w.iter().all(Option::is_none)
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 impl Default for Signals {
     fn default() -> Self {
-        Signals { green: 20.0, yellow: 3.0, all_red: 1.0, offset: 0.0 }
+        Signals { green: 20.0, yellow: 3.0, all_red: 1.0, offset: 0.0, windows: [None; 4], period: 0.0 }
     }
 }
 

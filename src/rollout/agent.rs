@@ -292,9 +292,11 @@ pub(crate) struct Yield {
     pub offset: f64,
 }
 
-/// The signal an agent answers to: the cycle and the phase whose green lets it go.
+/// The signal an agent answers to: the cycle, and the arm whose approach's light lets a
+/// vehicle go, or whose crosswalk's walk signal lets a walker cross.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Face {
     pub cycle: crate::check::scenario::Signals,
-    pub phase: u8,
+    pub arm: crate::check::scenario::Arm,
+    pub walk: bool,
 }

@@ -150,6 +150,44 @@ that `signals on` puts up; without it they time nothing.\n
     road four_way { signals on; signal_green 30 s }   // fine
     road four_way { signal_green 30 s }               // error",
     },
+    // ---- greens per approach (E0233-E0236) ----
+    Code {
+        code: "E0233",
+        title: "a per-approach green that cannot run",
+        explanation: "`signal_north A..B s` (and `signal_east`, `signal_south`, `signal_west`) gives that\n\
+approach its green from A to B seconds into the cycle, then `signal_yellow`, then red. A green is\n\
+a range that starts before it ends, within 0..600 s, on an approach the template has (a\n\
+`t_junction` has no north), and the cycle (`signal_cycle`) must hold every green and its yellow.\n
+    road four_way { signals on; signal_cycle 40 s; signal_north 0..15 s; signal_south 0..15 s; signal_east 20..35 s; signal_west 20..35 s }   // fine
+    road four_way { signals on; signal_north 15 s; ... }                                                                                    // error: one time",
+    },
+    Code {
+        code: "E0234",
+        title: "an approach without a green",
+        explanation: "Once one approach states its own green, every approach of the junction does: one left\n\
+out would stay red for good.\n
+    road t_junction { signals on; signal_west 0..15 s; signal_east 0..15 s; signal_south 20..30 s }   // fine
+    road t_junction { signals on; signal_west 0..15 s; signal_east 0..15 s }                          // error: south",
+    },
+    Code {
+        code: "E0235",
+        title: "two-phase timing mixed with greens per approach",
+        explanation: "`signal_green` and `signal_all_red` time the two-phase cycle; greens stated per approach\n\
+replace it, so the two are not given together. `signal_cycle` is the length of a cycle of\n\
+per-approach greens and means nothing without them.\n
+    road four_way { signals on; signal_green 20 s }                            // fine
+    road four_way { signals on; signal_green 20 s; signal_north 0..15 s; ... } // error",
+    },
+    Code {
+        code: "E0236",
+        title: "crossing approaches green at once",
+        explanation: "Approaches whose traffic crosses (north or south against east or west) may not show green\n\
+or yellow at the same time: the greens would send both into the junction together. Opposite\n\
+approaches may overlap as they like, which is how a leading or lagging phase (a protected\n\
+left) is written.\n
+    road four_way { signals on; signal_south 0..12 s; signal_north 4..12 s; signal_east 16..26 s; signal_west 16..26 s }   // fine: south leads
+    road four_way { signals on; signal_south 0..12 s; signal_north 0..12 s; signal_east 10..26 s; signal_west 16..26 s }   // error",
+    },
     // ---- flaggers (E0270-E0272) ----
     Code {
         code: "E0270",
