@@ -10,6 +10,9 @@ use crate::diag::{Diagnostic, did_you_mean};
 use crate::source::Span;
 use crate::syntax::ast;
 
+/// The most states one program lists (the rollout counts its step in a byte).
+const MAX_STEPS: usize = 32;
+
 impl Checker {
     /// Every `flag` block of `agents_ast` (whose checked agents are `agents`); `None` once
     /// something was reported.
@@ -69,6 +72,14 @@ impl Checker {
             );
             return None;
         };
+        if flag.steps.len() > MAX_STEPS {
+            self.err(
+                Diagnostic::error("E0271", format!("a `flag` block shows at most {MAX_STEPS} states"))
+                    .label(flag.span, format!("{} states", flag.steps.len()))
+                    .help("a repeating pattern is a cycle: `flag { stop 20 s; go 15 s }`"),
+            );
+            return None;
+        }
         let cycle = matches!(first.when, ast::FlagWhen::For(_));
         let mut steps = Vec::with_capacity(flag.steps.len());
         let mut last_at = 0.0;

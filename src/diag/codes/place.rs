@@ -204,8 +204,8 @@ a person with a goal, a speed or a replayed track.\n
         explanation: "A `flag` block lists the states a flagger shows, `stop` or `go`, in order. Either the\n\
 first is shown from the start and each later one begins `after` a clip time (in order, within\n\
 the clip) or `when` a trigger condition holds; or every state has a length and they repeat as a\n\
-cycle. An empty block, another word, a first state with a time, or a mix of the two forms is\n\
-refused.\n
+cycle. An empty block, more than 32 states, another word, a first state with a time, or a mix\n\
+of the two forms is refused.\n
     flag { stop; go after 8 s; stop when car within 20 m }   // fine
     flag { stop 20 s; go 15 s }                              // fine: a cycle
     flag { stop; go 15 s }                                   // error: `after` or `when` after the first",
