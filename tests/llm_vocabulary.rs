@@ -297,3 +297,92 @@ fn parking_driveways_and_a_reverse_goal_from_the_model_check() {
     let road = &reqs[0]["structured_outputs"]["json"]["properties"]["road"]["properties"];
     assert_eq!(road["parking"]["items"]["properties"]["side"]["enum"], json!(["in", "out", "both"]));
 }
+
+#[test]
+fn signals_and_a_red_light_runner_from_the_schema_check() {
+    let at_line = |name: &str, arm: &str, dist: f64| {
+        json!({"name": name, "kind": "sedan", "on": "lane", "arm": arm, "direction": "in", "lane": 1,
+            "distance_m": dist, "relation": "before", "landmark": "stop_line", "speed_kmh": 43, "ego": name == "ego"})
+    };
+    let mut runner = at_line("runner", "south", 30.0);
+    runner["behaviour"] = json!({"signal": "ignore"});
+    let schema = json!({"name": "runner", "brief": "a driver runs the red", "duration_s": 8,
+        "road": {"template": "four_way", "lanes": 1, "speed_limit_kmh": 50, "signals": true,
+            "signal_green_s": 6, "signal_offset_s": 9},
+        "agents": [at_line("ego", "west", 60.0), runner]});
+    let goals = "ego: goal { speed 43 km/h; turn straight }\nrunner: goal { speed 43 km/h; turn straight }\n";
+    let text = accepted(&schema, &[goals], Plan::Joint);
+    assert!(
+        text.contains(
+            "road four_way { lanes 1; speed_limit 50 km/h; signals on; signal_green 6 s; signal_offset 9 s }"
+        ),
+        "{text}"
+    );
+    assert!(text.contains("behaviour { signal ignore }"), "{text}");
+}
+
+#[test]
+fn flaggers_from_the_schema_stand_beside_their_lane_facing_its_traffic() {
+    let mut west = lane("west_flagger", "adult", "west", "in", 30.0, 0.0);
+    west["flag"] = json!({"shows": "stop", "switch_after_s": 8});
+    let mut east = lane("east_flagger", "adult", "east", "in", 30.0, 0.0);
+    east["flag"] = json!({"shows": "go", "switch_when": {"agent": "car", "condition": "within", "value": 15}});
+    // Listed first, a flagger is still no ego: the first mover is.
+    let schema = json!({"name": "work_zone", "brief": "flaggers at a work zone", "duration_s": 10,
+        "road": {"template": "straight", "lanes": 1, "speed_limit_kmh": 50},
+        "agents": [west, east, lane("car", "sedan", "west", "in", 55.0, 30.0)]});
+    for (plan, replies) in [
+        (Plan::Joint, vec!["car: goal { speed 30 km/h }\nwest_flagger: goal { speed 5 km/h }\n"]),
+        (Plan::Hierarchical, vec!["goal { speed 30 km/h }"]),
+    ] {
+        let text = accepted(&schema, &replies, plan);
+        for says in [
+            "egos [car]",
+            "agent west_flagger: adult {\n        at west.in[1], 30 m before center offset 2.5 m right heading 180 deg\n        flag { stop; go after 8 s }\n    }",
+            "agent east_flagger: adult {\n        at east.in[1], 30 m before center offset 2.5 m right heading 0 deg\n        flag { go; stop when car within 15 m }\n    }",
+        ] {
+            assert!(text.contains(says), "{plan:?}: no `{says}` in\n{text}");
+        }
+        assert!(!text.contains("speed 5 km/h"), "a flagger's goal from the goal stage is dropped:\n{text}");
+    }
+}
+
+#[test]
+fn a_near_miss_from_the_schema_is_written_and_staged() {
+    let mut s = json!({"name": "overtake", "brief": "a close pass", "duration_s": 6,
+        "road": {"template": "straight", "lanes": 2, "speed_limit_kmh": 80},
+        "agents": [lane("v1", "sedan", "west", "in", 50.0, 72.0), lane("v2", "van", "west", "in", 25.0, 43.2)],
+        "near_misses": [{"passer": "v1", "passed": "v2", "gap_m": 0.4, "at_s": 3}]});
+    s["agents"][0]["lane"] = json!(2);
+    let goals = "v1: goal { speed 72 km/h }\nv2: goal { speed 43.2 km/h }\n";
+    let text = accepted(&s, &[goals], Plan::Joint);
+    assert!(text.contains("\n    near_miss { passer v1; passed v2; gap 0.4 m; at 3 s }\n"), "{text}");
+    // A side that is no side goes back to the model.
+    let mut bad = s.clone();
+    bad["near_misses"][0]["side"] = json!("above");
+    assert_eq!(
+        rocc::llm::schema::parse(&bad.to_string()).expect_err("refused"),
+        "near miss side `above` is not one of left, right"
+    );
+}
+
+#[test]
+fn the_schema_and_the_grammar_export_name_signals_flaggers_and_near_misses() {
+    let v = rocc::llm::schema::json_schema(&["sedan".to_string(), "adult".to_string()]);
+    let agent = &v["properties"]["agents"]["items"]["properties"];
+    assert_eq!(agent["flag"]["properties"]["shows"]["enum"], json!(["stop", "go"]));
+    assert_eq!(agent["flag"]["properties"]["switch_when"], agent["start_when"]);
+    assert_eq!(agent["behaviour"]["properties"]["signal"]["enum"], json!(["obey", "ignore"]));
+    assert_eq!(v["properties"]["road"]["properties"]["signals"]["type"], "boolean");
+    assert_eq!(v["properties"]["near_misses"]["items"]["properties"]["side"]["enum"], json!(["left", "right"]));
+    for (format, def) in [(rocc::grammar::Format::Gbnf, " ::= "), (rocc::grammar::Format::Lark, ": ")] {
+        let g = rocc::grammar::print(&rocc::grammar::language(), format);
+        for rule in ["flag", "flag_step", "kw_flag", "near_miss", "near_miss_field"] {
+            let rule = if def == ": " { rule.to_string() } else { rule.replace('_', "-") };
+            assert!(g.lines().any(|l| l.starts_with(&format!("{rule}{def}"))), "{format:?} has no rule `{rule}`");
+        }
+    }
+    let g = gbnf::Grammar::parse(&rocc::grammar::print(&rocc::grammar::language(), rocc::grammar::Format::Gbnf));
+    let scene = "scenario s {\n    duration 4 s\n    road four_way { lanes 1; signals on; signal_north 0..12 s }\n    agent f: adult {\n        at west.in[1], 5 m before center offset 2.5 m right heading 180 deg\n        flag { stop; go after 3 s; stop when car within 10 m }\n    }\n    agent car: sedan { at west.in[1], 40 m before center; behaviour { signal ignore } }\n    near_miss { passer car; passed f; gap 0.5 m; side right; at 2 s }\n}\n";
+    assert!(g.accepts(scene), "the GBNF rejects signals, flags or near misses");
+}

@@ -242,6 +242,7 @@ fn scene(specs: Vec<Spec>, conflicts: Vec<Conflict>, traffic: Option<Traffic>, d
         rows: vec![],
         conflicts,
         near_misses: vec![],
+        flaggers: vec![],
         traffic,
         kinds: Default::default(),
     };

@@ -247,3 +247,108 @@ fn enters_formats_back_to_itself() {
     assert!(once.contains("enters a on red during 1..8 s\n") && once.contains("enters a on green\n"), "{once}");
     assert_eq!(rocc::syntax::format_source(&once).expect("formats again"), once);
 }
+
+fn rare(name: &str) -> String {
+    std::fs::read_to_string(format!("scenarios/rare/{name}.scn")).expect("rare scene")
+}
+
+#[test]
+fn the_rare_red_light_runner_crosses_on_red_while_the_ego_crosses_on_green() {
+    let f = front_of(&rare("red_light_runner"));
+    let t = &f.tracks;
+    let (runner, ego) = (idx(t, "runner"), idx(t, "ego"));
+    let over = (0..t.frames).find(|&k| past_line(&f, runner, k) > 0.0).expect("the runner crosses its line");
+    assert_eq!(light_of(&f, runner, over), Light::Red, "it crosses on red");
+    assert_eq!(light_of(&f, ego, over), Light::Green, "while the ego has green");
+    assert!(t.speeds[runner].iter().all(|v| *v > 11.9), "the runner never slows for its red");
+    // The ego, on its way in on the green, brakes for the runner inside and does not stop.
+    let slowest = t.speeds[ego].iter().cloned().fold(f64::INFINITY, f64::min);
+    assert!(slowest < 10.0 && slowest > 3.0, "the ego's slowest is {slowest:.2} m/s");
+    let into = (0..t.frames).find(|&k| past_line(&f, ego, k) > 0.0).expect("the ego enters");
+    assert_eq!(light_of(&f, ego, into), Light::Green);
+    for k in 0..t.frames {
+        let (a, b) = (t.poses[runner][k], t.poses[ego][k]);
+        assert!((a.x - b.x).hypot(a.y - b.y) > 3.0, "frame {k}: the two cars meet");
+    }
+}
+
+#[test]
+fn the_rare_cyclist_waits_at_the_red_between_the_car_ahead_and_the_ego() {
+    let f = front_of(&rare("cyclist_waits_at_red_between_cars"));
+    let t = &f.tracks;
+    let (front, rider, ego) = (idx(t, "front"), idx(t, "rider"), idx(t, "ego"));
+    let green = first_green(&f, front);
+    let k = green - 1;
+    let nose = |i: usize| past_line(&f, i, k);
+    let tail = |i: usize| nose(i) - t.agents[i].size[0];
+    for i in [front, rider, ego] {
+        assert!(t.speeds[i][k] < 0.1 && nose(i) < 0.0, "{} stands short of the line at the red", t.agents[i].name);
+    }
+    assert!(tail(front) > nose(rider) + 0.5 && tail(rider) > nose(ego) + 0.5, "car, cyclist, ego in that order");
+    // The cyclist rides in the lane between them, not beside them.
+    assert!((t.poses[rider][k].x - t.poses[front][k].x).abs() < 0.5);
+    for i in [front, rider] {
+        let into = (0..t.frames).find(|&j| past_line(&f, i, j) > 0.0).expect("enters");
+        assert_eq!(light_of(&f, i, into), Light::Green, "{} enters on the green", t.agents[i].name);
+    }
+}
+
+#[test]
+fn a_leading_green_gives_the_left_turn_a_protected_phase() {
+    use rocc::check::scenario::Arm;
+    use rocc::road::signals::{arm_light, walk};
+    let f = front_of(&case("leading-left-turn"));
+    let t = &f.tracks;
+    let c = f.map.signals.as_ref().expect("signals").cycle;
+    // South is green from 0 s, north from 6 s; both turn yellow at 12 s; east and west wait.
+    let at = |arm: Arm, s: f64| arm_light(&c, arm, s);
+    assert_eq!((at(Arm::South, 0.0), at(Arm::North, 0.0), at(Arm::East, 0.0)), (Light::Green, Light::Red, Light::Red));
+    assert_eq!(
+        (at(Arm::North, 6.0), at(Arm::North, 12.5), at(Arm::North, 15.5)),
+        (Light::Green, Light::Yellow, Light::Red)
+    );
+    assert_eq!(
+        (at(Arm::East, 16.0), at(Arm::West, 27.0), at(Arm::South, 29.0)),
+        (Light::Green, Light::Yellow, Light::Red)
+    );
+    // Walkers across north walk with the east-west green, not while north is red alone.
+    assert!(!walk(&c, Arm::North, 2.0) && walk(&c, Arm::North, 17.0));
+    let (turner, oncoming) = (idx(t, "turner"), idx(t, "oncoming"));
+    let green = (0..t.frames).find(|&k| at(Arm::North, k as f64 / t.rate) == Light::Green).expect("north's green");
+    assert_eq!(green, 60);
+    for k in 0..green {
+        assert!(past_line(&f, oncoming, k) <= 0.0, "frame {k}: the oncoming car is past its line on red");
+    }
+    let into = (0..t.frames).find(|&k| past_line(&f, turner, k) > 0.0).expect("the turner enters");
+    assert!(into < green, "the turner enters on its lead ({into})");
+    // It crosses the oncoming lane (x < 0) before the oncoming car reaches its line.
+    let across = (0..t.frames).find(|&k| t.poses[turner][k].x < -1.75).expect("the turner turns left");
+    assert!(past_line(&f, oncoming, across) < 0.0, "the oncoming car waits while the turner crosses");
+    assert!(past_line(&f, oncoming, t.frames - 1) > 10.0, "the oncoming car goes on its green");
+}
+
+#[test]
+fn boxes_json_lights_follow_the_per_approach_greens() {
+    use rocc::compile::{Options, Stage, batch};
+    let dir = std::env::temp_dir().join(format!("rocc-phases-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let o = Options { stage: Stage::Bev, frames: Some("0,70".to_string()), ..Options::default() };
+    let input = vec![std::path::PathBuf::from("tests/signal-cases/leading-left-turn.scn")];
+    assert!(batch::run(&input, &dir, &o, true).failures.is_empty(), "compiles");
+    let text = std::fs::read_to_string(dir.join("leading_left_turn/turner/boxes.json")).expect("boxes.json");
+    let boxes: serde_json::Value = serde_json::from_str(&text).expect("json");
+    let light = |frame: usize, lane: &str| -> String {
+        let rec = boxes.as_array().expect("frames").iter().find(|r| r["frame"] == frame).expect("frame");
+        let s = rec["signals"].as_array().expect("signals").iter().find(|s| s["lane"] == lane).expect("lane");
+        s["light"].as_str().expect("light").to_string()
+    };
+    assert_eq!((light(0, "south.in[1]"), light(0, "north.in[1]")), ("green".into(), "red".into()));
+    assert_eq!((light(70, "north.in[1]"), light(70, "east.in[1]")), ("green".into(), "red".into()));
+    let scene: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("leading_left_turn/turner/scene.json")).expect("scene"))
+            .expect("json");
+    assert_eq!(scene["signals"]["cycle"]["period"], 30.0);
+    assert_eq!(scene["signals"]["cycle"]["windows"][0], serde_json::json!([6.0, 12.0]), "north's green");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -49,6 +49,8 @@ impl Checker {
                 ast::AgentStmt::Behaviour(b) => (behaviour.replace(b).map(|x| x.span), "`behaviour`"),
                 ast::AgentStmt::Siren { value, span } => (siren.replace((value, *span)).map(|x| x.1), "`siren`"),
                 ast::AgentStmt::Mass { value, span } => (mass.replace((value, *span)).map(|x| x.1), "`mass`"),
+                // Read with the other agents (`Checker::flaggers`).
+                ast::AgentStmt::Flag(_) => (None, "`flag`"),
             };
             if let Some(first) = slot_first {
                 self.dup(what, first, st.span());

@@ -53,6 +53,9 @@ pub struct Scenario {
     /// `near_miss` blocks: passes within a gap, staged without contact.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub near_misses: Vec<NearMiss>,
+    /// People directing traffic (`flag { ... }`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub flaggers: Vec<Flagger>,
     pub traffic: Option<Traffic>,
     /// `expect` lines, evaluated on the tracks by `rocc test` (`crate::expect`).
     #[serde(default)]
@@ -183,11 +186,33 @@ pub struct Signals {
     pub all_red: f64,
     /// Time into the cycle at the clip's start.
     pub offset: f64,
+    /// Per-approach greens (`signal_north 0..20 s`), indexed north, east, south, west: each
+    /// green's start and end, s into a cycle of `period`; all `None` for the two-phase cycle.
+    #[serde(default, skip_serializing_if = "no_windows")]
+    pub windows: [Option<[f64; 2]>; 4],
+    /// The length of a cycle of per-approach greens, s (0 for the two-phase cycle).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub period: f64,
+}
+
+impl Signals {
+    /// The two-phase cycle: no approach states its own green.
+    pub fn two_phase(&self) -> bool {
+        no_windows(&self.windows)
+    }
+}
+
+fn no_windows(w: &[Option<[f64; 2]>; 4]) -> bool {
+    w.iter().all(Option::is_none)
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 impl Default for Signals {
     fn default() -> Self {
-        Signals { green: 20.0, yellow: 3.0, all_red: 1.0, offset: 0.0 }
+        Signals { green: 20.0, yellow: 3.0, all_red: 1.0, offset: 0.0, windows: [None; 4], period: 0.0 }
     }
 }
 
@@ -475,6 +500,29 @@ pub enum Point {
     FrontRight,
     RearLeft,
     RearRight,
+}
+
+/// A flagger (`flag { ... }` in a standing person's block): its stop/go states in order, which
+/// act as a signal for the approach it faces (docs/language.md, "Flaggers").
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Flagger {
+    /// Index into `Scenario::agents`.
+    pub agent: usize,
+    pub steps: Vec<FlagStep>,
+    /// Every step has a length and the steps repeat (`flag { stop 20 s; go 15 s }`).
+    pub cycle: bool,
+}
+
+/// One state of a flagger's program.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FlagStep {
+    /// `go` (traffic passes) or `stop`.
+    pub go: bool,
+    /// s: the clip time the step begins at, once the step before it has begun (`after`; 0 for
+    /// the first), or in a cycle how long it lasts.
+    pub at: f64,
+    /// `when NAME CONDITION`: the step begins once this holds (its agent a scenario index).
+    pub trigger: Option<Trigger>,
 }
 
 /// A near miss: `passer` comes alongside `passed`, on `passed`'s `side`, its box `gap` metres

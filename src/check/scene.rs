@@ -112,6 +112,7 @@ impl Checker {
         let near: Vec<Option<NearMiss>> =
             near_ast.iter().map(|c| self.near_miss(c, &order, &agents, duration_s)).collect();
         self.near_misses_apart(&near, &conflicts, &order, duration_s);
+        let flaggers = self.flaggers(&agents_ast, &agents, &order, duration_s);
         let egos = self.egos(egos_stmt, &order, &agents, header);
         let expects = self.expects(&expects_ast, &order, &agents, road.as_ref(), duration_s);
 
@@ -129,6 +130,7 @@ impl Checker {
             rows: rows.into_iter().collect::<Option<Vec<_>>>()?,
             conflicts: conflicts.into_iter().collect::<Option<Vec<_>>>()?,
             near_misses: near.into_iter().collect::<Option<Vec<_>>>()?,
+            flaggers: flaggers?,
             traffic,
             expects: expects?,
             kinds: used_kinds,

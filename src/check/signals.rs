@@ -1,5 +1,6 @@
 //! A road's traffic signals: `signals on` and the cycle (`signal_green`, `signal_yellow`,
-//! `signal_all_red`, `signal_offset`), allowed only where a junction has stop lines to hold at.
+//! `signal_all_red`, `signal_offset`, or greens per approach: `signal_phases`), allowed only
+//! where a junction has stop lines to hold at.
 
 use super::Checker;
 use super::scenario::{Dist, Signals, Template};
@@ -9,8 +10,19 @@ use crate::source::Span;
 use crate::syntax::ast;
 use std::collections::BTreeMap;
 
-/// The road parameters this file reads.
-pub const PARAMS: [&str; 5] = ["signals", "signal_green", "signal_yellow", "signal_all_red", "signal_offset"];
+/// The road parameters this file and `signal_phases` read.
+pub const PARAMS: [&str; 10] = [
+    "signals",
+    "signal_green",
+    "signal_yellow",
+    "signal_all_red",
+    "signal_offset",
+    "signal_cycle",
+    "signal_north",
+    "signal_east",
+    "signal_south",
+    "signal_west",
+];
 
 impl Checker {
     /// The signals of a road of template `template` from its signal parameters; `Err` once
@@ -29,6 +41,10 @@ impl Checker {
             if let Some(first) = seen.insert(n, p.span) {
                 self.dup(&format!("road parameter `{n}`"), first, p.span);
                 ok = false;
+                continue;
+            }
+            if super::signal_phases::PARAMS.contains(&n) {
+                // Greens per approach: read once the two-phase timing is known.
                 continue;
             }
             match (&p.value, n) {
@@ -90,7 +106,7 @@ impl Checker {
                 );
                 Err(())
             }
-            Some((true, _)) => Ok(Some(cycle)),
+            Some((true, _)) => self.signal_phases(template, cycle, params).map(Some),
             _ => Ok(None),
         }
     }

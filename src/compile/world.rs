@@ -3,7 +3,8 @@
 
 use crate::geom::wrap_angle;
 use crate::output::{
-    BoxMotion, EgoRecord, FrameWorld, Motion, SceneMap, SignalState, ego2global, instance_id, yaw_quaternion,
+    BoxMotion, EgoRecord, FlagShown, FlaggerRecord, FrameWorld, Motion, SceneMap, SignalState, ego2global, instance_id,
+    yaw_quaternion,
 };
 use crate::place::Pose;
 use crate::raster::layout::class_index;
@@ -51,8 +52,11 @@ impl ClipWorld<'_> {
             .map(|b| {
                 let i = b.track as usize;
                 // A box the tracks do not describe (inserted by `rocc edit`) has no motion.
-                (t.agents.get(i).is_some_and(|a| a.name == b.agent))
-                    .then(|| BoxMotion { instance_id: instance_id(self.scenario, &b.agent), motion: motion(i) })
+                (t.agents.get(i).is_some_and(|a| a.name == b.agent)).then(|| BoxMotion {
+                    instance_id: instance_id(self.scenario, &b.agent),
+                    motion: motion(i),
+                    flag: flag_shown(t, i, f),
+                })
             })
             .collect();
         let timestamp_us = (f as f64 * 1e6 / t.rate).round() as u64;
@@ -64,8 +68,21 @@ impl ClipWorld<'_> {
     }
 
     pub fn scene(&self) -> SceneMap {
-        SceneMap::of(self.scenario, self.map)
+        let mut scene = SceneMap::of(self.scenario, self.map);
+        scene.flaggers = self
+            .tracks
+            .flags
+            .iter()
+            .map(|ft| FlaggerRecord { agent: self.tracks.agents[ft.agent].name.clone(), faces: ft.faces.clone() })
+            .collect();
+        scene
     }
+}
+
+/// What flagger `i` shows at frame `f`; `None` for an agent that is no flagger.
+fn flag_shown(t: &Tracks, i: usize, f: usize) -> Option<FlagShown> {
+    let ft = t.flags.iter().find(|ft| ft.agent == i)?;
+    Some(if *ft.go.get(f)? { FlagShown::Go } else { FlagShown::Stop })
 }
 
 /// The derivative at frame `f` of a quantity sampled at every frame (`n` of them, `dt` apart):

@@ -165,7 +165,7 @@ impl Judge<'_> {
             );
             return Some(("E1004", what, HELP));
         };
-        let seen = signals::light(&plan.cycle, head.phase, f as f64 / front.tracks.rate);
+        let seen = signals::arm_light(&plan.cycle, head.id.arm, f as f64 / front.tracks.rate);
         let outside = if self.frames.contains(&f) { "" } else { ", outside the window" };
         let what = format!("it enters at {} on {}{outside}", self.t(f), seen.name());
         (seen != light || !outside.is_empty()).then_some(("E1004", what, HELP))

@@ -15,6 +15,7 @@
 //! constrained by the grammar exported from `grammar/scn.pest`.
 
 pub mod client;
+pub mod control;
 pub mod goals;
 pub mod prompts;
 pub mod repair;
@@ -239,7 +240,10 @@ impl Pipeline<'_> {
 
     fn goals(&mut self, s: &Schema) -> Result<Vec<Option<String>>, Diagnostic> {
         let mut goals: Vec<Option<String>> = vec![None; s.agents.len()];
-        let movers: Vec<usize> = (0..s.agents.len()).filter(|i| !self.is_static(&s.agents[*i].kind)).collect();
+        // Flaggers stand: they get no goal.
+        let movers: Vec<usize> = (0..s.agents.len())
+            .filter(|i| !self.is_static(&s.agents[*i].kind) && s.agents[*i].flag.is_none())
+            .collect();
         if movers.is_empty() {
             return Ok(goals);
         }

@@ -26,6 +26,9 @@ pub struct Schema {
     pub randomness: Option<f64>,
     #[serde(default)]
     pub seed: Option<u64>,
+    /// Passes within a gap, staged without contact (`near_miss { ... }`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub near_misses: Vec<super::control::NearMissSpec>,
 }
 
 fn default_duration() -> f64 {
@@ -49,6 +52,13 @@ pub struct RoadSpec {
     /// Driveways across the sidewalk (`driveway NAME ARM.DIR D m`), straight roads only.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub driveways: Vec<DrivewaySpec>,
+    /// Traffic signals at the junction (`signals on`), with an optional green and offset, s.
+    #[serde(default)]
+    pub signals: bool,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub signal_green_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub signal_offset_s: Option<f64>,
 }
 
 /// A parking lane: the arm and the kerb (`in`, `out` or `both`).
@@ -122,6 +132,9 @@ pub struct AgentSpec {
     /// The driveway of `on: driveway` (the road's first otherwise).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub driveway: Option<String>,
+    /// A person directing traffic: what it shows and when it switches.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flag: Option<super::control::FlagSpec>,
 }
 
 /// How an agent departs from careful behaviour (the `.scn` `behaviour { ... }` block).
@@ -137,6 +150,9 @@ pub struct BehaviourSpec {
     pub reaction_s: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub speeding_pct: Option<f64>,
+    /// `obey` or `ignore` (traffic signals and flaggers).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub signal: Option<String>,
 }
 
 /// `start when AGENT CONDITION [VALUE]`.
@@ -181,7 +197,24 @@ pub struct Overrides {
 
 /// The JSON schema sent with the schema stage (as a decoding constraint where the server takes one).
 pub fn json_schema(kinds: &[String]) -> Value {
-    let mut v = json!({
+    let mut v = base_schema(kinds);
+    let trigger = v["properties"]["agents"]["items"]["properties"]["start_when"].clone();
+    let road = &mut v["properties"]["road"]["properties"];
+    for (k, p) in super::control::road_properties().as_object().into_iter().flatten() {
+        road[k] = p.clone();
+    }
+    let agent = &mut v["properties"]["agents"]["items"]["properties"];
+    agent["flag"] = super::control::flag_property(&trigger);
+    // Kerbside placements (a separate statement: one macro holding them all overflows its recursion limit).
+    agent["slot"] = json!({"type": "integer", "minimum": 1, "maximum": 40});
+    agent["driveway"] = json!({"type": "string", "pattern": "^[a-z][a-z0-9_]{0,20}$"});
+    agent["behaviour"]["properties"]["signal"] = json!({"enum": ["obey", "ignore"]});
+    v["properties"]["near_misses"] = super::control::near_misses_property();
+    v
+}
+
+fn base_schema(kinds: &[String]) -> Value {
+    json!({
         "type": "object",
         "required": ["name", "brief", "road", "duration_s", "agents"],
         "properties": {
@@ -244,12 +277,7 @@ pub fn json_schema(kinds: &[String]) -> Value {
             "density": {"type": "number", "minimum": 0, "maximum": 1},
             "randomness": {"type": "number", "minimum": 0, "maximum": 1}
         }
-    });
-    // Kerbside placements (a separate statement: one macro holding them all overflows its recursion limit).
-    let agent = &mut v["properties"]["agents"]["items"]["properties"];
-    agent["slot"] = json!({"type": "integer", "minimum": 1, "maximum": 40});
-    agent["driveway"] = json!({"type": "string", "pattern": "^[a-z][a-z0-9_]{0,20}$"});
-    v
+    })
 }
 
 /// `road.parking` in the JSON schema.
@@ -322,6 +350,7 @@ pub fn parse(reply: &str) -> Result<Schema, String> {
         rare_fields(a)?;
     }
     kerb_fields(&mut s)?;
+    super::control::validate(&mut s)?;
     Ok(s)
 }
 
@@ -338,6 +367,7 @@ fn rare_fields(a: &mut AgentSpec) -> Result<(), String> {
     if let Some(b) = &a.behaviour {
         one_of("behaviour.yield", &b.yield_, &["always", "never"])?;
         one_of("behaviour.stop_line", &b.stop_line, &["obey", "ignore"])?;
+        one_of("behaviour.signal", &b.signal, &["obey", "ignore"])?;
         for (field, v) in [("reaction_s", b.reaction_s), ("speeding_pct", b.speeding_pct)] {
             if v.is_some_and(|v| !v.is_finite() || v < 0.0) {
                 return Err(format!("agent `{}`: behaviour.{field} must be a non-negative number", a.name));
@@ -403,6 +433,9 @@ pub fn behaviour(b: &BehaviourSpec) -> Option<String> {
     }
     if let Some(v) = b.speeding_pct {
         parts.push(format!("speeding {} %", num(v)));
+    }
+    if let Some(w) = &b.signal {
+        parts.push(format!("signal {w}"));
     }
     (!parts.is_empty()).then(|| format!("behaviour {{ {} }}", parts.join("; ")))
 }
@@ -476,12 +509,13 @@ pub fn placement(a: &AgentSpec) -> String {
 
 /// Which agents are egos: those the model marked, else the first mover.
 pub fn egos(s: &Schema, is_static: &dyn Fn(&str) -> bool) -> Vec<String> {
-    let marked: Vec<String> =
-        s.agents.iter().filter(|a| a.ego && !is_static(&a.kind)).map(|a| a.name.clone()).collect();
+    // A flagger stands where it is placed: never an ego.
+    let mover = |a: &&AgentSpec| !is_static(&a.kind) && a.flag.is_none();
+    let marked: Vec<String> = s.agents.iter().filter(|a| a.ego && mover(a)).map(|a| a.name.clone()).collect();
     if !marked.is_empty() {
         return marked;
     }
-    s.agents.iter().find(|a| !is_static(&a.kind)).map(|a| vec![a.name.clone()]).unwrap_or_default()
+    s.agents.iter().find(mover).map(|a| vec![a.name.clone()]).unwrap_or_default()
 }
 
 /// The scenario text: rocc writes it from the schema and the goal blocks the model chose.
@@ -519,10 +553,17 @@ pub fn emit(s: &Schema, goals: &[Option<String>], is_static: &dyn Fn(&str) -> bo
     params.extend(
         r.driveways.iter().map(|d| format!("driveway {} {}.{} {} m", d.name, d.arm, d.direction, num(d.distance_m))),
     );
+    super::control::road_params(r, &mut params);
     out.push_str(&format!("\n    road {} {{ {} }}\n", r.template, params.join("; ")));
     for (i, a) in s.agents.iter().enumerate() {
         let stat = is_static(&a.kind);
         out.push_str(&format!("\n    {} {}: {} {{\n", if stat { "object" } else { "agent" }, a.name, a.kind));
+        if let Some(f) = &a.flag {
+            // A flagger stands beside its lane facing the traffic; it has no speed or goal.
+            out.push_str(&format!("        {}\n", super::control::flagger_placement(a, &r.template)));
+            out.push_str(&format!("        {}\n    }}\n", super::control::flag_block(f)));
+            continue;
+        }
         out.push_str(&format!("        {}\n", placement(a)));
         if let Some(p) = &a.posture {
             out.push_str(&format!("        posture {p}\n"));
@@ -542,6 +583,7 @@ pub fn emit(s: &Schema, goals: &[Option<String>], is_static: &dyn Fn(&str) -> bo
         }
         out.push_str("    }\n");
     }
+    out.push_str(&super::control::near_miss_blocks(s));
     if s.density.is_some() || s.randomness.is_some() {
         let mut t = vec![];
         if let Some(d) = s.density {
@@ -608,6 +650,9 @@ pub fn describe(s: &Schema, a: &AgentSpec) -> String {
     }
     if let Some(on) = a.siren {
         words.push_str(if on { ", siren on" } else { ", siren off" });
+    }
+    if let Some(f) = &a.flag {
+        words.push_str(&format!(", directing traffic (stands; no goal): {}", super::control::flag_block(f)));
     }
     words
 }

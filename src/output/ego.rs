@@ -34,6 +34,14 @@ pub struct EgoRecord {
     pub motion: Motion,
 }
 
+/// A flagger's state: traffic it faces stops or goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FlagShown {
+    Stop,
+    Go,
+}
+
 /// How one agent moves at one frame (central differences over the clip's frames, one-sided at
 /// its ends, as nuScenes derives box velocities from annotations).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -56,6 +64,9 @@ pub struct BoxMotion {
     pub instance_id: String,
     #[serde(flatten)]
     pub motion: Motion,
+    /// What a flagger shows at this frame (`flag { ... }`); absent for everyone else.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flag: Option<FlagShown>,
 }
 
 /// The world side of one frame: timestamp, ego, and per box (in `FrameBoxes::boxes` order) its

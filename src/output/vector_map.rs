@@ -35,6 +35,18 @@ pub struct SceneMap {
     /// Parking lanes and driveways (`parking`, `driveway`), closed outlines; absent without.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub parking_areas: Vec<Points>,
+    /// People directing traffic (`flag { ... }`) and the lanes each faces; what each shows per
+    /// frame is its box's `flag` in `boxes.json`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub flaggers: Vec<FlaggerRecord>,
+}
+
+/// A flagger in `scene.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FlaggerRecord {
+    pub agent: String,
+    /// The approach lanes it directs, as a placement names them (`west.in[1]`).
+    pub faces: Vec<String>,
 }
 
 fn pts(line: &[DVec2]) -> Points {
@@ -61,6 +73,7 @@ impl SceneMap {
             stop_lines: map.stop_lines.iter().map(|s| pts(&[s.a, s.b])).collect(),
             signals: map.signals.clone(),
             parking_areas: map.carparks.iter().map(closed).collect(),
+            flaggers: vec![],
         }
     }
 }

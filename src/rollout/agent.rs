@@ -101,6 +101,10 @@ pub(crate) struct Actor {
     pub bend: Option<std::sync::Arc<Bend>>,
     /// The traffic signal it answers to (`assign_signals`).
     pub signal: Option<Face>,
+    /// A flagger's stop/go program (`rollout::flagger`).
+    pub flag: Option<Box<crate::rollout::flagger::FlagRun>>,
+    /// The flaggers ahead that this vehicle answers to (`assign_flaggers`).
+    pub flaggers: Vec<crate::rollout::flagger::Facing>,
     /// Stands where it is for good (an object, a static kind, a vehicle with neither speed nor
     /// a goal that moves it): vehicles pass it where there is room (`Sim::avoid`).
     pub blocker: bool,
@@ -232,6 +236,8 @@ pub(crate) struct State {
     pub since: f64,
     /// Arc length where the goal phase with the stop it keeps started (`Stage::stop_after`).
     pub stage_s: f64,
+    /// A flagger's step (`Sim::fire_flags`).
+    pub flag: u8,
 }
 
 /// A conflict with its agents as track indices.
@@ -267,6 +273,7 @@ pub(crate) fn initial(a: &Actor) -> State {
         stage_s: 0.0,
         alarm: 0.0,
         stage: 0,
+        flag: 0,
     }
 }
 
@@ -309,9 +316,11 @@ pub(crate) struct Yield {
     pub offset: f64,
 }
 
-/// The signal an agent answers to: the cycle and the phase whose green lets it go.
+/// The signal an agent answers to: the cycle, and the arm whose approach's light lets a
+/// vehicle go, or whose crosswalk's walk signal lets a walker cross.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Face {
     pub cycle: crate::check::scenario::Signals,
-    pub phase: u8,
+    pub arm: crate::check::scenario::Arm,
+    pub walk: bool,
 }

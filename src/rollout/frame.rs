@@ -163,6 +163,7 @@ pub(crate) fn empty_tracks(actors: &[Actor], rate: f64, frames: usize) -> Tracks
         speeds: actors.iter().map(|_| Vec::with_capacity(frames)).collect(),
         impacts: vec![],
         contacts: vec![],
+        flags: crate::rollout::flagger::flag_tracks(actors, frames),
     }
 }
 
@@ -262,12 +263,16 @@ impl<'a, 'b> Sim<'a, 'b> {
                     out.poses[i].extend_from_slice(&p[..self.resume.first]);
                     out.speeds[i].extend_from_slice(&v[..self.resume.first]);
                 }
+                for (o, d) in out.flags.iter_mut().zip(&done.flags) {
+                    o.go.extend_from_slice(&d.go[..self.resume.first.min(d.go.len())]);
+                }
             }
             None => self.record(out),
         }
         for f in self.resume.first..out.frames {
             let t = (f - 1) as f64 * self.dt;
             self.fire_triggers(t);
+            self.fire_flags(t);
             // An agent whose heading has not changed (bit for bit) keeps its unit heading: the
             // same call on the same bits. Standing and straight-driving agents take no sine.
             self.facts.dirs.resize(self.cur.len(), DVec2::X);
@@ -293,7 +298,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             for i in 0..self.actors.len() {
                 self.facts.yielding[i] = self.yield_state(i);
                 // A red (or a yellow it can stop for) holds it as an emergency vehicle would.
-                if let Some(rem) = self.signal_hold(i, t) {
+                if let Some(rem) = self.signal_hold(i, t).into_iter().chain(self.flag_hold(i, t)).reduce(f64::min) {
                     let y = &mut self.facts.yielding[i].0;
                     *y = Some(y.map_or(rem, |h| h.min(rem)));
                 }
@@ -343,6 +348,10 @@ impl<'a, 'b> Sim<'a, 'b> {
     pub(crate) fn record(&mut self, out: &mut Tracks) {
         if let Some(keep) = self.resume.keep.as_deref_mut() {
             keep.push(self.cur.clone());
+        }
+        if !out.flags.is_empty() {
+            let f = out.poses.first().map_or(0, Vec::len);
+            self.record_flags(out, f as f64 * self.dt);
         }
         for (i, st) in self.cur.iter().enumerate() {
             // A reversing vehicle moves along its state's heading, its body turned half round.

@@ -19,7 +19,8 @@
 //!   holding short of it; a walker about to cross waits at the kerb while a vehicle could not
 //!   stop comfortably for it;
 //! - signals (`signals on`): a vehicle holds at its stop line on a red, or a yellow it can stop
-//!   for comfortably, and a walker on a crosswalk waits at the kerb for the walk signal;
+//!   for comfortably, and a walker on a crosswalk waits at the kerb for the walk signal; a
+//!   flagger's stop holds the vehicles it faces short of it as a red does;
 //! - car-following keeps Gipps's safe speed: able to stop, at emergency braking, behind where the
 //!   leader could stop (within its clearance to its partner, for a conflict agent that the crash
 //!   latch may stop dead); a striker keeps out of bystanders' stopping envelopes;
@@ -33,6 +34,7 @@
 
 mod agent;
 mod drive;
+mod flagger;
 mod frame;
 pub mod impact;
 mod junction;
@@ -71,6 +73,20 @@ pub struct Tracks {
     /// follow from the motion after them (`rollout::impact`).
     #[serde(default)]
     pub contacts: Vec<impact::Contact>,
+    /// Each flagger's state per frame (`flag { ... }`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub flags: Vec<FlagTrack>,
+}
+
+/// What one flagger shows over the clip.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FlagTrack {
+    /// Track index (into `Tracks::agents`).
+    pub agent: usize,
+    /// The lanes it faces, as a placement names them (`west.in[1]`).
+    pub faces: Vec<String>,
+    /// Per frame: `go` (true) or `stop`.
+    pub go: Vec<bool>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

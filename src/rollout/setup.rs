@@ -83,6 +83,8 @@ pub(crate) fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Cl
         approach: None,
         bend: None,
         signal: None,
+        flag: None,
+        flaggers: vec![],
         blocker: false,
         room: None,
         pull: 0.0,

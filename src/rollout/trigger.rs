@@ -61,7 +61,7 @@ impl Sim<'_, '_> {
 }
 
 /// Whether agent `i`'s trigger `tr` holds on `states` at `t`.
-fn holds(actors: &[Actor], states: &[crate::rollout::agent::State], i: usize, tr: Trigger, t: f64) -> bool {
+pub(crate) fn holds(actors: &[Actor], states: &[crate::rollout::agent::State], i: usize, tr: Trigger, t: f64) -> bool {
     let who = tr.who();
     let (a, me, b, o) = (&actors[i], &states[i], &actors[who], &states[who]);
     let d = me.pos - o.pos;

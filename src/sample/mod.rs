@@ -23,6 +23,8 @@ pub struct Concrete {
     pub conflicts: Vec<Conflict>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub near_misses: Vec<NearMiss>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub flaggers: Vec<Flagger>,
     pub traffic: Option<Traffic>,
     /// The kinds the scenario names, with their size priors: rows draw each element's kind and
     /// box from them when the place pass lays the row out.
@@ -161,6 +163,7 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
         rows,
         conflicts: s.conflicts.clone(),
         near_misses: s.near_misses.clone(),
+        flaggers: s.flaggers.clone(),
         traffic: s.traffic,
         kinds: s.kinds.clone(),
     }

@@ -208,6 +208,8 @@ pub enum AgentStmt {
         value: Value,
         span: Span,
     },
+    /// `flag { ... }`: a flagger's stop/go states.
+    Flag(Flag),
 }
 
 impl AgentStmt {
@@ -220,6 +222,7 @@ impl AgentStmt {
             AgentStmt::Posture { span, .. } => *span,
             AgentStmt::Behaviour(b) => b.span,
             AgentStmt::Mass { span, .. } => *span,
+            AgentStmt::Flag(f) => f.span,
         }
     }
 }
@@ -424,6 +427,34 @@ pub struct Trigger {
     pub value: Option<Value>,
     pub landmark: Option<Ident>,
     pub span: Span,
+}
+
+/// `flag { STATE [after T | when ... | T]; ... }`: the state words are validated by the checker.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Flag {
+    pub steps: Vec<FlagStep>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FlagStep {
+    /// `stop` or `go`, as written.
+    pub state: Ident,
+    pub when: FlagWhen,
+    pub span: Span,
+}
+
+/// When a flag step begins.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum FlagWhen {
+    /// The first step, shown from the start.
+    Start,
+    /// `after T`: at a clip time.
+    After(Value),
+    /// `when NAME CONDITION`.
+    When(Trigger),
+    /// `STATE T`: shown for `T` in a repeating cycle.
+    For(Value),
 }
 
 /// `behaviour { NAME VALUE|WORD ... }`: settings are validated by the checker.

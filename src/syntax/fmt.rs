@@ -207,6 +207,21 @@ fn agent_stmt(s: &AgentStmt) -> Doc {
             fit: false,
         },
         AgentStmt::Posture { word, span } => Doc::Line { span: *span, text: format!("posture {}", word.name) },
+        AgentStmt::Flag(f) => Doc::Block {
+            header: "flag".into(),
+            span: f.span,
+            items: f.steps.iter().map(|x| Doc::Line { span: x.span, text: flag_step(x) }).collect(),
+            fit: true,
+        },
+    }
+}
+
+fn flag_step(x: &FlagStep) -> String {
+    match &x.when {
+        FlagWhen::Start => x.state.name.clone(),
+        FlagWhen::After(v) => format!("{} after {}", x.state.name, val(v)),
+        FlagWhen::For(v) => format!("{} {}", x.state.name, val(v)),
+        FlagWhen::When(w) => format!("{} {}", x.state.name, trigger(w)),
     }
 }
 

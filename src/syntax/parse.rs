@@ -309,6 +309,10 @@ impl Builder {
                 let sets = inner(p).into_iter().skip(1).map(|q| self.behaviour_set(q)).collect();
                 AgentStmt::Behaviour(Behaviour { sets, span })
             }
+            Rule::flag => {
+                let steps = inner(p).into_iter().skip(1).map(|q| self.flag_step(q)).collect();
+                AgentStmt::Flag(Flag { steps, span })
+            }
             r => unreachable!("grammar: agent statement {r:?}"),
         }
     }
@@ -374,6 +378,21 @@ impl Builder {
         let cond = self.ident(it.next().expect("grammar: trigger has a condition"));
         let landmark = it.next().map(|l| self.ident(l));
         Trigger { who, cond, under, value, landmark, span }
+    }
+
+    fn flag_step(&self, p: P<'_>) -> FlagStep {
+        let span = self.span(&p);
+        let parts = inner(p);
+        let state = self.ident(parts[0].clone());
+        let when = match parts.get(1) {
+            None => FlagWhen::Start,
+            Some(q) if q.as_rule() == Rule::trigger => FlagWhen::When(self.trigger(q.clone())),
+            Some(q) if q.as_rule() == Rule::kw_after => {
+                FlagWhen::After(self.value(parts.last().expect("grammar: `after` takes a time").clone()))
+            }
+            Some(q) => FlagWhen::For(self.value(q.clone())),
+        };
+        FlagStep { state, when, span }
     }
 
     fn behaviour_set(&self, p: P<'_>) -> BehaviourSet {

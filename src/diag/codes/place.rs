@@ -151,4 +151,75 @@ that `signals on` puts up; without it they time nothing.\n
     road four_way { signals on; signal_green 30 s }   // fine
     road four_way { signal_green 30 s }               // error",
     },
+    // ---- greens per approach (E0233-E0236) ----
+    Code {
+        code: "E0233",
+        title: "a per-approach green that cannot run",
+        explanation: "`signal_north A..B s` (and `signal_east`, `signal_south`, `signal_west`) gives that\n\
+approach its green from A to B seconds into the cycle, then `signal_yellow`, then red. A green is\n\
+a range that starts before it ends, within 0..600 s, on an approach the template has (a\n\
+`t_junction` has no north), and the cycle (`signal_cycle`) must hold every green and its yellow.\n
+    road four_way { signals on; signal_cycle 40 s; signal_north 0..15 s; signal_south 0..15 s; signal_east 20..35 s; signal_west 20..35 s }   // fine
+    road four_way { signals on; signal_north 15 s; ... }                                                                                    // error: one time",
+    },
+    Code {
+        code: "E0234",
+        title: "an approach without a green",
+        explanation: "Once one approach states its own green, every approach of the junction does: one left\n\
+out would stay red for good.\n
+    road t_junction { signals on; signal_west 0..15 s; signal_east 0..15 s; signal_south 20..30 s }   // fine
+    road t_junction { signals on; signal_west 0..15 s; signal_east 0..15 s }                          // error: south",
+    },
+    Code {
+        code: "E0235",
+        title: "two-phase timing mixed with greens per approach",
+        explanation: "`signal_green` and `signal_all_red` time the two-phase cycle; greens stated per approach\n\
+replace it, so the two are not given together. `signal_cycle` is the length of a cycle of\n\
+per-approach greens and means nothing without them.\n
+    road four_way { signals on; signal_green 20 s }                            // fine
+    road four_way { signals on; signal_green 20 s; signal_north 0..15 s; ... } // error",
+    },
+    Code {
+        code: "E0236",
+        title: "crossing approaches green at once",
+        explanation: "Approaches whose traffic crosses (north or south against east or west) may not show green\n\
+or yellow at the same time: the greens would send both into the junction together. Opposite\n\
+approaches may overlap as they like, which is how a leading or lagging phase (a protected\n\
+left) is written.\n
+    road four_way { signals on; signal_south 0..12 s; signal_north 4..12 s; signal_east 16..26 s; signal_west 16..26 s }   // fine: south leads
+    road four_way { signals on; signal_south 0..12 s; signal_north 0..12 s; signal_east 10..26 s; signal_west 16..26 s }   // error",
+    },
+    // ---- flaggers (E0270-E0272) ----
+    Code {
+        code: "E0270",
+        title: "a flagger that is not a standing person",
+        explanation: "`flag { ... }` makes an agent a flagger: a person (a kind of class pedestrian) who\n\
+stands where it is placed and directs traffic. A vehicle, an object or an animal cannot; nor can\n\
+a person with a goal, a speed or a replayed track.\n
+    agent f: adult { at west.in[1], 20 m before center offset 3 m right heading 180 deg; flag { stop } }   // fine
+    agent f: sedan { at west.in[1], 20 m before center; flag { stop } }                                   // error",
+    },
+    Code {
+        code: "E0271",
+        title: "a flag program that cannot run",
+        explanation: "A `flag` block lists the states a flagger shows, `stop` or `go`, in order. Either the\n\
+first is shown from the start and each later one begins `after` a clip time (in order, within\n\
+the clip) or `when` a trigger condition holds; or every state has a length and they repeat as a\n\
+cycle. An empty block, more than 32 states, another word, a first state with a time, or a mix\n\
+of the two forms is refused.\n
+    flag { stop; go after 8 s; stop when car within 20 m }   // fine
+    flag { stop 20 s; go 15 s }                              // fine: a cycle
+    flag { stop; go 15 s }                                   // error: `after` or `when` after the first",
+    },
+    Code {
+        code: "E0272",
+        title: "a flagger facing no approach",
+        explanation: "A flagger directs the traffic that comes toward its face: the lanes it stands on or\n\
+beside (within a metre of their paving, shoulder included) whose traffic heads within 60\n\
+degrees of straight at it. `heading` is its world yaw: on a `straight` road, one facing\n\
+eastbound traffic on `west.in` has `heading 180 deg`. A flagger off the road, or facing the way\n\
+the traffic goes, directs nobody.\n
+    agent f: adult { at west.in[1], 20 m before center offset 3 m right heading 180 deg; flag { stop } }   // fine
+    agent f: adult { at west.in[1], 20 m before center offset 3 m right heading 0 deg; flag { stop } }     // error",
+    },
 ];

@@ -3,7 +3,7 @@
 //! may go while its signal holds it. Scenes: `tests/signal-cases/`.
 
 use crate::road::Map;
-use crate::road::signals::{Light, light, phase_of};
+use crate::road::signals::{Light, arm_light, walk};
 use crate::rollout::agent::{Actor, Drive, Face};
 use crate::rollout::frame::Sim;
 use crate::rollout::junction::right_of_way::YIELD_BRAKE;
@@ -20,17 +20,17 @@ pub(crate) fn assign_signals(map: &Map, actors: &mut [Actor]) {
         if !matches!(a.drive, Drive::Mover) {
             continue;
         }
-        let phase = if a.vehicle {
+        let face = if a.vehicle {
             let lane = a.junction.map(|j| map.connectors[j.conn].from);
-            plan.heads.iter().find(|h| Some(h.lane) == lane).map(|h| h.phase)
+            plan.heads.iter().find(|h| Some(h.lane) == lane).map(|h| (h.id.arm, false))
         } else if let Some(kerb) = a.kerb {
             let (p, _) = a.path.point(kerb, 0.0);
             let on = |c: &&crate::road::map::Crosswalk| c.line.project(p).1.abs() < ON_CROSSWALK_M;
-            map.crosswalks.iter().find(on).map(|c| 1 - phase_of(c.arm))
+            map.crosswalks.iter().find(on).map(|c| (c.arm, true))
         } else {
             None
         };
-        a.signal = phase.map(|phase| Face { cycle: plan.cycle, phase });
+        a.signal = face.map(|(arm, walk)| Face { cycle: plan.cycle, arm, walk });
     }
 }
 
@@ -46,7 +46,11 @@ impl Sim<'_, '_> {
         if !a.behaviour.signal || st.frozen || self.striking(i, t) {
             return None;
         }
-        let shown = light(&face.cycle, face.phase, t);
+        let shown = match face.walk {
+            true if walk(&face.cycle, face.arm, t) => Light::Green,
+            true => Light::Red,
+            false => arm_light(&face.cycle, face.arm, t),
+        };
         if shown == Light::Green {
             return None;
         }

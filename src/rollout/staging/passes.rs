@@ -66,6 +66,7 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
     assign_yields(map, &mut actors, &confs);
     assign_crossings(map, &mut actors, &confs);
     crate::rollout::junction::signals::assign_signals(map, &mut actors);
+    crate::rollout::flagger::assign_flaggers(&c.flaggers, map, &mut actors, &track_of, &mut errs);
     order_crossings(&mut actors, &mut errs);
     if !errs.is_empty() {
         return Err(errs);
