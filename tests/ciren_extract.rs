@@ -442,17 +442,18 @@ fn real_llamacpp_server_without_a_projector_refuses_the_sketch_clearly() {
 
 #[test]
 fn a_reply_with_later_contacts_merges_every_block_and_checks() {
-    // v2 strikes v1's right side at the junction, then v3, following v1, runs into its back.
+    // v2 strikes v1's right side at the junction, then v3, following v1, runs into it: v1 has
+    // been turned by the first impact, so v3's front meets its rear right corner.
     let scene = SCENE.replace(
         "    conflict {",
         "    agent v3: sedan { at west.in[1], 45 m before stop_line; speed 40 km/h; goal { speed 40 km/h } }\n    conflict {",
     );
     let reply = r#"{"at_fault": "v2", "struck": "v1", "impact": "angle", "point": "right", "at": 3,
-        "later": [{"at_fault": "v3", "struck": "v1", "impact": "rear_end", "point": "rear", "at": 5}]}"#;
+        "later": [{"at_fault": "v3", "struck": "v1", "impact": "rear_end", "point": "rear_right", "at": 5}]}"#;
     let fake = serve(vec![chat(&scene), chat(reply)]);
     let (out, r) = run(&case_100237(), &opts(&fake.url, Server::Vllm), &tmp("later"));
     let Outcome::Accepted { text } = out else { panic!("{out:?}") };
-    let later = "conflict { at_fault v3; struck v1; impact rear_end; point rear; at 5 s }";
+    let later = "conflict { at_fault v3; struck v1; impact rear_end; point rear_right; at 5 s }";
     let scene = r.scene.clone().unwrap();
     let close = scene.rfind('}').unwrap();
     let line = scene[..close].rfind('\n').unwrap() + 1;
