@@ -143,7 +143,7 @@ fn fire_beam(
     let o = rig.sensor_origin(sensor);
     let el = sensor.elevations_deg[beam].to_radians();
     let (ce, se) = (el.cos(), el.sin());
-    let mut out = Vec::new();
+    let mut out = Vec::with_capacity(trig.len());
     for &(ca, sa) in trig {
         let d = ray_dir(&rot, (ce, se), (ca, sa));
         // Three uniforms per ray, hit or not; the two normals (Box-Muller) only for returns.
