@@ -111,22 +111,6 @@ pub fn ray_dir(rot: &[[f64; 3]; 3], (ce, se): (f64, f64), (ca, sa): (f64, f64)) 
     ]
 }
 
-/// Call `f(origin, direction)` for every ray of `rig` (sensor, beam, azimuth order), the rays
-/// `scan` fires.
-pub fn for_each_ray(rig: &Rig, mut f: impl FnMut([f64; 3], [f64; 3])) {
-    for sensor in &rig.sensors {
-        let (rot, o) = (sensor.rotation(), rig.sensor_origin(sensor));
-        let trig: Vec<(f64, f64)> =
-            sensor.azimuths(rig.horizontal_resolution_deg).map(|az| (az.cos(), az.sin())).collect();
-        for el in &sensor.elevations_deg {
-            let e = (el.to_radians().cos(), el.to_radians().sin());
-            for &a in &trig {
-                f(o, ray_dir(&rot, e, a));
-            }
-        }
-    }
-}
-
 #[allow(clippy::too_many_arguments)]
 fn fire_beam(
     labels: &[u8],
