@@ -115,3 +115,67 @@ fn flow_without_occupancy_is_e0430() {
     assert!(!out.join("rear_end_queue").exists(), "nothing written");
     let _ = std::fs::remove_dir_all(&out);
 }
+
+#[test]
+fn a_replayed_track_moves_one_sidedly_at_its_ends_in_boxes_and_flow_alike() {
+    let scn = root().join("tests/fixtures/flow/replayed_entry_exit.scn");
+    let out = tmp("ends");
+    let opts = Options { stage: Stage::Occ, frames: Some("10,20,30".into()), flow: true, ..Options::default() };
+    let r = batch::run(std::slice::from_ref(&scn), &out, &opts, true);
+    let why: Vec<String> = r.failures.iter().flat_map(|f| f.diags.iter().map(|d| format!("{d:?}"))).collect();
+    assert!(r.failures.is_empty(), "{why:?}");
+    let dir = out.join("replayed_entry_exit/ego");
+    let mut sources = rocc::source::SourceMap::default();
+    let front =
+        rocc::compile::front(rocc::check::check_path(&scn, &mut sources).expect("checks"), None).expect("front");
+    let t = &front.tracks;
+    let van = t.agents.iter().position(|a| a.name == "van").expect("van");
+    assert!(!front.present(van, 9) && front.present(van, 10) && front.present(van, 30) && !front.present(van, 31));
+    let pos = |f: usize| (t.poses[van][f].x, t.poses[van][f].y);
+    let text = std::fs::read_to_string(dir.join("boxes.json")).expect("boxes.json");
+    let frames: Vec<serde_json::Value> = serde_json::from_str(&text).expect("json");
+    let num = |v: &serde_json::Value| v.as_f64().expect("number");
+    for fr in &frames {
+        let f = fr["frame"].as_u64().expect("frame") as usize;
+        // Forward at the first frame, backward at the last, central between.
+        let (a, z) = match f {
+            10 => (10, 11),
+            30 => (29, 30),
+            _ => (f - 1, f + 1),
+        };
+        let dt = (z - a) as f64 / t.rate;
+        let want = [(pos(z).0 - pos(a).0) / dt, (pos(z).1 - pos(a).1) / dt];
+        assert!(want[0] > 5.0, "frame {f}: the van should be moving, {want:?}");
+        let b = fr["boxes"].as_array().expect("boxes").iter().find(|b| b["agent"] == "van").expect("van in view");
+        let got = [num(&b["velocity_world"][0]), num(&b["velocity_world"][1])];
+        assert!((got[0] - want[0]).abs() < 1e-9 && (got[1] - want[1]).abs() < 1e-9, "frame {f}: {got:?} vs {want:?}");
+        // The flow of the van's voxels is boxes.json's ego-axes velocity, to float32 precision.
+        let ego_axes = [num(&b["velocity"][0]) as f32, num(&b["velocity"][1]) as f32];
+        let flow = read_flow(&dir.join(format!("flow/{f:06}.npz")));
+        let occ = read_npy(&dir.join(format!("occ/{f:06}.npy"))).expect("occ");
+        let boxes = read_boxes_json(&dir.join("boxes.json")).expect("boxes.json");
+        let vb =
+            boxes.iter().find(|x| x.frame == f).and_then(|x| x.boxes.iter().find(|b| b.agent == "van")).expect("van");
+        let mut carried = 0;
+        for i in 0..NX {
+            for j in 0..NY {
+                if !inside(vb, i, j, -0.125) {
+                    continue;
+                }
+                for k in 0..NZ {
+                    if occ.labels[[i, j, k]] != BACKGROUND && occ.labels[[i, j, k]] != FREE {
+                        assert_eq!(
+                            [flow[[i, j, k, 0]], flow[[i, j, k, 1]]],
+                            ego_axes,
+                            "frame {f} voxel ({i}, {j}, {k})"
+                        );
+                        carried += 1;
+                    }
+                }
+            }
+        }
+        assert!(carried > 50, "frame {f}: {carried} van voxels");
+    }
+    assert_eq!(frames.len(), 3);
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -10,7 +10,6 @@
 
 use super::Occupancy;
 use super::layout::{BACKGROUND, NX, NY, NZ, ORIGIN, VOXEL, centre, class_label, flat};
-use crate::place::Pose;
 use crate::view::EgoBox;
 
 /// Components per voxel.
@@ -84,19 +83,6 @@ pub fn flow_into(occ: &Occupancy, boxes: &[EgoBox], velocity: &[[f64; 2]], out: 
             }
         }
     }
-}
-
-/// An agent's velocity over the ground at frame `f` (world axes, m/s): the central difference
-/// of its poses, one-sided at the clip's ends and where it is absent (`present`) next door.
-pub fn ground_velocity(poses: &[Pose], present: impl Fn(usize) -> bool, f: usize, rate: f64) -> [f64; 2] {
-    let ok = |g: usize| g < poses.len() && present(g);
-    let a = if f > 0 && ok(f - 1) { f - 1 } else { f };
-    let z = if ok(f + 1) { f + 1 } else { f };
-    if z == a {
-        return [0.0, 0.0];
-    }
-    let dt = (z - a) as f64 / rate;
-    [(poses[z].x - poses[a].x) / dt, (poses[z].y - poses[a].y) / dt]
 }
 
 /// A world-axes vector in the axes of an ego heading `yaw`.

@@ -6,9 +6,9 @@
 //! is written after, and `manifest.json` last: its presence with matching inputs and files is
 //! what "this clip is complete" means to a resumed run.
 
-use super::world::ClipWorld;
+use super::world::{ClipWorld, ground_velocity};
 use super::{Front, Options, Stage};
-use crate::backend::flow::{Flow, flow_into, ground_velocity, to_ego_axes};
+use crate::backend::flow::{Flow, flow_into, to_ego_axes};
 use crate::backend::{Background, OccInput, Occupancy, occ_frame_path, write_npy};
 use crate::lidar::{bin_frame_path, pcd_frame_path, scan, write_bin, write_pcd};
 use crate::output::{
@@ -316,7 +316,7 @@ pub fn compile_clip(
     let t = &front.tracks;
     let velocity = |f: usize, b: &EgoBox| -> [f64; 2] {
         let i = b.track as usize;
-        let v = ground_velocity(&t.poses[i], |g| front.present(i, g), f, t.rate);
+        let v = ground_velocity(t, &|g| front.present(i, g), i, f);
         to_ego_axes(v, t.poses[ci.ego][f].yaw)
     };
     let render = Render {
@@ -326,7 +326,13 @@ pub fn compile_clip(
         seed: clip_seed(front, ci.ego),
         manifest: want,
         source: &source,
-        world: Some(ClipWorld { scenario: &front.concrete.name, tracks: &front.tracks, map: &front.map, ego: ci.ego }),
+        world: Some(ClipWorld {
+            scenario: &front.concrete.name,
+            tracks: &front.tracks,
+            map: &front.map,
+            ego: ci.ego,
+            present: &|i, f| front.present(i, f),
+        }),
         velocity: Some(&velocity),
     };
     render_clip(&render, opts, dir, on_frame)

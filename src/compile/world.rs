@@ -13,13 +13,15 @@ use crate::rollout::Tracks;
 use crate::view::EgoBox;
 use glam::DVec2;
 
-/// What a clip knows of its world: the scenario's name (instance ids), tracks, map and ego.
+/// What a clip knows of its world: the scenario's name (instance ids), tracks, map and ego, and
+/// whether track `i` is in the scene at frame `f` (`Front::present`).
 #[derive(Clone, Copy)]
 pub struct ClipWorld<'a> {
     pub scenario: &'a str,
     pub tracks: &'a Tracks,
     pub map: &'a Map,
     pub ego: usize,
+    pub present: &'a (dyn Fn(usize, usize) -> bool + Sync),
 }
 
 impl ClipWorld<'_> {
@@ -27,7 +29,7 @@ impl ClipWorld<'_> {
     pub fn frame(&self, f: usize, ego_pose: Pose, boxes: &[EgoBox]) -> FrameWorld {
         let t = self.tracks;
         let a = &t.agents[self.ego];
-        let motion = |i: usize| motion(t, i, f, ego_pose.yaw);
+        let motion = |i: usize| motion(t, &|g| (self.present)(i, g), i, f, ego_pose.yaw);
         let ego = EgoRecord {
             agent: a.name.clone(),
             kind: a.kind.clone(),
@@ -85,32 +87,49 @@ fn flag_shown(t: &Tracks, i: usize, f: usize) -> Option<FlagShown> {
     Some(if *ft.go.get(f)? { FlagShown::Go } else { FlagShown::Stop })
 }
 
-/// The derivative at frame `f` of a quantity sampled at every frame (`n` of them, `dt` apart):
-/// a central difference, one-sided at the clip's ends, zero for a single frame.
-fn diff<T>(g: impl Fn(usize) -> T, f: usize, n: usize, dt: f64) -> T
+/// The frames a derivative at frame `f` differences, of a track sampled at frames `0..n` and in
+/// the scene where `present` says so: its two neighbours, `f` itself on a side where the
+/// neighbour is past the clip or absent (a replayed object entering or leaving), `None` when
+/// both are (a single frame).
+fn window(n: usize, present: &dyn Fn(usize) -> bool, f: usize) -> Option<(usize, usize)> {
+    let ok = |g: usize| g < n && present(g);
+    let lo = if f > 0 && ok(f - 1) { f - 1 } else { f };
+    let hi = if ok(f + 1) { f + 1 } else { f };
+    (hi > lo).then_some((lo, hi))
+}
+
+/// The derivative at frame `f` of a quantity sampled every `dt` over `window`'s frames: a
+/// central difference, one-sided at a track's ends, zero for a single frame.
+fn diff<T>(g: impl Fn(usize) -> T, f: usize, window: &dyn Fn(usize) -> Option<(usize, usize)>, dt: f64) -> T
 where
     T: std::ops::Sub<Output = T> + std::ops::Mul<f64, Output = T> + Default,
 {
-    if n < 2 {
-        return T::default();
-    }
-    let (lo, hi) = (f.saturating_sub(1), (f + 1).min(n - 1));
-    (g(hi) - g(lo)) * (1.0 / ((hi - lo) as f64 * dt))
+    window(f).map_or_else(T::default, |(lo, hi)| (g(hi) - g(lo)) * (1.0 / ((hi - lo) as f64 * dt)))
 }
 
-/// Agent `i`'s motion at frame `f`, world and ego axes (the ego's heading `ego_yaw`).
-fn motion(t: &Tracks, i: usize, f: usize, ego_yaw: f64) -> Motion {
-    let (n, dt) = (t.frames.min(t.poses[i].len()), 1.0 / t.rate);
+/// Agent `i`'s velocity over the ground at frame `f`, world axes (m/s): the one derivation
+/// behind `boxes.json`'s motion and the occupancy flow, so the two agree at a track's ends.
+pub fn ground_velocity(t: &Tracks, present: &dyn Fn(usize) -> bool, i: usize, f: usize) -> [f64; 2] {
+    let v = velocity(t, present, i, f);
+    [v.x, v.y]
+}
+
+fn velocity(t: &Tracks, present: &dyn Fn(usize) -> bool, i: usize, f: usize) -> DVec2 {
+    let n = t.frames.min(t.poses[i].len());
     let pos = |k: usize| DVec2::new(t.poses[i][k].x, t.poses[i][k].y);
-    let vel = |k: usize| diff(pos, k, n, dt);
+    diff(pos, f, &|g| window(n, present, g), 1.0 / t.rate)
+}
+
+/// Agent `i`'s motion at frame `f`, world and ego axes (the ego's heading `ego_yaw`), where it
+/// is in the scene at the frames `present` says.
+fn motion(t: &Tracks, present: &dyn Fn(usize) -> bool, i: usize, f: usize, ego_yaw: f64) -> Motion {
+    let (n, dt) = (t.frames.min(t.poses[i].len()), 1.0 / t.rate);
+    let window = |g: usize| window(n, present, g);
+    let vel = |k: usize| velocity(t, present, i, k);
     let v = vel(f);
-    let a = diff(vel, f, n, dt);
-    let yaw_rate = if n < 2 {
-        0.0
-    } else {
-        let (lo, hi) = (f.saturating_sub(1), (f + 1).min(n - 1));
-        wrap_angle(t.poses[i][hi].yaw - t.poses[i][lo].yaw) / ((hi - lo) as f64 * dt)
-    };
+    let a = diff(vel, f, &window, dt);
+    let yaw_rate =
+        window(f).map_or(0.0, |(lo, hi)| wrap_angle(t.poses[i][hi].yaw - t.poses[i][lo].yaw) / ((hi - lo) as f64 * dt));
     let to_ego = |w: DVec2| DVec2::from_angle(-ego_yaw).rotate(w);
     let arr = |w: DVec2| [w.x, w.y];
     Motion {

@@ -405,6 +405,7 @@ pub fn edit_clip(dir: &Path, edits: &[Edit], o: &ClipEdit) -> Result<Manifest, V
             tracks: &front.tracks,
             map: &front.map,
             ego,
+            present: &|i, f| front.present(i, f),
         }),
         velocity: None,
     };

@@ -30,7 +30,7 @@ pub struct Hit {
 }
 
 /// Where a ray enters and leaves the grid's box, if it meets it at all before `t_max`.
-fn clip_to_grid(o: [f64; 3], d: [f64; 3], t_max: f64) -> Option<(f64, f64)> {
+fn clip_to_grid(o: [f64; 3], d: [f64; 3], inv: [f64; 3], t_max: f64) -> Option<(f64, f64)> {
     let (mut t0, mut t1) = (0.0f64, t_max);
     for a in 0..3 {
         if d[a] == 0.0 {
@@ -38,7 +38,7 @@ fn clip_to_grid(o: [f64; 3], d: [f64; 3], t_max: f64) -> Option<(f64, f64)> {
                 return None;
             }
         } else {
-            let (ta, tb) = ((ORIGIN[a] - o[a]) / d[a], (UPPER[a] - o[a]) / d[a]);
+            let (ta, tb) = ((ORIGIN[a] - o[a]) * inv[a], (UPPER[a] - o[a]) * inv[a]);
             t0 = t0.max(ta.min(tb));
             t1 = t1.min(ta.max(tb));
         }
@@ -54,20 +54,29 @@ fn floor_i64(x: f64) -> i64 {
     if (t as f64) > x { t.saturating_sub(1) } else { t }
 }
 
+/// Per axis 1 / d: every boundary distance is a product with it (one division per axis and
+/// ray, not one per boundary).
+#[inline]
+fn inverse(d: [f64; 3]) -> [f64; 3] {
+    [1.0 / d[0], 1.0 / d[1], 1.0 / d[2]]
+}
+
 /// Walk the ray through `labels` (standard-layout (400, 400, 32)) up to distance `t_max`.
 pub fn cast(labels: &[u8], o: [f64; 3], d: [f64; 3], t_max: f64) -> Option<Hit> {
-    let (t_in, t_out) = clip_to_grid(o, d, t_max)?;
+    let inv = inverse(d);
+    let (t_in, t_out) = clip_to_grid(o, d, inv, t_max)?;
     let axis = if t_in > 0.0 { entry_axis(o, d, t_in) } else { 3 };
-    walk(labels, o, d, t_in, t_out, axis, [0, 0, 0], [NX as i64, NY as i64, NZ as i64], |_| {})
+    walk(labels, o, d, inv, t_in, t_out, axis, [0, 0, 0], [NX as i64, NY as i64, NZ as i64], |_| {})
 }
 
 /// `cast`, calling `seen` with the flat index (`layout::flat`) of every free voxel the ray
 /// passes through before its hit (or before `t_max` or the grid's edge), in order: the free
 /// space a sensor observes along the ray (`crate::visibility`).
 pub fn traverse(labels: &[u8], o: [f64; 3], d: [f64; 3], t_max: f64, seen: impl FnMut(usize)) -> Option<Hit> {
-    let (t_in, t_out) = clip_to_grid(o, d, t_max)?;
+    let inv = inverse(d);
+    let (t_in, t_out) = clip_to_grid(o, d, inv, t_max)?;
     let axis = if t_in > 0.0 { entry_axis(o, d, t_in) } else { 3 };
-    walk(labels, o, d, t_in, t_out, axis, [0, 0, 0], [NX as i64, NY as i64, NZ as i64], seen)
+    walk(labels, o, d, inv, t_in, t_out, axis, [0, 0, 0], [NX as i64, NY as i64, NZ as i64], seen)
 }
 
 /// Columns per block side in `Skip`.
@@ -145,7 +154,8 @@ impl Skip {
 
     /// Same result as `cast`, skipping blocks the ray passes above.
     pub fn cast(&self, labels: &[u8], o: [f64; 3], d: [f64; 3], t_max: f64) -> Option<Hit> {
-        let (t_in, t_out) = clip_to_grid(o, d, t_max)?;
+        let inv = inverse(d);
+        let (t_in, t_out) = clip_to_grid(o, d, inv, t_max)?;
         // Level or rising rays above every occupied voxel (most of the upper beams): nothing to hit.
         if d[2] >= 0.0 && o[2] + t_in * d[2] >= self.max_top {
             return None;
@@ -161,12 +171,12 @@ impl Skip {
             idx[a] = floor_i64((p - ORIGIN[a]) / bs).clamp(0, nb[a] - 1);
             if d[a] > 0.0 {
                 step[a] = 1;
-                t_next[a] = (ORIGIN[a] + (idx[a] + 1) as f64 * bs - o[a]) / d[a];
-                t_delta[a] = bs / d[a];
+                t_next[a] = (ORIGIN[a] + (idx[a] + 1) as f64 * bs - o[a]) * inv[a];
+                t_delta[a] = bs * inv[a];
             } else if d[a] < 0.0 {
                 step[a] = -1;
-                t_next[a] = (ORIGIN[a] + idx[a] as f64 * bs - o[a]) / d[a];
-                t_delta[a] = -bs / d[a];
+                t_next[a] = (ORIGIN[a] + idx[a] as f64 * bs - o[a]) * inv[a];
+                t_delta[a] = -bs * inv[a];
             }
         }
         let mut t = t_in;
@@ -187,14 +197,14 @@ impl Skip {
             if z_low < top && self.ground_only[block] && d[2] < 0.0 && o[2] + t * d[2] >= GROUND_Z {
                 // Above the ground on entry and descending: the only thing to hit is the ground's
                 // top face, at the same distance the voxel walk computes for that boundary.
-                let tg = (GROUND_Z - o[2]) / d[2];
+                let tg = (GROUND_Z - o[2]) * inv[2];
                 if tg <= t_end {
-                    return ground_hit(labels, o, d, tg, t_out);
+                    return ground_hit(labels, o, d, inv, tg, t_out);
                 }
             } else if z_low < top {
                 let lo = [idx[0] * B as i64, idx[1] * B as i64, 0];
                 let hi = [lo[0] + B as i64, lo[1] + B as i64, NZ as i64];
-                if let Some(h) = walk(labels, o, d, t, t_end, axis, lo, hi, |_| {}) {
+                if let Some(h) = walk(labels, o, d, inv, t, t_end, axis, lo, hi, |_| {}) {
                     return Some(h);
                 }
             }
@@ -216,18 +226,18 @@ impl Skip {
 const GROUND_Z: f64 = ORIGIN[2] + VOXEL * K_GROUND_TOP as f64;
 
 /// The hit on the ground voxel a descending ray enters through its top face at distance `tg`.
-fn ground_hit(labels: &[u8], o: [f64; 3], d: [f64; 3], tg: f64, t_out: f64) -> Option<Hit> {
+fn ground_hit(labels: &[u8], o: [f64; 3], d: [f64; 3], inv: [f64; 3], tg: f64, t_out: f64) -> Option<Hit> {
     let n = [NX, NY];
     let mut voxel = [0usize, 0, K_GROUND];
-    let mut t_exit = (GROUND_Z - VOXEL - o[2]) / d[2];
+    let mut t_exit = (GROUND_Z - VOXEL - o[2]) * inv[2];
     for a in 0..2 {
         let p = o[a] + tg * d[a];
         let i = floor_i64((p - ORIGIN[a]) / VOXEL).clamp(0, n[a] as i64 - 1) as usize;
         voxel[a] = i;
         if d[a] > 0.0 {
-            t_exit = t_exit.min((ORIGIN[a] + (i + 1) as f64 * VOXEL - o[a]) / d[a]);
+            t_exit = t_exit.min((ORIGIN[a] + (i + 1) as f64 * VOXEL - o[a]) * inv[a]);
         } else if d[a] < 0.0 {
-            t_exit = t_exit.min((ORIGIN[a] + i as f64 * VOXEL - o[a]) / d[a]);
+            t_exit = t_exit.min((ORIGIN[a] + i as f64 * VOXEL - o[a]) * inv[a]);
         }
     }
     let label = labels[flat(voxel[0], voxel[1], voxel[2])];
@@ -242,6 +252,7 @@ fn walk(
     labels: &[u8],
     o: [f64; 3],
     d: [f64; 3],
+    inv: [f64; 3],
     t_in: f64,
     t_out: f64,
     axis: usize,
@@ -260,12 +271,12 @@ fn walk(
         idx[a] = floor_i64((p - ORIGIN[a]) / VOXEL).clamp(lo[a], hi[a] - 1);
         if d[a] > 0.0 {
             step[a] = 1;
-            t_next[a] = (ORIGIN[a] + (idx[a] + 1) as f64 * VOXEL - o[a]) / d[a];
-            t_delta[a] = VOXEL / d[a];
+            t_next[a] = (ORIGIN[a] + (idx[a] + 1) as f64 * VOXEL - o[a]) * inv[a];
+            t_delta[a] = VOXEL * inv[a];
         } else if d[a] < 0.0 {
             step[a] = -1;
-            t_next[a] = (ORIGIN[a] + idx[a] as f64 * VOXEL - o[a]) / d[a];
-            t_delta[a] = -VOXEL / d[a];
+            t_next[a] = (ORIGIN[a] + idx[a] as f64 * VOXEL - o[a]) * inv[a];
+            t_delta[a] = -VOXEL * inv[a];
         }
     }
     // The same additions and comparisons as one loop over [f64; 3] would make, on scalars the
