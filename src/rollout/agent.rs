@@ -102,9 +102,9 @@ pub(crate) struct Actor {
     /// The traffic signal it answers to (`assign_signals`).
     pub signal: Option<Face>,
     /// A flagger's stop/go program (`rollout::flagger`).
-    pub flag: Option<Box<crate::rollout::flagger::FlagRun>>,
+    pub flag: Option<Box<FlagRun>>,
     /// The flaggers ahead that this vehicle answers to (`assign_flaggers`).
-    pub flaggers: Vec<crate::rollout::flagger::Facing>,
+    pub flaggers: Vec<Facing>,
     /// Stands where it is for good (an object, a static kind, a vehicle with neither speed nor
     /// a goal that moves it): vehicles pass it where there is room (`Sim::avoid`).
     pub blocker: bool,
@@ -323,4 +323,24 @@ pub(crate) struct Face {
     pub cycle: crate::check::scenario::Signals,
     pub arm: crate::check::scenario::Arm,
     pub walk: bool,
+}
+
+// ---- flaggers: plain data here, run by `rollout::flagger` ----
+
+/// A flagger's program as the rollout runs it: its steps (triggers on track indices).
+#[derive(Clone, Debug)]
+pub(crate) struct FlagRun {
+    pub steps: Vec<crate::check::scenario::FlagStep>,
+    pub cycle: bool,
+    /// A cycle's length, s.
+    pub period: f64,
+    /// The lanes it faces, as a placement names them (`west.in[1]`).
+    pub faces: Vec<String>,
+}
+
+/// A flagger a vehicle answers to: its track index and its station on the vehicle's route.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Facing {
+    pub flagger: usize,
+    pub at: f64,
 }

@@ -9,6 +9,7 @@ use crate::diag::Diagnostic;
 use crate::road::Map;
 use crate::rollout::FlagTrack;
 use crate::rollout::agent::{Actor, Drive};
+use crate::rollout::agent::{Facing, FlagRun};
 use crate::rollout::frame::Sim;
 use crate::rollout::junction::right_of_way::YIELD_BRAKE;
 use crate::rollout::kinematics::can_stop;
@@ -21,24 +22,6 @@ pub(crate) const STANDOFF_M: f64 = 2.0;
 const BESIDE_M: f64 = 1.0;
 /// A flagger faces traffic whose heading is within 60 degrees of straight at it.
 const FACING_COS: f64 = -0.5;
-
-/// A flagger's program as the rollout runs it: its steps (triggers on track indices).
-#[derive(Clone, Debug)]
-pub(crate) struct FlagRun {
-    pub steps: Vec<FlagStep>,
-    pub cycle: bool,
-    /// A cycle's length, s.
-    pub period: f64,
-    /// The lanes it faces, as a placement names them (`west.in[1]`).
-    pub faces: Vec<String>,
-}
-
-/// A flagger a vehicle answers to: its track index and its station on the vehicle's route.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Facing {
-    pub flagger: usize,
-    pub at: f64,
-}
 
 impl FlagRun {
     /// Whether it shows go at `t`, at step `step` of a program that is not a cycle.
