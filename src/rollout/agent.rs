@@ -344,3 +344,12 @@ pub(crate) struct Facing {
     pub flagger: usize,
     pub at: f64,
 }
+
+/// An empty record per flagger of `actors` (`Tracks::flags`).
+pub(crate) fn flag_tracks(actors: &[Actor], frames: usize) -> Vec<crate::rollout::FlagTrack> {
+    let of = |(i, a): (usize, &Actor)| {
+        let run = a.flag.as_deref()?;
+        Some(crate::rollout::FlagTrack { agent: i, faces: run.faces.clone(), go: Vec::with_capacity(frames) })
+    };
+    actors.iter().enumerate().filter_map(of).collect()
+}

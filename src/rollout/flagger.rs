@@ -7,7 +7,6 @@
 use crate::check::scenario::{FlagStep, Flagger};
 use crate::diag::Diagnostic;
 use crate::road::Map;
-use crate::rollout::FlagTrack;
 use crate::rollout::agent::{Actor, Drive};
 use crate::rollout::agent::{Facing, FlagRun};
 use crate::rollout::frame::Sim;
@@ -154,13 +153,4 @@ impl Sim<'_, '_> {
             ft.go.push(go);
         }
     }
-}
-
-/// An empty record per flagger of `actors` (`Tracks::flags`).
-pub(crate) fn flag_tracks(actors: &[Actor], frames: usize) -> Vec<FlagTrack> {
-    let of = |(i, a): (usize, &Actor)| {
-        let run = a.flag.as_deref()?;
-        Some(FlagTrack { agent: i, faces: run.faces.clone(), go: Vec::with_capacity(frames) })
-    };
-    actors.iter().enumerate().filter_map(of).collect()
 }

@@ -163,7 +163,7 @@ pub(crate) fn empty_tracks(actors: &[Actor], rate: f64, frames: usize) -> Tracks
         speeds: actors.iter().map(|_| Vec::with_capacity(frames)).collect(),
         impacts: vec![],
         contacts: vec![],
-        flags: crate::rollout::flagger::flag_tracks(actors, frames),
+        flags: crate::rollout::agent::flag_tracks(actors, frames),
     }
 }
 
@@ -215,7 +215,7 @@ impl<'a, 'b> Sim<'a, 'b> {
                 near: Vec::with_capacity(actors.len()),
                 fired: Vec::with_capacity(actors.len()),
                 blockers: (0..actors.len()).filter(|&i| actors[i].blocker).collect(),
-                slow: crate::rollout::drive::overtake::slow_movers(actors),
+                slow: crate::rollout::drive::slow::slow_movers(actors),
                 sirens: (0..actors.len())
                     .filter(|&i| actors[i].emergency && matches!(actors[i].drive, Drive::Mover))
                     .collect(),

@@ -12,6 +12,7 @@ pub(crate) mod pair;
 pub(crate) mod reverse;
 pub(crate) mod settle;
 pub(crate) mod siren;
+pub(crate) mod slow;
 
 use crate::geom::{Obb, wrap_angle};
 use crate::rollout::agent::{Lat, State, StopGoal};

@@ -6,21 +6,14 @@
 //! Regression scenes: tests/rollout-cases/car-passes-a-slow-cyclist.scn,
 //! tests/rollout-cases/car-behind-a-slow-cyclist-waits-for-an-oncoming-car.scn.
 
-use crate::road::Map;
-use crate::rollout::agent::{Actor, Blocking, Drive, Lat, StopGoal};
+use crate::rollout::agent::Blocking;
 use crate::rollout::frame::Sim;
 use crate::rollout::path::Foot;
-use crate::rollout::room::room_at;
-use glam::DVec2;
 
-/// Side clearance kept while passing a moving road user (m): a cyclist sways.
-pub(crate) const MOVER_CLEARANCE: f64 = 1.2;
-/// A road user is slow for one whose goal speed is at least 1 / `SLOW_SHARE` times its speed and
-/// `SLOW_DIFF` m/s more.
-const SLOW_SHARE: f64 = 0.5;
+use super::slow::{MIN_PACE, SLOW_SHARE};
+
+/// Slow also means at least this much slower than the passer's goal speed, m/s.
 const SLOW_DIFF: f64 = 3.0;
-/// Slower than this (m/s) it is not moving at its own pace but stopping or queued.
-const MIN_PACE: f64 = 1.0;
 /// Time ahead of it, at its speed, at which a pass turns back in, s.
 const RETURN_GAP_S: f64 = 1.0;
 /// Below this share of its own goal speed it is held up, not slow by choice.
@@ -28,38 +21,8 @@ const PACE_SHARE: f64 = 0.7;
 /// Straight road, short of any junction, that a pass needs beyond the slow mover's front, m.
 const CLEAR_RUN_M: f64 = 50.0;
 
-/// Whether `b` may be passed as a slow mover where the fastest vehicle's goal speed is
-/// `fastest`: a vehicle or bicycle that drives on in its lane at a goal speed of its own (no
-/// stop goal, no turn, no lateral move, no staged crash), at most half that speed.
-fn slow(b: &Actor, fastest: f64) -> bool {
-    b.vehicle
-        && matches!(b.drive, Drive::Mover)
-        && !b.blocker
-        && !b.emergency
-        && !b.in_conflict
-        && matches!((&b.lateral, &b.stop), (Lat::Hold, StopGoal::None))
-        && b.turn_goal.is_none()
-        && b.v_goal >= MIN_PACE
-        && b.v_goal <= SLOW_SHARE * fastest
-}
-
-fn fastest(actors: &[Actor]) -> f64 {
-    actors.iter().filter(|a| a.vehicle).map(|a| a.v_goal).fold(0.0, f64::max)
-}
-
-/// The paving round every slow mover where it starts (`Actor::room`), at set-up.
-pub(crate) fn measure_rooms(map: &Map, actors: &mut [Actor]) {
-    let top = fastest(actors);
-    for b in actors.iter_mut().filter(|b| b.room.is_none() && slow(b, top)) {
-        b.room = room_at(map, DVec2::new(b.init.x, b.init.y));
-    }
-}
-
-/// Agents that may be passed as slow movers (`slow`), from a lane whose paving was measured.
-pub(crate) fn slow_movers(actors: &[Actor]) -> Vec<usize> {
-    let top = fastest(actors);
-    (0..actors.len()).filter(|&j| actors[j].room.is_some() && slow(&actors[j], top)).collect()
-}
+/// Side clearance kept while passing a moving road user (m): a cyclist sways.
+pub(crate) const MOVER_CLEARANCE: f64 = 1.2;
 
 impl Sim<'_, '_> {
     /// Every slow mover going our way within `look` ahead of vehicle `i` (or beside it, till its

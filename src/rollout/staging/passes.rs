@@ -46,7 +46,7 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
             actors.push(background_actor(map, s, c.duration, &mut routes));
         }
     }
-    crate::rollout::drive::overtake::measure_rooms(map, &mut actors);
+    crate::rollout::drive::slow::measure_rooms(map, &mut actors);
     let mut confs = vec![];
     for (index, k) in c.conflicts.iter().enumerate() {
         let (Some(Some(af)), Some(Some(st))) = (track_of.get(k.at_fault), track_of.get(k.struck)) else { continue };
