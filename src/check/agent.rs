@@ -30,6 +30,7 @@ impl Checker {
         let mut behaviour: Option<&ast::Behaviour> = None;
         let mut phases: Vec<&ast::Goal> = vec![];
         let mut siren: Option<(&ast::Ident, Span)> = None;
+        let mut body = super::body::BodyStmts::default();
         for st in &a.stmts {
             let (slot_first, what): (Option<Span>, &str) = match st {
                 ast::AgentStmt::At { place: p, span } => (place.replace((p, *span)).map(|x| x.1), "placement `at`"),
@@ -47,6 +48,14 @@ impl Checker {
                 ast::AgentStmt::Posture { word, span } => (posture.replace((word, *span)).map(|x| x.1), "`posture`"),
                 ast::AgentStmt::Behaviour(b) => (behaviour.replace(b).map(|x| x.span), "`behaviour`"),
                 ast::AgentStmt::Siren { value, span } => (siren.replace((value, *span)).map(|x| x.1), "`siren`"),
+                ast::AgentStmt::Lamp { key, value, span } => {
+                    body.lamps.push((key, value, *span));
+                    (None, "lamp")
+                }
+                ast::AgentStmt::Door(d) => {
+                    body.doors.push(d);
+                    (None, "`door`")
+                }
             };
             if let Some(first) = slot_first {
                 self.dup(what, first, st.span());
@@ -146,6 +155,7 @@ impl Checker {
         };
         let (kinds, class, motion) = kind?;
         let siren = self.siren(siren, &kinds, is_static);
+        let body = self.body(&body, class, &kinds, order);
         Some(Agent {
             name: a.name.name.clone(),
             kinds,
@@ -163,6 +173,7 @@ impl Checker {
             behaviour: behaviour_c?,
             phases: phases_c?,
             siren: siren?,
+            body: body?,
             span,
             place_span: place_span.unwrap_or(span),
         })

@@ -3,7 +3,7 @@
 
 use crate::geom::wrap_angle;
 use crate::output::{
-    BoxMotion, EgoRecord, FrameWorld, Motion, SceneMap, SignalState, ego2global, instance_id, yaw_quaternion,
+    BoxMotion, EgoRecord, FrameWorld, Motion, SceneMap, SignalState, States, ego2global, instance_id, yaw_quaternion,
 };
 use crate::place::Pose;
 use crate::raster::layout::class_index;
@@ -45,14 +45,18 @@ impl ClipWorld<'_> {
             ego2global_translation: [ego_pose.x, ego_pose.y, 0.0],
             ego2global_rotation: yaw_quaternion(ego_pose.yaw),
             motion: motion(self.ego),
+            states: states(t, self.ego, f),
         };
         let boxes = boxes
             .iter()
             .map(|b| {
                 let i = b.track as usize;
                 // A box the tracks do not describe (inserted by `rocc edit`) has no motion.
-                (t.agents.get(i).is_some_and(|a| a.name == b.agent))
-                    .then(|| BoxMotion { instance_id: instance_id(self.scenario, &b.agent), motion: motion(i) })
+                (t.agents.get(i).is_some_and(|a| a.name == b.agent)).then(|| BoxMotion {
+                    instance_id: instance_id(self.scenario, &b.agent),
+                    motion: motion(i),
+                    states: states(t, i, f),
+                })
             })
             .collect();
         let timestamp_us = (f as f64 * 1e6 / t.rate).round() as u64;
@@ -66,6 +70,23 @@ impl ClipWorld<'_> {
     pub fn scene(&self) -> SceneMap {
         SceneMap::of(self.scenario, self.map)
     }
+}
+
+/// Track `i`'s lamps and doors at frame `f`; `None` for what carries no lamps.
+fn states(t: &Tracks, i: usize, f: usize) -> Option<States> {
+    let b = t.bodies.get(i).filter(|b| b.lamps)?;
+    Some(States {
+        headlights: b.headlights,
+        brake_lights: b.brake_lights.get(f).copied().unwrap_or(false),
+        hazards: b.hazards,
+        beacons: b.beacons,
+        siren: b.siren,
+        doors: b
+            .doors
+            .iter()
+            .filter_map(|(d, a)| a.get(f).filter(|&&deg| deg > 0.0).map(|&deg| (d.name().to_string(), deg)))
+            .collect(),
+    })
 }
 
 /// The derivative at frame `f` of a quantity sampled at every frame (`n` of them, `dt` apart):

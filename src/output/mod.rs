@@ -20,7 +20,7 @@ pub use npz::{DEFLATE, Deflate, NpyElem, Npz};
 pub use paint::{CHANNEL_COLOURS, SIDE as PREVIEW_SIDE, STRUCTURE_COLOUR, paint_bev, paint_lidar, paint_occ, palette};
 pub use preview::{render_preview, write_preview_png};
 
-pub use ego::{BoxMotion, EgoRecord, FrameWorld, Motion, SignalState, ego2global, instance_id, yaw_quaternion};
+pub use ego::{BoxMotion, EgoRecord, FrameWorld, Motion, SignalState, States, ego2global, instance_id, yaw_quaternion};
 pub use vector_map::{Points, SceneMap, read_scene_json, write_scene_json};
 
 /// A temporary of an interrupted write, as found in an output directory.

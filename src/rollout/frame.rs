@@ -155,6 +155,7 @@ pub(crate) fn empty_tracks(actors: &[Actor], rate: f64, frames: usize) -> Tracks
         poses: actors.iter().map(|_| Vec::with_capacity(frames)).collect(),
         speeds: actors.iter().map(|_| Vec::with_capacity(frames)).collect(),
         impacts: vec![],
+        bodies: vec![],
     }
 }
 

@@ -32,6 +32,7 @@
 //! on the requested side of the struck box at the impact frame.
 
 mod agent;
+pub mod body;
 mod drive;
 mod frame;
 mod junction;
@@ -66,6 +67,9 @@ pub struct Tracks {
     /// `[agent][frame]`, m/s along the heading.
     pub speeds: Vec<Vec<f64>>,
     pub impacts: Vec<ImpactRecord>,
+    /// `[agent]`: lamps and doors per frame (`body.rs`), read off the tracks above.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub bodies: Vec<body::BodyTrack>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -166,5 +170,7 @@ pub const WHEELBASE_SHARE: f64 = 0.6;
 
 /// Roll the placed scenario out over its frames.
 pub fn rollout(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Vec<Diagnostic>> {
-    staging::passes::run(c, map, placed)
+    let mut t = staging::passes::run(c, map, placed)?;
+    t.bodies = body::bodies(c, map, placed, &t);
+    Ok(t)
 }

@@ -56,6 +56,9 @@ pub struct ConcreteAgent {
     /// `siren on|off` as stated (`Agent::siren`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub siren: Option<bool>,
+    /// Lamps and doors as stated (`Agent::body`).
+    #[serde(default, skip_serializing_if = "crate::check::scenario::Body::is_default")]
+    pub body: crate::check::scenario::Body,
     #[serde(skip)]
     pub span: crate::source::Span,
     #[serde(skip)]
@@ -117,6 +120,7 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
                     .map(|p| Phase { speed: r.draw(p.speed), start_after: p.start_after, start_when: p.start_when })
                     .collect(),
                 siren: a.siren,
+                body: a.body.clone(),
                 span: a.span,
                 place_span: a.place_span,
             }

@@ -166,6 +166,15 @@ fn agent_stmt(s: &AgentStmt) -> Doc {
         AgentStmt::At { place, span } => Doc::Line { span: *span, text: format!("at {}", placement(place)) },
         AgentStmt::Speed { value, span } => Doc::Line { span: *span, text: format!("speed {}", val(value)) },
         AgentStmt::Siren { value, span } => Doc::Line { span: *span, text: format!("siren {}", value.name) },
+        AgentStmt::Lamp { key, value, span } => Doc::Line { span: *span, text: format!("{} {}", key.name, value.name) },
+        AgentStmt::Door(d) => {
+            let tail = match (&d.at, &d.when) {
+                (Some(v), _) => format!("at {}", val(v)),
+                (None, Some(w)) => trigger(w),
+                (None, None) => String::new(),
+            };
+            Doc::Line { span: d.span, text: format!("door {} {} {tail}", d.door.name, d.action.name) }
+        }
         AgentStmt::Size(s) => size(s),
         AgentStmt::Goal(g) => Doc::Block {
             header: "goal".into(),
@@ -226,15 +235,18 @@ fn goal_stmt(s: &GoalStmt) -> String {
         },
         GoalStmt::Turn { turn, .. } => format!("turn {}", turn.name),
         GoalStmt::Start { after, .. } => format!("start after {}", val(after)),
-        GoalStmt::StartWhen { trigger: w, .. } => {
-            let tail = match (&w.value, &w.landmark) {
-                (Some(v), _) => format!(" {}{}", if w.under { "under " } else { "" }, val(v)),
-                (None, Some(l)) => format!(" {}", l.name),
-                (None, None) => String::new(),
-            };
-            format!("start when {} {}{tail}", w.who.name, w.cond.name)
-        }
+        GoalStmt::StartWhen { trigger: w, .. } => format!("start {}", trigger(w)),
     }
+}
+
+/// `when NAME CONDITION [under] [VALUE|LANDMARK]`.
+fn trigger(w: &Trigger) -> String {
+    let tail = match (&w.value, &w.landmark) {
+        (Some(v), _) => format!(" {}{}", if w.under { "under " } else { "" }, val(v)),
+        (None, Some(l)) => format!(" {}", l.name),
+        (None, None) => String::new(),
+    };
+    format!("when {} {}{tail}", w.who.name, w.cond.name)
 }
 
 fn size(s: &SizeStmt) -> Doc {
