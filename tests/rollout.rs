@@ -206,6 +206,7 @@ fn scene(specs: Vec<Spec>, conflicts: Vec<Conflict>, traffic: Option<Traffic>, d
             behaviour: Default::default(),
             phases: vec![],
             siren: None,
+            body: Default::default(),
             span: Default::default(),
             place_span: Default::default(),
         })
