@@ -84,6 +84,44 @@ pub struct AgentSpec {
     /// An emergency vehicle's siren (on unless `false`); `None` writes nothing.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub siren: Option<bool>,
+    /// Headlights, hazard lights and an emergency vehicle's beacons, on or off; `None` writes
+    /// nothing (docs/language.md, "Lamps and doors").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lights: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hazards: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub beacons: Option<bool>,
+    /// A side door that opens at a time or on a trigger (dooring).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub door: Option<DoorSpec>,
+}
+
+/// `door NAME open at T s` or `door NAME open when ...` (the trigger's `within` or `ttc_under`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DoorSpec {
+    /// `front_left`, `front_right`, `rear_left` or `rear_right`.
+    pub door: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub open_at_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub open_when: Option<TriggerSpec>,
+}
+
+/// The `.scn` lines of an agent's lamps and door.
+fn body_lines(a: &AgentSpec) -> Vec<String> {
+    let on = |b: bool| if b { "on" } else { "off" };
+    let mut v: Vec<String> = [("lights", a.lights), ("hazards", a.hazards), ("beacons", a.beacons)]
+        .into_iter()
+        .filter_map(|(k, x)| x.map(|x| format!("{k} {}", on(x))))
+        .collect();
+    if let Some(d) = &a.door {
+        match (&d.open_when, d.open_at_s) {
+            (Some(t), _) => v.push(format!("door {} open {}", d.door, trigger(t).trim_start_matches("start "))),
+            (None, at) => v.push(format!("door {} open at {} s", d.door, num(at.unwrap_or(0.0)))),
+        }
+    }
+    v
 }
 
 /// How an agent departs from careful behaviour (the `.scn` `behaviour { ... }` block).
@@ -143,7 +181,24 @@ pub struct Overrides {
 
 /// The JSON schema sent with the schema stage (as a decoding constraint where the server takes one).
 pub fn json_schema(kinds: &[String]) -> Value {
-    json!({
+    let door = json!({
+        "type": "object",
+        "required": ["door"],
+        "properties": {
+            "door": {"enum": ["front_left", "front_right", "rear_left", "rear_right"]},
+            "open_at_s": {"type": "number", "minimum": 0, "maximum": 60},
+            "open_when": {
+                "type": "object",
+                "required": ["agent", "condition"],
+                "properties": {
+                    "agent": {"type": "string", "pattern": "^[a-z][a-z0-9_]{0,20}$"},
+                    "condition": {"enum": ["within", "ttc_under"]},
+                    "value": {"type": "number", "minimum": 0, "maximum": 200}
+                }
+            }
+        }
+    });
+    let mut schema = json!({
         "type": "object",
         "required": ["name", "brief", "road", "duration_s", "agents"],
         "properties": {
@@ -204,7 +259,14 @@ pub fn json_schema(kinds: &[String]) -> Value {
             "density": {"type": "number", "minimum": 0, "maximum": 1},
             "randomness": {"type": "number", "minimum": 0, "maximum": 1}
         }
-    })
+    });
+    // Lamps and doors are added apart: one `json!` of it all passes the macro's recursion limit.
+    let props = &mut schema["properties"]["agents"]["items"]["properties"];
+    for lamp in ["lights", "hazards", "beacons"] {
+        props[lamp] = json!({"type": "boolean"});
+    }
+    props["door"] = door;
+    schema
 }
 
 /// Read the model's reply: the first JSON object in it (code fences and chatter around it are
@@ -440,6 +502,9 @@ pub fn emit(s: &Schema, goals: &[Option<String>], is_static: &dyn Fn(&str) -> bo
                 out.push_str(&format!("        siren {}\n", if on { "on" } else { "off" }));
             }
         }
+        for line in body_lines(a) {
+            out.push_str(&format!("        {line}\n"));
+        }
         out.push_str("    }\n");
     }
     if s.density.is_some() || s.randomness.is_some() {
@@ -499,6 +564,9 @@ pub fn describe(s: &Schema, a: &AgentSpec) -> String {
     }
     if let Some(on) = a.siren {
         words.push_str(if on { ", siren on" } else { ", siren off" });
+    }
+    for line in body_lines(a) {
+        words.push_str(&format!(", {line}"));
     }
     words
 }
