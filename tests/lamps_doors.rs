@@ -192,3 +192,39 @@ fn beacons_go_with_the_siren_unless_stated() {
     let e = &lit.tracks.bodies[idx(&lit, "engine")];
     assert!(!e.siren && e.beacons, "`beacons on` with `siren off`: lights only");
 }
+
+#[test]
+fn import_boxes_keeps_the_lamps_and_doors_it_is_given() {
+    // A car standing with its hazards on whose driver's door opens at 0.5 s and starts to close
+    // at 1.5 s; a walker whose (meaningless) states are not kept.
+    let frames: Vec<Value> = (0..25)
+        .map(|f| {
+            let t = f as f64 * 0.1;
+            let deg = if t < 0.45 { 0.0 } else if t < 1.45 { (70.0 * (t - 0.4)).min(70.0) } else { 70.0 - 70.0 * (t - 1.4) };
+            let doors = if deg > 0.0 { serde_json::json!({"front_left": deg}) } else { serde_json::json!({}) };
+            serde_json::json!({"frame": f, "time": t, "ego_pose": {"x": 0.0, "y": 0.0, "yaw": 0.0}, "boxes": [
+                {"track": "car", "class": "vehicle.car", "center": [20.0, 3.0, 0.8], "size": [1.8, 4.6, 1.5], "yaw": 0.0,
+                 "states": {"headlights": false, "hazards": true, "brake_lights": false, "doors": doors}},
+                {"track": "kid", "class": "human.pedestrian.child", "center": [30.0, 6.0, 0.6], "size": [0.4, 0.4, 1.2], "yaw": 0.0,
+                 "states": {"hazards": true}}
+            ]})
+        })
+        .collect();
+    let path = std::env::temp_dir().join(format!("rocc-import-states-{}.json", std::process::id()));
+    std::fs::write(&path, serde_json::json!({"rate_hz": 10.0, "frames": frames}).to_string()).expect("write");
+    let mut sources = rocc::source::SourceMap::default();
+    let imp = rocc::import::import_boxes(&path, rocc::import::Convention::NuScenes, "kept", &mut sources)
+        .unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| d.message.clone()).collect::<Vec<_>>()));
+    std::fs::remove_file(&path).expect("clean up");
+    for says in ["lights off", "hazards on", "door front_left open at 0.5 s", "door front_left close at 1.5 s"] {
+        assert!(imp.text.contains(&format!("        {says}\n")), "{says}:\n{}", imp.text);
+    }
+    assert_eq!(imp.text.matches("hazards").count(), 1, "not on the walker:\n{}", imp.text);
+    // Compiled again, the car's door swings as recorded, one frame behind at most.
+    let f = front::front_of(&imp.text);
+    let car = &imp.agents.iter().find(|a| a.1 == "car").expect("the car's agent").0;
+    let body = &f.tracks.bodies[idx(&f, car)];
+    assert!(body.hazards);
+    let angle = &body.doors[0].1;
+    assert_eq!((angle[4], angle[5], angle[14], angle[15]), (0.0, 7.0, 70.0, 63.0), "{angle:?}");
+}
