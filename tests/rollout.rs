@@ -207,6 +207,7 @@ fn scene(specs: Vec<Spec>, conflicts: Vec<Conflict>, traffic: Option<Traffic>, d
             phases: vec![],
             siren: None,
             body: Default::default(),
+            door_swing: vec![],
             span: Default::default(),
             place_span: Default::default(),
         })

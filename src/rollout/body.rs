@@ -3,6 +3,7 @@
 //! (scenarios/rare/dooring.scn). The rules are in docs/rollout.md, "Lamps and doors".
 
 use crate::check::scenario::{Class, Door, DoorMove, Motion, Trigger};
+use crate::diag::Diagnostic;
 use crate::geom::wrap_angle;
 use crate::place::{Placed, Pose};
 use crate::road::Map;
@@ -21,8 +22,10 @@ pub const STOPPED_SPEED: f64 = 0.1;
 pub const DOOR_OPEN_DEG: f64 = 70.0;
 /// How fast a door swings, degrees per second (fully open in one second).
 pub const DOOR_SWING_DEG_S: f64 = 70.0;
-/// Thickness of a door's box, m.
-pub const DOOR_THICKNESS_M: f64 = 0.1;
+/// Thickness of a door's box, m: one BEV cell and one voxel (0.25 m), so that the grids show
+/// it at any angle (a real door is about 0.1 m thick; thinner, the rasteriser's rounded corners
+/// can leave it no cell at all).
+pub const DOOR_THICKNESS_M: f64 = 0.25;
 
 /// One agent's lamps and doors over the clip.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -71,6 +74,38 @@ pub fn bodies(c: &Concrete, map: &Map, placed: &Placed, t: &Tracks) -> Vec<BodyT
             }
         })
         .collect()
+}
+
+/// Roll `c` out again with its doors swinging as `t` has them, until they swing the same way
+/// twice: the rollout sees an open door as an obstacle (`drive/doors.rs`), and a door's moves
+/// may watch agents that react to it. Each run settles the next move in time (before it, the
+/// runs agree), so a scene with `n` door moves takes at most `n` more runs; one without doors
+/// none.
+pub(crate) fn with_doors(c: &Concrete, map: &Map, placed: &Placed, mut t: Tracks) -> Result<Tracks, Vec<Diagnostic>> {
+    let moves: usize = c.agents.iter().map(|a| a.body.doors.len()).sum();
+    if moves == 0 {
+        return Ok(t);
+    }
+    let mut c = c.clone();
+    for _ in 0..moves {
+        let mut changed = false;
+        for (ci, a) in c.agents.iter_mut().enumerate() {
+            let swing = placed
+                .agents
+                .iter()
+                .position(|p| p.source == Some(ci))
+                .and_then(|i| t.bodies.get(i))
+                .map_or_else(Vec::new, |b| b.doors.clone());
+            changed |= swing != a.door_swing;
+            a.door_swing = swing;
+        }
+        if !changed {
+            break;
+        }
+        t = super::staging::passes::run(&c, map, placed)?;
+        t.bodies = bodies(&c, map, placed, &t);
+    }
+    Ok(t)
 }
 
 /// Brake lights at frame `f`: decelerating beyond `BRAKE_LIGHT_DECEL` (central difference of

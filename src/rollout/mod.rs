@@ -172,5 +172,5 @@ pub const WHEELBASE_SHARE: f64 = 0.6;
 pub fn rollout(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Vec<Diagnostic>> {
     let mut t = staging::passes::run(c, map, placed)?;
     t.bodies = body::bodies(c, map, placed, &t);
-    Ok(t)
+    body::with_doors(c, map, placed, t)
 }

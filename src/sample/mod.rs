@@ -59,6 +59,10 @@ pub struct ConcreteAgent {
     /// Lamps and doors as stated (`Agent::body`).
     #[serde(default, skip_serializing_if = "crate::check::scenario::Body::is_default")]
     pub body: crate::check::scenario::Body,
+    /// The angle (degrees) per frame of each door `body` moves, as the rollout's last run
+    /// swung it (`rollout::body`): empty before the rollout.
+    #[serde(skip)]
+    pub door_swing: Vec<(crate::check::scenario::Door, Vec<f64>)>,
     #[serde(skip)]
     pub span: crate::source::Span,
     #[serde(skip)]
@@ -121,6 +125,7 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
                     .collect(),
                 siren: a.siren,
                 body: a.body.clone(),
+                door_swing: vec![],
                 span: a.span,
                 place_span: a.place_span,
             }
