@@ -4,12 +4,12 @@
 //! step.
 
 pub(crate) mod avoid;
+mod doors;
 pub(crate) mod follow;
 pub(crate) mod index;
 pub(crate) mod neighbours;
 pub(crate) mod pair;
 pub(crate) mod siren;
-mod doors;
 
 use crate::geom::{Obb, wrap_angle};
 use crate::rollout::agent::{Lat, State, StopGoal};
