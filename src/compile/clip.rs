@@ -246,7 +246,8 @@ pub fn frame_boxes(front: &Front, ego: usize, f: usize) -> Vec<EgoBox> {
             }
         });
     // Open doors: boxes of their vehicle's agent, track and class (`body::DOOR_KIND`).
-    let doors = (0..t.agents.len()).filter(|&i| i != ego && near(i) && front.present(i, f)).flat_map(|i| {
+    let with_doors = t.bodies.iter().enumerate().filter(|(_, b)| !b.doors.is_empty()).map(|(i, _)| i);
+    let doors = with_doors.filter(|&i| i != ego && near(i) && front.present(i, f)).flat_map(|i| {
         let a = &t.agents[i];
         open_doors(t, i, f).map(move |(pose, size)| AgentState {
             track: i as u32,
