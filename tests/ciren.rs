@@ -7,7 +7,7 @@
 #[path = "support/contact.rs"]
 mod contact;
 
-use contact::{measured_contact, sector};
+use contact::{measured_contact, obb, sector};
 use rocc::check::scenario::Point;
 use rocc::ciren::{self, Imported};
 use rocc::rollout::Tracks;
@@ -239,6 +239,7 @@ fn bad_safe_extractions_give_specific_diagnostics() {
         ("safe_bad_direction.json", "E0803"),
         ("safe_unknown_vehicle.json", "E0803"),
         ("safe_undecidable.json", "E0808"),
+        ("safe_two_impacts.json", "E0804"),
     ];
     for (f, code) in cases {
         let mut sources = SourceMap::default();
@@ -347,10 +348,23 @@ fn generated_files_check_format_and_are_deterministic() {
 
 // ------------------------------------------------------------------ generated records
 
+/// A later contact of a generated record: vehicle `by` (3 brings a third vehicle) with its
+/// `area` against `other` (0: a tree) and its `other_area`.
+#[derive(Debug, Clone)]
+struct Extra {
+    by: u32,
+    area: &'static str,
+    other: u32,
+    other_area: &'static str,
+    dir: Option<&'static str>,
+}
+
 /// One coded record built from the fields the importer reads: the configuration, the narrated
-/// directions, junction and road, the coded areas, movements and body types.
+/// directions, junction and road, the coded areas, movements and body types, and up to two
+/// later contacts.
 #[derive(Debug, Clone)]
 struct Record {
+    extras: Vec<Extra>,
     config: &'static str,
     junction: &'static str,
     relation: &'static str,
@@ -369,9 +383,13 @@ impl Record {
             None => format!("Vehicle {word} (V{}) was on a road. ", n + 1),
         };
         let summary = format!(
-            "{}{}{}The front of V2 struck the {} of V1.",
+            "{}{}{}{}The front of V2 struck the {} of V1.",
             travel(0, "one"),
             travel(1, "two"),
+            match self.extras.iter().find(|e| e.by == 3 || e.other == 3).and_then(|e| e.dir) {
+                Some(d) => format!("Vehicle three (V3) was traveling {d} in the {d}bound lane. "),
+                None => String::new(),
+            },
             self.junction,
             self.areas[0].to_lowercase()
         );
@@ -387,11 +405,11 @@ impl Record {
       <Driver><PreeventMovement value="1" sasCode="01">{mv}</PreeventMovement></Driver>
     </GeneralVehicleForm>"#,
                 v = n + 1,
-                body = self.bodies[n],
+                body = self.bodies[n % 2],
                 rel = self.relation,
                 l = self.lanes,
                 al = self.alignment,
-                mv = self.moves[n],
+                mv = self.moves[n % 2],
             )
         };
         format!(
@@ -405,11 +423,13 @@ impl Record {
     </CaseSummary>
     <Events>
       <EventSum VehicleNumber="1" EventNumber="1"><Rank>1</Rank><Class value="2" sasCode="2">Compact</Class><AreaOfDamage value="1" sasCode="{a1c}">{a1}</AreaOfDamage><Contacted value="2" sasCode="2">Vehicle#2</Contacted><ContactedClass value="2" sasCode="2">Compact</ContactedClass><ContactedAreaOfDamage value="1" sasCode="{a2c}">{a2}</ContactedAreaOfDamage></EventSum>
+      {later}
     </Events>
   </CaseForm>
   <GeneralVehicleForms>
     {f1}
     {f2}
+    {f3}
   </GeneralVehicleForms>
 </Case>
 "#,
@@ -420,6 +440,26 @@ impl Record {
             a2c = area_code(self.areas[1]),
             f1 = form(0),
             f2 = form(1),
+            f3 = if self.extras.iter().any(|e| e.by == 3 || e.other == 3) { form(2) } else { String::new() },
+            later = self.extras.iter().enumerate().map(|(i, e)| {
+                let contacted = if e.other == 0 {
+                    r#"<Contacted value="42" sasCode="42">Tree(&gt; 10 cm in diameter)</Contacted><ContactedAreaOfDamage value="1" sasCode="0">Not a motor vehicle</ContactedAreaOfDamage>"#.to_string()
+                } else {
+                    format!(
+                        r#"<Contacted value="{o}" sasCode="{o}">Vehicle#{o}</Contacted><ContactedAreaOfDamage value="1" sasCode="{c}">{a}</ContactedAreaOfDamage>"#,
+                        o = e.other,
+                        c = area_code(e.other_area),
+                        a = e.other_area
+                    )
+                };
+                format!(
+                    r#"<EventSum VehicleNumber="{v}" EventNumber="{n}"><Rank>{n}</Rank><AreaOfDamage value="1" sasCode="{c}">{a}</AreaOfDamage>{contacted}</EventSum>"#,
+                    v = e.by,
+                    n = i + 2,
+                    c = area_code(e.area),
+                    a = e.area
+                )
+            }).collect::<Vec<_>>().join("\n      "),
         )
     }
 }
@@ -447,8 +487,21 @@ fn record() -> impl proptest::strategy::Strategy<Value = Record> {
         prop_oneof![Just("Straight"), Just("Curve right"), Just("Curve left")],
         1u32..=4,
     );
-    (road, [dir.clone(), dir], [area.clone(), area], [mv.clone(), mv], [body.clone(), body]).prop_map(
-        |((config, junction, relation, alignment, lanes), dirs, areas, moves, bodies)| Record {
+    // Mostly a third vehicle's front into the pair (a chain), sometimes a tree or a second strike.
+    let by = prop_oneof![3 => Just(3u32), 1 => 1u32..=2];
+    let front_mostly = prop_oneof![3 => Just("Front"), 1 => area.clone()];
+    let extra =
+        (by, front_mostly, 0u32..=3, area.clone(), dir.clone()).prop_map(|(by, area, other, other_area, dir)| Extra {
+            by,
+            area,
+            other: if other == by { 0 } else { other },
+            other_area,
+            dir,
+        });
+    let extras = proptest::collection::vec(extra, 0..=2);
+    (road, [dir.clone(), dir], [area.clone(), area], [mv.clone(), mv], [body.clone(), body], extras).prop_map(
+        |((config, junction, relation, alignment, lanes), dirs, areas, moves, bodies, extras)| Record {
+            extras,
             config,
             junction,
             relation,
@@ -473,8 +526,14 @@ proptest::proptest! {
         let p = d.join("crash_report.xml");
         std::fs::write(&p, r.xml()).expect("write");
         let mut sources = SourceMap::default();
-        if let Err(diags) = ciren::import_case(&p, &mut sources) {
-            for x in &diags {
+        let got = ciren::import_case(&p, &mut sources);
+        if let Ok(imp) = &got {
+            // Every later contact is staged, none left out.
+            proptest::prop_assert_eq!(imp.crash.conflicts.len(), 1 + r.extras.len());
+            proptest::prop_assert_eq!(imp.staged.text.matches("conflict {").count(), 1 + r.extras.len());
+        }
+        if let Err(diags) = &got {
+                for x in diags {
                 proptest::prop_assert!(
                     !x.message.contains("does not check"),
                     "{}: {}\n{}",
@@ -485,5 +544,195 @@ proptest::proptest! {
             }
         }
         let _ = std::fs::remove_dir_all(&d);
+    }
+}
+
+// ------------------------------------------------------------------ force direction
+
+/// The coded force per (vehicle, event), read from the record's `VehicleExteriorForm` CDC rows
+/// with roxmltree, independently of the importer: clock direction and total delta-V (km/h).
+fn coded_forces(xml: &str) -> Vec<(u32, u32, Option<u32>, Option<f64>)> {
+    let doc = roxmltree::Document::parse(xml).expect("xml");
+    let mut out = vec![];
+    for f in doc.descendants().filter(|n| n.has_tag_name("VehicleExteriorForm")) {
+        let v: u32 = f.attribute("VehicleNumber").and_then(|x| x.parse().ok()).expect("vehicle");
+        for e in f.descendants().filter(|n| n.has_tag_name("CDCevent")) {
+            let ev: u32 = e.attribute("eventNumber").and_then(|x| x.parse().ok()).expect("event");
+            let clock = e.children().find(|n| n.has_tag_name("ClockDirection")).and_then(|n| n.text());
+            let h = clock.and_then(|t| t.trim().parse::<u32>().ok()).filter(|h| (1..=12).contains(h));
+            let dv = e
+                .descendants()
+                .find(|n| n.has_tag_name("Total"))
+                .and_then(|n| n.attribute("value"))
+                .and_then(|x| x.parse::<f64>().ok())
+                .filter(|x| *x > 0.0 && *x < 250.0);
+            out.push((v, ev, h, dv));
+        }
+    }
+    out
+}
+
+/// Curb weight (kg) of vehicle `v` in its `GeneralVehicleForm`.
+fn curb_weight(xml: &str, v: u32) -> Option<f64> {
+    let doc = roxmltree::Document::parse(xml).expect("xml");
+    let g = doc
+        .descendants()
+        .find(|n| n.has_tag_name("GeneralVehicleForm") && n.attribute("VehicleNumber") == Some(&v.to_string()))?;
+    g.descendants().find(|n| n.has_tag_name("CurbWeight"))?.attribute("value")?.parse().ok()
+}
+
+/// Velocity of agent `i` over the frame leading into frame `f`, m/s.
+fn vel(t: &Tracks, i: usize, f: usize) -> glam::DVec2 {
+    let (p0, p1) = (t.poses[i][f - 1], t.poses[i][f]);
+    glam::DVec2::new(p1.x - p0.x, p1.y - p0.y) * t.rate
+}
+
+/// The clock direction (0.5..12.5) of the force on agent `a` from agent `b`, measured from the
+/// boxes' relative velocity over the frame leading into contact `f`: the force on `a` comes
+/// from where `a` moves relative to `b` (12 straight ahead, 3 the right side).
+fn measured_clock(t: &Tracks, a: usize, b: usize, f: usize) -> f64 {
+    let rel = (vel(t, a, f) - vel(t, b, f)).rotate(glam::DVec2::from_angle(-t.poses[a][f - 1].yaw));
+    let h = (-rel.y.atan2(rel.x).to_degrees()).rem_euclid(360.0) / 30.0;
+    if h < 0.5 { h + 12.0 } else { h }
+}
+
+fn clock_gap(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(12.0);
+    d.min(12.0 - d)
+}
+
+/// Every coded clock direction is met within one hour at its contact, and where a delta-V and
+/// both curb weights (or a fixed object) are coded, the closing speed at contact is within 25%
+/// of the momentum balance with a common velocity after: `dv * (m1 + m2) / m2`.
+#[test]
+fn each_impact_meets_its_coded_clock_direction_and_delta_v() {
+    let mut checked = (0, 0);
+    for p in dirs("tests/fixtures/ciren-cases", true) {
+        let xml = std::fs::read_to_string(p.join("crash_report.xml")).expect("xml");
+        let mut sources = SourceMap::default();
+        let imp = ciren::import_case(&p, &mut sources).unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+        let scen = rocc::check::check_text(&imp.file_name(), &imp.staged.text, Path::new("."), &mut sources)
+            .unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+        let t = rocc::compile::front(scen, None).expect("front").tracks;
+        let id = &imp.crash.id;
+        for (v, ev, h, dv) in coded_forces(&xml) {
+            let a = t.agents.iter().position(|x| x.name == format!("v{v}")).expect("agent");
+            let rec = &t.impacts[ev as usize - 1];
+            assert!(rec.at_fault == a || rec.struck == a, "{id}: event {ev} is not v{v}'s");
+            let b = if rec.at_fault == a { rec.struck } else { rec.at_fault };
+            if let Some(h) = h {
+                let m = measured_clock(&t, a, b, rec.frame);
+                assert!(clock_gap(m, f64::from(h)) <= 1.0, "{id}: v{v} coded {h} o'clock, measured {m:.2}");
+                checked.0 += 1;
+            }
+            let m_other = if t.agents[b].name.starts_with("obj") {
+                Some(None)
+            } else {
+                curb_weight(&xml, t.agents[b].name[1..].parse().expect("vN")).map(Some)
+            };
+            if let (Some(dv), Some(m_self), Some(m_other)) = (dv, curb_weight(&xml, v), m_other) {
+                let want = m_other.map_or(dv, |m| dv * (m_self + m) / m);
+                let got = (vel(&t, a, rec.frame) - vel(&t, b, rec.frame)).length() * 3.6;
+                assert!((got - want).abs() <= 0.25 * want, "{id}: closing {got:.1} km/h, delta-V asks {want:.1}");
+                checked.1 += 1;
+            }
+        }
+    }
+    assert!(checked.0 >= 6 && checked.1 >= 3, "checked {checked:?}");
+}
+
+// ------------------------------------------------------------------ several contacts
+
+/// Each `EventSum` of a record in event order: (event, vehicle, its area, other vehicle, its
+/// area), read with roxmltree, independently of the importer.
+fn coded_events(xml: &str) -> Vec<(u32, u32, Part, u32, Part)> {
+    let doc = roxmltree::Document::parse(xml).expect("xml");
+    let text = |e: roxmltree::Node, tag: &str| {
+        e.children().find(|n| n.has_tag_name(tag)).and_then(|n| n.text()).unwrap_or("").to_string()
+    };
+    let mut out: Vec<_> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("EventSum"))
+        .map(|e| {
+            let num = |a: &str| e.attribute(a).and_then(|x| x.parse::<u32>().ok()).expect("number");
+            let other = text(e, "Contacted").rsplit('#').next().and_then(|x| x.parse().ok()).expect("a vehicle");
+            let part = |t: String| part(t.split_whitespace().next().unwrap_or("")).expect("a part");
+            (
+                num("EventNumber"),
+                num("VehicleNumber"),
+                part(text(e, "AreaOfDamage")),
+                other,
+                part(text(e, "ContactedAreaOfDamage")),
+            )
+        })
+        .collect();
+    out.sort_by_key(|e| e.0);
+    out
+}
+
+/// Records with several contacts (tests/fixtures/ciren-chains/) import with one conflict per
+/// event, and on the rolled-out boxes each pair first touches in event order, within 1.5 s of
+/// its `at`, the struck box on its coded side and the striker with its front; every coded clock
+/// direction is met within one hour; no pair outside the events touches.
+#[test]
+fn every_event_of_a_chain_lands_on_its_coded_sides_in_order() {
+    let mut files: Vec<PathBuf> = std::fs::read_dir("tests/fixtures/ciren-chains")
+        .expect("chain records")
+        .map(|e| e.expect("entry").path())
+        .collect();
+    files.sort();
+    assert!(files.len() >= 2);
+    for p in files {
+        let xml = std::fs::read_to_string(&p).expect("xml");
+        let mut sources = SourceMap::default();
+        let imp = ciren::import_case(&p, &mut sources).unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+        let scen = rocc::check::check_text(&imp.file_name(), &imp.staged.text, Path::new("."), &mut sources)
+            .unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+        let at: Vec<f64> = scen.conflicts.iter().map(|c| c.at.expect("at")).collect();
+        let t = rocc::compile::front(scen, None).expect("front").tracks;
+        let id = imp.crash.id.clone();
+        let events = coded_events(&xml);
+        assert_eq!(at.len(), events.len(), "{id}: one conflict per event");
+        let idx = |v: u32| t.agents.iter().position(|a| a.name == format!("v{v}")).expect("agent");
+        let mut firsts = vec![];
+        for (i, &(ev, v, va, o, oa)) in events.iter().enumerate() {
+            // The struck one is the vehicle whose coded part is not its front.
+            let ((s, sp), (f, fp)) = if oa == Part::Front { ((v, va), (o, oa)) } else { ((o, oa), (v, va)) };
+            assert_eq!(fp, Part::Front, "{id}: event {ev} has no striking front");
+            let (a, b) = (idx(f), idx(s));
+            let first = (1..t.frames)
+                .find(|&fr| obb(&t, a, fr).overlaps(&obb(&t, b, fr)))
+                .unwrap_or_else(|| panic!("{id}: event {ev}: v{f} never touches v{s}"));
+            assert!((first as f64 / t.rate - at[i]).abs() <= 1.5, "{id}: event {ev} at frame {first}, asked {}", at[i]);
+            let (on_struck, on_striker) = measured_contact(&t, a, b, first).expect("contact");
+            let (sb, sa) = (t.agents[b].size, t.agents[a].size);
+            let want = match sp {
+                Part::Front => Point::Front,
+                Part::Left => Point::Left,
+                Part::Right => Point::Right,
+                Part::Rear => Point::Rear,
+            };
+            assert_eq!(sector(on_struck, sb[0], sb[1]), want, "{id}: event {ev}: v{s} struck elsewhere");
+            assert!(on_striker.x > 0.6 * sa[0] / 2.0, "{id}: event {ev}: v{f} not with its front");
+            firsts.push(first);
+        }
+        assert!(firsts.windows(2).all(|w| w[0] <= w[1]), "{id}: contacts out of order {firsts:?}");
+        for (v, ev, h, _) in coded_forces(&xml) {
+            let Some(h) = h else { continue };
+            let (_, x, _, y, _) = events.iter().find(|e| e.0 == ev).expect("event");
+            let (a, b) = if *x == v { (idx(*x), idx(*y)) } else { (idx(*y), idx(*x)) };
+            let m = measured_clock(&t, a, b, firsts[events.iter().position(|e| e.0 == ev).expect("event")]);
+            assert!(clock_gap(m, f64::from(h)) <= 1.0, "{id}: v{v} event {ev} coded {h} o'clock, measured {m:.2}");
+        }
+        for a in 0..t.agents.len() {
+            for b in a + 1..t.agents.len() {
+                let listed = events.iter().any(|e| {
+                    let (x, y) = (idx(e.1), idx(e.3));
+                    (x, y) == (a, b) || (x, y) == (b, a)
+                });
+                let touch = (0..t.frames).any(|fr| obb(&t, a, fr).overlaps(&obb(&t, b, fr)));
+                assert!(listed || !touch, "{id}: {} and {} touch", t.agents[a].name, t.agents[b].name);
+            }
+        }
     }
 }

@@ -330,7 +330,7 @@ fn cli_writes_a_file_that_checks_and_a_transcript_without_the_image() {
     assert!(t.contains("base64,<") && t.len() < 200_000, "the sketch is not copied into the transcript");
     let v: Value = serde_json::from_str(&t).unwrap();
     assert_eq!(v["prompts"]["ciren_scene"], "v1");
-    assert_eq!(v["prompts"]["ciren_conflict"], "v1");
+    assert_eq!(v["prompts"]["ciren_conflict"], "v2");
     assert_eq!(v["descriptor"]["point"], "right");
     assert_eq!(v["examples"], serde_json::json!(["100237.scn", "105165.scn"]));
 }
@@ -438,4 +438,34 @@ fn real_llamacpp_server_without_a_projector_refuses_the_sketch_clearly() {
     let ex = &t["exchanges"][0];
     assert_eq!(ex["status"], 500, "the server read the request and refused the image part");
     assert!(ex["request"]["grammar"].as_str().unwrap().contains("root ::= file"));
+}
+
+#[test]
+fn a_reply_with_later_contacts_merges_every_block_and_checks() {
+    // v2 strikes v1's right side at the junction, then v3, following v1, runs into its back.
+    let scene = SCENE.replace(
+        "    conflict {",
+        "    agent v3: sedan { at west.in[1], 45 m before stop_line; speed 40 km/h; goal { speed 40 km/h } }\n    conflict {",
+    );
+    let reply = r#"{"at_fault": "v2", "struck": "v1", "impact": "angle", "point": "right", "at": 3,
+        "later": [{"at_fault": "v3", "struck": "v1", "impact": "rear_end", "point": "rear", "at": 5}]}"#;
+    let fake = serve(vec![chat(&scene), chat(reply)]);
+    let (out, r) = run(&case_100237(), &opts(&fake.url, Server::Vllm), &tmp("later"));
+    let Outcome::Accepted { text } = out else { panic!("{out:?}") };
+    let later = "conflict { at_fault v3; struck v1; impact rear_end; point rear; at 5 s }";
+    let scene = r.scene.clone().unwrap();
+    let close = scene.rfind('}').unwrap();
+    let line = scene[..close].rfind('\n').unwrap() + 1;
+    assert_eq!(
+        text,
+        format!("{}\n    {BLOCK}\n    {later}\n{}", &scene[..line], &scene[line..]),
+        "both blocks, nothing else"
+    );
+    check_ok(&text);
+    let schema = &fake.requests()[1]["structured_outputs"]["json"];
+    assert_eq!(
+        schema["properties"]["later"]["items"]["properties"]["struck"]["enum"],
+        serde_json::json!(["v1", "v2", "v3"])
+    );
+    assert_eq!(r.descriptor.unwrap().later.len(), 1);
 }

@@ -187,6 +187,13 @@ fn brake_lights_follow_the_deceleration_and_a_stop() {
     }
     assert!(!body.brake_lights[0], "cruising at first");
     assert!(*body.brake_lights.last().expect("frames"), "stopped at the end");
+    // Reversing: pulling away backwards is no braking; standing still before it is.
+    let f = front::front_of(&scene("scenarios/rare/reversing_from_driveway.scn"));
+    let car = idx(&f, "car");
+    let (v, lit) = (&f.tracks.speeds[car], &f.tracks.bodies[car].brake_lights);
+    let backing = (1..v.len() - 1).find(|&k| v[k + 1] < v[k] - 0.05 && v[k] < -0.2).expect("speeds up backwards");
+    assert!(!lit[backing], "frame {backing}: speed {:.2}", v[backing]);
+    assert!(lit[0], "standing in the driveway before it backs out");
 }
 
 #[test]

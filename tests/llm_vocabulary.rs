@@ -301,3 +301,46 @@ fn the_grammar_export_has_the_rare_vocabulary() {
     let scene = "scenario s {\n    duration 4 s\n    road straight { lanes 1 }\n    agent kid: child {\n        at west.in[1], 5 m before center\n        posture kneeling\n        goal { speed 1 m/s; lateral cross; start when ego within 10 m }\n        goal { speed 2 m/s; start when ego ttc under 2 s }\n        behaviour { yield never; reaction 1 s }\n    }\n    agent amb: ambulance { at east.in[1], 40 m before center; speed 30 km/h; siren off; beacons on }\n    object parked: sedan { at east.out[1], 10 m after center; hazards off; door front_left open when kid within 8 m; door front_left close at 3 s }\n}\n";
     assert!(g.accepts(scene), "the GBNF rejects the rare vocabulary");
 }
+
+#[test]
+fn parking_driveways_and_a_reverse_goal_from_the_model_check() {
+    let mut car = json!({"name": "car", "kind": "sedan", "on": "driveway", "driveway": "home", "arm": "east",
+        "direction": "out", "lane": 1, "distance_m": 0, "relation": "after", "landmark": "center", "speed_kmh": 0,
+        "ego": false});
+    car["start_when"] = json!({"agent": "van", "condition": "within", "value": 60});
+    let parked = json!({"name": "parked", "kind": "sedan", "on": "parking", "slot": 3, "arm": "east",
+        "direction": "out", "lane": 1, "distance_m": 0, "relation": "after", "landmark": "center", "speed_kmh": 0,
+        "ego": false});
+    let van = lane("van", "van", "west", "in", 50.0, 30.0);
+    let schema = json!({"name": "backing_out", "brief": "a car backs out of a driveway into traffic", "duration_s": 10,
+        "road": {"template": "straight", "lanes": 1, "sidewalks": true, "parking": [{"arm": "east", "side": "out"}],
+            "driveways": [{"name": "home", "arm": "east", "direction": "out", "distance_m": 30}]},
+        "agents": [car, parked, van]});
+    let goals = "car: goal { speed 2 m/s; reverse into east.out[1] }\nvan: goal { speed 30 km/h }\n";
+    let text = accepted(&schema, &[goals], Plan::Joint);
+    for says in [
+        "parking east out",
+        "driveway home east.out 30 m",
+        "at driveway(home)",
+        "at parking(east.out)[3]",
+        "goal { speed 2 m/s; reverse into east.out[1]; start when van within 60 m }",
+    ] {
+        assert!(text.contains(says), "no `{says}` in\n{text}");
+    }
+    // The goal grammars and the language export admit the reverse goal and kerbside places.
+    let single = gbnf::Grammar::parse(&llm::goals::single_grammar());
+    for block in ["goal { reverse 8 m }", "goal { speed 2 m/s; reverse into east.out[1]; start after 1 s }"] {
+        assert!(single.accepts(block), "{block}");
+    }
+    let g = gbnf::Grammar::parse(&rocc::grammar::print(&rocc::grammar::language(), rocc::grammar::Format::Gbnf));
+    assert!(g.accepts(&text), "the GBNF rejects\n{text}");
+    // A side word the schema does not know is sent back.
+    let mut bad = schema.clone();
+    bad["road"]["parking"][0]["side"] = json!("left");
+    let fake = serve(vec![chat(&bad.to_string())]);
+    let (out, _) = llm::text_to_scenario("parking", &opts(&fake.url, Plan::Joint), "scene.scn", &std::env::temp_dir());
+    assert!(!matches!(out, Outcome::Accepted { .. }), "{out:?}");
+    let reqs = fake.requests();
+    let road = &reqs[0]["structured_outputs"]["json"]["properties"]["road"]["properties"];
+    assert_eq!(road["parking"]["items"]["properties"]["side"]["enum"], json!(["in", "out", "both"]));
+}

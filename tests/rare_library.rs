@@ -215,3 +215,54 @@ fn cars_ahead_and_oncoming_pull_over_for_a_fire_truck_from_behind() {
     assert!(slowest(&t, engine) > 12.5, "the truck slowed to {:.2} m/s", slowest(&t, engine));
     no_overlap(&t);
 }
+
+#[test]
+fn a_car_reverses_out_of_a_driveway_into_the_lane_and_the_van_stops_behind_it() {
+    use glam::DVec2;
+    let text = std::fs::read_to_string(root().join("scenarios/rare/reversing_from_driveway.scn")).expect("scene");
+    let f = front::front_of(&text);
+    let t = &f.tracks;
+    let (car, van) = (idx(t, "car"), idx(t, "van"));
+    // It starts in the driveway beyond the sidewalk, nosed in (facing south, away from the road).
+    let p0 = t.poses[car][0];
+    assert!(p0.y < -9.0 && (p0.yaw + std::f64::consts::FRAC_PI_2).abs() < 1e-6, "{p0:?}");
+    // Backwards: wherever it moves its velocity points opposite its heading, its speed below zero.
+    let mut moving = 0;
+    for fr in 1..t.frames {
+        let (p, q) = (t.poses[car][fr - 1], t.poses[car][fr]);
+        let d = DVec2::new(q.x - p.x, q.y - p.y);
+        if d.length() * t.rate > 0.5 {
+            moving += 1;
+            let along = d.normalize().dot(DVec2::from_angle(q.yaw));
+            assert!(along < -0.95, "frame {fr}: velocity at {along:.2} to the heading");
+            assert!(t.speeds[car][fr] < 0.0, "frame {fr}: speed {:.2}", t.speeds[car][fr]);
+        }
+    }
+    assert!(moving >= 50, "it reversed for {moving} frames");
+    assert!(t.speeds[car].iter().all(|v| *v >= -3.0 - 1e-9), "faster than the reverse limit");
+    // It ends at rest in east.out[1] (-3.5 < y < 0), its whole box in the lane, facing east.
+    let end = t.frames - 1;
+    let last = t.poses[car][end];
+    assert!(last.yaw.abs() < 4f64.to_radians(), "it ends at {:.1} deg", last.yaw.to_degrees());
+    for c in obb(t, car, end).corners() {
+        assert!(c.y > -3.5 - 0.05 && c.y < 0.0, "a corner at y = {:.2} is off the lane", c.y);
+    }
+    assert_eq!(t.speeds[car][end], 0.0);
+    // The van holds 30 km/h until the car backs into its lane ahead, then slows and stops behind it.
+    assert!(t.speeds[van][..60].iter().all(|v| *v > 8.2), "the van slowed early");
+    assert!(slowest(t, van) < 0.05, "the van did not stop: {:.2} m/s", slowest(t, van));
+    assert!(t.poses[van][end].x + 2.5 < last.x - 2.2, "the van is not behind the car");
+    no_overlap(t);
+    // BEV channel 3 (carpark_areas) holds the parking lane and the driveway; the driveway lies
+    // over the walkway (channel 2) and is no drivable paving (channel 1); the parking lane is.
+    let mut bev = rocc::raster::Bev::zeros();
+    let ego = rocc::place::Pose { x: p0.x, y: p0.y, yaw: 0.0 };
+    rocc::raster::Rasterizer::new().rasterize_into(&f.map, ego, &[], &mut bev);
+    // The pixel `dx`, `dy` m from the car's start (ego frame = world axes here).
+    let px = |ch: usize, dx: f64, dy: f64| bev.masks[[ch, (200.0 + 4.0 * dx) as usize, (200.0 + 4.0 * dy) as usize]];
+    assert_eq!((px(3, 0.0, 0.0), px(1, 0.0, 0.0), px(2, 0.0, 0.0)), (1, 0, 0), "the car stands in the driveway");
+    assert_eq!((px(3, 0.0, 5.0), px(2, 0.0, 5.0), px(1, 0.0, 5.0)), (1, 1, 0), "across the sidewalk");
+    assert_eq!((px(3, -15.0, 7.8), px(1, -15.0, 7.8)), (1, 1), "the parking lane");
+    assert_eq!((px(3, -15.0, 5.0), px(2, -15.0, 5.0)), (0, 1), "the sidewalk beyond the parking lane");
+    assert_eq!((px(3, -15.0, 17.0), px(2, -15.0, 17.0)), (0, 1), "no parking along the north kerb");
+}

@@ -30,6 +30,7 @@ fn road(template: Template, lanes: u32, width: f64, crosswalks: bool, sidewalks:
         radius: if template == Template::Roundabout { 18.0 } else { 120.0 },
         angle: 40f64.to_radians(),
         signals: None,
+        kerb: Default::default(),
     }
 }
 

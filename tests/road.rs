@@ -29,6 +29,7 @@ fn road(template: Template) -> Road {
         radius: if template == Template::Roundabout { 15.0 } else { 100.0 },
         angle: 45f64.to_radians(),
         signals: None,
+        kerb: Default::default(),
     }
 }
 
@@ -761,4 +762,52 @@ fn roundabout_walkways_follow_the_flares_and_slips() {
     // The last case has paved slips: junction polygons beyond the 4 flares and 16 ring sectors.
     let slipped = road::build(&cases[5]);
     assert!(slipped.intersections.len() > 20, "no paved slip: {} junction polygons", slipped.intersections.len());
+}
+
+/// Parking lanes along three kerbs, a mid-block crosswalk and two driveways (`road/parking.rs`):
+/// the map keeps its invariants (no walkway on paving, lanes on the drivable area), every slot
+/// stands in a parking lane on drivable paving, and a driveway's car beyond the sidewalk, in a
+/// parking area but off the paving.
+#[test]
+fn parking_lanes_and_driveways_keep_the_map_invariants() {
+    use rocc::check::scenario::{Arm, Driveway, Kerbside, ParkingLane};
+    use rocc::road::map::KerbRef;
+    let lane = |arm, dir, width| ParkingLane { arm, dir, width };
+    let drive = |name: &str, arm, dir, at| Driveway { name: name.into(), arm, dir, at };
+    let mut r = Road { sidewalks: true, crosswalks: true, ..road(Template::Straight) };
+    r.kerb = Kerbside {
+        parking: vec![lane(Arm::East, Dir::Out, 2.5), lane(Arm::East, Dir::In, 2.5), lane(Arm::West, Dir::In, 3.0)],
+        driveways: vec![drive("home", Arm::West, Dir::Out, 20.0), drive("shop", Arm::East, Dir::Out, 30.0)],
+    };
+    let m = road::build(&r);
+    check_map(&r, &m).unwrap();
+    for yaw in [0.0, 0.7] {
+        check_walkways(&r, yaw).unwrap();
+    }
+    assert_eq!(m.carparks.len(), 5);
+    let n = r.parking_slots();
+    assert_eq!(n, 9, "(60 m - 3 m clear of the crosswalk) / 6 m");
+    let h = 2.0 * 3.5;
+    for p in &r.kerb.parking {
+        for slot in 1..=n {
+            let k = m.kerb_place(KerbRef::Slot { arm: p.arm, dir: p.dir, slot }).expect("slot");
+            assert!(covered(k.centre, &m.carparks, 0.0) && covered(k.centre, &m.drivable, 0.0), "{slot}");
+            assert!((k.centre.y.abs() - (h + p.width / 2.0)).abs() < 1e-9, "slot {slot} at {}", k.centre);
+        }
+        // The sidewalk along that kerb moved out past the parking lane.
+        let sw = m.sidewalks.iter().find(|s| s.arm == p.arm && s.dir == p.dir).expect("sidewalk");
+        let near = sw.polygon.iter().map(|q| q.y.abs()).fold(f64::INFINITY, f64::min);
+        assert!((near - (h + p.width)).abs() < 1e-9, "{:?} {:?} sidewalk from {near}", p.arm, p.dir);
+    }
+    for (i, d) in r.kerb.driveways.iter().enumerate() {
+        let k = m.kerb_place(KerbRef::Driveway(i)).expect("driveway");
+        assert!(covered(k.centre, &m.carparks, 0.0) && !covered(k.centre, &m.drivable, 0.0), "{}", d.name);
+        assert!(k.centre.y.abs() > h + 3.0, "{} stands beyond the sidewalk", d.name);
+    }
+    // The crosswalk's ends stand on a walkway (the kerb extension where the kerb has parking).
+    for c in &m.crosswalks {
+        for end in [c.line.points[0], *c.line.points.last().expect("end")] {
+            assert!(covered(end, &m.walkways, 1e-6), "crosswalk end {end} off the walkways");
+        }
+    }
 }

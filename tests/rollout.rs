@@ -149,6 +149,7 @@ fn goal() -> Goal<f64> {
         turn: None,
         start_after: 0.0,
         start_when: None,
+        reverse: None,
         stop_span: Default::default(),
     }
 }
@@ -189,6 +190,7 @@ fn scene(specs: Vec<Spec>, conflicts: Vec<Conflict>, traffic: Option<Traffic>, d
         radius: 0.0,
         angle: 0.0,
         signals: None,
+        kerb: Default::default(),
     };
     let agents: Vec<ConcreteAgent> = specs
         .iter()

@@ -130,6 +130,17 @@ impl Checker {
             (Some(g), Some(m)) if !is_static => self.goal(g, m, class?, place.as_ref(), road, order, &a.name),
             _ => Some(None),
         };
+        if let (Some(Some(g)), Some(d), Some((v, _))) = (&goal_c, &speed_d, speed)
+            && g.reverse.is_some()
+            && d.hi() > 0.0
+        {
+            self.err(
+                Diagnostic::error("E0251", "a reversing vehicle starts from rest")
+                    .label(v.span, "initial speed")
+                    .help("remove `speed` from the agent; its goal's `speed` (at most 3 m/s) is its reverse pace"),
+            );
+            return None;
+        }
         let posture = self.posture(posture, class, motion);
         let span = a.span;
         let place_span = place.as_ref().and(a.stmts.iter().find_map(|s| match s {

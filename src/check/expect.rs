@@ -54,7 +54,10 @@ impl Checker {
             }
             ast::ExpectWhat::Speed { agent, bound, value } => {
                 let i = self.resolve(agent, order);
-                let ms = self.fixed(value, Dim::Speed, "speed bound", 0.0, MAX_SPEED_MS, "0..324 km/h");
+                // Negative down to the fastest reverse: speeds are along the heading, a reversing
+                // vehicle's below zero (`speed car at_most -1 m/s`).
+                let lo = -crate::check::kerb::REVERSE_MAX_MS;
+                let ms = self.fixed(value, Dim::Speed, "speed bound", lo, MAX_SPEED_MS, "-3 m/s..324 km/h");
                 ExpectWhat::Speed { agent: i?, at_least: bound.at_least, ms: ms? }
             }
             ast::ExpectWhat::Stopped { agent, landmark } => {

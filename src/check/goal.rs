@@ -28,6 +28,7 @@ impl Checker {
             turn: None,
             start_after: 0.0,
             start_when: None,
+            reverse: None,
             stop_span: Span::default(),
         };
         let mut ok = true;
@@ -211,6 +212,10 @@ impl Checker {
                         None => ok = false,
                     }
                 }
+                ast::GoalStmt::Reverse { to, span } => match self.reverse(to, *span, class, road) {
+                    Some(r) => out.reverse = Some(r),
+                    None => ok = false,
+                },
                 ast::GoalStmt::Turn { turn, span } => {
                     let Some(t) = word(self, turn, &TURNS, "turn") else {
                         ok = false;
@@ -239,6 +244,9 @@ impl Checker {
                     out.turn = Some(t);
                 }
             }
+        }
+        if ok && let Some(r) = out.reverse {
+            ok = self.reverse_fits(&out, r, g, place);
         }
         ok.then_some(Some(out))
     }

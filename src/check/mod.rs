@@ -12,6 +12,7 @@ pub mod classes;
 mod conflict;
 mod expect;
 mod goal;
+pub mod kerb;
 mod kinds;
 pub mod load;
 mod near_miss;
@@ -165,6 +166,9 @@ impl Checker {
             let mut e = Diagnostic::error("E0103", format!("{what} is out of range"))
                 .label(v.span, format!("must be within {shown}"))
                 .help(format!("{what} must be within {shown}"));
+            if dim == Dim::Speed && d.lo() < 0.0 {
+                e = e.and_help("to drive backwards, give the vehicle a reverse goal: `goal { reverse 8 m }`");
+            }
             if let Some(meant) = units::slip(v, dim, min, max, shown) {
                 let written = crate::syntax::fmt::val(v);
                 e = e.and_help(format!(

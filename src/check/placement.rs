@@ -160,6 +160,7 @@ impl Checker {
                 }
                 Some(Place::Sidewalk { arm: arm?, dir, along: along?, offset: offset?, heading: heading? })
             }
+            ast::Placement::Parking { .. } | ast::Placement::Driveway { .. } => self.kerb_placement(p, road?),
         }
     }
 

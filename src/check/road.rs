@@ -36,6 +36,7 @@ impl Checker {
             },
             angle: 45f64.to_radians(),
             signals: None,
+            kerb: Kerbside::default(),
         };
         let mut allowed =
             vec!["lanes", "lane_width", "speed_limit", "shoulder", "median", "crosswalks", "sidewalks", "length"];
@@ -164,6 +165,12 @@ impl Checker {
         match self.signals(template, &signal_params) {
             Ok(s) => road.signals = s,
             Err(()) => ok = false,
+        }
+        if ok && !r.kerb.is_empty() {
+            match self.kerbside(r, &road) {
+                Some(k) => road.kerb = k,
+                None => ok = false,
+            }
         }
         ok.then_some(road)
     }

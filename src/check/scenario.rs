@@ -169,6 +169,9 @@ pub struct Road {
     /// Traffic signals at the junction (`signals on`); `None`: none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub signals: Option<Signals>,
+    /// Parking lanes and driveways along the kerbs (`parking`, `driveway`); none by default.
+    #[serde(default, skip_serializing_if = "Kerbside::is_empty")]
+    pub kerb: Kerbside,
 }
 
 /// A junction's signal cycle (`road four_way { signals on; signal_green 20 s }`), s: two phases,
@@ -353,6 +356,16 @@ pub enum Place<V = Dist> {
     },
     /// Pose comes from the first keyframe of the agent's track.
     Track,
+    /// Slot `slot` (1 = nearest the road's centre) of the parking lane along that kerb.
+    Parking {
+        arm: Arm,
+        dir: Dir,
+        slot: u32,
+    },
+    /// In driveway `index` of `Road::kerb`, nosed in (facing away from the road).
+    Driveway {
+        index: usize,
+    },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -374,6 +387,9 @@ pub struct Goal<V = Dist> {
     /// A condition that starts the goal (`start when ...`); it holds its initial speed till then.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub start_when: Option<Trigger>,
+    /// `reverse 8 m` or `reverse into LANE`: the vehicle drives backwards, rear first.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reverse: Option<Reverse>,
     /// The `stop ...` statement, for the place pass's E0206 (`stop behind` a leader that is not
     /// ahead); default when there is none.
     #[serde(skip)]
@@ -669,4 +685,49 @@ pub enum ExpectWhat {
     /// Its front passes the stop line of `lane` within the window while that lane's signal
     /// shows `light`.
     Enters { agent: usize, lane: LaneId, light: Light },
+}
+
+// ---- kerbside places and reversing (check/kerb.rs, road/parking.rs, rollout/drive/reverse.rs) ----
+
+/// Parking lanes and driveways along a road's kerbs.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Kerbside {
+    pub parking: Vec<ParkingLane>,
+    pub driveways: Vec<Driveway>,
+}
+
+impl Kerbside {
+    pub fn is_empty(&self) -> bool {
+        self.parking.is_empty() && self.driveways.is_empty()
+    }
+}
+
+/// A parking lane along the kerb of an arm's in-lanes or out-lanes, between the paving and the
+/// sidewalk.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ParkingLane {
+    pub arm: Arm,
+    pub dir: Dir,
+    /// Its width, m.
+    pub width: f64,
+}
+
+/// A driveway across the sidewalk on the kerb of an arm's in-lanes or out-lanes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Driveway {
+    pub name: String,
+    pub arm: Arm,
+    pub dir: Dir,
+    /// Its centre's distance along the arm from the road's centre, m.
+    pub at: f64,
+}
+
+/// Where a reverse goal ends.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Reverse {
+    /// Straight back along its heading, this far (m).
+    Dist(f64),
+    /// Rear first into this lane, ending aligned with it, facing its direction of travel.
+    Into(LaneId),
 }

@@ -73,6 +73,22 @@ pub struct CaseVehicle {
     pub traffic_control: Option<Coded>,
     /// `Rollover/Data/Type`.
     pub rollover: Option<Coded>,
+    /// `Vehicle/CurbWeight` (kg).
+    pub curb_weight: Option<Coded>,
+    pub range: Range<usize>,
+}
+
+/// One CDC row of a `VehicleExteriorForm`: the clock direction of the principal force on
+/// `vehicle` in event `event`, and the total delta-V the reconstruction coded for it.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct CdcRow {
+    pub vehicle: u32,
+    pub event: u32,
+    /// 1..=12; `None` when not coded (or out of range).
+    pub clock: Option<u32>,
+    /// `ComputerGeneratedDeltaV/Total` (999 = unknown: the mapping decides).
+    pub delta_v: Option<Coded>,
+    /// The `CDCevent` element.
     pub range: Range<usize>,
 }
 
@@ -88,6 +104,8 @@ pub struct CirenCase {
     pub summary: Option<Coded>,
     pub events: Vec<Event>,
     pub vehicles: Vec<CaseVehicle>,
+    /// The CDC rows of every inspected vehicle.
+    pub cdc: Vec<CdcRow>,
 }
 
 /// The XML file of a case: `PATH` itself, or `PATH/crash_report.xml` for a case directory.
@@ -209,11 +227,37 @@ pub fn parse_case(text: &str, path: &Path, file: u32) -> Result<CirenCase, Vec<D
             critical_event: find(&["Driver", "CriticalPrecrashEvent"]),
             traffic_control: find(&["Precrash", "TrafficControlDevices", "Device"]),
             rollover: find(&["Rollover", "Data", "Type"]),
+            curb_weight: find(&["Vehicle", "CurbWeight"]),
             range: g.range(),
         });
     }
     case.vehicles.sort_by_key(|v| v.number);
+    case.cdc = cdc_rows(root);
     Ok(case)
+}
+
+/// The CDC rows: `VehicleExteriorForm/CDC/CDCevent`, clock from `ClockDirection`, else the
+/// leading digits of the CDC code (`12FCEN4` -> 12).
+fn cdc_rows(root: roxmltree::Node) -> Vec<CdcRow> {
+    let mut out = Vec::new();
+    for f in root.descendants().filter(|n| n.has_tag_name("VehicleExteriorForm")) {
+        let vehicle = num_attr(f, "VehicleNumber").unwrap_or(0);
+        for e in f.descendants().filter(|n| n.has_tag_name("CDCevent")) {
+            let text = |tag: &str| child(e, tag).and_then(|n| n.text()).map(str::trim).unwrap_or("");
+            let lead = |t: &str| t.chars().take_while(char::is_ascii_digit).collect::<String>();
+            let clock = [lead(text("ClockDirection")), lead(text("Summary"))]
+                .iter()
+                .find_map(|t| t.parse::<u32>().ok().filter(|h| (1..=12).contains(h)));
+            out.push(CdcRow {
+                vehicle,
+                event: num_attr(e, "eventNumber").unwrap_or(0),
+                clock,
+                delta_v: descend(e, &["ComputerGeneratedDeltaV", "Total"]).map(coded),
+                range: e.range(),
+            });
+        }
+    }
+    out
 }
 
 /// Case ids become file and scenario names: keep them to `[A-Za-z0-9_-]`.

@@ -99,6 +99,8 @@ pub struct RoadDesc {
     /// A centre turn lane or a median strip, m.
     pub median: f64,
     pub shoulder: f64,
+    /// Quarter turns counter-clockwise from the source's compass frame into rocc's.
+    pub turns: i32,
     /// Why: one line per choice, citing the source.
     pub notes: Vec<String>,
 }
@@ -210,7 +212,25 @@ pub struct ConflictDesc {
     pub point: Point,
     /// The striker's face, as coded.
     pub face: Face,
+    /// Coded clock directions of the principal force (CDC), per vehicle of the pair.
+    pub clocks: Vec<ClockDesc>,
+    /// Closing speed at contact implied by a coded delta-V (km/h), and the vehicle it is of.
+    pub closing: Option<Closing>,
     pub notes: Vec<String>,
+}
+
+/// The clock direction (1..=12) the principal force on `vehicle` comes from: 12 the front, 3
+/// the right side, 6 the back, 9 the left side.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClockDesc {
+    pub vehicle: String,
+    pub hour: u32,
+}
+
+/// The closing speed a coded delta-V implies (see `impact.rs` for the model).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Closing {
+    pub kmh: f64,
 }
 
 /// Where a crash was read from. A CIREN case and the SAFE extraction of the same case share the
@@ -235,7 +255,8 @@ pub struct Crash {
     pub road: RoadDesc,
     pub vehicles: Vec<VehicleDesc>,
     pub objects: Vec<ObjectDesc>,
-    pub conflict: ConflictDesc,
+    /// The staged contacts in time order (the record's event order).
+    pub conflicts: Vec<ConflictDesc>,
 }
 
 impl Crash {

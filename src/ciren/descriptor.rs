@@ -54,6 +54,10 @@ pub struct Descriptor {
     pub point: String,
     /// Seconds into the clip; `None` leaves the checker's default.
     pub at_s: Option<f64>,
+    /// Later contacts of the same crash, in time order (a chain: each strikes once, before it is
+    /// struck; the checker enforces it).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub later: Vec<Descriptor>,
 }
 
 impl Descriptor {
@@ -66,11 +70,21 @@ impl Descriptor {
         )
     }
 
+    /// Every block, this one then the later ones, one per line at statement indent.
+    pub fn blocks(&self) -> String {
+        let mut all = vec![self.block()];
+        all.extend(self.later.iter().map(Descriptor::block));
+        all.join("\n    ")
+    }
+
     pub fn to_json(&self) -> Value {
         let mut v =
             json!({"at_fault": self.at_fault, "struck": self.struck, "impact": self.impact, "point": self.point});
         if let Some(t) = self.at_s {
             v["at"] = json!(t);
+        }
+        if !self.later.is_empty() {
+            v["later"] = Value::Array(self.later.iter().map(Descriptor::to_json).collect());
         }
         v
     }
@@ -79,6 +93,16 @@ impl Descriptor {
 /// The JSON schema the conflict reply is constrained by: names from the roster, words from the
 /// checker's vocabularies.
 pub fn json_schema(r: &Roster) -> Value {
+    let mut one = one_schema(r);
+    one["properties"]["later"] = json!({"type": "array", "maxItems": MAX_LATER, "items": one_schema(r)});
+    one
+}
+
+/// Later contacts a reply may list.
+const MAX_LATER: usize = 4;
+
+/// The schema of one contact.
+fn one_schema(r: &Roster) -> Value {
     json!({
         "type": "object",
         "properties": {
@@ -96,16 +120,52 @@ pub fn json_schema(r: &Roster) -> Value {
 /// Read a reply: one JSON object (code fences and chatter around it tolerated), or a DSL
 /// `conflict { ... }` block. `Err` says what is wrong, in words the model gets back.
 pub fn parse(reply: &str, r: &Roster) -> Result<Descriptor, String> {
-    let raw = match json_object(reply) {
-        Some(v) => from_json(&v)?,
-        None => match dsl_block(reply) {
-            Some(d) => d?,
-            None => {
-                return Err("the reply holds neither a JSON object nor a `conflict { ... }` block".to_string());
-            }
-        },
+    if let Some(v) = json_object(reply) {
+        return from_json_all(&v, r);
+    }
+    let mut blocks = dsl_blocks(reply).into_iter();
+    let Some(first) = blocks.next() else {
+        return Err("the reply holds neither a JSON object nor a `conflict { ... }` block".to_string());
     };
-    validate(raw, r)
+    let mut d = validate(first?, r)?;
+    for b in blocks {
+        d.later.push(validate(b?, r)?);
+    }
+    check_later(&d)?;
+    Ok(d)
+}
+
+/// One JSON answer and its `later` list.
+fn from_json_all(v: &Value, r: &Roster) -> Result<Descriptor, String> {
+    let mut d = validate(from_json(v)?, r)?;
+    match v.get("later") {
+        None | Some(Value::Null) => {}
+        Some(Value::Array(list)) => {
+            for (i, x) in list.iter().enumerate() {
+                let raw = from_json(x).map_err(|e| format!("`later[{i}]`: {e}"))?;
+                d.later.push(validate(raw, r).map_err(|e| format!("`later[{i}]`: {e}"))?);
+            }
+        }
+        Some(other) => return Err(format!("`later` must be a list of contacts, not {other}")),
+    }
+    check_later(&d)?;
+    Ok(d)
+}
+
+/// At most `MAX_LATER` later contacts, none before the first.
+fn check_later(d: &Descriptor) -> Result<(), String> {
+    if d.later.len() > MAX_LATER {
+        return Err(format!("{} later contacts; at most {MAX_LATER}", d.later.len()));
+    }
+    let mut prev = d.at_s.unwrap_or(0.0);
+    for (i, l) in d.later.iter().enumerate() {
+        let t = l.at_s.unwrap_or(prev);
+        if t < prev {
+            return Err(format!("`later[{i}]` at {t} s comes before the contact listed ahead of it"));
+        }
+        prev = t;
+    }
+    Ok(())
 }
 
 /// Field values as the model wrote them, before validation.
@@ -161,6 +221,22 @@ fn seconds(s: &str) -> Result<f64, String> {
         (t, 1.0)
     };
     num.trim().parse::<f64>().map(|x| x * scale).map_err(|_| format!("`at` `{s}` is not a time such as `3 s`"))
+}
+
+/// Every `conflict { ... }` block of the reply, in order.
+fn dsl_blocks(reply: &str) -> Vec<Result<Raw, String>> {
+    let mut out = Vec::new();
+    let mut from = 0;
+    while let Some(i) = reply[from..].find("conflict") {
+        let start = from + i;
+        let Some(close) = reply[start..].find('}') else { break };
+        match dsl_block(&reply[start..=start + close]) {
+            Some(b) => out.push(b),
+            None => break,
+        }
+        from = start + close + 1;
+    }
+    out
 }
 
 /// A `conflict { ... }` block anywhere in the reply, read with the language's own parser.
@@ -282,7 +358,14 @@ fn validate(raw: Raw, r: &Roster) -> Result<Descriptor, String> {
         Some(Ok(t)) if t.is_finite() && t > 0.0 && t <= r.duration_s => Some(t),
         Some(Ok(t)) => return Err(format!("`at` {t} is outside the clip (0 to {} s)", r.duration_s)),
     };
-    Ok(Descriptor { at_fault: at_fault.to_string(), struck: struck.to_string(), impact, point, at_s })
+    Ok(Descriptor {
+        at_fault: at_fault.to_string(),
+        struck: struck.to_string(),
+        impact,
+        point,
+        at_s,
+        later: Vec::new(),
+    })
 }
 
 /// Byte ranges of the scene's `conflict` blocks, in order, and where a new block goes when
@@ -353,14 +436,16 @@ pub fn strip(scene: &str) -> String {
     out
 }
 
-/// The descriptor of a scene's first conflict block, as the conflict call would answer it
-/// (for the worked examples of the conflict prompt).
+/// The descriptor of a scene's conflict blocks (the first, then the later ones), as the
+/// conflict call would answer it (for the worked examples of the conflict prompt).
 pub fn of_scene(scene: &str, r: &Roster) -> Option<Descriptor> {
-    let (a, b) = first_conflict_span(scene)?;
-    match dsl_block(&scene[a..b])? {
-        Ok(raw) => validate(raw, r).ok(),
-        Err(_) => None,
+    let (spans, _) = conflict_spans(scene)?;
+    let mut all = spans.iter().map(|&(a, b)| dsl_block(&scene[a..b])?.ok().and_then(|raw| validate(raw, r).ok()));
+    let mut d = all.next()??;
+    for l in all {
+        d.later.push(l?);
     }
+    Some(d)
 }
 
 #[cfg(test)]
@@ -387,6 +472,7 @@ mod tests {
             impact: "angle".into(),
             point: "right".into(),
             at_s: Some(3.0),
+            later: Vec::new(),
         };
         let j = r#"Sure: ```json
 {"at_fault": "v2", "struck": "v1", "impact": "angle", "point": "right", "at": 3}
@@ -416,6 +502,27 @@ mod tests {
             bad(r#"{"at_fault": "v1", "struck": "v2", "impact": "angle", "point": "left", "at": 60}"#).contains("clip")
         );
         assert!(bad(r#"{"at_fault": 1, "struck": "v2", "impact": "angle", "point": "left"}"#).contains("string"));
+    }
+
+    #[test]
+    fn later_contacts_are_read_from_json_and_from_several_blocks() {
+        let r = roster();
+        let j = r#"{"at_fault": "v2", "struck": "v1", "impact": "angle", "point": "right", "at": 3,
+            "later": [{"at_fault": "v1", "struck": "obj1", "impact": "object", "point": "front", "at": 4}]}"#;
+        let d = parse(j, &r).unwrap();
+        assert_eq!(d.later.len(), 1);
+        assert_eq!(
+            d.blocks(),
+            "conflict { at_fault v2; struck v1; impact angle; point right; at 3 s }\n    \
+             conflict { at_fault v1; struck obj1; impact object; point front; at 4 s }"
+        );
+        assert_eq!(parse(&d.blocks(), &r).unwrap(), d, "the blocks read back");
+        assert_eq!(from_json_all(&d.to_json(), &r).unwrap(), d, "the JSON reads back");
+        let early = j.replace("\"at\": 4", "\"at\": 2");
+        assert!(parse(&early, &r).unwrap_err().contains("before"));
+        let bad = j.replace("obj1", "v9");
+        assert!(parse(&bad, &r).unwrap_err().contains("later[0]"));
+        assert!(json_schema(&r)["properties"]["later"]["items"]["properties"]["at_fault"].is_object());
     }
 
     const SCENE: &str =

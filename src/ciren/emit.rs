@@ -33,6 +33,8 @@ pub struct Staged {
     pub frame: usize,
     pub time: f64,
     pub struck_side: Point,
+    /// What the staging met only in part (a closing speed off its delta-V), for warnings.
+    pub shortfalls: Vec<String>,
 }
 
 /// A number as the language writes it: integers bare, otherwise one decimal.
@@ -69,27 +71,50 @@ fn lead_distance(c: &Crash, v: &VehicleDesc, t: f64) -> f64 {
     (speed * t - to_conflict).max(3.0)
 }
 
+/// Seconds between successive contacts of a multi-event crash, in time order.
+pub const EVENT_GAP: f64 = 2.0;
+
+/// The target time of conflict `i` (time order).
+fn conflict_time(st: Staging, i: usize) -> f64 {
+    st.t_impact + EVENT_GAP * i as f64
+}
+
+/// When `name` first reaches a contact: its own strike (the striker's lag added) or the first
+/// contact that strikes it; the first contact's time for a vehicle in none.
+fn first_contact(c: &Crash, st: Staging, name: &str) -> f64 {
+    let times = c.conflicts.iter().enumerate().filter_map(|(i, k)| {
+        let t = conflict_time(st, i);
+        if k.at_fault == name {
+            Some(t + st.lag)
+        } else if k.struck == name {
+            Some(t)
+        } else {
+            None
+        }
+    });
+    times.reduce(f64::min).unwrap_or(st.t_impact)
+}
+
 /// Per-vehicle distance before the landmark.
 fn distances(c: &Crash, st: Staging) -> Vec<f64> {
-    let af = &c.conflict.at_fault;
-    let struck = c.vehicle(&c.conflict.struck);
     c.vehicles
         .iter()
         .map(|v| {
             if v.manoeuvre == Manoeuvre::Stopped {
                 return 3.0;
             }
-            let is_af = &v.name == af;
-            let t = if is_af { st.t_impact + st.lag } else { st.t_impact };
-            let d = lead_distance(c, v, t);
-            match (is_af, c.conflict.impact, struck) {
-                // Same lane, behind the struck vehicle: at least a car length and a gap back.
-                (true, Impact::RearEnd, Some(s)) => {
-                    let ds = if s.manoeuvre == Manoeuvre::Stopped { 3.0 } else { lead_distance(c, s, st.t_impact) };
-                    d.max(ds + 12.0 + 5.0 * st.lag)
-                }
-                _ => d,
-            }
+            let d = lead_distance(c, v, first_contact(c, st, &v.name));
+            // A rear-end striker is in the same lane, behind the struck vehicle: at least a car
+            // length and a gap back.
+            let behind = c.conflicts.iter().filter(|k| k.at_fault == v.name && k.impact == Impact::RearEnd);
+            behind.filter_map(|k| c.vehicle(&k.struck)).fold(d, |d, s| {
+                let ds = if s.manoeuvre == Manoeuvre::Stopped {
+                    3.0
+                } else {
+                    lead_distance(c, s, first_contact(c, st, &s.name))
+                };
+                d.max(ds + 12.0 + 5.0 * st.lag)
+            })
         })
         .collect()
 }
@@ -127,7 +152,8 @@ pub fn emit(c: &Crash, st: Staging) -> String {
     let far = ds.iter().copied().fold(0.0, f64::max);
     let mut out = String::new();
     comment_lines(&mut out, "", &c.header);
-    let duration = (st.t_impact + 4.0).ceil().max(8.0);
+    let last = conflict_time(st, c.conflicts.len().saturating_sub(1));
+    let duration = (last + 4.0).ceil().max(8.0);
     let _ = writeln!(out, "scenario {} {{", c.scenario_name());
     let _ = writeln!(out, "    seed {}", seed(&c.id));
     let _ = writeln!(out, "    duration {} s", num(duration));
@@ -196,16 +222,17 @@ pub fn emit(c: &Crash, st: Staging) -> String {
         let _ = writeln!(out, "    }}");
     }
 
-    out.push('\n');
-    let k = &c.conflict;
-    comment_lines(&mut out, "    ", &k.notes);
-    let _ = writeln!(out, "    conflict {{");
-    let _ = writeln!(out, "        at_fault {}", k.at_fault);
-    let _ = writeln!(out, "        struck {}", k.struck);
-    let _ = writeln!(out, "        impact {}", impact_name(k.impact));
-    let _ = writeln!(out, "        point {}", k.point.name());
-    let _ = writeln!(out, "        at {} s", num(st.t_impact));
-    let _ = writeln!(out, "    }}");
+    for (i, k) in c.conflicts.iter().enumerate() {
+        out.push('\n');
+        comment_lines(&mut out, "    ", &k.notes);
+        let _ = writeln!(out, "    conflict {{");
+        let _ = writeln!(out, "        at_fault {}", k.at_fault);
+        let _ = writeln!(out, "        struck {}", k.struck);
+        let _ = writeln!(out, "        impact {}", impact_name(k.impact));
+        let _ = writeln!(out, "        point {}", k.point.name());
+        let _ = writeln!(out, "        at {} s", num(conflict_time(st, i)));
+        let _ = writeln!(out, "    }}");
+    }
     out.push_str("}\n");
     out
 }
@@ -238,10 +265,85 @@ pub fn on_coded_sides(
     }
 }
 
-/// Emit, check and roll out; keep the first staging whose latched contact is on the coded
-/// sides. An error says what the last attempt did.
+/// Rounds of speed adjustment toward the coded force (clock direction, delta-V).
+const FORCE_ROUNDS: usize = 4;
+
+/// Emit, check and roll out; keep the first staging whose latched contacts are all on their
+/// coded sides and meet their coded force. When the sides are right but a force is not, the
+/// speeds `impact::propose` derives from that contact's headings are taken and the staging
+/// starts again (at most `FORCE_ROUNDS` times). An error says what the last attempt did.
 pub fn stage(c: &Crash) -> Result<Staged, Vec<Diagnostic>> {
+    let mut crash = c.clone();
     let mut last = String::new();
+    // The first staging whose clocks are met but a closing speed is not: kept, with a warning,
+    // when no round meets both (the rollout's staging sets the striker's last-second speed).
+    let mut partial: Option<Staged> = None;
+    'rounds: for _ in 0..FORCE_ROUNDS {
+        let Some((mut staged, tracks, recs)) = stage_sides(&crash, &mut last)? else { break };
+        let mut shortfalls = Vec::new();
+        for (k, rec) in crash.conflicts.iter().zip(&recs) {
+            match super::impact::check(k, &tracks, rec) {
+                Ok(()) => {}
+                Err(miss) if miss.closing_only => {
+                    shortfalls.push(format!("{} into {}: {}", k.at_fault, k.struck, miss.message));
+                }
+                Err(miss) => {
+                    last = format!("{} into {}: {}", k.at_fault, k.struck, miss.message);
+                    let Some(speeds) = super::impact::propose(&crash, k, &tracks, rec) else { break 'rounds };
+                    set_speeds(&mut crash, &speeds);
+                    continue 'rounds;
+                }
+            }
+        }
+        if shortfalls.is_empty() {
+            return Ok(staged);
+        }
+        let (k, rec) = crash
+            .conflicts
+            .iter()
+            .zip(&recs)
+            .find(|(k, r)| super::impact::check(k, &tracks, r).is_err())
+            .expect("a shortfall");
+        let speeds = super::impact::propose(&crash, k, &tracks, rec);
+        staged.shortfalls = shortfalls;
+        partial.get_or_insert(staged);
+        match speeds {
+            Some(s) => set_speeds(&mut crash, &s),
+            None => break,
+        }
+    }
+    if let Some(p) = partial {
+        return Ok(p);
+    }
+    let k = &c.conflicts[0];
+    let what = if c.conflicts.len() == 1 {
+        format!("{}'s {} into {}'s {} side", k.at_fault, k.face.name(), k.struck, k.point.name())
+    } else {
+        format!("its {} contacts", c.conflicts.len())
+    };
+    Err(vec![
+        Diagnostic::error("E0805", format!("case {}: rocc could not stage {what}: {last}", c.id))
+            .help("nothing is written for this case; `rocc explain E0805` lists what the staging can and cannot do"),
+    ])
+}
+
+/// Take the speeds the coded force asks, said in each vehicle's notes.
+fn set_speeds(c: &mut Crash, speeds: &[(String, f64)]) {
+    const NOTE: &str = "speed at contact set by the coded force";
+    for (name, kmh) in speeds {
+        if let Some(v) = c.vehicles.iter_mut().find(|v| &v.name == name) {
+            v.speed_kmh = (kmh * 10.0).round() / 10.0;
+            v.notes.retain(|n| !n.starts_with(NOTE));
+            v.notes.push(format!("{NOTE} (clock direction, delta-V): {} km/h", num(v.speed_kmh)));
+        }
+    }
+}
+
+type Rolled = (Staged, crate::rollout::Tracks, Vec<crate::rollout::ImpactRecord>);
+
+/// The first staging whose latched contacts are all on their coded sides, with its tracks and
+/// one impact per conflict (time order); `None` (and `last` saying why) when none is.
+fn stage_sides(c: &Crash, last: &mut String) -> Result<Option<Rolled>, Vec<Diagnostic>> {
     let tries = LAGS.iter().flat_map(|&lag| TIMES.iter().map(move |&t| (t, lag)));
     for (t, lag) in tries {
         let st = Staging { t_impact: t, lag };
@@ -266,51 +368,42 @@ pub fn stage(c: &Crash) -> Result<Staged, Vec<Diagnostic>> {
         let front = match crate::compile::front(scen, None) {
             Ok(f) => f,
             Err(d) => {
-                last = d.iter().map(|x| format!("{}: {}", x.code, x.message)).collect::<Vec<_>>().join("; ");
+                *last = d.iter().map(|x| format!("{}: {}", x.code, x.message)).collect::<Vec<_>>().join("; ");
                 continue;
             }
         };
-        let Some(rec) = front.tracks.impacts.first() else {
-            last = format!("no contact at {} s", num(t));
-            continue;
-        };
-        let size = front.tracks.agents[rec.at_fault].size;
-        if rec.depth < crate::rollout::MIN_DEPTH {
-            last = format!("only a {:.2} m graze at {} s", rec.depth, num(t));
-            continue;
-        }
-        match on_coded_sides(
-            c.conflict.impact,
-            c.conflict.face,
-            c.conflict.point,
-            rec.struck_side,
-            rec.at_fault_local,
-            size,
-        ) {
-            Ok(()) => {
-                return Ok(Staged {
+        match contacts_on_sides(c, &front.tracks) {
+            Ok(recs) => {
+                let first = &recs[0];
+                let staged = Staged {
                     text,
                     staging: st,
-                    frame: rec.frame,
-                    time: rec.frame as f64 / front.tracks.rate,
-                    struck_side: rec.struck_side,
-                });
+                    frame: first.frame,
+                    time: first.frame as f64 / front.tracks.rate,
+                    struck_side: first.struck_side,
+                    shortfalls: Vec::new(),
+                };
+                return Ok(Some((staged, front.tracks, recs)));
             }
-            Err(m) => last = m,
+            Err(m) => *last = format!("{m} (impact at {} s)", num(t)),
         }
     }
-    Err(vec![
-        Diagnostic::error(
-            "E0805",
-            format!(
-                "case {}: rocc could not stage {}'s {} into {}'s {} side: {last}",
-                c.id,
-                c.conflict.at_fault,
-                c.conflict.face.name(),
-                c.conflict.struck,
-                c.conflict.point.name()
-            ),
-        )
-        .help("nothing is written for this case; `rocc explain E0805` lists what the staging can and cannot do"),
-    ])
+    Ok(None)
+}
+
+/// One latched impact per conflict, each deep enough and on its coded sides.
+fn contacts_on_sides(c: &Crash, t: &crate::rollout::Tracks) -> Result<Vec<crate::rollout::ImpactRecord>, String> {
+    let mut out = Vec::new();
+    for (i, k) in c.conflicts.iter().enumerate() {
+        let pair = format!("{} into {}", k.at_fault, k.struck);
+        let rec = t.impacts.iter().find(|r| r.conflict == i).ok_or_else(|| format!("{pair}: no contact"))?;
+        if rec.depth < crate::rollout::MIN_DEPTH {
+            return Err(format!("{pair}: only a {:.2} m graze", rec.depth));
+        }
+        let size = t.agents[rec.at_fault].size;
+        on_coded_sides(k.impact, k.face, k.point, rec.struck_side, rec.at_fault_local, size)
+            .map_err(|m| format!("{pair}: {m}"))?;
+        out.push(rec.clone());
+    }
+    Ok(out)
 }

@@ -470,7 +470,7 @@ fn go(
         run.conflict_replies.push(reply.clone());
         let (diags, sources, feedback, kept) = match descriptor::parse(&reply, &roster) {
             Ok(d) => {
-                let merged = descriptor::merge(&scene, &d.block()).unwrap_or_else(|| scene.clone());
+                let merged = descriptor::merge(&scene, &d.blocks()).unwrap_or_else(|| scene.clone());
                 run.merged.push(merged.clone());
                 match repair::check(name, &merged, base) {
                     Ok(()) => {
@@ -480,7 +480,7 @@ fn go(
                     Err((diags, sources)) => {
                         let fb = format!(
                             "the scene with `{}` fails the checker:\n{}",
-                            d.block(),
+                            d.blocks(),
                             repair::diagnostics_json(&diags, &sources)
                         );
                         (diags, sources, fb, merged)

@@ -5,7 +5,8 @@
 //! source fields; or a diagnostic saying exactly why the case cannot be represented.
 //!
 //! `case.rs` reads the XML into a plain `CirenCase`; `narrative.rs` reads the Summary with fixed
-//! rules; `record.rs` maps a case, and `safe.rs` a SAFE extraction, to a plain `Crash`
+//! rules; `record/` maps a case (field decoders, a pair of vehicles, a vehicle and an object),
+//! and `safe/` a SAFE extraction (its `point_of_impact` rules in `safe/poi.rs`), to a plain `Crash`
 //! (`crash.rs`); `emit.rs` writes the `.scn` and keeps it only once the checker and the rollout
 //! agree that the latched contact is on the coded sides. The VLM route (`extract.rs`) sends the sketch and summary to a vision model, checks and
 //! repairs the scene like `rocc text`, and merges the conflict of a separate greedy call by span
@@ -16,6 +17,7 @@ pub mod crash;
 pub mod descriptor;
 pub mod emit;
 pub mod extract;
+pub mod impact;
 pub mod narrative;
 pub mod record;
 pub mod safe;
@@ -48,7 +50,14 @@ pub fn import_case(path: &Path, sources: &mut SourceMap) -> Result<Imported, Vec
     let (case, file) = read_case(path, sources)?;
     let mapped = record::map_case(&case, file)?;
     let staged = stage(&mapped.crash)?;
-    Ok(Imported { crash: mapped.crash, staged, warnings: mapped.warnings })
+    let mut warnings = mapped.warnings;
+    for s in &staged.shortfalls {
+        warnings.push(Diagnostic::warning("E0806", format!("case {}: {s}", case.id)).help(
+            "the sides and the clock direction are met; the rollout's staging sets the striker's speed in \
+                 its last seconds, so the closing speed is the staging's",
+        ));
+    }
+    Ok(Imported { crash: mapped.crash, staged, warnings })
 }
 
 /// Read, map, emit and verify one SAFE extraction (`*.json`).

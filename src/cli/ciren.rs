@@ -115,9 +115,13 @@ fn import_all(inputs: &[PathBuf], out: &Path, import: Importer, mut failed: usiz
 
 /// Who struck whom with what, and when the crash latches.
 fn what_happened(imp: &Imported) -> String {
-    let k = &imp.crash.conflict;
+    let k = &imp.crash.conflicts[0];
+    let more = match imp.crash.conflicts.len() {
+        1 => String::new(),
+        n => format!(", then {} more", n - 1),
+    };
     format!(
-        "{}'s {} into {} ({}{}), latched at {:.1} s",
+        "{}'s {} into {} ({}{}), latched at {:.1} s{more}",
         k.at_fault,
         k.face.name(),
         k.struck,

@@ -87,6 +87,14 @@ pub fn for_decoding(mut cfg: Cfg) -> Cfg {
                 Node::Opt(Box::new(Node::Seq(vec![Node::Ref("sep".into()), ws()]))),
             ])))
         }));
+        // Then up to two parking lanes and two driveways, bounded for the same reason.
+        for rule in ["parking_decl", "parking_decl", "driveway_decl", "driveway_decl"] {
+            seq.push(Node::Opt(Box::new(Node::Seq(vec![
+                Node::Ref(rule.into()),
+                ws(),
+                Node::Opt(Box::new(Node::Seq(vec![Node::Ref("sep".into()), ws()]))),
+            ]))));
+        }
         seq.push(Node::Lit("}".into()));
         *node = Node::Seq(seq);
     }

@@ -135,7 +135,7 @@ fn goal_block() -> Cfg {
         ])))
     };
     let mut seq = vec![Node::Lit("goal".into()), ws(), Node::Lit("{".into()), ws()];
-    seq.extend(["speed_stmt", "lateral", "stop", "turn", "start"].map(part));
+    seq.extend(["speed_stmt", "lateral", "stop", "turn", "reverse", "start"].map(part));
     seq.push(Node::Lit("}".into()));
     grammar::for_decoding(cfg.with_root("goal_block", Node::Seq(seq)))
 }

@@ -43,6 +43,37 @@ pub struct RoadSpec {
     pub crosswalks: bool,
     #[serde(default)]
     pub sidewalks: bool,
+    /// Parking lanes along kerbs (`parking ARM in|out|both`), straight roads only.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub parking: Vec<ParkingSpec>,
+    /// Driveways across the sidewalk (`driveway NAME ARM.DIR D m`), straight roads only.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub driveways: Vec<DrivewaySpec>,
+}
+
+/// A parking lane: the arm and the kerb (`in`, `out` or `both`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ParkingSpec {
+    pub arm: String,
+    pub side: String,
+}
+
+/// A driveway: its name, the kerb it crosses and its distance along the arm from the centre.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DrivewaySpec {
+    pub name: String,
+    pub arm: String,
+    #[serde(default = "out_word")]
+    pub direction: String,
+    #[serde(default = "twenty")]
+    pub distance_m: f64,
+}
+
+/// Where an agent stands (`AgentSpec::on`).
+pub const PLACES: [&str; 5] = ["lane", "sidewalk", "crosswalk", "parking", "driveway"];
+
+fn out_word() -> String {
+    "out".into()
 }
 
 fn one() -> u32 {
@@ -53,7 +84,8 @@ fn one() -> u32 {
 pub struct AgentSpec {
     pub name: String,
     pub kind: String,
-    /// `lane` (default), `sidewalk` or `crosswalk`.
+    /// `lane` (default), `sidewalk`, `crosswalk`, `parking` (a slot of the parking lane along
+    /// `arm`.`direction`) or `driveway`.
     #[serde(default = "lane_word")]
     pub on: String,
     pub arm: String,
@@ -95,6 +127,12 @@ pub struct AgentSpec {
     /// A side door that opens at a time or on a trigger (dooring).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub door: Option<DoorSpec>,
+    /// The parking slot of `on: parking` (1 = nearest the centre; `lane` otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slot: Option<u32>,
+    /// The driveway of `on: driveway` (the road's first otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub driveway: Option<String>,
 }
 
 /// `door NAME open at T s` or `door NAME open when ...` (the trigger's `within` or `ttc_under`).
@@ -181,24 +219,7 @@ pub struct Overrides {
 
 /// The JSON schema sent with the schema stage (as a decoding constraint where the server takes one).
 pub fn json_schema(kinds: &[String]) -> Value {
-    let door = json!({
-        "type": "object",
-        "required": ["door"],
-        "properties": {
-            "door": {"enum": ["front_left", "front_right", "rear_left", "rear_right"]},
-            "open_at_s": {"type": "number", "minimum": 0, "maximum": 60},
-            "open_when": {
-                "type": "object",
-                "required": ["agent", "condition"],
-                "properties": {
-                    "agent": {"type": "string", "pattern": "^[a-z][a-z0-9_]{0,20}$"},
-                    "condition": {"enum": ["within", "ttc_under"]},
-                    "value": {"type": "number", "minimum": 0, "maximum": 200}
-                }
-            }
-        }
-    });
-    let mut schema = json!({
+    let mut v = json!({
         "type": "object",
         "required": ["name", "brief", "road", "duration_s", "agents"],
         "properties": {
@@ -213,7 +234,9 @@ pub fn json_schema(kinds: &[String]) -> Value {
                     "lanes": {"type": "integer", "minimum": 1, "maximum": 4},
                     "speed_limit_kmh": {"type": "number", "minimum": 10, "maximum": 130},
                     "crosswalks": {"type": "boolean"},
-                    "sidewalks": {"type": "boolean"}
+                    "sidewalks": {"type": "boolean"},
+                    "parking": parking_schema(),
+                    "driveways": driveways_schema()
                 }
             },
             "agents": {
@@ -224,7 +247,7 @@ pub fn json_schema(kinds: &[String]) -> Value {
                     "properties": {
                         "name": {"type": "string", "pattern": "^[a-z][a-z0-9_]{0,20}$"},
                         "kind": {"enum": kinds},
-                        "on": {"enum": ["lane", "sidewalk", "crosswalk"]},
+                        "on": {"enum": PLACES},
                         "arm": {"enum": ARMS},
                         "direction": {"enum": ["in", "out"]},
                         "lane": {"type": "integer", "minimum": 1, "maximum": 4},
@@ -260,13 +283,64 @@ pub fn json_schema(kinds: &[String]) -> Value {
             "randomness": {"type": "number", "minimum": 0, "maximum": 1}
         }
     });
-    // Lamps and doors are added apart: one `json!` of it all passes the macro's recursion limit.
-    let props = &mut schema["properties"]["agents"]["items"]["properties"];
+    // Kerbside placements, lamps and doors (a separate statement: one macro holding them all
+    // overflows its recursion limit).
+    let agent = &mut v["properties"]["agents"]["items"]["properties"];
+    agent["slot"] = json!({"type": "integer", "minimum": 1, "maximum": 40});
+    agent["driveway"] = json!({"type": "string", "pattern": "^[a-z][a-z0-9_]{0,20}$"});
     for lamp in ["lights", "hazards", "beacons"] {
-        props[lamp] = json!({"type": "boolean"});
+        agent[lamp] = json!({"type": "boolean"});
     }
-    props["door"] = door;
-    schema
+    agent["door"] = door_schema();
+    v
+}
+
+/// An agent's `door` in the JSON schema.
+fn door_schema() -> Value {
+    json!({
+        "type": "object",
+        "required": ["door"],
+        "properties": {
+            "door": {"enum": ["front_left", "front_right", "rear_left", "rear_right"]},
+            "open_at_s": {"type": "number", "minimum": 0, "maximum": 60},
+            "open_when": {
+                "type": "object",
+                "required": ["agent", "condition"],
+                "properties": {
+                    "agent": {"type": "string", "pattern": "^[a-z][a-z0-9_]{0,20}$"},
+                    "condition": {"enum": ["within", "ttc_under"]},
+                    "value": {"type": "number", "minimum": 0, "maximum": 200}
+                }
+            }
+        }
+    })
+}
+
+/// `road.parking` in the JSON schema.
+fn parking_schema() -> Value {
+    json!({
+        "type": "array", "maxItems": 4,
+        "items": {
+            "type": "object", "required": ["arm", "side"],
+            "properties": {"arm": {"enum": ARMS}, "side": {"enum": ["in", "out", "both"]}}
+        }
+    })
+}
+
+/// `road.driveways` in the JSON schema.
+fn driveways_schema() -> Value {
+    json!({
+        "type": "array", "maxItems": 4,
+        "items": {
+            "type": "object", "required": ["name", "arm", "direction", "distance_m"],
+            "properties": {
+                "name": {"type": "string", "pattern": "^[a-z][a-z0-9_]{0,20}$"},
+                "arm": {"enum": ARMS},
+                "direction": {"enum": ["in", "out"]},
+                "distance_m": {"type": "number", "minimum": 2, "maximum": 100}
+            }
+        }
+    })
 }
 
 /// Read the model's reply: the first JSON object in it (code fences and chatter around it are
@@ -311,6 +385,7 @@ pub fn parse(reply: &str) -> Result<Schema, String> {
         }
         rare_fields(a)?;
     }
+    kerb_fields(&mut s)?;
     Ok(s)
 }
 
@@ -339,6 +414,27 @@ fn rare_fields(a: &mut AgentSpec) -> Result<(), String> {
             return Err(format!("agent `{}`: start_when.value must be a non-negative number", a.name));
         }
         t.agent = ident(&t.agent, "agent");
+    }
+    Ok(())
+}
+
+/// The words of parking lanes, driveways and kerbside placements; names become identifiers.
+fn kerb_fields(s: &mut Schema) -> Result<(), String> {
+    for p in &s.road.parking {
+        if !["in", "out", "both"].contains(&p.side.as_str()) {
+            return Err(format!("road.parking side `{}` is not one of in, out, both", p.side));
+        }
+    }
+    for d in &mut s.road.driveways {
+        d.name = ident(&d.name, "driveway");
+    }
+    for a in &mut s.agents {
+        if !PLACES.contains(&a.on.as_str()) {
+            return Err(format!("agent `{}`: on `{}` is not one of {}", a.name, a.on, PLACES.join(", ")));
+        }
+        if let Some(d) = &mut a.driveway {
+            *d = ident(d, "driveway");
+        }
     }
     Ok(())
 }
@@ -434,6 +530,8 @@ pub fn apply(s: &mut Schema, o: &Overrides, sentence: &str) {
 pub fn placement(a: &AgentSpec) -> String {
     let d = num(a.distance_m);
     match a.on.as_str() {
+        "parking" => format!("at parking({}.{})[{}]", a.arm, a.direction, a.slot.unwrap_or(a.lane)),
+        "driveway" => format!("at driveway({})", a.driveway.as_deref().unwrap_or("d1")),
         "sidewalk" => format!("at sidewalk({}.{}), {d} m {} {}", a.arm, a.direction, a.relation, a.landmark),
         "crosswalk" => format!("at crosswalk({}), 50 %", a.arm),
         _ => format!("at {}.{}[{}], {d} m {} {}", a.arm, a.direction, a.lane, a.relation, a.landmark),
@@ -478,9 +576,13 @@ pub fn emit(s: &Schema, goals: &[Option<String>], is_static: &dyn Fn(&str) -> bo
     if crosswalks {
         params.push("crosswalks on".into());
     }
-    if sidewalks {
+    if sidewalks || !r.driveways.is_empty() {
         params.push("sidewalks on".into());
     }
+    params.extend(r.parking.iter().map(|p| format!("parking {} {}", p.arm, p.side)));
+    params.extend(
+        r.driveways.iter().map(|d| format!("driveway {} {}.{} {} m", d.name, d.arm, d.direction, num(d.distance_m))),
+    );
     out.push_str(&format!("\n    road {} {{ {} }}\n", r.template, params.join("; ")));
     for (i, a) in s.agents.iter().enumerate() {
         let stat = is_static(&a.kind);
@@ -539,6 +641,15 @@ pub fn describe(s: &Schema, a: &AgentSpec) -> String {
     let place = match a.on.as_str() {
         "sidewalk" => format!("on the {} sidewalk of the {} arm", a.direction, a.arm),
         "crosswalk" => format!("on the crosswalk of the {} arm", a.arm),
+        "parking" => format!(
+            "parked in slot {} of the parking lane along the {} {} kerb (it may `reverse into` a lane)",
+            a.slot.unwrap_or(a.lane),
+            a.arm,
+            a.direction
+        ),
+        "driveway" => {
+            format!("in driveway {}, nosed in (it may `reverse into` a lane)", a.driveway.as_deref().unwrap_or("d1"))
+        }
         _ => {
             let motion = if a.direction == "in" { "toward" } else { "away from" };
             format!("in lane {} of the {} arm, {toward}, {motion} {junction}", a.lane, a.arm)

@@ -3,7 +3,9 @@
 //! centrelines (lanes and junction connectors, in the direction of travel), lane dividers (the
 //! painted lines of BEV channel 15, each dash its own polyline), road boundaries (the outline of
 //! road blocks and junctions, BEV channel 17), crosswalks (closed outlines, channel 16) and stop
-//! lines (two points each); and the junction's signals, where it has them.
+//! lines (two points each); and the junction's signals, where it has them. Parking lanes and
+//! driveways (BEV channel 3) are no MapTR class: where a road has them they are written as
+//! closed outlines under `parking_areas`.
 
 use crate::geom::{Polygon, point_in_polygon};
 use crate::road::Map;
@@ -30,6 +32,9 @@ pub struct SceneMap {
     /// frame's lights are in `boxes.json`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub signals: Option<crate::road::signals::SignalPlan>,
+    /// Parking lanes and driveways (`parking`, `driveway`), closed outlines; absent without.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub parking_areas: Vec<Points>,
 }
 
 fn pts(line: &[DVec2]) -> Points {
@@ -55,6 +60,7 @@ impl SceneMap {
             crosswalks: map.crosswalk_polygons.iter().map(closed).collect(),
             stop_lines: map.stop_lines.iter().map(|s| pts(&[s.a, s.b])).collect(),
             signals: map.signals.clone(),
+            parking_areas: map.carparks.iter().map(closed).collect(),
         }
     }
 }

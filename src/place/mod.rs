@@ -169,7 +169,9 @@ fn surface_ok(map: &Map, class: Class, motion: Motion, cross: bool, pose: Pose) 
         // A road-less scene (replayed tracks) has no map for a static object to be near.
         _ if motion == Motion::Static && map.lanes.is_empty() => (true, ""),
         // A wreck, a parked car or a bicycle on its side can be anywhere a static thing can.
-        Class::Vehicle if motion != Motion::Static => (s.lane || s.shoulder || s.junction, "a lane or the shoulder"),
+        Class::Vehicle if motion != Motion::Static => {
+            (s.lane || s.shoulder || s.junction || s.carpark, "a lane, the shoulder, a parking lane or a driveway")
+        }
         Class::Bicycle if motion != Motion::Static => {
             (s.lane || s.shoulder || s.junction || s.sidewalk || s.crosswalk, "a lane, the shoulder or a sidewalk")
         }

@@ -10,7 +10,7 @@ use super::Pose;
 use crate::check::scenario::{Arm, Dir, Keyframe, Landmark, LaneId, Place};
 use crate::geom::Polyline;
 use crate::road::Map;
-use crate::road::map::Lane;
+use crate::road::map::{KerbRef, Lane};
 use glam::DVec2;
 
 /// Float slack at the ends of a guide.
@@ -35,6 +35,8 @@ pub enum Miss {
     NoCrosswalk(Arm),
     NoSidewalk(Arm, Dir),
     NoTrack,
+    /// A parking slot or driveway the map does not lay out.
+    NoKerb,
 }
 
 /// A line to measure along, and the station of a landmark on it.
@@ -167,11 +169,19 @@ pub fn pose(map: &Map, place: &Place<f64>, track: Option<&[Keyframe]>) -> Result
             let (g, s) = on_sidewalk(map, *arm, *dir, a.landmark, a.dist)?;
             Ok(along(&g, s, *offset, *heading))
         }
+        Place::Parking { arm, dir, slot } => kerb(map, KerbRef::Slot { arm: *arm, dir: *dir, slot: *slot }),
+        Place::Driveway { index } => kerb(map, KerbRef::Driveway(*index)),
         Place::Track => {
             let k = track.and_then(|t| t.first()).ok_or(Miss::NoTrack)?;
             Ok(Pose { x: k.x, y: k.y, yaw: k.yaw })
         }
     }
+}
+
+/// A parking slot's or a driveway's standing place (`road/parking.rs`).
+fn kerb(map: &Map, at: KerbRef) -> Result<Pose, Miss> {
+    let k = map.kerb_place(at).ok_or(Miss::NoKerb)?;
+    Ok(Pose { x: k.centre.x, y: k.centre.y, yaw: k.yaw })
 }
 
 impl Miss {
@@ -210,6 +220,10 @@ impl Miss {
                     if *dir == Dir::In { "in" } else { "out" }
                 ),
                 "add `sidewalks on` to the road block".into(),
+            ),
+            Miss::NoKerb => (
+                format!("`{who}` is placed in a parking slot or driveway this road does not lay out"),
+                "parking lanes and driveways are laid along straight roads".into(),
             ),
             Miss::NoTrack => {
                 (format!("`{who}` replays a track with no keyframes"), "give the track at least one keyframe".into())

@@ -18,6 +18,8 @@ pub struct Surfaces {
     pub sidewalk: bool,
     /// Any drivable paving (lanes, shoulders, median, junction).
     pub drivable: bool,
+    /// A parking area: a parking lane or a driveway (`road/parking.rs`).
+    pub carpark: bool,
 }
 
 impl Surfaces {
@@ -45,6 +47,7 @@ impl Surfaces {
         s.crosswalk = inside(&map.crosswalk_polygons);
         s.sidewalk = inside(&map.walkways);
         s.drivable = s.lane || s.shoulder || s.junction || inside(&map.drivable);
+        s.carpark = inside(&map.carparks);
         s
     }
 
@@ -58,6 +61,8 @@ impl Surfaces {
             "on a lane"
         } else if self.shoulder {
             "on the shoulder"
+        } else if self.carpark {
+            "in a parking lane or driveway"
         } else if self.sidewalk {
             "on a sidewalk"
         } else if self.drivable {

@@ -42,6 +42,30 @@ pub struct Map {
     /// Traffic signals at the junction (`signals on`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub signals: Option<crate::road::signals::SignalPlan>,
+    /// Parking slots and driveways (`road/parking.rs`): where `parking(ARM.DIR)[K]` and
+    /// `driveway(NAME)` stand.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub kerb_places: Vec<KerbPlace>,
+}
+
+/// A parking slot or a driveway's standing place: its centre and the heading of a vehicle in it
+/// (along the lanes beside a slot; nosed in, away from the road, in a driveway).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct KerbPlace {
+    pub at: KerbRef,
+    pub centre: DVec2,
+    pub yaw: f64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum KerbRef {
+    Slot {
+        arm: Arm,
+        dir: crate::check::scenario::Dir,
+        slot: u32,
+    },
+    /// Index into `Road::kerb.driveways`.
+    Driveway(usize),
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

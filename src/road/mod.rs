@@ -10,6 +10,7 @@ mod curve;
 mod junction;
 pub mod map;
 mod merge;
+pub(crate) mod parking;
 mod roundabout;
 pub mod route;
 pub(crate) mod shape;
@@ -31,6 +32,9 @@ pub fn build(road: &Road) -> Map {
         // Replayed recorded tracks carry no map of their own.
         Template::None => Map::default(),
     };
+    if !road.kerb.is_empty() {
+        parking::lay(road, &mut map);
+    }
     map.bounds = bounds(&map);
     map.signals = road.signals.map(|c| signals::plan(c, &map));
     map

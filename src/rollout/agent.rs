@@ -115,6 +115,8 @@ pub(crate) struct Actor {
     pub lane_hw: f64,
     /// A vehicle's lane is the only one of its direction (a two-lane road).
     pub single: bool,
+    /// Driven backwards (`drive::reverse`): its state's heading is the body's turned half round.
+    pub reverse: bool,
 }
 
 /// A goal phase as the rollout runs it: its goal speed, from its start time once its trigger

@@ -108,15 +108,16 @@ pub(crate) fn with_doors(c: &Concrete, map: &Map, placed: &Placed, mut t: Tracks
     Ok(t)
 }
 
-/// Brake lights at frame `f`: decelerating beyond `BRAKE_LIGHT_DECEL` (central difference of
-/// the speeds, one-sided at the ends), or stopped.
+/// Brake lights at frame `f`: slowing beyond `BRAKE_LIGHT_DECEL` (central difference of the
+/// speeds' size, one-sided at the ends; forwards or reversing), or stopped.
 fn braking(v: &[f64], f: usize, rate: f64) -> bool {
     let n = v.len();
     if n == 0 {
         return false;
     }
     let (lo, hi) = (f.saturating_sub(1), (f + 1).min(n - 1));
-    let a = if hi > lo { (v[hi] - v[lo]) * rate / (hi - lo) as f64 } else { 0.0 };
+    // Slowing is the speed's size falling: a reversing car's speed is negative.
+    let a = if hi > lo { (v[hi].abs() - v[lo].abs()) * rate / (hi - lo) as f64 } else { 0.0 };
     a < -BRAKE_LIGHT_DECEL || v[f.min(n - 1)].abs() < STOPPED_SPEED
 }
 

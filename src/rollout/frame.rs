@@ -2,6 +2,7 @@
 //! current state (a Jacobi update, so the result does not depend on agent order), undoes moves
 //! that would overlap, and latches crashes.
 
+use crate::geom::wrap_angle;
 use crate::place::Pose;
 use crate::rollout::Tracks;
 use crate::rollout::agent::Rank;
@@ -12,6 +13,7 @@ use crate::rollout::kinematics::{replay, steer};
 use crate::rollout::path::Foot;
 use crate::rollout::staging::plan::Plan;
 use glam::DVec2;
+use std::f64::consts::PI;
 
 pub(crate) struct Sim<'a, 'b> {
     pub(crate) actors: &'a [Actor],
@@ -334,8 +336,10 @@ impl<'a, 'b> Sim<'a, 'b> {
             keep.push(self.cur.clone());
         }
         for (i, st) in self.cur.iter().enumerate() {
-            out.poses[i].push(Pose { x: st.pos.x, y: st.pos.y, yaw: st.yaw });
-            out.speeds[i].push(st.v);
+            // A reversing vehicle moves along its state's heading, its body turned half round.
+            let (yaw, v) = if self.actors[i].reverse { (wrap_angle(st.yaw + PI), -st.v) } else { (st.yaw, st.v) };
+            out.poses[i].push(Pose { x: st.pos.x, y: st.pos.y, yaw });
+            out.speeds[i].push(v);
         }
     }
 

@@ -89,6 +89,7 @@ pub(crate) fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Cl
         pull: 0.0,
         lane_hw: 1.75,
         single: false,
+        reverse: false,
         info,
     }
 }
@@ -208,6 +209,9 @@ pub(crate) fn build_actor(
         },
         Some(Stop::After(dist)) => StopGoal::Centre(a.s0 + dist.max(0.0)),
     };
+    if let Some(r) = goal.and_then(|g| g.reverse).filter(|_| a.vehicle) {
+        crate::rollout::drive::reverse::setup(map, &mut a, r, goal.and_then(|g| g.speed), errs);
+    }
     if a.vehicle {
         a.pull = pull_offset(lane, a.hw, a.d0);
         a.lane_hw = lane.map_or(1.75, |l| l.width / 2.0);

@@ -114,6 +114,7 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
                     turn: g.turn,
                     start_after: g.start_after,
                     start_when: g.start_when,
+                    reverse: g.reverse,
                     stop_span: g.stop_span,
                 }),
                 track: a.track.clone(),
@@ -182,6 +183,8 @@ fn place(p: &Place, r: &mut Rng) -> Place<f64> {
             heading: heading.map(|h| r.draw(h)),
         },
         Place::Track => Place::Track,
+        Place::Parking { arm, dir, slot } => Place::Parking { arm: *arm, dir: *dir, slot: *slot },
+        Place::Driveway { index } => Place::Driveway { index: *index },
     }
 }
 

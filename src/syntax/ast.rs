@@ -110,7 +110,19 @@ pub enum Egos {
 pub struct Road {
     pub template: Ident,
     pub params: Vec<Param>,
+    /// `parking ARM SIDE [WIDTH]` and `driveway NAME ARM.DIR DIST` (src/road/parking.rs).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub kerb: Vec<KerbDecl>,
     pub span: Span,
+}
+
+/// A kerbside place declared in a road block.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum KerbDecl {
+    /// `parking east both 2.5 m`: the side word (`in`, `out`, `both`) is checked.
+    Parking { arm: Ident, side: Ident, width: Option<Value>, span: Span },
+    /// `driveway d1 east.out 20 m`: across the sidewalk of that kerb, 20 m along the arm.
+    Driveway { name: Ident, side: SideRef, at: Value, span: Span },
 }
 
 /// `traffic { ... }`: a block of named parameters.
@@ -262,6 +274,10 @@ pub enum Placement {
     Crosswalk { arm: Ident, fraction: Value, span: Span },
     /// `sidewalk(north.out), 3 m after junction`
     Sidewalk { side: SideRef, along: Along, offset: Option<Offset>, heading: Option<Value>, span: Span },
+    /// `parking(east.out)[3]`
+    Parking { side: SideRef, slot: u32, slot_span: Span, span: Span },
+    /// `driveway(d1)`
+    Driveway { name: Ident, span: Span },
 }
 
 impl Placement {
@@ -270,7 +286,9 @@ impl Placement {
             Placement::Lane { span, .. }
             | Placement::World { span, .. }
             | Placement::Crosswalk { span, .. }
-            | Placement::Sidewalk { span, .. } => *span,
+            | Placement::Sidewalk { span, .. }
+            | Placement::Parking { span, .. }
+            | Placement::Driveway { span, .. } => *span,
         }
     }
 }
@@ -351,6 +369,17 @@ pub enum GoalStmt {
         trigger: Trigger,
         span: Span,
     },
+    /// `reverse 8 m` or `reverse into east.out[1]`.
+    Reverse {
+        to: ReverseTo,
+        span: Span,
+    },
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum ReverseTo {
+    Dist(Value),
+    Into(LaneRef),
 }
 
 impl GoalStmt {
@@ -361,7 +390,8 @@ impl GoalStmt {
             | GoalStmt::Stop { span, .. }
             | GoalStmt::Turn { span, .. }
             | GoalStmt::Start { span, .. }
-            | GoalStmt::StartWhen { span, .. } => *span,
+            | GoalStmt::StartWhen { span, .. }
+            | GoalStmt::Reverse { span, .. } => *span,
         }
     }
     pub fn keyword(&self) -> &'static str {
@@ -371,6 +401,7 @@ impl GoalStmt {
             GoalStmt::Stop { .. } => "stop",
             GoalStmt::Turn { .. } => "turn",
             GoalStmt::Start { .. } | GoalStmt::StartWhen { .. } => "start",
+            GoalStmt::Reverse { .. } => "reverse",
         }
     }
 }

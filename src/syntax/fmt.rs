@@ -76,13 +76,10 @@ fn scenario_stmt(s: &ScenarioStmt) -> Doc {
             Egos::Vehicles => "egos vehicles".to_string(),
             Egos::List(l) => format!("egos [{}]", l.iter().map(|i| i.name.as_str()).collect::<Vec<_>>().join(", ")),
         }),
-        ScenarioStmt::Road(r) if r.params.is_empty() => line(format!("road {}", r.template.name)),
-        ScenarioStmt::Road(r) => Doc::Block {
-            header: format!("road {}", r.template.name),
-            span: r.span,
-            items: r.params.iter().map(param).collect(),
-            fit: true,
-        },
+        ScenarioStmt::Road(r) if r.params.is_empty() && r.kerb.is_empty() => line(format!("road {}", r.template.name)),
+        ScenarioStmt::Road(r) => {
+            Doc::Block { header: format!("road {}", r.template.name), span: r.span, items: road_items(r), fit: true }
+        }
         ScenarioStmt::Traffic(t) => Doc::Block {
             header: "traffic".into(),
             span: t.span,
@@ -236,6 +233,10 @@ fn goal_stmt(s: &GoalStmt) -> String {
         GoalStmt::Turn { turn, .. } => format!("turn {}", turn.name),
         GoalStmt::Start { after, .. } => format!("start after {}", val(after)),
         GoalStmt::StartWhen { trigger: w, .. } => format!("start {}", trigger(w)),
+        GoalStmt::Reverse { to: ReverseTo::Dist(v), .. } => format!("reverse {}", val(v)),
+        GoalStmt::Reverse { to: ReverseTo::Into(l), .. } => {
+            format!("reverse into {}.{}[{}]", l.arm.name, if l.dir == Dir::In { "in" } else { "out" }, l.index)
+        }
     }
 }
 
@@ -251,6 +252,27 @@ fn trigger(w: &Trigger) -> String {
 
 fn size(s: &SizeStmt) -> Doc {
     Doc::Line { span: s.span, text: format!("{} {}", s.key.as_str(), val(&s.value)) }
+}
+
+/// A road block's parameters and kerbside places, in source order.
+fn road_items(r: &Road) -> Vec<Doc> {
+    let dir = |d: Dir| if d == Dir::In { "in" } else { "out" };
+    let kerb = r.kerb.iter().map(|k| match k {
+        KerbDecl::Parking { arm, side, width, span } => {
+            let w = width.as_ref().map(|w| format!(" {}", val(w))).unwrap_or_default();
+            (span.start, Doc::Line { span: *span, text: format!("parking {} {}{w}", arm.name, side.name) })
+        }
+        KerbDecl::Driveway { name, side, at, span } => (
+            span.start,
+            Doc::Line {
+                span: *span,
+                text: format!("driveway {} {}.{} {}", name.name, side.arm.name, dir(side.dir), val(at)),
+            },
+        ),
+    });
+    let mut items: Vec<(u32, Doc)> = r.params.iter().map(|p| (p.span.start, param(p))).chain(kerb).collect();
+    items.sort_by_key(|(start, _)| *start);
+    items.into_iter().map(|(_, d)| d).collect()
 }
 
 fn param(p: &Param) -> Doc {
@@ -295,6 +317,8 @@ pub fn placement(p: &Placement) -> String {
         Placement::Sidewalk { side, along: a, offset, heading, .. } => {
             format!("sidewalk({}.{}), {}{}", side.arm.name, dir(side.dir), along(a), tail(offset, heading))
         }
+        Placement::Parking { side, slot, .. } => format!("parking({}.{})[{slot}]", side.arm.name, dir(side.dir)),
+        Placement::Driveway { name, .. } => format!("driveway({})", name.name),
     }
 }
 

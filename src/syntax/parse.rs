@@ -118,8 +118,14 @@ impl Builder {
             Rule::road => {
                 let mut it = inner(p).into_iter().skip(1);
                 let template = self.ident(it.next().expect("grammar: road template"));
-                let params = it.map(|q| self.param(q)).collect();
-                ScenarioStmt::Road(Road { template, params, span })
+                let (mut params, mut kerb) = (vec![], vec![]);
+                for q in it {
+                    match q.as_rule() {
+                        Rule::parking_decl | Rule::driveway_decl => kerb.push(self.kerb_decl(q)),
+                        _ => params.push(self.param(q)),
+                    }
+                }
+                ScenarioStmt::Road(Road { template, params, kerb, span })
             }
             Rule::traffic => {
                 let params = inner(p).into_iter().skip(1).map(|q| self.param(q)).collect();
@@ -223,6 +229,35 @@ impl Builder {
         Param { name, value, span }
     }
 
+    fn kerb_decl(&self, p: P<'_>) -> KerbDecl {
+        let span = self.span(&p);
+        let rule = p.as_rule();
+        let parts: Vec<_> = inner(p).into_iter().skip(1).collect();
+        if rule == Rule::parking_decl {
+            let width = parts.get(2).map(|v| self.value(v.clone()));
+            return KerbDecl::Parking {
+                arm: self.ident(parts[0].clone()),
+                side: self.ident(parts[1].clone()),
+                width,
+                span,
+            };
+        }
+        KerbDecl::Driveway {
+            name: self.ident(parts[0].clone()),
+            side: self.side_ref(parts[1].clone()),
+            at: self.value(parts[2].clone()),
+            span,
+        }
+    }
+
+    fn side_ref(&self, s: P<'_>) -> SideRef {
+        let span = self.span(&s);
+        let mut it = inner(s).into_iter();
+        let arm = self.ident(it.next().expect("grammar: side arm"));
+        let dir = dir(it.next().expect("grammar: side dir").as_str());
+        SideRef { arm, dir, span }
+    }
+
     fn kind_ref(&self, p: P<'_>) -> KindRef {
         let q = last(p);
         match q.as_rule() {
@@ -314,6 +349,14 @@ impl Builder {
                 GoalStmt::Stop { stop, span }
             }
             Rule::turn => GoalStmt::Turn { turn: self.ident(last(p)), span },
+            Rule::reverse => {
+                let q = last(p);
+                let to = match q.as_rule() {
+                    Rule::lane_ref => ReverseTo::Into(self.lane_ref(q)),
+                    _ => ReverseTo::Dist(self.value(q)),
+                };
+                GoalStmt::Reverse { to, span }
+            }
             Rule::start => match last(p.clone()) {
                 q if q.as_rule() == Rule::trigger => GoalStmt::StartWhen { trigger: self.trigger(q), span },
                 q => GoalStmt::Start { after: self.value(q), span },
@@ -394,21 +437,24 @@ impl Builder {
                     span,
                 }
             }
+            Rule::parking_place => {
+                let s = parts.iter().find(|x| x.as_rule() == Rule::side_ref).expect("grammar: parking side");
+                let k = parts.iter().find(|x| x.as_rule() == Rule::integer).expect("grammar: parking slot");
+                Placement::Parking {
+                    side: self.side_ref(s.clone()),
+                    slot: k.as_str().parse().unwrap_or(u32::MAX),
+                    slot_span: self.span(k),
+                    span,
+                }
+            }
+            Rule::driveway_place => {
+                let n = parts.iter().find(|x| x.as_rule() == Rule::ident).expect("grammar: driveway name");
+                Placement::Driveway { name: self.ident(n.clone()), span }
+            }
             _ => {
                 let l = parts.iter().find(|x| x.as_rule() == Rule::lane_ref).expect("grammar: lane ref");
-                let lspan = self.span(l);
-                let mut it = inner(l.clone()).into_iter();
-                let arm = self.ident(it.next().expect("grammar: lane arm"));
-                let d = dir(it.next().expect("grammar: lane dir").as_str());
-                let idx = it.next().expect("grammar: lane index");
                 Placement::Lane {
-                    lane: LaneRef {
-                        arm,
-                        dir: d,
-                        index: idx.as_str().parse().unwrap_or(u32::MAX),
-                        index_span: self.span(&idx),
-                        span: lspan,
-                    },
+                    lane: self.lane_ref(l.clone()),
                     along: along.expect("grammar: lane placement has a distance"),
                     offset,
                     heading,
@@ -416,6 +462,15 @@ impl Builder {
                 }
             }
         }
+    }
+
+    fn lane_ref(&self, l: P<'_>) -> LaneRef {
+        let span = self.span(&l);
+        let mut it = inner(l).into_iter();
+        let arm = self.ident(it.next().expect("grammar: lane arm"));
+        let d = dir(it.next().expect("grammar: lane dir").as_str());
+        let idx = it.next().expect("grammar: lane index");
+        LaneRef { arm, dir: d, index: idx.as_str().parse().unwrap_or(u32::MAX), index_span: self.span(&idx), span }
     }
 
     fn along(&self, p: P<'_>) -> Along {

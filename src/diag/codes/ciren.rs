@@ -58,7 +58,10 @@ non-collision, a pedestrian record, a contact by a vehicle's back, top or underc
 strikes with a front or a side), a fixed object rocc has no kind for (ditch, embankment, curb),
 a side impact with a tree, a T-junction approached from its missing leg, a vehicle travelling
 across a road the record codes without a junction (out of a driveway: write it by hand on a
-`t_junction`), or a SAFE extraction with one vehicle or more than two.
+`t_junction`), or a SAFE extraction with one vehicle, more than two, or several impacts. For records with several
+events: a vehicle that strikes in two events, or strikes after it was struck, a pair that meets
+in two events (a struck agent holds from its contact on), a later event involving neither
+vehicle of the first-ranked one, or a fixed object struck beside other contacts.
 
     rocc ciren import ciren/100412 -o scn/   # error: the case codes a rollover",
     },
@@ -66,10 +69,11 @@ across a road the record codes without a junction (out of a driveway: write it b
         code: "E0805",
         title: "crash could not be staged on the coded sides",
         explanation: "The importer writes a scenario only after `rocc check` accepts it and the rollout's latched
-contact lies on the coded sides: the struck box's side (thirds of each face, as `point` is
-defined) and the striker's coded face (front, or the coded side for a sideswipe). Several
-impact times are tried; this error means none of them landed there, and it names what the last
-attempt did. Nothing is written. Typical cause: an impact the rollout meets square-on (`angle`)
+contact of every event lies on its coded sides: the struck box's side (thirds of each face, as
+`point` is defined) and the striker's coded face (front, or the coded side for a sideswipe), and
+meets the coded clock direction of the principal force within an hour. Several impact times, and
+speeds solved for the coded force, are tried; this error means none of them landed there, and it
+names what the last attempt did. Nothing is written. Typical cause: an impact the rollout meets square-on (`angle`)
 between vehicles whose paths do not let the striker reach the struck side, e.g. a vehicle hit
 on its side by oncoming traffic after it spun.
 
@@ -77,11 +81,15 @@ on its side by oncoming traffic after it spun.
     },
     Code {
         code: "E0806",
-        title: "later crash events not staged",
-        explanation: "A CIREN record codes several events (a second contact, a sideslap); rocc stages one
-conflict per scenario, the first-ranked event. This warning names each event left out.
+        title: "closing speed off the coded delta-V",
+        explanation: "A warning: the contact lands on its coded sides and meets the coded clock direction of the
+principal force, but the closing speed at contact is more than 20% from the one the coded
+delta-V implies (momentum with a common velocity after, masses from curb weights or class
+priors). The importer solves the speeds at contact and stages again; the rollout's staging sets
+the striker's speed in its last seconds, so the closing speed is the staging's. The file is
+written; the warning gives both speeds.
 
-    rocc ciren import ciren/100237 -o scn/   # warning: event 2 (V1 left side by V2 front) not staged",
+    rocc ciren import tests/fixtures/ciren-chains/rear-end-chain.xml -o scn/",
     },
     Code {
         code: "E0807",

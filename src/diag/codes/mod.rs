@@ -1,6 +1,7 @@
 //! Every diagnostic code rocc can emit, with the long explanation `rocc explain CODE` prints,
 //! one file per range:
-//! E00xx: files and syntax. E01xx: the checker. E02xx: road and placement. E03xx: compile
+//! E00xx: files and syntax. E01xx: the checker. E02xx: road and placement (E0250-E0259:
+//! reversing, parking lanes and driveways). E03xx: compile
 //! options. E04xx: I/O.
 //! E07xx: import, edit and eval.
 //! E06xx: the LLM front end (`rocc text`): the HTTP client, the model's replies, the repair loop.
@@ -18,6 +19,7 @@ mod compile;
 mod expect;
 mod import;
 mod io;
+mod kerb;
 mod learn;
 mod llm;
 mod place;
@@ -35,6 +37,7 @@ pub fn all() -> impl Iterator<Item = &'static Code> {
         syntax::CODES,
         check::CODES,
         place::CODES,
+        kerb::CODES,
         compile::CODES,
         io::CODES,
         import::CODES,

@@ -6,9 +6,10 @@ pub const CODES: &[Code] = &[
     Code {
         code: "E0201",
         title: "placement off a valid surface",
-        explanation: "Each class starts where it can physically be: moving vehicles on lanes, shoulders or\n\
-the junction; moving bicycles also on sidewalks and crosswalks; people, animals and static things\n\
-of any class (cones, debris, a wreck) anywhere on the map or within 10 m of it, lanes included.\n
+        explanation: "Each class starts where it can physically be: moving vehicles on lanes, shoulders,\n\
+the junction, a parking lane or a driveway; moving bicycles also on sidewalks and crosswalks;\n\
+people, animals and static things of any class (cones, debris, a wreck) anywhere on the map or\n\
+within 10 m of it, lanes included.\n
     agent ego: sedan { at sidewalk(east.out), 10 m after center }   // error
     object injured: adult { at west.in[1], 5 m before center; posture lying }   // fine
     object c: traffic_cone { at (500 m, 500 m) }                    // error: far off the map",

@@ -9,6 +9,7 @@ pub(crate) mod follow;
 pub(crate) mod index;
 pub(crate) mod neighbours;
 pub(crate) mod pair;
+pub(crate) mod reverse;
 pub(crate) mod siren;
 
 use crate::geom::{Obb, wrap_angle};
@@ -249,7 +250,7 @@ impl Sim<'_, '_> {
         if let Some(tg) = target {
             phase = (st.phase + dt / dur).min(1.0);
             d_next = a.d0 + (tg - a.d0) * quintic(phase);
-        } else if a.vehicle && matches!(a.lateral, Lat::Hold) {
+        } else if a.vehicle && matches!(a.lateral, Lat::Hold) && !a.reverse {
             // Pull over for an emergency vehicle; squeeze past whoever is easing aside for us
             // (`away_from`, or for our siren) or round what stands in our lane; then settle back.
             let look = st.v * st.v / (2.0 * lim.brake) + 2.5 * st.v + 15.0;

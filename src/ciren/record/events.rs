@@ -1,0 +1,225 @@
+//! Every contact of a case: the `EventSum` rows decoded, one per contact (a contact coded from
+//! both vehicles' rows counts once), in time order (the event number). The first-ranked contact
+//! sets the road and its pair; each other one joins the crash as a further conflict, its new
+//! vehicle placed on the same road; what the language cannot stage (a vehicle striking twice,
+//! a struck vehicle striking later, a pair meeting twice, an object struck beside other
+//! contacts) refuses the case with the reason.
+
+use super::ctx::Ctx;
+use super::fields::{Area, area};
+use super::pair::{extra_vehicle, pair_conflict};
+use crate::ciren::case::{CaseVehicle, Coded, Event};
+use crate::ciren::crash::{ConflictDesc, Crash};
+use crate::diag::Diagnostic;
+use crate::source::Span;
+use std::collections::BTreeMap;
+
+/// What an event's vehicle met.
+pub(super) enum Party<'a> {
+    Vehicle(&'a CaseVehicle, Area, Coded),
+    Object,
+}
+
+/// One decoded contact.
+pub(super) struct Contact<'a> {
+    pub ev: &'a Event,
+    pub me: &'a CaseVehicle,
+    pub own: Area,
+    pub own_c: Coded,
+    pub contacted: Coded,
+    pub other: Party<'a>,
+}
+
+impl Contact<'_> {
+    /// The header line citing the event.
+    pub fn cite(&self) -> String {
+        let other = match &self.other {
+            Party::Vehicle(_, _, c) => format!(", {}", c.cite("ContactedAreaOfDamage")),
+            Party::Object => String::new(),
+        };
+        format!(
+            "EventSum {}: V{} {}, {}{other}.",
+            self.ev.number,
+            self.ev.vehicle,
+            self.own_c.cite("AreaOfDamage"),
+            self.contacted.cite("Contacted")
+        )
+    }
+    /// The unordered vehicle pair, for contacts coded from both sides.
+    fn key(&self) -> (u32, u32, u32) {
+        let o = match &self.other {
+            Party::Vehicle(v, _, _) => v.number,
+            Party::Object => 0,
+        };
+        (self.ev.number, self.me.number.min(o), self.me.number.max(o))
+    }
+}
+
+/// Decode one event: the vehicle, its damaged area, and the party it met.
+pub(super) fn decode<'a>(cx: &Ctx<'a>, ev: &'a Event) -> Result<Contact<'a>, Vec<Diagnostic>> {
+    let ev_span = cx.tag_span(&ev.range, "EventSum");
+    let need = |c: &Option<Coded>, what: &str| {
+        c.clone().ok_or_else(|| {
+            cx.err(
+                "E0802",
+                format!("EventSum of V{} has no {what}", ev.vehicle),
+                Some((ev_span, "this event")),
+                "the event's damage areas and contacted party are required",
+            )
+        })
+    };
+    let own_c = need(&ev.area, "AreaOfDamage")?;
+    let contacted = need(&ev.contacted, "Contacted")?;
+    let own = area(&own_c).ok_or_else(|| cx.unknown("AreaOfDamage", &own_c, "known CDC areas: F, B, L, R, T, U"))?;
+    let vehicle = |n: u32| cx.case.vehicles.iter().find(|v| v.number == n);
+    let Some(me) = vehicle(ev.vehicle) else {
+        return Err(cx.err(
+            "E0802",
+            format!("the event names V{} but the record has no GeneralVehicleForm for it", ev.vehicle),
+            Some((ev_span, "this event")),
+            "each vehicle of the event needs its GeneralVehicleForm (body type, pre-crash data)",
+        ));
+    };
+    let t = contacted.lower();
+    let other_no: Option<u32> =
+        t.split('#').nth(1).and_then(|n| n.trim().split(|c: char| !c.is_ascii_digit()).next()?.parse().ok());
+    let other = match other_no.filter(|_| t.contains("vehicle")) {
+        Some(on) => {
+            let oc = need(&ev.contacted_area, "ContactedAreaOfDamage")?;
+            let oa = area(&oc)
+                .ok_or_else(|| cx.unknown("ContactedAreaOfDamage", &oc, "known CDC areas: F, B, L, R, T, U"))?;
+            let Some(o) = vehicle(on) else {
+                return Err(cx.err(
+                    "E0802",
+                    format!("V{} contacted V{on}, which has no GeneralVehicleForm", ev.vehicle),
+                    Some((cx.span(&contacted), "this vehicle")),
+                    "each vehicle of the event needs its GeneralVehicleForm (body type, pre-crash data)",
+                ));
+            };
+            Party::Vehicle(o, oa, oc)
+        }
+        None => Party::Object,
+    };
+    Ok(Contact { ev, me, own, own_c, contacted, other })
+}
+
+/// The case's contacts in time order, one per contact, and the index of the first-ranked.
+pub(super) fn contacts<'a>(cx: &Ctx<'a>) -> Result<(Vec<Contact<'a>>, usize), Vec<Diagnostic>> {
+    let mut events: Vec<&Event> = cx.case.events.iter().collect();
+    events.sort_by_key(|e| (e.number, e.vehicle));
+    let mut out: Vec<Contact> = Vec::new();
+    for e in events {
+        let c = decode(cx, e)?;
+        if !out.iter().any(|o| o.key() == c.key() && c.key().1 != 0) {
+            out.push(c);
+        }
+    }
+    let primary =
+        (0..out.len()).min_by_key(|&i| (out[i].ev.rank.unwrap_or(u32::MAX), out[i].ev.number, out[i].ev.vehicle));
+    match primary {
+        Some(p) => Ok((out, p)),
+        None => Err(cx.err(
+            "E0802",
+            "no Events/EventSum row: the record codes no collision".into(),
+            None,
+            "a case needs at least one EventSum with AreaOfDamage, Contacted and ContactedAreaOfDamage",
+        )),
+    }
+}
+
+/// Add a contact other than the first-ranked one to the crash: its conflict, and a vehicle it
+/// brings that the crash does not hold yet.
+pub(super) fn join(
+    cx: &mut Ctx,
+    story: &crate::ciren::narrative::Narrative,
+    crash: &mut Crash,
+    c: &Contact,
+) -> Result<ConflictDesc, Vec<Diagnostic>> {
+    let span = cx.tag_span(&c.ev.range, "EventSum");
+    let Party::Vehicle(other, oa, oc) = &c.other else {
+        return Err(cx.err(
+            "E0804",
+            format!(
+                "event {}: V{} struck {} beside the case's other contacts; rocc places a struck fixed object only \
+                 in a single-vehicle case",
+                c.ev.number,
+                c.me.number,
+                c.contacted.cite("Contacted")
+            ),
+            Some((span, "this event")),
+            "write the object into the imported scenario by hand, or import the vehicle contacts alone",
+        ));
+    };
+    let (af, st, impact, point, face, why) = pair_conflict(cx, (c.me, c.own, &c.own_c), (other, *oa, oc))?;
+    let (af_n, st_n) = (format!("v{af}"), format!("v{st}"));
+    let known = |n: &str| crash.vehicle(n).is_some();
+    let (new, partner) = match (known(&af_n), known(&st_n)) {
+        (true, true) => (None, st_n.clone()),
+        (false, true) => (Some(af), st_n.clone()),
+        (true, false) => (Some(st), af_n.clone()),
+        (false, false) => {
+            return Err(cx.err(
+                "E0804",
+                format!(
+                    "event {} (V{af} into V{st}) involves no vehicle of the first-ranked event; rocc stages later \
+                     contacts beside it",
+                    c.ev.number
+                ),
+                Some((span, "this event")),
+                "import the case's contacts that chain from its first-ranked event",
+            ));
+        }
+    };
+    if let Some(n) = new {
+        let v = cx.case.vehicles.iter().find(|v| v.number == n).expect("decoded vehicle");
+        let desc = extra_vehicle(cx, story, crash, v, &partner, impact)?;
+        crash.vehicles.push(desc);
+    }
+    crash.header.push(c.cite());
+    Ok(ConflictDesc {
+        at_fault: af_n,
+        struck: st_n,
+        impact,
+        point,
+        face,
+        clocks: Vec::new(),
+        closing: None,
+        notes: vec![format!("Event {}: {why} (EventSum damage areas).", c.ev.number)],
+    })
+}
+
+/// The language's rules for several crashes, checked before emission: a vehicle strikes in one
+/// contact, is struck only after (or when) it strikes, and a pair meets once.
+pub(super) fn check_order(cx: &Ctx, crash: &Crash, events: &[(u32, Span)]) -> Result<(), Vec<Diagnostic>> {
+    let mut strikes: BTreeMap<&str, usize> = BTreeMap::new();
+    let mut first_struck: BTreeMap<&str, usize> = BTreeMap::new();
+    for (i, k) in crash.conflicts.iter().enumerate() {
+        let (ev, span) = events[i];
+        let refuse = |msg: String| {
+            Err(cx.err(
+                "E0804",
+                format!("event {ev}: {msg}"),
+                Some((span, "this event")),
+                "a struck agent holds from its contact on (motion after an impact is not simulated): rocc stages \
+                 chains where each vehicle strikes once, before it is struck",
+            ))
+        };
+        if let Some(&j) = strikes.get(k.at_fault.as_str()) {
+            return refuse(format!("{} strikes again (it struck in event {})", k.at_fault, events[j].0));
+        }
+        if let Some(&j) = first_struck.get(k.at_fault.as_str()) {
+            return refuse(format!("{} strikes after it was struck in event {}", k.at_fault, events[j].0));
+        }
+        fn pair(x: &ConflictDesc) -> [&str; 2] {
+            let mut p = [x.at_fault.as_str(), x.struck.as_str()];
+            p.sort();
+            p
+        }
+        if let Some(j) = crash.conflicts[..i].iter().position(|x| pair(x) == pair(k)) {
+            return refuse(format!("{} and {} met already in event {}", k.at_fault, k.struck, events[j].0));
+        }
+        strikes.insert(&k.at_fault, i);
+        first_struck.entry(&k.struck).or_insert(i);
+    }
+    Ok(())
+}
