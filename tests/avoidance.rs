@@ -188,3 +188,42 @@ fn away_from_a_standing_object_eases_to_the_far_side_of_the_lane() {
     let beside = (0..t.frames).find(|&k| t.poses[car][k].x > t.poses[junk][0].x).expect("the car reaches the debris");
     assert!(t.poses[car][beside].y > lane_y + 0.4, "the car did not ease away\n{tr}");
 }
+
+/// The least gap between two boxes over the clip is at least `m` (boxes grown by half of it
+/// each never overlap; square corners make this a conservative test).
+fn keeps_apart(t: &Tracks, a: usize, b: usize, m: f64) -> Option<usize> {
+    (0..t.frames).find(|&f| obb(t, a, f).grown(m / 2.0).overlaps(&obb(t, b, f).grown(m / 2.0)))
+}
+
+#[test]
+fn a_car_passes_a_slow_cyclist_in_the_clear_oncoming_lane_a_metre_away() {
+    let f = front_of("tests/rollout-cases/car-passes-a-slow-cyclist.scn");
+    let t = &f.tracks;
+    let (car, cyclist) = (idx(t, "car"), idx(t, "cyclist"));
+    let tr = trace(t, car);
+    assert_eq!(keeps_apart(t, car, cyclist, 1.0), None, "closer than 1 m\n{tr}");
+    assert!(slowest(t, car) > 9.0, "the car slowed to {:.2} m/s behind the cyclist\n{tr}", slowest(t, car));
+    let (end, lane_y) = (t.poses[car][t.frames - 1], t.poses[car][0].y);
+    assert!(end.x > t.poses[cyclist][t.frames - 1].x + 20.0, "the car did not pass\n{tr}");
+    assert!((end.y - lane_y).abs() < 0.2, "the car is not back in its lane\n{tr}");
+    assert!(t.poses[car].iter().any(|p| p.y > 0.0), "the car did not cross the centre line\n{tr}");
+}
+
+#[test]
+fn a_car_behind_a_slow_cyclist_waits_for_the_oncoming_car_then_passes() {
+    let f = front_of("tests/rollout-cases/car-behind-a-slow-cyclist-waits-for-an-oncoming-car.scn");
+    let t = &f.tracks;
+    let (car, cyclist, oncoming) = (idx(t, "car"), idx(t, "cyclist"), idx(t, "oncoming"));
+    let tr = trace(t, car);
+    assert_eq!(touches(t, car, oncoming), None, "{tr}");
+    assert_eq!(keeps_apart(t, car, cyclist, 1.0), None, "closer than 1 m\n{tr}");
+    assert!(slowest(t, oncoming) > 10.0, "the oncoming car slowed to {:.2} m/s", slowest(t, oncoming));
+    // It follows the cyclist at its pace, and moves out only once the oncoming car is by.
+    let by = (0..t.frames).find(|&f| t.poses[oncoming][f].x < t.poses[car][f].x).expect("the oncoming car passes");
+    let lane_y = t.poses[car][0].y;
+    let moved_out = (0..t.frames).find(|&f| t.poses[car][f].y > lane_y + 0.5).expect("the car never moves out");
+    assert!(moved_out >= by, "the car moved out at frame {moved_out}, the oncoming car passed at {by}\n{tr}");
+    assert!(t.speeds[car][..by].iter().any(|&v| v < 5.0), "the car did not slow behind the cyclist\n{tr}");
+    let end = t.poses[car][t.frames - 1];
+    assert!(end.x > t.poses[cyclist][t.frames - 1].x + 10.0, "the car did not pass\n{tr}");
+}

@@ -266,3 +266,39 @@ fn triggers_and_behaviour_format_to_text_that_checks_the_same() {
         assert!(once.contains("behaviour {") || once.contains("start when"), "{once}");
     }
 }
+
+fn check_code(text: &str) -> &'static str {
+    let mut sources = rocc::source::SourceMap::default();
+    rocc::check::check_text("t.scn", text, std::path::Path::new("."), &mut sources).expect_err("refused")[0].code
+}
+
+#[test]
+fn a_goal_phase_pulls_over_and_stops_on_its_own_trigger() {
+    let text = case("car-pulls-over-and-stops-on-a-trigger");
+    let t = &front_of(&text).tracks;
+    let (lead, ego) = (idx(t, "lead"), idx(t, "ego"));
+    let fired = (0..t.frames).find(|&f| dist(t, lead, ego, f) <= 25.0).expect("the ego closes in");
+    // In its lane at its speed till its condition holds; the phase runs from the next step.
+    assert!((0..=fired).all(|f| (t.poses[lead][f].y + 1.75).abs() < 1e-9 && (t.speeds[lead][f] - 8.0).abs() < 1e-9));
+    // Then onto the shoulder (lane edge at y = -3.5, shoulder to -6), stopped 40 m on.
+    let end = t.poses[lead][t.frames - 1];
+    let half_w = t.agents[lead].size[1] / 2.0;
+    assert!(end.y + half_w < -3.3 && end.y - half_w > -6.0, "the lead is at y = {:.2}", end.y);
+    assert!(t.speeds[lead][t.frames - 1] < 0.05, "the lead did not stop");
+    let run = end.x - t.poses[lead][fired].x;
+    assert!((run - 40.0).abs() < 1.0, "stopped {run:.2} m on");
+    // The ego drives past it in its lane.
+    assert!(t.poses[ego][t.frames - 1].x > end.x + 10.0 && (t.poses[ego][t.frames - 1].y + 1.75).abs() < 0.05);
+    assert!((0..t.frames).all(|f| !obb(t, lead, f).overlaps(&obb(t, ego, f))));
+    // What a phase cannot change is E0155: its route, another lateral move, nothing at all.
+    let phase = "goal { lateral pull_to_shoulder; stop after 40 m; start when ego within 25 m }";
+    for (with, why) in [
+        ("goal { turn left; start when ego within 25 m }", "a turn"),
+        ("goal { lateral change_lane left; start when ego within 25 m }", "a lane change"),
+        ("goal { start when ego within 25 m }", "nothing"),
+    ] {
+        assert_eq!(check_code(&text.replace(phase, with)), "E0155", "{why}");
+    }
+    let after_easing = text.replace("goal { speed 8 m/s }", "goal { speed 8 m/s; lateral away_from ego }");
+    assert_eq!(check_code(&after_easing), "E0155");
+}

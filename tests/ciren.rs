@@ -204,8 +204,11 @@ fn a_stopped_car_stays_stopped_until_struck() {
         .unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
     let t = check_contact(&imp, &[("v1".into(), Part::Right), ("v2".into(), Part::Front)]);
     let v1 = t.agents.iter().position(|a| a.name == "v1").expect("v1");
-    assert!(t.speeds[v1].iter().all(|&s| s.abs() < 1e-9), "v1 moved: {:?}", t.speeds[v1]);
-    assert_eq!(t.poses[v1][0], t.poses[v1][t.frames - 1]);
+    // Until the impact; from it on the impulse moves it.
+    let hit = t.impacts.first().expect("impact").frame;
+    assert!(t.speeds[v1][..hit].iter().all(|&s| s.abs() < 1e-9), "v1 moved: {:?}", t.speeds[v1]);
+    assert_eq!(t.poses[v1][0], t.poses[v1][hit]);
+    assert!(t.poses[v1][hit] != t.poses[v1][t.frames - 1], "the impact did not move v1");
 }
 
 // ------------------------------------------------------------------ bad inputs

@@ -409,7 +409,7 @@ fn clip_edits_change_exactly_the_box_list_and_rerun_the_stages() {
     let ins = |w: &str| parse_edit("insert", &w.split(' ').map(String::from).collect::<Vec<_>>()).unwrap();
     let code = |e: Edit| edit_clip(&dir, &[e], &o).unwrap_err()[0].code;
     assert_eq!(code(ins("sedan at 20,40 yaw 0")), "E0710");
-    assert_eq!(code(ins("pedestrian at 20,0 yaw 0")), "E0710");
+    assert_eq!(code(ins("bicycle at 20,40 yaw 0")), "E0710");
     assert_eq!(code(ins("sedan at 10,-3 yaw 0")), "E0711");
     assert_eq!(code(ins("sedan at 1,0 yaw 0")), "E0711", "the ego's own box");
     assert_eq!(code(Edit::Delete { agent: "cuter".into() }), "E0709");
@@ -462,6 +462,11 @@ fn clip_edits_change_exactly_the_box_list_and_rerun_the_stages() {
     edit_clip(&dir, &[Edit::Delete { agent: "cutter".into() }], &o).unwrap();
     let deleted = read_boxes_json(&dir.join("boxes.json")).unwrap();
     assert!(deleted.iter().all(|f| f.boxes.iter().all(|b| b.agent != "cutter") && f.boxes.len() == 1));
+
+    // A person standing on the ego's lane: the checker places one there, and so does an edit.
+    edit_clip(&dir, &[ins("pedestrian at 40,0 yaw 90deg")], &o).unwrap();
+    let person = read_boxes_json(&dir.join("boxes.json")).unwrap();
+    assert!(person.iter().all(|f| f.boxes.len() == 2 && f.boxes[1].class == Class::Pedestrian));
 }
 
 /// An ego driving east at exactly 10 m/s (1 m per frame at 10 Hz) past a static cone.
@@ -574,6 +579,10 @@ fn scn_edits_are_gated_by_the_checker_and_placement() {
     assert_eq!(code(Edit::Insert { kind: "sedan".into(), x: -60.0, y: -1.75, yaw: 0.0 }), "E0202");
     assert_eq!(code(Edit::Move { agent: "ego".into(), dx: 1.0, dy: 0.0 }), "E0714");
     assert_eq!(code(Edit::Delete { agent: "nobody".into() }), "E0709");
+    // A person on a lane passes the checker's surface rule, as in a clip edit.
+    let on_lane = Edit::Insert { kind: "pedestrian".into(), x: 30.0, y: -1.75, yaw: 0.0 };
+    let text = edit_scn(&scn, &[on_lane], &mut SourceMap::default()).unwrap();
+    assert!(text.contains("agent inserted_pedestrian_1: pedestrian { at (30 m, -1.75 m)"), "{text}");
 }
 
 #[test]

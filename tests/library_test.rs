@@ -78,7 +78,8 @@ fn failing_expectations_point_at_their_line_with_time_and_value() {
     assert!(err.contains("E1010") && err.contains("contact at t = 3.0 s on ego's rear, not its front"), "{err}");
     assert!(err.contains("E1013") && err.contains("it never stops: slowest"), "{err}");
     assert!(err.contains("E1015") && err.contains("45.0 km/h at t = 0.0 s"), "{err}");
-    assert!(err.contains("E1012") && err.contains("closest 2.62 m apart, at t = 0.0 s"), "{err}");
+    // The impact shunts the ego into `first`.
+    assert!(err.contains("E1012") && err.contains("closest 0.00 m apart, at t = 3.4 s"), "{err}");
     assert!(err.contains("E1014") && err.contains("short of the junction"), "{err}");
     // Each report points at its line of the file.
     assert!(err.contains("queue.scn:31:9"), "{err}");
@@ -142,7 +143,8 @@ fn snapshots_are_written_compared_and_reviewed() {
         "{first}"
     );
     assert!(first.contains("  ok   contact striker with ego on rear\n"), "{first}");
-    assert!(first.contains("contacts\n  frames 30..59: ego (rear) with striker (front)\n"), "{first}");
+    // The striker and the ego part within the impact's window; the ego is shunted into `first`.
+    assert!(first.contains("contacts\n  frames 30..31: ego (rear) with striker (front)\n"), "{first}");
     assert!(first.contains("digests (first ego; BEV, procedural occupancy)\n  frame 0: bev "), "{first}");
     assert!(std::fs::read_dir(d.join("snapshots")).expect("dir").count() == 1, "a temporary file was left");
     assert!(rocc(&["test", dir], "").status.success());

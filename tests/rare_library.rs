@@ -103,6 +103,13 @@ fn a_deer_leaps_across_the_rural_road_in_front_of_the_ego() {
     // A leap: faster than a person runs, from one verge to the other.
     let top = t.speeds[deer].iter().cloned().fold(0.0, f64::max);
     assert!(top > 8.0, "the deer's top speed is {top:.2} m/s");
+    // An animal bounds off: 8 m/s about a second after it sets off, not a walker's five.
+    let off = t.speeds[deer].iter().position(|&v| v > 0.05).expect("the deer never moves");
+    let fast = t.speeds[deer].iter().position(|&v| v >= 8.0).expect("never 8 m/s");
+    assert!(fast - off <= 13, "8 m/s after {:.1} s", (fast - off) as f64 / 10.0);
+    // It leaps across in front of the ego: it never stops on the road or at its edge.
+    let mut on_road = (off..t.frames).filter(|&f| t.poses[deer][f].y.abs() < 5.0);
+    assert!(on_road.all(|f| t.speeds[deer][f] > 4.0), "the deer slowed on the road");
     let (y0, y1) = (t.poses[deer][0].y, t.poses[deer][t.frames - 1].y);
     assert!(y0 < -5.0 && y1 > 4.0, "the deer went from y = {y0:.2} to {y1:.2}");
     assert!(slowest(&t, ego) < 15.0, "the ego did not brake: {:.2} m/s", slowest(&t, ego));
@@ -213,6 +220,21 @@ fn cars_ahead_and_oncoming_pull_over_for_a_fire_truck_from_behind() {
         assert!((t.poses[i][end].y - lane_y).abs() < 0.2 && t.speeds[i][end] > 3.0, "{name} did not go on");
     }
     assert!(slowest(&t, engine) > 12.5, "the truck slowed to {:.2} m/s", slowest(&t, engine));
+    // Back in its lane, `ahead` drives on past the van steering back off the shoulder (its box
+    // stays clear of the centre line): no braking for it between 11.6 and 13.4 s.
+    let (ahead, van) = (idx(&t, "ahead"), idx(&t, "oncoming"));
+    for f in 116..=134 {
+        let v = &t.speeds[ahead];
+        assert!(
+            v[f] >= v[f - 1] - 0.3 * 0.1,
+            "ahead brakes at {:.1} s: {:.2} -> {:.2} m/s",
+            f as f64 / 10.0,
+            v[f - 1],
+            v[f]
+        );
+        let c = contact::obb(&t, van, f).corners();
+        assert!(c.iter().all(|p| p.y > 0.0), "the van crosses the centre line at frame {f}");
+    }
     no_overlap(&t);
 }
 

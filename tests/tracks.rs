@@ -45,15 +45,20 @@ fn wobble(frame: usize, salt: u64) -> f64 {
 
 /// A nuPlan-layout box stream at 20 Hz: a car turning left at 10 m/s, a car braking hard from
 /// 15 m/s at 7 m/s^2 to a stop, a walker, each with 10 cm and 3 degrees (the walker 15) of
-/// jitter; `glitch` moves the turning car `glitch` m sideways in one frame.
+/// jitter; `glitch` moves the turning car `glitch` m sideways in frame 60.
 fn stream(glitch: f64) -> String {
+    stream_with(glitch, 60..61)
+}
+
+/// `stream`, the turning car moved `glitch` m sideways in `frames`.
+fn stream_with(glitch: f64, frames_moved: std::ops::Range<usize>) -> String {
     let mut frames = vec![];
     for f in 0..120 {
         let t = f as f64 * 0.05;
         let (r, w) = (20.0, 10.0 / 20.0);
         let th = w * t;
         let mut turn = [r * th.sin(), r - r * th.cos(), th];
-        if f == 60 {
+        if frames_moved.contains(&f) {
             turn[0] -= glitch * th.sin();
             turn[1] += glitch * th.cos();
         }
@@ -103,11 +108,47 @@ fn jittery_recorded_turns_hard_braking_and_walkers_import_and_check() {
     assert!(["t_turn", "t_brake", "t_walk"].iter().all(|n| text.contains(&format!("agent {n}"))), "{text}");
 }
 
+/// Import `text`: the scene text and the warnings.
+fn import_warned(text: &str, name: &str) -> (String, Vec<Diagnostic>) {
+    let dir = std::env::temp_dir().join(format!("rocc-tracks-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("stream.json");
+    std::fs::write(&path, text).expect("write");
+    let mut sources = SourceMap::default();
+    let r = import_boxes(&path, Convention::NuPlan, "recorded", &mut sources);
+    let _ = std::fs::remove_dir_all(&dir);
+    let i = r.unwrap_or_else(|d| panic!("{name}: {}", d.iter().map(|d| d.render_plain(&sources)).collect::<String>()));
+    (i.text, i.warnings)
+}
+
+/// The keyframe times (s) of agent `name` in imported text.
+fn key_times(text: &str, name: &str) -> Vec<String> {
+    let from = text.find(&format!("agent {name}:")).unwrap_or_else(|| panic!("no agent {name}"));
+    let body = &text[from..from + text[from..].find("\n    }").expect("end of agent")];
+    body.lines().filter_map(|l| l.trim().split_once(" s: ").map(|(t, _)| t.to_string())).collect()
+}
+
 #[test]
-fn a_recorded_box_jumping_sideways_is_refused_at_its_keyframe() {
-    let d = import_stream(&stream(4.0), "glitch").expect_err("a 4 m sideways jump in 50 ms");
-    assert!(["E0131", "E0134"].contains(&d[0].code), "{d:?}");
-    assert!(d[0].message.contains("`t_turn`"), "{}", d[0].message);
+fn a_recorded_box_jumping_sideways_is_dropped_with_a_warning_and_the_rest_kept() {
+    // One glitched frame: dropped, the rest of the track kept, one E0135 naming it.
+    let (text, warns) = import_warned(&stream(4.0), "glitch");
+    let e0135: Vec<&Diagnostic> = warns.iter().filter(|d| d.code == "E0135").collect();
+    assert_eq!(e0135.len(), 1, "{warns:?}");
+    assert!(e0135[0].message.contains("`turn`") && e0135[0].message.contains("frame 60"), "{}", e0135[0].message);
+    let times = key_times(&text, "t_turn");
+    assert_eq!(times.len(), 119, "{times:?}");
+    assert!(
+        !times.contains(&"3".to_string()) && times.contains(&"2.95".to_string()) && times.contains(&"3.05".to_string())
+    );
+    assert_eq!(key_times(&text, "t_brake").len(), 120);
+    // A jump for good: the rest of the track is an agent of its own, from the frame it jumps.
+    let (text, warns) = import_warned(&stream_with(4.0, 60..120), "jump");
+    assert_eq!(warns.iter().filter(|d| d.code == "E0135").count(), 1, "{warns:?}");
+    assert_eq!(key_times(&text, "t_turn").len(), 60);
+    assert_eq!(key_times(&text, "t_turn_from_60").len(), 60);
+    assert_eq!(key_times(&text, "t_turn_from_60")[0], "3");
+    // `rocc explain` knows the code.
+    assert!(rocc::diag::codes::all().any(|c| c.code == "E0135"));
 }
 
 #[test]
@@ -184,4 +225,44 @@ fn keyframes_in_lane_coordinates_mix_with_world_ones_and_are_checked_like_them()
     assert_eq!(code("0 s: west.in[2], 50 m before center; 1 s: west.in[2], 50 m after center"), "E0131");
     assert_eq!(code("0 s: west.in[2], 50 m before center; 1 s: west.in[2], 90 m after center"), "E0203");
     assert_eq!(code("0 s: west.in[2], 40..45 m before center"), "E0117");
+}
+
+#[test]
+fn a_track_on_a_trigger_counts_its_keyframes_from_when_it_fires_and_is_checked_like_any() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/behaviour-cases/car-pulls-out-from-the-shoulder-on-a-trigger.scn");
+    let src = std::fs::read_to_string(&path).expect("scene");
+    let mut sources = SourceMap::default();
+    let s = check::check_text("t.scn", &src, Path::new("."), &mut sources).expect("checks");
+    let f = front(s, None).unwrap_or_else(|d| panic!("{d:?}"));
+    let t = &f.tracks;
+    let (car, ego) = (t.agents.iter().position(|a| a.name == "parked").expect("parked"), 1);
+    // It fires on the first frame the ego is within 30 m; its keyframes count one step later.
+    let dist = |k: usize| (t.poses[car][k].x - t.poses[ego][k].x).hypot(t.poses[car][k].y - t.poses[ego][k].y);
+    let fired = (0..t.frames).find(|&k| dist(k) <= 30.0).expect("the ego comes within 30 m");
+    assert!(fired > 10, "fired at frame {fired}");
+    let first = t.poses[car][0];
+    assert!((0..=fired).all(|k| t.poses[car][k] == first), "it moved before its trigger");
+    // west.in[1] runs east 1.75 m south of the centre line.
+    for (key_t, x, y, yaw) in [(1.0, -8.5, -4.15, 8.0), (2.0, -4.5, -3.25, 12.0), (3.0, 1.5, -2.05, 4.0)] {
+        let p = t.poses[car][fired + (key_t * t.rate) as usize];
+        assert!(
+            (p.x - x).abs() < 1e-6 && (p.y - y).abs() < 1e-6 && (p.yaw - f64::to_radians(yaw)).abs() < 1e-6,
+            "keyframe {key_t} s: {p:?}"
+        );
+    }
+    // Feasibility and surface as for any track; triggers as for any start.
+    let code = |from: &str, to: &str| run(&src.replacen(from, to, 1)).expect_err(to)[0].code;
+    assert_eq!(code("1 s: west.in[1], 8.5 m before", "1 s: west.in[1], 80 m after"), "E0132");
+    assert_eq!(code("4 s: west.in[1], 9.5 m after", "4 s: west.in[1], 120 m after"), "E0131");
+    assert_eq!(code("shoulder 2.5 m", "shoulder 0.5 m"), "E0210");
+    assert_eq!(code("track when ego within 30 m {", "track when ego within 30 s {"), "E0101");
+    assert_eq!(code("track when ego within 30 m {", "track when ego near 30 m {"), "E0150");
+    assert_eq!(code("track when ego within 30 m {", "track when parked within 30 m {"), "E0151");
+    let cycle = src.replacen(
+        "speed 40 km/h\n        goal { speed 40 km/h }",
+        "speed 40 km/h\n        goal { speed 40 km/h; start when parked starts }",
+        1,
+    );
+    assert_eq!(run(&cycle).expect_err("a cycle")[0].code, "E0151");
 }

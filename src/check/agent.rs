@@ -31,6 +31,7 @@ impl Checker {
         let mut phases: Vec<&ast::Goal> = vec![];
         let mut siren: Option<(&ast::Ident, Span)> = None;
         let mut body = super::body::BodyStmts::default();
+        let mut mass: Option<(&ast::Value, Span)> = None;
         for st in &a.stmts {
             let (slot_first, what): (Option<Span>, &str) = match st {
                 ast::AgentStmt::At { place: p, span } => (place.replace((p, *span)).map(|x| x.1), "placement `at`"),
@@ -56,6 +57,7 @@ impl Checker {
                     body.doors.push(d);
                     (None, "`door`")
                 }
+                ast::AgentStmt::Mass { value, span } => (mass.replace((value, *span)).map(|x| x.1), "`mass`"),
             };
             if let Some(first) = slot_first {
                 self.dup(what, first, st.span());
@@ -126,8 +128,9 @@ impl Checker {
                 size[i] = Some(self.bounded(v, Dim::Length, what, 0.05, 40.0, "0.05..40 m"));
             }
         }
-        let goal_c = match (goal, motion) {
-            (Some(g), Some(m)) if !is_static => self.goal(g, m, class?, place.as_ref(), road, order, &a.name),
+        let goal_c = match (goal, motion, track.and_then(|t| t.when.as_ref())) {
+            (Some(g), Some(m), _) if !is_static => self.goal(g, m, class?, place.as_ref(), road, order, &a.name),
+            (None, _, Some(w)) => self.track_trigger(w, order),
             _ => Some(None),
         };
         if let (Some(Some(g)), Some(d), Some((v, _))) = (&goal_c, &speed_d, speed)
@@ -158,8 +161,25 @@ impl Checker {
                 );
                 None
             }
-            (false, _) => phases.iter().map(|g| self.phase(g, order)).collect::<Vec<_>>().into_iter().collect(),
+            (false, _) => {
+                let vehicle = motion == Some(Motion::Vehicle);
+                phases.iter().map(|g| self.phase(g, order, vehicle)).collect::<Vec<_>>().into_iter().collect()
+            }
         };
+        // A phase pulls over from its lane: not from a lane change, a crossing or an easing aside.
+        if let (Some(Some(g)), Some(ps)) = (&goal_c, &phases_c)
+            && g.lateral != Lateral::HoldLane
+            && let Some(k) = ps.iter().position(|p| p.pull_over)
+        {
+            self.err(
+                Diagnostic::error(
+                    "E0155",
+                    format!("`{}` pulls over in a goal phase after another lateral move", a.name.name),
+                )
+                .label(phases[k].span, "pulls over here")
+                .help("a phase pulls over from a goal that holds its lane; drop one of the two lateral moves"),
+            );
+        }
         let behaviour_c = match behaviour {
             Some(b) => self.behaviour(b, &a.name.name, motion, is_static, goal),
             None => Some(Behaviour::default()),
@@ -167,6 +187,10 @@ impl Checker {
         let (kinds, class, motion) = kind?;
         let siren = self.siren(siren, &kinds, is_static);
         let body = self.body(&body, class, &kinds, order);
+        let mass = match mass {
+            Some((v, span)) => self.mass(v, span, &a.name.name, is_static).map(Some),
+            None => Some(None),
+        };
         Some(Agent {
             name: a.name.name.clone(),
             kinds,
@@ -185,6 +209,7 @@ impl Checker {
             phases: phases_c?,
             siren: siren?,
             body: body?,
+            mass: mass?,
             span,
             place_span: place_span.unwrap_or(span),
         })
@@ -211,6 +236,23 @@ impl Checker {
             return None;
         }
         Some(Some(on))
+    }
+
+    /// `track when NAME CONDITION`: its trigger, carried as the `start when` of an otherwise
+    /// empty goal, so that triggers read it like any start (cycles E0151, E0154) and the
+    /// rollout starts the replay when it fires.
+    fn track_trigger(&mut self, w: &ast::Trigger, order: &[&str]) -> Option<Option<Goal>> {
+        let start_when = Some(self.trigger(w, order)?);
+        Some(Some(Goal {
+            speed: None,
+            lateral: Lateral::HoldLane,
+            stop: None,
+            reverse: None,
+            turn: None,
+            start_after: 0.0,
+            start_when,
+            stop_span: Span::default(),
+        }))
     }
 
     fn track(

@@ -8,9 +8,9 @@ use crate::syntax::ast;
 use std::collections::BTreeMap;
 
 impl Checker {
-    /// A crash latches its pair from the impact on, so an agent's crashes must be possible in
-    /// that light: it strikes once (one intercept, E0121), a pair touches once (E0123), and an
-    /// agent strikes before anything strikes it (it stands still from its first contact, E0122).
+    /// A crash ends both agents' driving (they slide to rest, or hold `after latch`), so an
+    /// agent's crashes must be possible in that light: it strikes once (one intercept, E0121), a
+    /// pair is staged once (E0123), and an agent strikes before anything strikes it (E0122).
     /// Struck any number of times, in any order, is fine: a pile-up into a car that has stopped.
     pub(super) fn conflicts_in_order(
         &mut self,
@@ -47,12 +47,12 @@ impl Checker {
                         .label(ca.span, "second crash of the pair")
                         .label(first.span, "first crash of the pair")
                         .help(
-                            "a crash holds its pair from the contact on, so a pair touches once; keep one of the two",
+                            "a crash ends the pair's driving, so a pair is staged to crash once; keep one of the two",
                         ),
                 );
                 continue;
             }
-            // Struck before its own strike: it stands still from then on and cannot strike.
+            // Struck before its own strike: it is no longer driven and cannot strike.
             let struck_first = all
                 .iter()
                 .filter(|(e, _)| e.struck == c.at_fault && when(e) < when(c))
@@ -72,7 +72,7 @@ impl Checker {
                     .label(field(ca, "at_fault"), format!("`{name}` strikes here"))
                     .label(field(ea, "struck"), format!("`{name}` is struck first"))
                     .help(format!(
-                        "a crash holds its pair from the contact on (motion after an impact is not simulated): `{name}` \
+                        "a struck agent is no longer driven from the contact on (it slides to rest): `{name}` \
                          must strike first, so move its strike to {:.1} s or before, or the crash that strikes it later",
                         when(e)
                     )),
@@ -194,7 +194,8 @@ impl Checker {
                 None
             }
         };
-        let (at_fault, struck, impact, point, at) = (at_fault?, struck?, impact?, point?, at?);
+        let after = self.after_impact(&fields);
+        let (at_fault, struck, impact, point, at, after) = (at_fault?, struck?, impact?, point?, at?, after?);
         if at_fault.0 == struck.0 {
             self.err(
                 Diagnostic::error("E0114", "a conflict needs two different agents")
@@ -225,7 +226,7 @@ impl Checker {
                 ok = false;
             }
         }
-        ok.then_some(Conflict { at_fault: at_fault.0, struck: struck.0, impact, point, at, span: c.span })
+        ok.then_some(Conflict { at_fault: at_fault.0, struck: struck.0, impact, point, at, after, span: c.span })
     }
 }
 

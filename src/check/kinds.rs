@@ -29,6 +29,7 @@ impl Checker {
             let mut motion = parent.as_ref().map_or(class.default_motion(), |p| p.motion);
             let mut size: [Option<Dist>; 3] =
                 parent.as_ref().map_or([None; 3], |p| [Some(p.length), Some(p.width), Some(p.height)]);
+            let mut mass = parent.as_ref().and_then(|p| p.mass);
             let emergency = EMERGENCY_KINDS.contains(&k.name.name.as_str()) || parent.is_some_and(|p| p.emergency);
             for s in &k.stmts {
                 match s {
@@ -41,6 +42,13 @@ impl Checker {
                         let what = format!("kind {}", s.key.as_str());
                         size[s.key as usize] = self.bounded(&s.value, Dim::Length, &what, 0.01, 40.0, "0.01..40 m");
                     }
+                    ast::KindStmt::Mass { .. } => {}
+                }
+            }
+            // After the motion statements: a static kind has no mass.
+            for s in &k.stmts {
+                if let ast::KindStmt::Mass { value, span } = s {
+                    mass = self.mass(value, *span, &k.name.name, motion == Motion::Static);
                 }
             }
             let missing: Vec<&str> =
@@ -60,7 +68,10 @@ impl Checker {
             let [length, width, height] = size.map(|s| s.expect("checked above"));
             self.kinds.insert(
                 k.name.name.clone(),
-                (Kind { name: k.name.name.clone(), class, motion, length, width, height, emergency }, k.name.span),
+                (
+                    Kind { name: k.name.name.clone(), class, motion, length, width, height, emergency, mass },
+                    k.name.span,
+                ),
             );
         }
     }

@@ -12,6 +12,7 @@ pub mod classes;
 mod conflict;
 mod expect;
 mod goal;
+mod impact;
 pub mod kerb;
 mod kinds;
 pub mod load;

@@ -252,6 +252,9 @@ pub struct Kind {
     /// (`kind my_amb: ambulance { ... }`). Derived by the checker, so not serialised.
     #[serde(skip)]
     pub emergency: bool,
+    /// `mass`, kg, stated on the kind or the kind it derives from.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass: Option<f64>,
 }
 
 /// The stdlib kinds that drive with lights and siren (cross traffic gives them the junction);
@@ -279,7 +282,9 @@ pub struct Agent {
     /// Initial speed, m/s.
     pub speed: Dist,
     pub goal: Option<Goal>,
-    /// Replayed keyframes (from the box-stream importer); `place` is `Place::Track` then.
+    /// Replayed keyframes (from the box-stream importer); `place` is `Place::Track` then. A
+    /// track that starts on a trigger (`track when ...`) carries it as `goal`'s `start_when`,
+    /// its only part; its keyframe times count from when it fires.
     pub track: Option<Vec<Keyframe>>,
     /// A person's or an animal's posture, which sets its box (`sample` applies it).
     #[serde(default, skip_serializing_if = "Posture::is_standing")]
@@ -296,6 +301,9 @@ pub struct Agent {
     /// Lamps and doors as stated (`body.rs`).
     #[serde(default, skip_serializing_if = "Body::is_default")]
     pub body: Body,
+    /// Mass, kg, as the agent or its kind states it (`mass 1500 kg`); class priors otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass: Option<f64>,
     #[serde(skip)]
     pub span: Span,
     #[serde(skip)]
@@ -499,8 +507,29 @@ pub struct Conflict {
     pub point: Point,
     /// Target time of impact, s.
     pub at: Option<f64>,
+    /// What follows the contact (`after`, `restitution`, `friction`).
+    #[serde(default, skip_serializing_if = "AfterImpact::is_default")]
+    pub after: AfterImpact,
     #[serde(skip)]
     pub span: Span,
+}
+
+/// What follows a conflict's contact: the bodies move on from it (the default), or the pair
+/// holds where it met (`after latch`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct AfterImpact {
+    /// `after latch`: the pair holds at its deepest overlap for the rest of the clip.
+    pub latch: bool,
+    /// `restitution`, 0..1; `rollout::impact::RESTITUTION` when unstated.
+    pub restitution: Option<f64>,
+    /// `friction` between the two bodies, 0..1.5; `rollout::impact::BODY_FRICTION` when unstated.
+    pub friction: Option<f64>,
+}
+
+impl AfterImpact {
+    pub fn is_default(&self) -> bool {
+        *self == AfterImpact::default()
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -647,9 +676,16 @@ impl Behaviour {
 /// goal before it has started.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Phase<V = Dist> {
-    pub speed: V,
+    /// The goal speed from its start; `None` keeps the one before.
+    pub speed: Option<V>,
     pub start_after: f64,
     pub start_when: Option<Trigger>,
+    /// `stop after DIST`: stops that far on from where the phase starts, m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stop_after: Option<f64>,
+    /// `lateral pull_to_shoulder` (vehicles): pulls over from its start.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub pull_over: bool,
 }
 
 // ---- expectations (`expect { ... }`) ----

@@ -17,14 +17,25 @@ const CONDITIONS: [(&str, &str); 5] = [
 ];
 
 impl Checker {
-    /// A later goal block: a goal `speed` and the `start` that hands over to it (E0155 for
-    /// anything else: a phase changes speed, not route or stops).
-    pub(super) fn phase(&mut self, g: &ast::Goal, order: &[&str]) -> Option<Phase> {
+    /// A later goal block: the `start` that hands over to it, and what changes then: a goal
+    /// `speed`, a stop (`stop after DIST`, from where the phase starts) or, for a vehicle,
+    /// `lateral pull_to_shoulder` (E0155 for anything else: a phase keeps the route).
+    pub(super) fn phase(&mut self, g: &ast::Goal, order: &[&str], vehicle: bool) -> Option<Phase> {
         let mut speed = None;
         let mut start: Option<(f64, Option<Trigger>)> = None;
+        let (mut stop_after, mut pull_over) = (None, false);
         let mut ok = true;
         for st in &g.stmts {
             match st {
+                ast::GoalStmt::Stop { stop: ast::Stop::After(v), .. } if stop_after.is_none() => {
+                    stop_after = self.fixed(v, Dim::Length, "stop distance", 0.0, 2000.0, "0..2000 m");
+                    ok &= stop_after.is_some();
+                }
+                ast::GoalStmt::Lateral { lateral: ast::Lateral::Word(w), .. }
+                    if w.name == "pull_to_shoulder" && vehicle && !pull_over =>
+                {
+                    pull_over = true;
+                }
                 ast::GoalStmt::Speed { value, .. } if speed.is_none() => {
                     speed = self.bounded(value, Dim::Speed, "goal speed", 0.0, MAX_SPEED_MS, "0..324 km/h");
                     ok &= speed.is_some();
@@ -43,26 +54,30 @@ impl Checker {
                     self.err(
                         Diagnostic::error(
                             "E0155",
-                            format!("a goal phase takes one `speed` and one `start`, not `{}` here", other.keyword()),
+                            format!(
+                                "a goal phase changes the speed, stops (`stop after`) or pulls over, not `{}` here",
+                                other.keyword()
+                            ),
                         )
                         .label(other.span(), "not in a later goal block")
-                        .help("route, lateral moves and stops belong to the first goal block"),
+                        .help("turns, lane changes, crossings and other stops belong to the first goal block"),
                     );
                     ok = false;
                 }
             }
         }
-        let (Some(speed), Some((start_after, start_when))) = (speed, start) else {
+        let changes = speed.is_some() || stop_after.is_some() || pull_over;
+        let (true, Some((start_after, start_when))) = (changes, start) else {
             if ok {
                 self.err(
-                    Diagnostic::error("E0155", "a goal phase needs a `speed` and a `start`")
+                    Diagnostic::error("E0155", "a goal phase needs a `start` and something to change")
                         .label(g.span, "second goal block")
-                        .help("e.g. `goal { speed 0 km/h; start when ego within 15 m }`"),
+                        .help("e.g. `goal { speed 0 km/h; start when ego within 15 m }` or `goal { stop after 20 m; start after 3 s }`"),
                 );
             }
             return None;
         };
-        ok.then_some(Phase { speed, start_after, start_when })
+        ok.then_some(Phase { speed, start_after, start_when, stop_after, pull_over })
     }
 
     /// One `start when ...`: its agent resolved, its condition word known and given what it takes.
@@ -195,8 +210,15 @@ fn cycle_from(edges: &[Vec<usize>], start: usize) -> Option<Vec<usize>> {
     None
 }
 
-/// The `start when` of agent `a` (any goal block) that names `who`.
+/// The `start when` of agent `a` (any goal block), or its `track when`, that names `who`.
 fn trigger_span(a: &ast::Agent, who: &str) -> crate::source::Span {
+    let track = a.stmts.iter().find_map(|s| match s {
+        ast::AgentStmt::Track(t) => t.when.as_ref().filter(|w| w.who.name == who).map(|w| w.span),
+        _ => None,
+    });
+    if let Some(span) = track {
+        return span;
+    }
     a.stmts
         .iter()
         .filter_map(|s| match s {

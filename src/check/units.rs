@@ -14,6 +14,8 @@ pub enum Dim {
     Ratio,
     /// A bare number.
     Count,
+    /// kg.
+    Mass,
 }
 
 impl Dim {
@@ -26,6 +28,7 @@ impl Dim {
             Dim::Frequency => "a frequency",
             Dim::Ratio => "a ratio",
             Dim::Count => "a plain number",
+            Dim::Mass => "a mass",
         }
     }
     /// The units a user may write for this dimension (for hints).
@@ -38,6 +41,7 @@ impl Dim {
             Dim::Frequency => "Hz",
             Dim::Ratio => "%",
             Dim::Count => "no unit",
+            Dim::Mass => "kg",
         }
     }
 }
@@ -51,6 +55,7 @@ pub fn unit(u: &str) -> (Dim, f64) {
 pub fn lookup(u: &str) -> Option<(Dim, f64)> {
     Some(match u {
         "m" => (Dim::Length, 1.0),
+        "kg" => (Dim::Mass, 1.0),
         "cm" => (Dim::Length, 0.01),
         "km" => (Dim::Length, 1000.0),
         "m/s" => (Dim::Speed, 1.0),

@@ -3,7 +3,7 @@
 //!
 //! Placements are chosen so both vehicles reach the conflict area at the impact time on their
 //! own goals; the rollout then re-plans the striker's last seconds onto the coded side. A few
-//! timings are tried in a fixed order and the first whose latched contact is on the coded sides
+//! timings are tried in a fixed order and the first whose staged contact is on the coded sides
 //! is kept, so the result is deterministic and never unverified.
 
 use super::crash::{Crash, Face, Manoeuvre, Side, Template, VehicleDesc, impact_name};

@@ -121,7 +121,7 @@ fn what_happened(imp: &Imported) -> String {
         n => format!(", then {} more", n - 1),
     };
     format!(
-        "{}'s {} into {} ({}{}), latched at {:.1} s{more}",
+        "{}'s {} into {} ({}{}), impact at {:.1} s{more}",
         k.at_fault,
         k.face.name(),
         k.struck,

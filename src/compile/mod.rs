@@ -189,15 +189,14 @@ impl Front {
     }
 
     /// Whether track `i` is in the scene at frame `f`. A replayed track exists from its first to
-    /// its last keyframe (a recorded object enters and leaves the clip); everything else, always.
+    /// its last keyframe (a recorded object enters and leaves the clip); everything else, and a
+    /// track on a trigger (at its first keyframe till then, at its last after), always.
     pub fn present(&self, i: usize, f: usize) -> bool {
-        let keys = self
-            .placed
-            .agents
-            .get(i)
-            .and_then(|p| p.source)
-            .and_then(|s| self.concrete.agents.get(s))
-            .and_then(|a| a.track.as_ref());
+        let agent = self.placed.agents.get(i).and_then(|p| p.source).and_then(|s| self.concrete.agents.get(s));
+        if agent.and_then(|a| a.goal.as_ref()?.start_when).is_some() {
+            return true;
+        }
+        let keys = agent.and_then(|a| a.track.as_ref());
         let (Some(first), Some(last)) = (keys.and_then(|k| k.first()), keys.and_then(|k| k.last())) else {
             return true;
         };

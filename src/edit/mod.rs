@@ -104,9 +104,19 @@ pub const STDLIB_KINDS: [&str; 32] = [
 
 /// Whether the BEV's map layers make the pixel under an ego-frame point a valid surface for
 /// `class` (the BEV twin of `place`'s surface rule): vehicles on drivable paving, bicycles there
-/// or on walkways and crosswalks, pedestrians on walkways, crosswalks or the shoulder (road
-/// block outside the lane groups); static things anywhere on the grid. `Err` names what was needed.
+/// or on walkways and crosswalks; people, like static things, anywhere on the grid (standing,
+/// kneeling or lying on a lane included, as the checker allows). `Err` names what was needed.
 pub fn surface_ok(bev: &Bev, class: Class, x: f64, y: f64) -> Result<(), &'static str> {
+    surface(bev, class, x, y, false)
+}
+
+/// `surface_ok` with people where they usually are: on walkways, crosswalks or the shoulder
+/// (road block outside the lane groups). The edit protocol inserts them there, as the paper does.
+pub fn usual_surface_ok(bev: &Bev, class: Class, x: f64, y: f64) -> Result<(), &'static str> {
+    surface(bev, class, x, y, true)
+}
+
+fn surface(bev: &Bev, class: Class, x: f64, y: f64, usual: bool) -> Result<(), &'static str> {
     let px = |m: f64| to_canvas(m).floor();
     let (i, j) = (px(x), px(y));
     if !(0.0..GRID as f64).contains(&i) || !(0.0..GRID as f64).contains(&j) {
@@ -122,7 +132,7 @@ pub fn surface_ok(bev: &Bev, class: Class, x: f64, y: f64) -> Result<(), &'stati
     let (ok, need) = match class {
         Class::Vehicle => (drivable, "drivable area (BEV channels 0, 1, 3, 5, 6)"),
         Class::Bicycle => (drivable || at(CH_WALKWAYS) || at(CH_CROSSWALKS), "drivable area, a walkway or a crosswalk"),
-        Class::Pedestrian => {
+        Class::Pedestrian if usual => {
             (at(CH_WALKWAYS) || at(CH_CROSSWALKS) || shoulder, "a walkway, a crosswalk or the shoulder")
         }
         _ => (true, ""),

@@ -21,7 +21,7 @@ use crate::backend::{Background, Mode, OccInput, Occupancy, OccupancyBackend, Pr
 use crate::check::scenario::Class;
 use crate::compile::{frame_boxes, front};
 use crate::diag::Diagnostic;
-use crate::edit::{kind_info, overlap, rerasterize, surface_ok};
+use crate::edit::{kind_info, overlap, rerasterize, usual_surface_ok};
 use crate::raster::{Bev, Rasterizer, rasterize};
 use crate::sample::Rng;
 use crate::view::EgoBox;
@@ -126,7 +126,7 @@ impl Scene {
     }
 
     fn acceptable(&self, b: &EgoBox, others: &[EgoBox]) -> bool {
-        surface_ok(&self.bev, b.class, b.x, b.y).is_ok()
+        usual_surface_ok(&self.bev, b.class, b.x, b.y).is_ok()
             && overlap(b, others, self.ego_size).is_none()
             && b.x.abs() < 48.0
             && b.y.abs() < 48.0

@@ -31,6 +31,8 @@
 
 pub use crate::check::classes::{ClassMap, map_class};
 
+mod feasible;
+
 use crate::check::scenario::Class;
 use crate::diag::Diagnostic;
 use crate::geom::wrap_angle;
@@ -402,12 +404,13 @@ fn ident(track: &str) -> String {
 }
 
 /// One replayed agent: a maximal run of consecutive frames of one track.
+#[derive(Clone)]
 struct Segment {
     name: String,
     track: String,
     class_name: String,
-    kind: &'static str,
     class: Class,
+    kind: &'static str,
     size: [f64; 3],
     /// (clip frame, pose)
     keys: Vec<(usize, Pose)>,
@@ -436,8 +439,8 @@ fn segments(rec: &Recorded, warnings: &mut Vec<Diagnostic>, whole: Span) -> Vec<
                         name,
                         track: b.track.clone(),
                         class_name: b.class_name.clone(),
-                        kind: b.kind,
                         class: b.class,
+                        kind: b.kind,
                         size: b.size,
                         keys: vec![],
                         states: vec![],
@@ -505,7 +508,7 @@ pub fn to_scn(
     warnings: &mut Vec<Diagnostic>,
     whole: Span,
 ) -> Result<(String, Vec<AgentSpan>), Vec<Diagnostic>> {
-    let segs = segments(rec, warnings, whole);
+    let segs = feasible::drop_infeasible(segments(rec, warnings, whole), rec.rate, warnings, whole);
     let n = rec.frames.len();
     let mut t = format!(
         "// Imported by `rocc import boxes` from {source_name} (convention {}): {n} frame(s) at {} Hz, {} replayed agent(s).\n",

@@ -100,7 +100,7 @@ pub fn stdlib_kinds() -> Vec<(String, bool)> {
         .map(|k| {
             let motion = k.stmts.iter().find_map(|s| match s {
                 KindStmt::Motion { motion, .. } => Some(motion.name.as_str()),
-                KindStmt::Size(_) => None,
+                KindStmt::Size(_) | KindStmt::Mass { .. } => None,
             });
             let stat = match motion {
                 Some(m) => m == "static",

@@ -126,6 +126,13 @@ pub(crate) struct Stage {
     pub v_goal: f64,
     pub start: f64,
     pub trigger: Option<Trigger>,
+    /// Stops this far on from where the phase that states it starts (`State::stage_s`), m;
+    /// later phases keep it.
+    pub stop_after: Option<f64>,
+    /// The phase states its own stop: `State::stage_s` is taken at its start.
+    pub own_stop: bool,
+    /// Pulls over (`Actor::pull`), from this phase on.
+    pub pull: bool,
 }
 
 /// The stretch that two vehicles' junction paths share, seen from one of them: route arc
@@ -188,6 +195,12 @@ impl Actor {
         }
     }
 
+    /// The goal phase it is in, if any.
+    #[inline]
+    pub(crate) fn stage(&self, st: &State) -> Option<&Stage> {
+        st.stage.checked_sub(1).and_then(|k| self.phases.get(k as usize))
+    }
+
     pub(crate) fn obb(&self, st: &State) -> Obb {
         Obb { center: st.pos, yaw: st.yaw, length: 2.0 * self.hl, width: 2.0 * self.hw }
     }
@@ -217,6 +230,11 @@ pub(crate) struct State {
     pub alarm: f64,
     /// How many of its goal phases have started (`Actor::phases`).
     pub stage: u8,
+    /// When its trigger fired, s (0 without one): a triggered track counts its keyframe times
+    /// from it.
+    pub since: f64,
+    /// Arc length where the goal phase with the stop it keeps started (`Stage::stop_after`).
+    pub stage_s: f64,
 }
 
 /// A conflict with its agents as track indices.
@@ -248,6 +266,8 @@ pub(crate) fn initial(a: &Actor) -> State {
         frozen: false,
         give_way: false,
         go: a.trigger.is_none(),
+        since: 0.0,
+        stage_s: 0.0,
         alarm: 0.0,
         stage: 0,
     }
@@ -279,6 +299,8 @@ pub(crate) struct Blocking {
     /// The paving round it, as offsets on our route.
     pub lo: f64,
     pub hi: f64,
+    /// Its speed along our route: 0 standing, a slow mover's pace (`drive::overtake`), m/s.
+    pub v: f64,
 }
 
 /// How a vehicle makes way for an emergency vehicle (`Sim::siren_for`).

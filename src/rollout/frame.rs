@@ -9,6 +9,7 @@ use crate::rollout::agent::Rank;
 use crate::rollout::agent::initial;
 use crate::rollout::agent::{Actor, Blocking, Conf, Drive, Lat, State, Yield};
 use crate::rollout::drive::index::{AlongIndexes, Near};
+use crate::rollout::impact::bodies::Wrecks;
 use crate::rollout::kinematics::{replay, steer};
 use crate::rollout::path::Foot;
 use crate::rollout::staging::plan::Plan;
@@ -47,6 +48,8 @@ pub(crate) struct Sim<'a, 'b> {
     pub(crate) pairs: Vec<(usize, usize)>,
     /// Some agent starts on a trigger (`fire_triggers`).
     pub(crate) any_trigger: bool,
+    /// Masses, and the bodies moving on from an impact (`rollout::impact`).
+    pub(crate) wreck: Wrecks,
 }
 
 /// What every agent's step reads of this frame besides the states: derived from `Sim::cur`
@@ -76,6 +79,8 @@ pub(crate) struct Facts {
     pub(crate) fired: Vec<(usize, bool)>,
     /// Agents that stand for good (`Actor::blocker`), for `avoid`.
     pub(crate) blockers: Vec<usize>,
+    /// Slow moving road users others may pass (`drive::overtake`), for `avoid`.
+    pub(crate) slow: Vec<usize>,
     /// Emergency vehicles that drive (`Actor::emergency`), for `siren_for`.
     pub(crate) sirens: Vec<usize>,
     /// Per agent, this frame: the emergency vehicle it makes way for (`siren_for`).
@@ -158,6 +163,7 @@ pub(crate) fn empty_tracks(actors: &[Actor], rate: f64, frames: usize) -> Tracks
         speeds: actors.iter().map(|_| Vec::with_capacity(frames)).collect(),
         impacts: vec![],
         bodies: vec![],
+        contacts: vec![],
     }
 }
 
@@ -209,11 +215,13 @@ impl<'a, 'b> Sim<'a, 'b> {
                 near: Vec::with_capacity(actors.len()),
                 fired: Vec::with_capacity(actors.len()),
                 blockers: (0..actors.len()).filter(|&i| actors[i].blocker).collect(),
+                slow: crate::rollout::drive::overtake::slow_movers(actors),
                 sirens: (0..actors.len())
                     .filter(|&i| actors[i].emergency && matches!(actors[i].drive, Drive::Mover))
                     .collect(),
                 siren_for: vec![None; actors.len()],
             },
+            wreck: Wrecks::new(actors),
             any_trigger: actors.iter().any(|a| a.trigger.is_some() || !a.phases.is_empty()),
             approach_slot,
             cross_at,
@@ -315,8 +323,10 @@ impl<'a, 'b> Sim<'a, 'b> {
             for i in 0..self.actors.len() {
                 self.next[i] = self.step(&mut sc, i, t, f);
             }
+            self.slide();
             self.resolve_overlaps(f);
             self.latch(f, out);
+            self.collide(f, out);
             std::mem::swap(&mut self.cur, &mut self.next);
             self.record(out);
         }
@@ -343,10 +353,13 @@ impl<'a, 'b> Sim<'a, 'b> {
         }
     }
 
-    /// Conflict pairs may come close and overlap; nobody else may.
+    /// Conflict pairs may come close and overlap; nobody else may, except where one moves on
+    /// from an impact (its contacts are impacts: `collide`).
     #[inline]
     pub(crate) fn exempt(&self, i: usize, j: usize) -> bool {
-        self.confs.iter().any(|k| (k.af == i && k.st == j) || (k.af == j && k.st == i))
+        self.wreck.moving(i)
+            || self.wreck.moving(j)
+            || self.confs.iter().any(|k| (k.af == i && k.st == j) || (k.af == j && k.st == i))
     }
 
     /// The state of agent `i` at `t + dt`, from everyone's state at `t` (frame `f - 1`).
@@ -355,8 +368,10 @@ impl<'a, 'b> Sim<'a, 'b> {
         let st = self.cur[i];
         match &a.drive {
             Drive::Static => st,
+            // A track on a trigger stands at its first keyframe till the trigger fires.
+            Drive::Replay(_) if !st.go => State { v: 0.0, ..st },
             Drive::Replay(keys) => {
-                let (p, yaw) = replay(keys, t + self.dt);
+                let (p, yaw) = replay(keys, t + self.dt - st.since);
                 State { pos: p, yaw, v: p.distance(st.pos) / self.dt, ..st }
             }
             Drive::Mover if st.frozen => State { v: 0.0, ..st },

@@ -35,6 +35,7 @@ mod agent;
 pub mod body;
 mod drive;
 mod frame;
+pub mod impact;
 mod junction;
 mod kinematics;
 mod path;
@@ -70,6 +71,10 @@ pub struct Tracks {
     /// `[agent]`: lamps and doors per frame (`body.rs`), read off the tracks above.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub bodies: Vec<body::BodyTrack>,
+    /// Every impact resolved by the impact model, in order: staged contacts and those that
+    /// follow from the motion after them (`rollout::impact`).
+    #[serde(default)]
+    pub contacts: Vec<impact::Contact>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -132,11 +137,25 @@ pub fn limits(class: Class, motion: Motion) -> Limits {
         (Motion::Vehicle, _) => {
             Limits { accel: 2.5, brake: 3.0, brake_max: 8.0, yaw_rate: 1.2, lat_acc: 3.0, headway: 1.2, min_gap: 2.0 }
         }
-        _ => Limits { accel: 1.5, brake: 2.0, brake_max: 4.0, yaw_rate: 3.0, lat_acc: 4.0, headway: 0.8, min_gap: 0.8 },
+        (Motion::Holonomic, Class::Pedestrian) | (Motion::Static, _) => {
+            Limits { accel: 1.5, brake: 2.0, brake_max: 4.0, yaw_rate: 3.0, lat_acc: 4.0, headway: 0.8, min_gap: 0.8 }
+        }
+        (Motion::Holonomic, _) => ANIMAL,
     }
 }
 
+/// Animals (walking kinds that are not pedestrians: `animal`, `dog`, a `deer` derived from
+/// them; a `stroller` shares their class and motion, hence their limits) bound off: a deer reaches 8 m/s in about a second and stops or turns as sharply
+/// (scenarios/rare/deer_leaps_onto_rural_road.scn).
+pub const ANIMAL: Limits =
+    Limits { accel: 8.0, brake: 5.0, brake_max: 10.0, yaw_rate: 4.0, lat_acc: 6.0, headway: 0.8, min_gap: 0.8 };
+
 impl Tracks {
+    /// The first frame at which agent `i` is in an impact the impact model resolved.
+    pub fn first_contact(&self, i: usize) -> Option<usize> {
+        self.contacts.iter().filter(|c| c.a == i || c.b == i).map(|c| c.frame).min()
+    }
+
     /// Feed every pose, speed and impact (frame and depth) to `h`, bit for bit: the digest that
     /// pins the rollout (`bench rollout`, the pin test), which a change that claims to change
     /// nothing must leave as it is.

@@ -115,7 +115,11 @@ pub(crate) fn build_actor(
     // A recorded track is what happened: it is replayed even for a kind that never moves by
     // itself (a cone carried on a pickup), so an imported clip reproduces its boxes exactly.
     if let Some(keys) = ca.filter(|_| !p.is_object).and_then(|ca| ca.track.as_ref()).filter(|k| !k.is_empty()) {
-        return base_actor(info, p.pose, p.motion, p.class, Drive::Replay(keys.clone()));
+        let mut a = base_actor(info, p.pose, p.motion, p.class, Drive::Replay(keys.clone()));
+        // `track when ...`: the replay starts when its trigger fires.
+        let when = ca.and_then(|ca| ca.goal.as_ref()?.start_when);
+        a.trigger = when.and_then(|t| crate::rollout::trigger::on_tracks(t, track_of));
+        return a;
     }
     let Some(ca) = ca.filter(|_| !p.is_object && p.motion != Motion::Static) else {
         let mut a = base_actor(info, p.pose, p.motion, p.class, Drive::Static);
@@ -135,14 +139,24 @@ pub(crate) fn build_actor(
     a.start = goal.map(|g| g.start_after.max(0.0)).unwrap_or(0.0);
     a.trigger = goal.and_then(|g| g.start_when).and_then(|t| crate::rollout::trigger::on_tracks(t, track_of));
     a.behaviour = ca.behaviour;
+    // Each phase keeps the speed, stop and pull-over of the one before unless it states its own.
+    let mut prev =
+        Stage { v_goal: f64::NAN, start: 0.0, trigger: None, stop_after: None, own_stop: false, pull: false };
     a.phases = ca
         .phases
         .iter()
         .take(u8::MAX as usize)
-        .map(|p| Stage {
-            v_goal: p.speed.max(0.0),
-            start: p.start_after.max(0.0),
-            trigger: p.start_when.and_then(|t| crate::rollout::trigger::on_tracks(t, track_of)),
+        .map(|p| {
+            let v_goal = p.speed.map_or(prev.v_goal, |v| v.max(0.0));
+            prev = Stage {
+                v_goal,
+                start: p.start_after.max(0.0),
+                trigger: p.start_when.and_then(|t| crate::rollout::trigger::on_tracks(t, track_of)),
+                stop_after: p.stop_after.or(prev.stop_after),
+                own_stop: p.stop_after.is_some(),
+                pull: p.pull_over || prev.pull,
+            };
+            prev
         })
         .collect();
     let lateral = goal.map(|g| g.lateral).unwrap_or(Lateral::HoldLane);
@@ -152,7 +166,13 @@ pub(crate) fn build_actor(
     } else if lateral == Lateral::Cross {
         match cross_line(map, pos) {
             Some((yaw, len, kerb)) => {
-                a.path = Path::straight(pos, yaw, len);
+                // An animal bounds on past the far verge instead of pulling up on it, so that it
+                // crosses at its goal speed (scenarios/rare/deer_leaps_onto_rural_road.scn).
+                let run_on = match goal.and_then(|g| g.speed) {
+                    Some(v) if a.lim == crate::rollout::ANIMAL => v * v / a.lim.brake,
+                    _ => 0.0,
+                };
+                a.path = Path::straight(pos, yaw, len + run_on);
                 a.kerb = Some(kerb);
             }
             None => {
@@ -178,6 +198,11 @@ pub(crate) fn build_actor(
         None if lateral == Lateral::Cross && a.v0 < 0.05 => WALK_SPEED,
         None => a.v0,
     };
+    let mut v = a.v_goal;
+    for p in &mut a.phases {
+        p.v_goal = if p.v_goal.is_nan() { v } else { p.v_goal };
+        v = p.v_goal;
+    }
     let lane = lane_here.map(|l| &map.lanes[l]);
     let aside = pull_offset;
     a.lateral = match lateral {

@@ -47,9 +47,14 @@ impl Sim<'_, '_> {
         }
         for &(i, phase) in &self.facts.fired {
             if phase {
-                self.cur[i].stage += 1;
+                let st = &mut self.cur[i];
+                st.stage += 1;
+                if self.actors[i].stage(st).is_some_and(|p| p.own_stop) {
+                    st.stage_s = st.s;
+                }
             } else {
                 self.cur[i].go = true;
+                self.cur[i].since = t;
             }
         }
     }

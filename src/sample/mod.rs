@@ -63,6 +63,9 @@ pub struct ConcreteAgent {
     /// swung it (`rollout::body`): empty before the rollout.
     #[serde(skip)]
     pub door_swing: Vec<(crate::check::scenario::Door, Vec<f64>)>,
+    /// Mass in kg as the agent or its kind states it (`rollout::impact`); class priors otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass: Option<f64>,
     #[serde(skip)]
     pub span: crate::source::Span,
     #[serde(skip)]
@@ -122,11 +125,18 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
                 phases: a
                     .phases
                     .iter()
-                    .map(|p| Phase { speed: r.draw(p.speed), start_after: p.start_after, start_when: p.start_when })
+                    .map(|p| Phase {
+                        speed: p.speed.map(|v| r.draw(v)),
+                        start_after: p.start_after,
+                        start_when: p.start_when,
+                        stop_after: p.stop_after,
+                        pull_over: p.pull_over,
+                    })
                     .collect(),
                 siren: a.siren,
                 body: a.body.clone(),
                 door_swing: vec![],
+                mass: a.mass.or(k.mass),
                 span: a.span,
                 place_span: a.place_span,
             }

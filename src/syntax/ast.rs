@@ -41,7 +41,15 @@ pub struct KindDecl {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub enum KindStmt {
     Size(SizeStmt),
-    Motion { motion: Ident, span: Span },
+    Motion {
+        motion: Ident,
+        span: Span,
+    },
+    /// `mass VALUE` (kg).
+    Mass {
+        value: Value,
+        span: Span,
+    },
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -203,6 +211,11 @@ pub enum AgentStmt {
     },
     /// `door NAME ACTION at TIME` or `door NAME ACTION when ...` (words checked by the checker).
     Door(DoorStmt),
+    /// `mass VALUE` (kg).
+    Mass {
+        value: Value,
+        span: Span,
+    },
 }
 
 /// `door front_left open at 3 s` / `door front_left open when bike within 8 m`.
@@ -227,6 +240,7 @@ impl AgentStmt {
             AgentStmt::Track(t) => t.span,
             AgentStmt::Posture { span, .. } => *span,
             AgentStmt::Behaviour(b) => b.span,
+            AgentStmt::Mass { span, .. } => *span,
         }
     }
 }
@@ -450,6 +464,8 @@ pub struct BehaviourSet {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Track {
     pub keys: Vec<Keyframe>,
+    /// `track when NAME CONDITION { ... }`: keyframe times count from when it fires.
+    pub when: Option<Trigger>,
     pub span: Span,
 }
 

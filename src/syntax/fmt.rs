@@ -53,6 +53,7 @@ fn item(it: &Item) -> Doc {
                     KindStmt::Motion { motion, span } => {
                         Doc::Line { span: *span, text: format!("motion {}", motion.name) }
                     }
+                    KindStmt::Mass { value, span } => Doc::Line { span: *span, text: format!("mass {}", val(value)) },
                 })
                 .collect(),
             fit: true,
@@ -172,6 +173,7 @@ fn agent_stmt(s: &AgentStmt) -> Doc {
             };
             Doc::Line { span: d.span, text: format!("door {} {} {tail}", d.door.name, d.action.name) }
         }
+        AgentStmt::Mass { value, span } => Doc::Line { span: *span, text: format!("mass {}", val(value)) },
         AgentStmt::Size(s) => size(s),
         AgentStmt::Goal(g) => Doc::Block {
             header: "goal".into(),
@@ -196,7 +198,7 @@ fn agent_stmt(s: &AgentStmt) -> Doc {
             fit: true,
         },
         AgentStmt::Track(t) => Doc::Block {
-            header: "track".into(),
+            header: t.when.as_ref().map_or("track".into(), |w| format!("track {}", trigger(w))),
             span: t.span,
             items: t
                 .keys
@@ -240,7 +242,7 @@ fn goal_stmt(s: &GoalStmt) -> String {
     }
 }
 
-/// `when NAME CONDITION [under] [VALUE|LANDMARK]`.
+/// `when NAME CONDITION [under] [VALUE | LANDMARK]`.
 fn trigger(w: &Trigger) -> String {
     let tail = match (&w.value, &w.landmark) {
         (Some(v), _) => format!(" {}{}", if w.under { "under " } else { "" }, val(v)),

@@ -75,6 +75,7 @@ impl Builder {
                 let stmts = it
                     .map(|q| match q.as_rule() {
                         Rule::size_stmt => KindStmt::Size(self.size(q)),
+                        Rule::mass_stmt => KindStmt::Mass { span: self.span(&q), value: self.value(last(q)) },
                         Rule::motion_stmt => {
                             let span = self.span(&q);
                             let m = inner(q).pop().expect("grammar: motion word");
@@ -282,15 +283,18 @@ impl Builder {
                 AgentStmt::Lamp { key, value: self.ident(parts[1].clone()), span }
             }
             Rule::door_stmt => AgentStmt::Door(self.door(p)),
+            Rule::mass_stmt => AgentStmt::Mass { value: self.value(last(p)), span },
             Rule::size_stmt => AgentStmt::Size(self.size(p)),
             Rule::goal => {
                 let stmts = inner(p).into_iter().skip(1).map(|q| self.goal_stmt(q)).collect();
                 AgentStmt::Goal(Goal { stmts, span })
             }
             Rule::track => {
-                let keys = inner(p)
+                let parts = inner(p);
+                let when = parts.iter().find(|q| q.as_rule() == Rule::trigger).map(|q| self.trigger(q.clone()));
+                let keys = parts
                     .into_iter()
-                    .skip(1)
+                    .filter(|q| q.as_rule() == Rule::keyframe)
                     .map(|k| {
                         let span = self.span(&k);
                         let parts = inner(k);
@@ -304,7 +308,7 @@ impl Builder {
                         Keyframe { t, pose: KeyPose::World { x, y, yaw }, span }
                     })
                     .collect();
-                AgentStmt::Track(Track { keys, span })
+                AgentStmt::Track(Track { keys, when, span })
             }
             Rule::posture_stmt => AgentStmt::Posture { word: self.ident(last(p)), span },
             Rule::behaviour => {

@@ -7,7 +7,8 @@ pub const CODES: &[Code] = &[
         code: "E0101",
         title: "unit of the wrong dimension",
         explanation: "Numbers carry units and each statement expects one dimension:
-  length m, cm, km; speed m/s, km/h, mph; time s, ms; angle deg, rad; frequency Hz; ratio %.\n\
+  length m, cm, km; speed m/s, km/h, mph; time s, ms; angle deg, rad; frequency Hz; ratio %;
+  mass kg.\n\
 Bare numbers are counts.\n
     speed 5 m          // error: a speed needs m/s, km/h or mph\n    speed 5 m/s        // fine",
     },
@@ -211,8 +212,8 @@ Keep one strike per agent, or let another agent strike.",
     Code {
         code: "E0122",
         title: "crashes in an order that cannot happen",
-        explanation: "A crash holds its pair from the contact on (motion after an impact is not simulated), so\n\
-an agent that is struck stands still from then on and cannot strike anyone later. An agent's\n\
+        explanation: "An agent that is struck is no longer driven from the contact on (it slides to rest, or\n\
+holds `after latch`), so it cannot strike anyone later. An agent's\n\
 own strike comes before, or at the same time as, every crash that strikes it. A chain is\n\
 written front first: the middle car strikes the car ahead, then the one behind strikes it.\n
     conflict { at_fault mid; struck lead; impact rear_end; point rear; at 2 s }
@@ -223,7 +224,7 @@ written front first: the middle car strikes the car ahead, then the one behind s
     Code {
         code: "E0123",
         title: "a pair that crashes twice",
-        explanation: "A crash holds its pair from the contact on, so two agents touch once: a second conflict\n\
+        explanation: "A pair is staged to crash once (after it, neither is driven): a second conflict\n\
 between the same two (either way round) is refused, and both blocks are shown.\n
     conflict { at_fault a; struck b; impact rear_end; point rear; at 2 s }
     conflict { at_fault b; struck a; impact angle; point left; at 4 s }     // error: the same pair",
@@ -274,6 +275,16 @@ keyframes the direction of travel may differ from the mean heading by at most 30
 Give each keyframe the heading of the travel, or check that x and y are not swapped.",
     },
     // ---- triggers and behaviour (E0150-E0169) ----
+    Code {
+        code: "E0135",
+        title: "recorded box dropped",
+        explanation: "A warning of `rocc import boxes`: a recorded box that no body could have followed from the\n\
+boxes before it (a detector's glitch: a box jumping metres in one frame) breaks a limit of the\n\
+track checks (E0131-E0134). It is dropped and the track is interpolated across it; where the\n\
+box jumps and stays, the rest of the track becomes an agent of its own (`NAME_from_FRAME`).\n\
+The warning names the track, the clip frame and the limit.\n
+    rocc import boxes glitchy.json --convention nuplan -o scene.scn   // warning E0135 per dropped box",
+    },
     Code {
         code: "E0150",
         title: "unknown or malformed trigger condition",
@@ -330,11 +341,14 @@ moves, `reaches stop_line` a vehicle placed on an in-lane of a road with stop li
         title: "invalid goal phase",
         explanation: "A later `goal` block of an agent is a phase: it takes over from the goal before it once its\n\
 `start` holds (`start after T` counts from the clip's start, `start when ...` is a trigger),\n\
-and only after that goal has started. A phase gives one `speed` and one `start`, nothing else:\n\
-turns, lateral moves and stops belong to the first goal block. Static things and replayed\n\
-tracks have no phases.\n
+and only after that goal has started. A phase gives a `start` and what changes then, each at\n\
+most once: a `speed`, `stop after DIST` (counted from where the phase starts) and, for a vehicle\n\
+whose first goal holds its lane, `lateral pull_to_shoulder`; without a `speed` it keeps the one\n\
+before. Turns, lane changes, crossings and the other stops belong to the first goal block.\n\
+Static things and replayed tracks have no phases.\n
     goal { speed 10 m/s }
     goal { speed 0 m/s; start when car headway under 1.5 s }     // fine: brakes to a stop
+    goal { lateral pull_to_shoulder; stop after 40 m; start after 3 s }  // fine: pulls over
     goal { speed 4 m/s; turn left; start after 1 s }             // error: a turn in a phase",
     },
     // ---- near misses (E0190-E0195) ----

@@ -79,9 +79,9 @@ whose channels 0-7 and 15-17 replace the map's in every frame, or a directory of
         title: "edited box off a valid surface",
         explanation: "An inserted or moved box must stand where the BEV's map layers allow its class:\n\
 vehicles on drivable area (channels 0, 1, 3, 5, 6), bicycles there or on walkways and\n\
-crosswalks, pedestrians on walkways, crosswalks or the shoulder; static objects anywhere in the\n\
-100 m grid. The check is at the box centre, in every edited frame.\n
-    $ rocc edit out/cut_in/ego --insert pedestrian at 10,0   // error: a pedestrian in the middle of the lane",
+crosswalks; people (as the checker places them: standing or lying on a lane included) and static\n\
+objects anywhere in the 100 m grid. The check is at the box centre, in every edited frame.\n
+    $ rocc edit out/cut_in/ego --insert sedan at 20,40   // error: a car off the road",
     },
     Code {
         code: "E0711",

@@ -17,6 +17,7 @@ mod check;
 mod ciren;
 mod compile;
 mod expect;
+mod impact;
 mod import;
 mod io;
 mod kerb;
@@ -36,6 +37,7 @@ pub fn all() -> impl Iterator<Item = &'static Code> {
     [
         syntax::CODES,
         check::CODES,
+        impact::CODES,
         place::CODES,
         kerb::CODES,
         compile::CODES,

@@ -1,13 +1,16 @@
 //! Passing what stands in the lane for good (`Actor::blocker`: a wreck, a double-parked or
-//! stalled car, a cone): a vehicle nudges over within its lane, or moves into the next lane or
-//! onto the shoulder once the oncoming traffic there leaves it time, and stops behind it only
-//! where the paving leaves no room (`Sim::avoid`).
+//! stalled car, a cone) or moves on slowly in it (`overtake`: a cyclist): a vehicle nudges over
+//! within its lane, or moves into the next lane or onto the shoulder once the oncoming traffic
+//! there leaves it time, and stops behind it only where the paving leaves no room
+//! (`Sim::avoid`).
 
 use crate::rollout::agent::Blocking;
+use crate::rollout::drive::overtake::{MOVER_CLEARANCE, pass_time};
 use crate::rollout::drive::{PASS_CLEARANCE, PASS_LAT_RATE};
 use crate::rollout::frame::Sim;
 use crate::rollout::kinematics::slip_tan;
 use crate::rollout::path::Foot;
+use glam::DVec2;
 
 /// How far the paving reaches either side of the lane's centre line where the paving round the
 /// obstacle is unknown (in a junction: at least the next lane), m.
@@ -44,10 +47,11 @@ impl Sim<'_, '_> {
     /// ahead: `None` where nothing does.
     pub(crate) fn avoid(&self, i: usize, look: f64, f: usize, seen: &mut Vec<Blocking>) -> Option<Avoid> {
         let (a, st) = (&self.actors[i], &self.cur[i]);
-        if !a.vehicle || a.in_conflict || a.blocker || self.facts.blockers.is_empty() {
+        if !a.vehicle || a.in_conflict || a.blocker || (self.facts.blockers.is_empty() && self.facts.slow.is_empty()) {
             return None;
         }
         self.blocking(i, look, f, seen);
+        self.slow_ahead(i, look, seen);
         let m = BAND_MARGIN;
         let here = (a.d0 - a.hw - m, a.d0 + a.hw + m);
         if !seen.iter().any(|b| b.meets(here)) {
@@ -58,7 +62,7 @@ impl Sim<'_, '_> {
             .into_iter()
             .filter_map(|side| self.pass_side(i, side, seen))
             .reduce(|p, q| if (q.0 - a.d0).abs() < (p.0 - a.d0).abs() - 1e-9 { q } else { p });
-        let Some((target, need, far, near)) = pick else {
+        let Some((target, need, far, near, v_obs)) = pick else {
             return Some(Avoid { target: None, standoff: 0.0 });
         };
         // Steering out from a standstill takes more than the slip angle's run (the heading has
@@ -67,7 +71,8 @@ impl Sim<'_, '_> {
         let side = (target - a.d0).signum();
         // Set out so as to be over before car-following toward it slows us (the reference moves
         // over at `PASS_LAT_RATE`), not a long way back in the oncoming lane.
-        let set_out = st.v * (target - st.d).abs() / PASS_LAT_RATE + standoff + SET_OUT_M;
+        // Closing on a slow mover, at the speed we close in.
+        let set_out = (st.v - v_obs).max(0.0) * (target - st.d).abs() / PASS_LAT_RATE + standoff + SET_OUT_M;
         if near - (st.s + a.hl) > set_out {
             return Some(Avoid { target: None, standoff: 0.0 });
         }
@@ -76,7 +81,7 @@ impl Sim<'_, '_> {
         let (elo, ehi) =
             if side > 0.0 { (a.d0 + a.lane_hw, target + a.hw + m) } else { (target - a.hw - m, a.d0 - a.lane_hw) };
         let over = if side > 0.0 { st.off + a.hw > a.d0 + a.lane_hw } else { st.off - a.hw < a.d0 - a.lane_hw };
-        if elo >= ehi || over || self.oncoming_clear(i, (elo, ehi), far) {
+        if elo >= ehi || over || self.oncoming_clear(i, (elo, ehi), far, v_obs) {
             Some(Avoid { target: Some(target), standoff })
         } else {
             Some(Avoid { target: None, standoff })
@@ -101,10 +106,7 @@ impl Sim<'_, '_> {
             {
                 continue;
             }
-            let Foot { s: sj, d: lj, beyond, dir: th } = a.path.frenet_dir(o.pos, st.s + ahead);
-            let (cr, sr) = (self.facts.dirs[j].dot(th), th.perp_dot(self.facts.dirs[j]));
-            let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
-            let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
+            let (Foot { s: sj, d: lj, beyond, dir: th }, ext_lon, ext_lat) = self.on_route(i, j, ahead);
             if beyond > 0.5 || sj + ext_lon < st.s - a.hl - 1.0 {
                 continue;
             }
@@ -114,18 +116,28 @@ impl Sim<'_, '_> {
                 Some(r) if r.dir.dot(th) < -0.7 => (lj + r.off - r.left, lj + r.off + r.right),
                 _ => (f64::NEG_INFINITY, f64::INFINITY),
             };
-            seen.push(Blocking { sj, lj, ext_lon, ext_lat, lo, hi });
+            seen.push(Blocking { sj, lj, ext_lon, ext_lat, lo, hi, v: 0.0 });
             if !b.doors.is_empty() {
                 self.open_doors(i, j, f, (lo, hi), seen);
             }
         }
     }
 
+    /// Agent `j` on vehicle `i`'s route, `ahead` m along it: the foot of its centre, and its box's
+    /// half extents along and across the route.
+    pub(crate) fn on_route(&self, i: usize, j: usize, ahead: f64) -> (Foot<DVec2>, f64, f64) {
+        let (a, st, b) = (&self.actors[i], &self.cur[i], &self.actors[j]);
+        let foot = a.path.frenet_dir(self.cur[j].pos, st.s + ahead);
+        let th = foot.dir;
+        let (cr, sr) = (self.facts.dirs[j].dot(th), th.perp_dot(self.facts.dirs[j]));
+        (foot, b.hl * cr.abs() + b.hw * sr.abs(), b.hl * sr.abs() + b.hw * cr.abs())
+    }
+
     /// Passing on `side` (+1 left, -1 right): the offset clear of every obstacle in the band
     /// swept on the way there, how far our box must move before the nearest leaves its band,
-    /// and where the first of them begins and the last ends along our route; `None` where that
-    /// leaves the paving.
-    fn pass_side(&self, i: usize, side: f64, seen: &[Blocking]) -> Option<(f64, f64, f64, f64)> {
+    /// where the first of them begins and the last ends along our route, and the fastest one's
+    /// speed; `None` where that leaves the paving.
+    fn pass_side(&self, i: usize, side: f64, seen: &[Blocking]) -> Option<(f64, f64, f64, f64, f64)> {
         let a = &self.actors[i];
         let m = BAND_MARGIN;
         let band =
@@ -137,7 +149,7 @@ impl Sim<'_, '_> {
             let next = seen
                 .iter()
                 .filter(|b| b.meets(band(target)))
-                .map(|b| b.lj + side * (b.ext_lat + a.hw + PASS_CLEARANCE))
+                .map(|b| b.lj + side * (b.ext_lat + a.hw + if b.v > 0.0 { MOVER_CLEARANCE } else { PASS_CLEARANCE }))
                 .fold(target, |t, d| if side > 0.0 { t.max(d) } else { t.min(d) });
             if next == target {
                 break;
@@ -152,24 +164,29 @@ impl Sim<'_, '_> {
         }
         let need = within.clone().map(|b| side * (b.lj - a.d0) + b.ext_lat + a.hw + m).fold(0.0, f64::max);
         let far = within.clone().map(|b| b.sj + b.ext_lon).fold(f64::NEG_INFINITY, f64::max);
-        let near = within.map(|b| b.sj - b.ext_lon).fold(f64::INFINITY, f64::min);
-        Some((target, need, far, near))
+        let near = within.clone().map(|b| b.sj - b.ext_lon).fold(f64::INFINITY, f64::min);
+        let v_obs = within.map(|b| b.v).fold(0.0, f64::max);
+        Some((target, need, far, near, v_obs))
     }
 
     /// Whether no vehicle coming toward vehicle `i` in the offsets `band` of its route would
-    /// reach the end of its pass (`far`, arc length) before it is past, with `ONCOMING_GAP_S` to
-    /// spare, accelerating toward its goal speed.
-    fn oncoming_clear(&self, i: usize, band: (f64, f64), far: f64) -> bool {
+    /// reach the end of its pass (`far`, arc length, moving on at `v_obs`) before it is past,
+    /// with `ONCOMING_GAP_S` to spare, accelerating toward its goal speed.
+    fn oncoming_clear(&self, i: usize, band: (f64, f64), far: f64, v_obs: f64) -> bool {
         let (a, st) = (&self.actors[i], &self.cur[i]);
         let fwd = self.facts.dirs[i];
         let dist = far + a.hl + 1.0 - st.s;
         let (v, acc, top) = (st.v, a.lim.accel, a.v_goal.max(1.0));
-        let t_us = if v >= top {
+        let t_us = if v_obs > 0.0 {
+            pass_time(v, acc, top, dist, v_obs)
+        } else if v >= top {
             dist / v
         } else {
             let (t1, d1) = ((top - v) / acc, (top * top - v * v) / (2.0 * acc));
             if d1 >= dist { ((v * v + 2.0 * acc * dist).sqrt() - v) / acc } else { t1 + (dist - d1) / top }
         };
+        // A moving obstacle carries the end of the pass on with it.
+        let far = far + v_obs * t_us;
         self.facts.near.iter().enumerate().all(|(k, n)| {
             let dp = n.pos - st.pos;
             let ahead = dp.dot(fwd);

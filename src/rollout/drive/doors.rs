@@ -28,7 +28,7 @@ impl Sim<'_, '_> {
             if beyond > 0.5 || sj + ext_lon < st.s - a.hl - 1.0 {
                 continue;
             }
-            seen.push(Blocking { sj, lj, ext_lon, ext_lat, lo: room.0, hi: room.1 });
+            seen.push(Blocking { sj, lj, ext_lon, ext_lat, lo: room.0, hi: room.1, v: 0.0 });
         }
     }
 }

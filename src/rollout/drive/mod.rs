@@ -8,8 +8,10 @@ mod doors;
 pub(crate) mod follow;
 pub(crate) mod index;
 pub(crate) mod neighbours;
+pub(crate) mod overtake;
 pub(crate) mod pair;
 pub(crate) mod reverse;
+pub(crate) mod settle;
 pub(crate) mod siren;
 
 use crate::geom::{Obb, wrap_angle};
@@ -172,6 +174,10 @@ impl Sim<'_, '_> {
                 StopGoal::Centre(sc) => Some(sc - st.s),
                 _ => None,
             };
+            // A goal phase's `stop after`, counted from where that phase started.
+            if let Some(d) = a.stage(&st).and_then(|p| p.stop_after) {
+                stop_rem = Some(stop_rem.map_or(f64::INFINITY, |r: f64| r).min(st.stage_s + d - st.s));
+            }
         }
         if let Some(rem) = stop_rem {
             acc = acc.min(stop_law(st.v, rem, lim, dt));
@@ -256,6 +262,9 @@ impl Sim<'_, '_> {
             let look = st.v * st.v / (2.0 * lim.brake) + 2.5 * st.v + 15.0;
             let tg = if let Some(y) = self.facts.siren_for[i] {
                 y.offset
+            } else if active && a.stage(&st).is_some_and(|p| p.pull) {
+                // A goal phase that pulls over: onto the shoulder, as for a siren.
+                a.pull
             } else if let Some(tg) = self.pass_offset(i, look) {
                 tg
             } else {

@@ -511,7 +511,11 @@ impl Sim<'_, '_> {
             // in their lane, and a walker's path is the least predictable.
             let slack = if b.vehicle { 1.0 } else { 3.0 };
             let horizon = (way.gap.max(0.0) / st.v.max(1.0)).min(4.0) + slack;
-            let l2 = lj + v_lat * horizon;
+            let mut l2 = lj + v_lat * horizon;
+            // Parallel to us and settling back into its lane, it stops there (`settle_reach`).
+            if let Some(r) = self.settle_reach(j, a.path.point(x.sj, 0.0).1) {
+                l2 = lj + (l2 - lj).clamp(-r, r);
+            }
             obstacle = lj.min(l2) - ext_lat < hi && lj.max(l2) + ext_lat > lo;
         }
         if !obstacle {

@@ -46,6 +46,7 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
             actors.push(background_actor(map, s, c.duration, &mut routes));
         }
     }
+    crate::rollout::drive::overtake::measure_rooms(map, &mut actors);
     let mut confs = vec![];
     for (index, k) in c.conflicts.iter().enumerate() {
         let (Some(Some(af)), Some(Some(st))) = (track_of.get(k.at_fault), track_of.get(k.struck)) else { continue };
@@ -69,13 +70,14 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
     if !errs.is_empty() {
         return Err(errs);
     }
+    let masses = stated_masses(c, placed, actors.len());
     let mut out = empty_tracks(&actors, c.rate, frames);
     if confs.is_empty() {
-        Sim::new(&actors, &confs, &[], None, dt).run(&mut out);
+        Sim::new(&actors, &confs, &[], None, dt).masses(&masses).run(&mut out);
     } else {
         let mut pass1 = empty_tracks(&actors, c.rate, frames);
         let mut states = Vec::with_capacity(frames);
-        Sim::new(&actors, &confs, &[], None, dt).keep_states(&mut states).run(&mut pass1);
+        Sim::new(&actors, &confs, &[], None, dt).masses(&masses).keep_states(&mut states).run(&mut pass1);
         // A staging that misses or lands elsewhere than asked, or that has the overlap safety
         // net stop someone dead, is planned again away from the impact times tried (the plan
         // nearest the request may be the one a bystander spoils), up to `RESTAGE` times. The
@@ -93,8 +95,10 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
             // overlaps: those frames are copied, not simulated again.
             let start = pass2_start(&actors, &confs, &plans, &states, dt);
             out = empty_tracks(&actors, c.rate, frames);
-            let report =
-                Sim::new(&actors, &confs, &plans, Some(&pass1), dt).resume(&pass1, &states, start).run(&mut out);
+            let report = Sim::new(&actors, &confs, &plans, Some(&pass1), dt)
+                .masses(&masses)
+                .resume(&pass1, &states, start)
+                .run(&mut out);
             let mut failed =
                 staging_errors(&actors, &confs, &plans, &out, &report.blocked_by, (dt, frames, c.duration));
             failed.extend(near_errors(&actors, &confs, &plans, &out, (dt, c.duration)));
@@ -155,11 +159,27 @@ fn near_confs(c: &Concrete, actors: &[Actor], track_of: &[Option<usize>]) -> Vec
         let (Some(Some(af)), Some(Some(st))) = (track_of.get(n.passer), track_of.get(n.passed)) else { continue };
         let (a, b) = (initial(&actors[*af]), initial(&actors[*st]));
         let point = n.side.unwrap_or_else(|| plan::start_side(a.pos, b.pos, b.yaw));
-        let k =
-            Conflict { at_fault: n.passer, struck: n.passed, impact: Impact::Sideswipe, point, at: n.at, span: n.span };
+        let k = Conflict {
+            at_fault: n.passer,
+            struck: n.passed,
+            impact: Impact::Sideswipe,
+            point,
+            at: n.at,
+            after: Default::default(),
+            span: n.span,
+        };
         confs.push(Conf { index, af: *af, st: *st, c: k, gap: Some(n.gap) });
     }
     confs
+}
+
+/// The mass each track's agent states, if any (background traffic states none).
+fn stated_masses(c: &Concrete, placed: &Placed, tracks: usize) -> Vec<Option<f64>> {
+    let mut m = vec![None; tracks];
+    for (i, p) in placed.agents.iter().enumerate().take(tracks) {
+        m[i] = p.source.and_then(|s| c.agents.get(s)).and_then(|a| a.mass);
+    }
+    m
 }
 
 /// How many times a staging that fails is planned again (`plan::choose` away from the impact

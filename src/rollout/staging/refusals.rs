@@ -29,6 +29,7 @@ pub(crate) fn forced_braking(actors: &[Actor], confs: &[Conf], plans: &[Option<P
     let mut first: Option<Forced> = None;
     for (i, a) in actors.iter().enumerate() {
         let end = out.impacts.iter().filter(|r| r.at_fault == i || r.struck == i).map(|r| r.frame).min();
+        let end = end.into_iter().chain(out.first_contact(i)).min();
         let end = end.unwrap_or(out.frames).min(first.map_or(out.frames, |f| (f.t / dt).round() as usize));
         for f in 1..end {
             let acc = (out.speeds[i][f] - out.speeds[i][f - 1]) / dt;
@@ -238,6 +239,7 @@ mod tests {
                 impact: Impact::RearEnd,
                 point: Point::Rear,
                 at: None,
+                after: Default::default(),
                 span: Default::default(),
             };
             let confs = [Conf { index: 0, af: 0, st: 2, c, gap: None }];

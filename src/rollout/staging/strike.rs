@@ -1,11 +1,13 @@
 //! The striker of a staged conflict: its intercept toward the contact pose, kept out of
-//! bystanders' stopping envelopes, and the latch that freezes the pair at the crash.
+//! bystanders' stopping envelopes, and the contact
+//! that resolves the crash (moving on from it, or held there `after latch`).
 
 use crate::geom::{Obb, wrap_angle};
 use crate::place::Pose;
 use crate::rollout::agent::State;
 use crate::rollout::drive::follow::SAFE_MARGIN;
 use crate::rollout::frame::{COURSE_STEPS, Scratch, Sim};
+use crate::rollout::impact::motion::{Hit, coefficients};
 use crate::rollout::kinematics::pursuit;
 use crate::rollout::path::Hermite;
 use crate::rollout::staging::plan;
@@ -259,9 +261,10 @@ impl Sim<'_, '_> {
         })
     }
 
-    /// Latch each staged conflict at its deepest overlap: once the boxes meet, the frame where
+    /// Resolve each staged conflict at its deepest overlap: once the boxes meet, the frame where
     /// the planned penetration is reached (or the impact time passes, or the overlap starts to
-    /// shrink) freezes both agents there.
+    /// shrink) is the impact. The pair moves on from it (`Sim::hit`), or, `after latch`, holds
+    /// there.
     pub(crate) fn latch(&mut self, f: usize, out: &mut Tracks) {
         let t = f as f64 * self.dt;
         let (confs, plans) = (self.confs, self.plans);
@@ -279,7 +282,8 @@ impl Sim<'_, '_> {
             }
             let (af, st) = (conf.af, conf.st);
             let (mut a, mut b) = (self.actors[af].obb(&self.next[af]), self.actors[st].obb(&self.next[st]));
-            if !a.overlaps(&b) {
+            let grazed = !a.overlaps(&b);
+            if grazed {
                 if self.prev_depth[k] <= 0.0 {
                     continue;
                 }
@@ -293,8 +297,14 @@ impl Sim<'_, '_> {
             let depth = plan::depth(&a, &b);
             if depth >= 0.8 * plan.delta || t >= plan.t_impact - 0.5 * self.dt || depth <= self.prev_depth[k] {
                 self.latched[k] = true;
-                self.next[af].frozen = true;
-                self.next[st].frozen = true;
+                let frame = if conf.c.after.latch {
+                    self.next[af].frozen = true;
+                    self.next[st].frozen = true;
+                    f
+                } else {
+                    let hit = Hit { coefficients: coefficients(&conf.c.after), conflict: Some(conf.index) };
+                    self.hit(out, (af, st), f, !grazed, hit)
+                };
                 let p = plan::contact_centroid(&a, &b).unwrap_or((a.center + b.center) / 2.0);
                 let local = |o: &Obb| {
                     let q = (p - o.center).rotate(DVec2::from_angle(-o.yaw));
@@ -303,7 +313,7 @@ impl Sim<'_, '_> {
                 let sl = local(&b);
                 out.impacts.push(ImpactRecord {
                     conflict: conf.index,
-                    frame: f,
+                    frame,
                     at_fault: af,
                     struck: st,
                     point_world: [p.x, p.y],
