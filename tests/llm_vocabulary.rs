@@ -1,5 +1,5 @@
 //! `rocc text` and the rare-scene vocabulary: canned model replies (an in-process fake server,
-//! no model) that use postures, behaviour settings, triggers, goal phases and sirens each yield a
+//! no model) that use postures, behaviour settings, triggers, goal phases, sirens, lamps and doors each yield a
 //! scenario that checks; the goal grammars admit triggers and phases; the grammar export has
 //! the new rules.
 
@@ -208,6 +208,43 @@ fn a_siren_from_the_schema_is_written_and_checked() {
 }
 
 #[test]
+fn lamps_and_a_door_from_the_schema_are_written_and_checked() {
+    // A van standing in the lane with its hazards on opens its door as the ego comes near.
+    let scene = |kind: &str, beacons: Option<bool>| {
+        let mut van = lane("van", kind, "west", "in", 10.0, 0.0);
+        van["hazards"] = json!(true);
+        van["door"] = json!({"door": "front_left", "open_when": {"agent": "ego", "condition": "within", "value": 15}});
+        if let Some(b) = beacons {
+            van["beacons"] = json!(b);
+        }
+        let mut ego = lane("ego", "sedan", "west", "in", 50.0, 30.0);
+        ego["lights"] = json!(true);
+        straight(vec![van, ego])
+    };
+    let goals = "van: goal { speed 0 km/h }\nego: goal { speed 30 km/h; stop behind van }\n";
+    let text = accepted(&scene("van", None), &[goals], Plan::Joint);
+    for says in ["hazards on", "door front_left open when ego within 15 m", "lights on"] {
+        assert!(text.contains(&format!("        {says}\n")), "{says}: {text}");
+    }
+    let text = accepted(&scene("ambulance", Some(false)), &[goals], Plan::Joint);
+    assert!(text.contains("        beacons off\n"), "{text}");
+    // Beacons on a kind that has none: the checker's E0241, for the repair loop.
+    let fake = serve(vec![chat(&scene("van", Some(true)).to_string()), chat(goals)]);
+    let (out, _) = llm::text_to_scenario("a van", &opts(&fake.url, Plan::Joint), "scene.scn", &std::env::temp_dir());
+    let Outcome::Rejected { diags, .. } = out else { panic!("{out:?}") };
+    assert_eq!(diags[0].code, "E0241", "{}", diags[0].message);
+    // The JSON schema sent for decoding offers the lamps and the doors by name.
+    let reqs = fake.requests();
+    let props = &reqs[0]["structured_outputs"]["json"]["properties"]["agents"]["items"]["properties"];
+    for lamp in ["lights", "hazards", "beacons"] {
+        assert_eq!(props[lamp]["type"], "boolean", "{lamp}");
+    }
+    let doors = &props["door"]["properties"];
+    assert_eq!(doors["door"]["enum"], json!(["front_left", "front_right", "rear_left", "rear_right"]));
+    assert_eq!(doors["open_when"]["properties"]["condition"]["enum"], json!(["within", "ttc_under"]));
+}
+
+#[test]
 fn goal_grammars_admit_triggers_and_one_phase() {
     let single = gbnf::Grammar::parse(&llm::goals::single_grammar());
     for block in [
@@ -245,13 +282,23 @@ fn goal_grammars_admit_triggers_and_one_phase() {
 fn the_grammar_export_has_the_rare_vocabulary() {
     for (format, def) in [(rocc::grammar::Format::Gbnf, " ::= "), (rocc::grammar::Format::Lark, ": ")] {
         let g = rocc::grammar::print(&rocc::grammar::language(), format);
-        for rule in ["posture_stmt", "behaviour", "behaviour_set", "trigger", "kw_when", "kw_under", "siren_stmt"] {
+        for rule in [
+            "posture_stmt",
+            "behaviour",
+            "behaviour_set",
+            "trigger",
+            "kw_when",
+            "kw_under",
+            "siren_stmt",
+            "lamp_stmt",
+            "door_stmt",
+        ] {
             let rule = if def == ": " { rule.to_string() } else { rule.replace('_', "-") };
             assert!(g.lines().any(|l| l.starts_with(&format!("{rule}{def}"))), "{format:?} has no rule `{rule}`");
         }
     }
     let g = gbnf::Grammar::parse(&rocc::grammar::print(&rocc::grammar::language(), rocc::grammar::Format::Gbnf));
-    let scene = "scenario s {\n    duration 4 s\n    road straight { lanes 1 }\n    agent kid: child {\n        at west.in[1], 5 m before center\n        posture kneeling\n        goal { speed 1 m/s; lateral cross; start when ego within 10 m }\n        goal { speed 2 m/s; start when ego ttc under 2 s }\n        behaviour { yield never; reaction 1 s }\n    }\n    agent amb: ambulance { at east.in[1], 40 m before center; speed 30 km/h; siren off }\n}\n";
+    let scene = "scenario s {\n    duration 4 s\n    road straight { lanes 1 }\n    agent kid: child {\n        at west.in[1], 5 m before center\n        posture kneeling\n        goal { speed 1 m/s; lateral cross; start when ego within 10 m }\n        goal { speed 2 m/s; start when ego ttc under 2 s }\n        behaviour { yield never; reaction 1 s }\n    }\n    agent amb: ambulance { at east.in[1], 40 m before center; speed 30 km/h; siren off; beacons on }\n    object parked: sedan { at east.out[1], 10 m after center; hazards off; door front_left open when kid within 8 m; door front_left close at 3 s }\n}\n";
     assert!(g.accepts(scene), "the GBNF rejects the rare vocabulary");
 }
 

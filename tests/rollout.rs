@@ -208,6 +208,8 @@ fn scene(specs: Vec<Spec>, conflicts: Vec<Conflict>, traffic: Option<Traffic>, d
             behaviour: Default::default(),
             phases: vec![],
             siren: None,
+            body: Default::default(),
+            door_swing: vec![],
             mass: None,
             span: Default::default(),
             place_span: Default::default(),

@@ -6,6 +6,8 @@ import os
 import numpy as np
 
 BOX_FIELDS = ("x", "y", "z", "l", "w", "h", "yaw")
+# The lamps of a box's `states` in `boxes.json` (docs/output.md, "Vehicle states").
+LAMPS = ("headlights", "brake_lights", "hazards", "beacons", "siren")
 
 
 class NotAnOutputError(ValueError):
@@ -264,7 +266,9 @@ class Frame:
         """Arrays over this frame's M boxes: `box` (M, 7) [x, y, z, l, w, h, yaw], `class` (M,)
         int, `velocity`, `acceleration`, `velocity_world`, `acceleration_world` (M, 2),
         `yaw_rate` (M,) (NaN where a box has no motion), and lists `agent`, `kind`,
-        `instance_id`."""
+        `instance_id`; the lamps `headlights`, `brake_lights`, `hazards`, `beacons`, `siren`
+        (M,) bool (False for a box without `states`: walkers, objects) and `doors`, per box a
+        dict of each open door's angle in degrees (docs/output.md, "Vehicle states")."""
         bs = self._rec["boxes"]
         out = {
             "box": np.array([[b[k] for k in BOX_FIELDS] for b in bs], dtype=np.float64).reshape(-1, 7),
@@ -277,4 +281,7 @@ class Frame:
         for k in ("velocity", "acceleration", "velocity_world", "acceleration_world"):
             out[k] = np.array([b.get(k, nan2) for b in bs], dtype=np.float64).reshape(-1, 2)
         out["yaw_rate"] = np.array([b.get("yaw_rate", np.nan) for b in bs], dtype=np.float64)
+        for k in LAMPS:
+            out[k] = np.array([bool(b.get("states", {}).get(k, False)) for b in bs], dtype=bool)
+        out["doors"] = [dict(b.get("states", {}).get("doors", {})) for b in bs]
         return out

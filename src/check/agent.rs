@@ -30,6 +30,7 @@ impl Checker {
         let mut behaviour: Option<&ast::Behaviour> = None;
         let mut phases: Vec<&ast::Goal> = vec![];
         let mut siren: Option<(&ast::Ident, Span)> = None;
+        let mut body = super::body::BodyStmts::default();
         let mut mass: Option<(&ast::Value, Span)> = None;
         for st in &a.stmts {
             let (slot_first, what): (Option<Span>, &str) = match st {
@@ -48,6 +49,14 @@ impl Checker {
                 ast::AgentStmt::Posture { word, span } => (posture.replace((word, *span)).map(|x| x.1), "`posture`"),
                 ast::AgentStmt::Behaviour(b) => (behaviour.replace(b).map(|x| x.span), "`behaviour`"),
                 ast::AgentStmt::Siren { value, span } => (siren.replace((value, *span)).map(|x| x.1), "`siren`"),
+                ast::AgentStmt::Lamp { key, value, span } => {
+                    body.lamps.push((key, value, *span));
+                    (None, "lamp")
+                }
+                ast::AgentStmt::Door(d) => {
+                    body.doors.push(d);
+                    (None, "`door`")
+                }
                 ast::AgentStmt::Mass { value, span } => (mass.replace((value, *span)).map(|x| x.1), "`mass`"),
                 // Read with the other agents (`Checker::flaggers`).
                 ast::AgentStmt::Flag(_) => (None, "`flag`"),
@@ -179,6 +188,7 @@ impl Checker {
         };
         let (kinds, class, motion) = kind?;
         let siren = self.siren(siren, &kinds, is_static);
+        let body = self.body(&body, class, &kinds, order);
         let mass = match mass {
             Some((v, span)) => self.mass(v, span, &a.name.name, is_static).map(Some),
             None => Some(None),
@@ -200,6 +210,7 @@ impl Checker {
             behaviour: behaviour_c?,
             phases: phases_c?,
             siren: siren?,
+            body: body?,
             mass: mass?,
             span,
             place_span: place_span.unwrap_or(span),

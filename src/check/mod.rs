@@ -7,6 +7,7 @@
 
 mod agent;
 mod behaviour;
+mod body;
 pub mod classes;
 mod conflict;
 mod expect;

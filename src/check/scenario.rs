@@ -288,6 +288,8 @@ pub const EMERGENCY_KINDS: [&str; 3] = ["ambulance", "fire_truck", "police_car"]
 
 pub use super::posture::Posture;
 
+pub use super::body::{Body, DOORS, Door, DoorMove};
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Agent {
     pub name: String,
@@ -321,6 +323,9 @@ pub struct Agent {
     /// `siren on|off` as stated (emergency vehicles only); unstated, an emergency vehicle's is on.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub siren: Option<bool>,
+    /// Lamps and doors as stated (`body.rs`).
+    #[serde(default, skip_serializing_if = "Body::is_default")]
+    pub body: Body,
     /// Mass, kg, as the agent or its kind states it (`mass 1500 kg`); class priors otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mass: Option<f64>,

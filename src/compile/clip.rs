@@ -19,6 +19,7 @@ use crate::output::{
 use crate::place::Pose;
 use crate::raster::layout::{HALF_EXTENT_M, box_reaches_patch};
 use crate::raster::{Bev, Rasterizer};
+use crate::rollout::body::{DOOR_KIND, open_doors};
 use crate::sample::Rng;
 use crate::source::SourceMap;
 use crate::view::{AgentState, EgoBox, to_ego};
@@ -244,9 +245,28 @@ pub fn frame_boxes(front: &Front, ego: usize, f: usize) -> Vec<EgoBox> {
                 pose: t.poses[i][f],
             }
         });
-    let mut boxes = to_ego(ego_pose, states);
+    // Open doors: boxes of their vehicle's agent, track and class (`body::DOOR_KIND`).
+    let with_doors = t.bodies.iter().enumerate().filter(|(_, b)| !b.doors.is_empty()).map(|(i, _)| i);
+    let doors = with_doors.filter(|&i| i != ego && near(i) && front.present(i, f)).flat_map(|i| {
+        let a = &t.agents[i];
+        open_doors(t, i, f).map(move |(pose, size)| AgentState {
+            track: i as u32,
+            name: &a.name,
+            kind: DOOR_KIND,
+            class: a.class,
+            size,
+            pose,
+        })
+    });
+    let mut boxes = to_ego(ego_pose, states.chain(doors));
     boxes.retain(|b| box_reaches_patch(b.x, b.y, b.l, b.w));
     boxes
+}
+
+/// Whether a box of `frame_boxes` is an open door (part of its vehicle's shape, not a box of
+/// `boxes.json`).
+pub fn is_door(b: &EgoBox) -> bool {
+    b.kind == DOOR_KIND
 }
 
 /// Indices into `frames` sampled for the GIFs and for the contact sheet.
@@ -372,7 +392,8 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
             |s, (n, &f)| -> io::Result<FrameOut> {
                 let t0 = Instant::now();
                 let (ego_pose, boxes) = (r.source)(f, &mut s.raster, &mut s.bev)?;
-                let world = r.world.map(|w| w.frame(f, ego_pose, &boxes));
+                let listed: Vec<EgoBox> = boxes.iter().filter(|b| !is_door(b)).cloned().collect();
+                let world = r.world.map(|w| w.frame(f, ego_pose, &listed));
                 let t2 = Clock::add(&clock.bev, t0);
                 let mut files = vec![write_bev_frame(dir, f, &s.bev)?];
                 let mut t3 = Clock::add(&clock.write, t2);
@@ -442,7 +463,7 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
                 }
                 on_frame();
                 Ok(FrameOut {
-                    boxes: FrameBoxes { frame: f, t: f as f64 / rate, boxes },
+                    boxes: FrameBoxes { frame: f, t: f as f64 / rate, boxes: listed },
                     world,
                     files,
                     thumbs: preview.then_some(thumbs),

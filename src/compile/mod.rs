@@ -16,7 +16,7 @@ mod world;
 
 pub use clip::{
     BoxVelocity, ClipInput, ClipReport, FrameSource, Render, clip_dir, clip_seed, compile_clip, edited_clip,
-    frame_boxes, render_clip,
+    frame_boxes, is_door, render_clip,
 };
 pub use static_bev::StaticBev;
 pub use world::ClipWorld;

@@ -3,8 +3,8 @@
 
 use crate::geom::wrap_angle;
 use crate::output::{
-    BoxMotion, EgoRecord, FlagShown, FlaggerRecord, FrameWorld, Motion, SceneMap, SignalState, ego2global, instance_id,
-    yaw_quaternion,
+    BoxMotion, EgoRecord, FlagShown, FlaggerRecord, FrameWorld, Motion, SceneMap, SignalState, States, ego2global,
+    instance_id, yaw_quaternion,
 };
 use crate::place::Pose;
 use crate::raster::layout::class_index;
@@ -48,6 +48,7 @@ impl ClipWorld<'_> {
             ego2global_translation: [ego_pose.x, ego_pose.y, 0.0],
             ego2global_rotation: yaw_quaternion(ego_pose.yaw),
             motion: motion(self.ego),
+            states: states(t, self.ego, f),
         };
         let boxes = boxes
             .iter()
@@ -58,6 +59,7 @@ impl ClipWorld<'_> {
                     instance_id: instance_id(self.scenario, &b.agent),
                     motion: motion(i),
                     flag: flag_shown(t, i, f),
+                    states: states(t, i, f),
                 })
             })
             .collect();
@@ -85,6 +87,23 @@ impl ClipWorld<'_> {
 fn flag_shown(t: &Tracks, i: usize, f: usize) -> Option<FlagShown> {
     let ft = t.flags.iter().find(|ft| ft.agent == i)?;
     Some(if *ft.go.get(f)? { FlagShown::Go } else { FlagShown::Stop })
+}
+
+/// Track `i`'s lamps and doors at frame `f`; `None` for what carries no lamps.
+fn states(t: &Tracks, i: usize, f: usize) -> Option<States> {
+    let b = t.bodies.get(i).filter(|b| b.lamps)?;
+    Some(States {
+        headlights: b.headlights,
+        brake_lights: b.brake_lights.get(f).copied().unwrap_or(false),
+        hazards: b.hazards,
+        beacons: b.beacons,
+        siren: b.siren,
+        doors: b
+            .doors
+            .iter()
+            .filter_map(|(d, a)| a.get(f).filter(|&&deg| deg > 0.0).map(|&deg| (d.name().to_string(), deg)))
+            .collect(),
+    })
 }
 
 /// The frames a derivative at frame `f` differences, of a track sampled at frames `0..n` and in

@@ -13,7 +13,8 @@
 //!   "frames": [ { "frame": 0, "time": 0.0,
 //!       "ego_pose": {"x": 1.0, "y": 2.0, "yaw": 0.1},   // or {"translation": [x,y,z], "rotation": [w,x,y,z]}
 //!       "boxes": [ {"track": "a1", "class": "vehicle.car",
-//!                   "center": [x, y, z], "size": [a, b, c], "yaw": 0.3} ] } ] }
+//!                   "center": [x, y, z], "size": [a, b, c], "yaw": 0.3,
+//!                   "states": {"hazards": true, "doors": {"front_left": 35.0}}} ] } ] }  // optional
 //! ```
 //!
 //! Conventions, each converted exactly to rocc's world box (centre, l, w, h, yaw CCW from +x):
@@ -42,6 +43,9 @@ use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
+
+mod states;
+pub use states::StatesIn;
 
 /// nuPlan's ego vehicle (Chrysler Pacifica), l, w, h in metres.
 pub const NUPLAN_EGO_SIZE: [f64; 3] = [5.176, 2.297, 1.777];
@@ -129,6 +133,9 @@ struct BoxIn {
     yaw: Option<f64>,
     #[serde(default, rename = "box")]
     packed: Option<[f64; 7]>,
+    /// Lamps and doors (`states.rs`).
+    #[serde(default)]
+    states: Option<StatesIn>,
 }
 
 /// One recorded box in rocc's world frame.
@@ -143,6 +150,8 @@ pub struct RecBox {
     /// l, w, h (m).
     pub size: [f64; 3],
     pub pose: Pose,
+    /// Lamps and doors, where the box gave them.
+    pub states: Option<StatesIn>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -337,6 +346,7 @@ fn convert(file: FileIn, conv: Convention, whole: Span) -> Result<(Recorded, Vec
                 kind: m.kind,
                 size: lwh,
                 pose: Pose { yaw: keep_or_wrap(pose.yaw), ..pose },
+                states: b.states.clone(),
             });
         }
         frames.push(RecFrame { frame: f.frame, time: f.time, ego: Pose { yaw: keep_or_wrap(ego.yaw), ..ego }, boxes });
@@ -404,6 +414,8 @@ struct Segment {
     size: [f64; 3],
     /// (clip frame, pose)
     keys: Vec<(usize, Pose)>,
+    /// Per key, the box's lamps and doors.
+    states: Vec<Option<StatesIn>>,
 }
 
 fn segments(rec: &Recorded, warnings: &mut Vec<Diagnostic>, whole: Span) -> Vec<Segment> {
@@ -431,6 +443,7 @@ fn segments(rec: &Recorded, warnings: &mut Vec<Diagnostic>, whole: Span) -> Vec<
                         kind: b.kind,
                         size: b.size,
                         keys: vec![],
+                        states: vec![],
                     });
                     out.len() - 1
                 }
@@ -460,6 +473,7 @@ fn segments(rec: &Recorded, warnings: &mut Vec<Diagnostic>, whole: Span) -> Vec<
                 );
             }
             out[s].keys.push((n, b.pose));
+            out[s].states.push(b.states.clone());
             open.insert(b.track.clone(), (s, n));
         }
     }
@@ -542,6 +556,11 @@ pub fn to_scn(
             num(h)
         );
         t += &track_text(&s.keys, rec.rate);
+        let keyed: Vec<(usize, Option<&StatesIn>)> =
+            s.keys.iter().zip(&s.states).map(|(k, st)| (k.0, st.as_ref())).collect();
+        for line in states::lines(s.class, s.kind, &keyed, rec.rate) {
+            t += &format!("        {line}\n");
+        }
         t += "    }\n";
         agents.push((s.name.clone(), s.track.clone(), s.keys[0].0, s.keys[s.keys.len() - 1].0));
     }

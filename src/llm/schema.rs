@@ -126,6 +126,17 @@ pub struct AgentSpec {
     /// An emergency vehicle's siren (on unless `false`); `None` writes nothing.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub siren: Option<bool>,
+    /// Headlights, hazard lights and an emergency vehicle's beacons, on or off; `None` writes
+    /// nothing (docs/language.md, "Lamps and doors").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lights: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hazards: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub beacons: Option<bool>,
+    /// A side door that opens at a time or on a trigger (dooring).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub door: Option<DoorSpec>,
     /// The parking slot of `on: parking` (1 = nearest the centre; `lane` otherwise).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub slot: Option<u32>,
@@ -135,6 +146,33 @@ pub struct AgentSpec {
     /// A person directing traffic: what it shows and when it switches.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flag: Option<super::control::FlagSpec>,
+}
+
+/// `door NAME open at T s` or `door NAME open when ...` (the trigger's `within` or `ttc_under`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DoorSpec {
+    /// `front_left`, `front_right`, `rear_left` or `rear_right`.
+    pub door: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub open_at_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub open_when: Option<TriggerSpec>,
+}
+
+/// The `.scn` lines of an agent's lamps and door.
+fn body_lines(a: &AgentSpec) -> Vec<String> {
+    let on = |b: bool| if b { "on" } else { "off" };
+    let mut v: Vec<String> = [("lights", a.lights), ("hazards", a.hazards), ("beacons", a.beacons)]
+        .into_iter()
+        .filter_map(|(k, x)| x.map(|x| format!("{k} {}", on(x))))
+        .collect();
+    if let Some(d) = &a.door {
+        match (&d.open_when, d.open_at_s) {
+            (Some(t), _) => v.push(format!("door {} open {}", d.door, trigger(t).trim_start_matches("start "))),
+            (None, at) => v.push(format!("door {} open at {} s", d.door, num(at.unwrap_or(0.0)))),
+        }
+    }
+    v
 }
 
 /// How an agent departs from careful behaviour (the `.scn` `behaviour { ... }` block).
@@ -205,9 +243,14 @@ pub fn json_schema(kinds: &[String]) -> Value {
     }
     let agent = &mut v["properties"]["agents"]["items"]["properties"];
     agent["flag"] = super::control::flag_property(&trigger);
-    // Kerbside placements (a separate statement: one macro holding them all overflows its recursion limit).
+    // Kerbside placements, lamps and doors (a separate statement: one macro holding them all
+    // overflows its recursion limit).
     agent["slot"] = json!({"type": "integer", "minimum": 1, "maximum": 40});
     agent["driveway"] = json!({"type": "string", "pattern": "^[a-z][a-z0-9_]{0,20}$"});
+    for lamp in ["lights", "hazards", "beacons"] {
+        agent[lamp] = json!({"type": "boolean"});
+    }
+    agent["door"] = door_schema();
     agent["behaviour"]["properties"]["signal"] = json!({"enum": ["obey", "ignore"]});
     v["properties"]["near_misses"] = super::control::near_misses_property();
     v
@@ -276,6 +319,27 @@ fn base_schema(kinds: &[String]) -> Value {
             },
             "density": {"type": "number", "minimum": 0, "maximum": 1},
             "randomness": {"type": "number", "minimum": 0, "maximum": 1}
+        }
+    })
+}
+
+/// An agent's `door` in the JSON schema.
+fn door_schema() -> Value {
+    json!({
+        "type": "object",
+        "required": ["door"],
+        "properties": {
+            "door": {"enum": ["front_left", "front_right", "rear_left", "rear_right"]},
+            "open_at_s": {"type": "number", "minimum": 0, "maximum": 60},
+            "open_when": {
+                "type": "object",
+                "required": ["agent", "condition"],
+                "properties": {
+                    "agent": {"type": "string", "pattern": "^[a-z][a-z0-9_]{0,20}$"},
+                    "condition": {"enum": ["within", "ttc_under"]},
+                    "value": {"type": "number", "minimum": 0, "maximum": 200}
+                }
+            }
         }
     })
 }
@@ -581,6 +645,9 @@ pub fn emit(s: &Schema, goals: &[Option<String>], is_static: &dyn Fn(&str) -> bo
                 out.push_str(&format!("        siren {}\n", if on { "on" } else { "off" }));
             }
         }
+        for line in body_lines(a) {
+            out.push_str(&format!("        {line}\n"));
+        }
         out.push_str("    }\n");
     }
     out.push_str(&super::control::near_miss_blocks(s));
@@ -653,6 +720,9 @@ pub fn describe(s: &Schema, a: &AgentSpec) -> String {
     }
     if let Some(f) = &a.flag {
         words.push_str(&format!(", directing traffic (stands; no goal): {}", super::control::flag_block(f)));
+    }
+    for line in body_lines(a) {
+        words.push_str(&format!(", {line}"));
     }
     words
 }

@@ -32,6 +32,9 @@ pub struct EgoRecord {
     pub ego2global_rotation: [f64; 4],
     #[serde(flatten)]
     pub motion: Motion,
+    /// Lamps and doors (vehicles and bicycles).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub states: Option<States>,
 }
 
 /// A flagger's state: traffic it faces stops or goes.
@@ -67,6 +70,23 @@ pub struct BoxMotion {
     /// What a flagger shows at this frame (`flag { ... }`); absent for everyone else.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flag: Option<FlagShown>,
+    /// Lamps and doors (vehicles and bicycles).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub states: Option<States>,
+}
+
+/// What a vehicle's (or a bicycle's) lamps show and how far each door is open, at one frame
+/// (docs/output.md, "Vehicle states").
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct States {
+    pub headlights: bool,
+    pub brake_lights: bool,
+    pub hazards: bool,
+    pub beacons: bool,
+    pub siren: bool,
+    /// Each door not shut, by name (`front_left`), with its opening angle in degrees.
+    #[serde(default)]
+    pub doors: std::collections::BTreeMap<String, f64>,
 }
 
 /// The world side of one frame: timestamp, ego, and per box (in `FrameBoxes::boxes` order) its

@@ -21,7 +21,7 @@ pub use paint::{CHANNEL_COLOURS, SIDE as PREVIEW_SIDE, STRUCTURE_COLOUR, paint_b
 pub use preview::{render_preview, write_preview_png};
 
 pub use ego::{
-    BoxMotion, EgoRecord, FlagShown, FrameWorld, Motion, SignalState, ego2global, instance_id, yaw_quaternion,
+    BoxMotion, EgoRecord, FlagShown, FrameWorld, Motion, SignalState, States, ego2global, instance_id, yaw_quaternion,
 };
 pub use vector_map::{FlaggerRecord, Points, SceneMap, read_scene_json, write_scene_json};
 

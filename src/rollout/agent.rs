@@ -44,6 +44,9 @@ pub(crate) enum StopGoal {
 
 pub(crate) struct Actor {
     pub drive: Drive,
+    /// Each door that moves, with its angle (degrees) per frame: an obstacle of its own while
+    /// open (`drive/doors.rs`, `rollout/body.rs`).
+    pub doors: Vec<(crate::check::scenario::Door, Vec<f64>)>,
     /// Heading follows the path with bounded turning radius (vehicles, bicycles); otherwise
     /// holonomic.
     pub vehicle: bool,

@@ -162,6 +162,7 @@ pub(crate) fn empty_tracks(actors: &[Actor], rate: f64, frames: usize) -> Tracks
         poses: actors.iter().map(|_| Vec::with_capacity(frames)).collect(),
         speeds: actors.iter().map(|_| Vec::with_capacity(frames)).collect(),
         impacts: vec![],
+        bodies: vec![],
         contacts: vec![],
         flags: crate::rollout::agent::flag_tracks(actors, frames),
     }

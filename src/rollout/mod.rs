@@ -33,6 +33,7 @@
 //! on the requested side of the struck box at the impact frame.
 
 mod agent;
+pub mod body;
 mod drive;
 mod flagger;
 mod frame;
@@ -69,6 +70,9 @@ pub struct Tracks {
     /// `[agent][frame]`, m/s along the heading.
     pub speeds: Vec<Vec<f64>>,
     pub impacts: Vec<ImpactRecord>,
+    /// `[agent]`: lamps and doors per frame (`body.rs`), read off the tracks above.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub bodies: Vec<body::BodyTrack>,
     /// Every impact resolved by the impact model, in order: staged contacts and those that
     /// follow from the motion after them (`rollout::impact`).
     #[serde(default)]
@@ -201,5 +205,7 @@ pub const WHEELBASE_SHARE: f64 = 0.6;
 
 /// Roll the placed scenario out over its frames.
 pub fn rollout(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Vec<Diagnostic>> {
-    staging::passes::run(c, map, placed)
+    let mut t = staging::passes::run(c, map, placed)?;
+    t.bodies = body::bodies(c, map, placed, &t);
+    body::with_doors(c, map, placed, t)
 }

@@ -53,6 +53,7 @@ pub(crate) fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Cl
     let [l, w, _] = info.size;
     Actor {
         drive,
+        doors: vec![],
         vehicle: motion == Motion::Vehicle,
         hl: l / 2.0,
         hw: w / 2.0,
@@ -112,6 +113,7 @@ pub(crate) fn build_actor(
         background: false,
     };
     let ca = p.source.and_then(|i| c.agents.get(i));
+    let doors = ca.map(|ca| ca.door_swing.clone()).unwrap_or_default();
     // A recorded track is what happened: it is replayed even for a kind that never moves by
     // itself (a cone carried on a pickup), so an imported clip reproduces its boxes exactly.
     if let Some(keys) = ca.filter(|_| !p.is_object).and_then(|ca| ca.track.as_ref()).filter(|k| !k.is_empty()) {
@@ -124,6 +126,7 @@ pub(crate) fn build_actor(
     let Some(ca) = ca.filter(|_| !p.is_object && p.motion != Motion::Static) else {
         let mut a = base_actor(info, p.pose, p.motion, p.class, Drive::Static);
         a.blocker = true;
+        a.doors = doors;
         a.room = room_at(map, DVec2::new(p.pose.x, p.pose.y));
         return a;
     };
@@ -247,6 +250,7 @@ pub(crate) fn build_actor(
             && goal.and_then(|g| g.turn).is_none();
         if a.blocker {
             a.room = room_at(map, pos);
+            a.doors = doors;
         }
     }
     a

@@ -58,6 +58,13 @@ pub struct ConcreteAgent {
     /// `siren on|off` as stated (`Agent::siren`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub siren: Option<bool>,
+    /// Lamps and doors as stated (`Agent::body`).
+    #[serde(default, skip_serializing_if = "crate::check::scenario::Body::is_default")]
+    pub body: crate::check::scenario::Body,
+    /// The angle (degrees) per frame of each door `body` moves, as the rollout's last run
+    /// swung it (`rollout::body`): empty before the rollout.
+    #[serde(skip)]
+    pub door_swing: Vec<(crate::check::scenario::Door, Vec<f64>)>,
     /// Mass in kg as the agent or its kind states it (`rollout::impact`); class priors otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mass: Option<f64>,
@@ -129,6 +136,8 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
                     })
                     .collect(),
                 siren: a.siren,
+                body: a.body.clone(),
+                door_swing: vec![],
                 mass: a.mass.or(k.mass),
                 span: a.span,
                 place_span: a.place_span,

@@ -203,6 +203,14 @@ pub enum AgentStmt {
         value: Ident,
         span: Span,
     },
+    /// `lights|hazards|beacons on|off` (key and word as written, checked by the checker).
+    Lamp {
+        key: Ident,
+        value: Ident,
+        span: Span,
+    },
+    /// `door NAME ACTION at TIME` or `door NAME ACTION when ...` (words checked by the checker).
+    Door(DoorStmt),
     /// `mass VALUE` (kg).
     Mass {
         value: Value,
@@ -212,10 +220,23 @@ pub enum AgentStmt {
     Flag(Flag),
 }
 
+/// `door front_left open at 3 s` / `door front_left open when bike within 8 m`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DoorStmt {
+    pub door: Ident,
+    pub action: Ident,
+    /// `at TIME`; `None` with `when`.
+    pub at: Option<Value>,
+    pub when: Option<Trigger>,
+    pub span: Span,
+}
+
 impl AgentStmt {
     pub fn span(&self) -> Span {
         match self {
             AgentStmt::At { span, .. } | AgentStmt::Speed { span, .. } | AgentStmt::Siren { span, .. } => *span,
+            AgentStmt::Lamp { span, .. } => *span,
+            AgentStmt::Door(d) => d.span,
             AgentStmt::Size(s) => s.span,
             AgentStmt::Goal(g) => g.span,
             AgentStmt::Track(t) => t.span,

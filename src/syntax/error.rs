@@ -45,6 +45,10 @@ const KEYWORDS: &[&str] = &[
     "start",
     "track",
     "siren",
+    "lights",
+    "hazards",
+    "beacons",
+    "door",
     "yaw",
     "posture",
     "conflict",
@@ -264,6 +268,8 @@ fn begins_statement(r: &Rule) -> bool {
             | Rule::kw_track
             | Rule::kw_posture
             | Rule::kw_siren
+            | Rule::lamp_key
+            | Rule::kw_door
             | Rule::kw_lateral
             | Rule::kw_stop
             | Rule::kw_turn

@@ -164,6 +164,15 @@ fn agent_stmt(s: &AgentStmt) -> Doc {
         AgentStmt::At { place, span } => Doc::Line { span: *span, text: format!("at {}", placement(place)) },
         AgentStmt::Speed { value, span } => Doc::Line { span: *span, text: format!("speed {}", val(value)) },
         AgentStmt::Siren { value, span } => Doc::Line { span: *span, text: format!("siren {}", value.name) },
+        AgentStmt::Lamp { key, value, span } => Doc::Line { span: *span, text: format!("{} {}", key.name, value.name) },
+        AgentStmt::Door(d) => {
+            let tail = match (&d.at, &d.when) {
+                (Some(v), _) => format!("at {}", val(v)),
+                (None, Some(w)) => trigger(w),
+                (None, None) => String::new(),
+            };
+            Doc::Line { span: d.span, text: format!("door {} {} {tail}", d.door.name, d.action.name) }
+        }
         AgentStmt::Mass { value, span } => Doc::Line { span: *span, text: format!("mass {}", val(value)) },
         AgentStmt::Size(s) => size(s),
         AgentStmt::Goal(g) => Doc::Block {

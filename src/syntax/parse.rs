@@ -277,6 +277,12 @@ impl Builder {
             Rule::at_stmt => AgentStmt::At { place: self.placement(last(p)), span },
             Rule::speed_stmt => AgentStmt::Speed { value: self.value(last(p)), span },
             Rule::siren_stmt => AgentStmt::Siren { value: self.ident(last(p)), span },
+            Rule::lamp_stmt => {
+                let parts = inner(p);
+                let key = Ident { name: parts[0].as_str().to_string(), span: self.span(&parts[0]) };
+                AgentStmt::Lamp { key, value: self.ident(parts[1].clone()), span }
+            }
+            Rule::door_stmt => AgentStmt::Door(self.door(p)),
             Rule::mass_stmt => AgentStmt::Mass { value: self.value(last(p)), span },
             Rule::size_stmt => AgentStmt::Size(self.size(p)),
             Rule::goal => {
@@ -365,6 +371,15 @@ impl Builder {
             },
             r => unreachable!("grammar: goal statement {r:?}"),
         }
+    }
+
+    /// `door NAME ACTION (at TIME | when ...)`.
+    fn door(&self, p: P<'_>) -> DoorStmt {
+        let span = self.span(&p);
+        let parts = inner(p);
+        let at = parts.iter().find(|x| x.as_rule() == Rule::value).map(|v| self.value(v.clone()));
+        let when = parts.iter().find(|x| x.as_rule() == Rule::trigger).map(|t| self.trigger(t.clone()));
+        DoorStmt { door: self.ident(parts[1].clone()), action: self.ident(parts[2].clone()), at, when, span }
     }
 
     fn trigger(&self, p: P<'_>) -> Trigger {

@@ -60,6 +60,12 @@ def main(out, not_output):
         c, s = np.cos(yaw), np.sin(yaw)
         rot = np.array([[c, s], [-s, c]])
         assert np.allclose(b["velocity"], b["velocity_world"] @ rot.T, atol=1e-9)
+        # Lamps: one flag per box; an ambulance drives with its siren and beacons on.
+        for lamp in rocc_data.tree.LAMPS:
+            assert b[lamp].shape == (k,) and b[lamp].dtype == bool, lamp
+        assert len(b["doors"]) == k
+        for kind, siren, beacons in zip(b["kind"], b["siren"], b["beacons"]):
+            assert kind != "ambulance" or (siren and beacons), (kind, siren, beacons)
         n += 1
     assert n == len(tree)
 

@@ -222,4 +222,41 @@ the traffic goes, directs nobody.\n
     agent f: adult { at west.in[1], 20 m before center offset 3 m right heading 180 deg; flag { stop } }   // fine
     agent f: adult { at west.in[1], 20 m before center offset 3 m right heading 0 deg; flag { stop } }     // error",
     },
+    // ---- lamps and doors (E0240) ----
+    Code {
+        code: "E0240",
+        title: "headlights or hazards on a kind without them",
+        explanation: "`lights on|off` (headlights) is for vehicles and bicycles; `hazards on|off` for vehicles.\n\
+A person, an animal or an object has no lamps, and a bicycle no hazard lights.\n
+    agent car: sedan { at west.in[1], 20 m before center; lights on; hazards on }  // fine
+    agent bike: bicycle { at west.in[1], 30 m before center; lights on }          // fine
+    agent kid: child { at sidewalk(west.in), 10 m before center; lights on }      // error",
+    },
+    Code {
+        code: "E0241",
+        title: "beacons on a kind without them",
+        explanation: "`beacons on|off` sets the flashing roof lights of an emergency vehicle (`ambulance`,\n\
+`fire_truck`, `police_car` and kinds derived from them), which are on with the siren unless\n\
+stated. `beacons on` with `siren off` drives with lights only: traffic does not make way.\n
+    agent amb: ambulance { at west.in[1], 60 m before center; siren off; beacons on }  // fine
+    agent car: sedan { at west.in[1], 20 m before center; beacons on }                 // error",
+    },
+    Code {
+        code: "E0242",
+        title: "a door on a kind without doors",
+        explanation: "`door NAME open|close ...` swings a side door of a car, van, truck or bus (class\n\
+`vehicle`, not `motorcycle`). A walker, a cyclist, a motorcycle or an object has no doors.\n
+    object parked: sedan { at east.in[1], 10 m after center offset 2.8 m right; door front_left open at 2 s }  // fine
+    agent bike: bicycle { at east.in[1], 30 m before center; door front_left open at 2 s }                    // error",
+    },
+    Code {
+        code: "E0243",
+        title: "a door trigger that cannot be read",
+        explanation: "A door opens or closes at a time (`at 3 s`) or when another agent comes `within` a\n\
+distance or its time to collision falls `under` a time. `reaches`, `headway` and `starts` watch\n\
+a road user's own route or goal, which a door does not follow.\n
+    door front_left open when bike within 8 m          // fine
+    door front_left open when bike ttc under 2 s       // fine
+    door front_left open when bike starts              // error",
+    },
 ];

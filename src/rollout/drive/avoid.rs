@@ -45,12 +45,12 @@ pub(crate) struct Avoid {
 impl Sim<'_, '_> {
     /// How vehicle `i` gets past whatever stands for good in the band it drives, within `look`
     /// ahead: `None` where nothing does.
-    pub(crate) fn avoid(&self, i: usize, look: f64, seen: &mut Vec<Blocking>) -> Option<Avoid> {
+    pub(crate) fn avoid(&self, i: usize, look: f64, f: usize, seen: &mut Vec<Blocking>) -> Option<Avoid> {
         let (a, st) = (&self.actors[i], &self.cur[i]);
         if !a.vehicle || a.in_conflict || a.blocker || (self.facts.blockers.is_empty() && self.facts.slow.is_empty()) {
             return None;
         }
-        self.blocking(i, look, seen);
+        self.blocking(i, look, f, seen);
         self.slow_ahead(i, look, seen);
         let m = BAND_MARGIN;
         let here = (a.d0 - a.hw - m, a.d0 + a.hw + m);
@@ -89,8 +89,8 @@ impl Sim<'_, '_> {
     }
 
     /// Every obstacle within `look` ahead of vehicle `i` (or beside it, till its rear is a metre
-    /// past), projected onto its route.
-    fn blocking(&self, i: usize, look: f64, seen: &mut Vec<Blocking>) {
+    /// past), projected onto its route; an open door is one of its own (frame `f`'s angle).
+    fn blocking(&self, i: usize, look: f64, f: usize, seen: &mut Vec<Blocking>) {
         let (a, st) = (&self.actors[i], &self.cur[i]);
         let fwd = self.facts.dirs[i];
         seen.clear();
@@ -117,6 +117,9 @@ impl Sim<'_, '_> {
                 _ => (f64::NEG_INFINITY, f64::INFINITY),
             };
             seen.push(Blocking { sj, lj, ext_lon, ext_lat, lo, hi, v: 0.0 });
+            if !b.doors.is_empty() {
+                self.open_doors(i, j, f, (lo, hi), seen);
+            }
         }
     }
 

@@ -4,6 +4,7 @@
 //! step.
 
 pub(crate) mod avoid;
+mod doors;
 pub(crate) mod follow;
 pub(crate) mod index;
 pub(crate) mod neighbours;
@@ -90,7 +91,7 @@ impl Sim<'_, '_> {
             let over = (st.off - y.offset).abs() < 0.3;
             v_des = if over { 0.0 } else { v_des.min(st.v.max(3.0)).min(MOVE_OVER_SPEED) };
         }
-        let lateral = self.lateral(sc, i, active);
+        let lateral = self.lateral(sc, i, active, t);
         let LateralPlan { target, triggered, mut phase, mut d_next, pass_target, standoff, .. } = lateral;
         let margin = if a.vehicle { 0.25 } else { 0.1 };
         // Till the reference is there: the profile's clock runs out while a creeping car's
@@ -215,7 +216,7 @@ impl Sim<'_, '_> {
 
     /// Lateral: where the profile would put us next, and where a pass of one easing aside for
     /// us heads.
-    fn lateral(&self, sc: &mut Scratch, i: usize, active: bool) -> LateralPlan {
+    fn lateral(&self, sc: &mut Scratch, i: usize, active: bool, t: f64) -> LateralPlan {
         let (a, st, dt) = (&self.actors[i], self.cur[i], self.dt);
         let lim = a.lim;
         let mut triggered = st.triggered;
@@ -268,7 +269,9 @@ impl Sim<'_, '_> {
             } else if let Some(tg) = self.pass_offset(i, look) {
                 tg
             } else {
-                let avoid = self.avoid(i, look, &mut sc.blocking);
+                // The frame of the states read now (`t`), for the angle of an open door.
+                let now = (t / self.dt).round() as usize;
+                let avoid = self.avoid(i, look, now, &mut sc.blocking);
                 standoff = avoid.map_or(0.0, |v| if v.target.is_none() { v.standoff } else { 0.0 });
                 avoid.and_then(|v| v.target).unwrap_or(a.d0)
             };
