@@ -242,19 +242,20 @@ fn goal_grammars_admit_triggers_and_one_phase() {
 }
 
 #[test]
-fn phase_grammar_admits_stops_and_pulling_over_but_no_route_change() {
+fn phase_grammar_admits_stops_pulling_over_and_lane_changes_but_no_turn() {
     let single = gbnf::Grammar::parse(&llm::goals::single_grammar());
     for block in [
         "goal { speed 40 km/h } goal { stop after 30 m; start after 2 s }",
         "goal { speed 40 km/h } goal { lateral pull_to_shoulder; start when amb within 40 m }",
         "goal { speed 40 km/h } goal { speed 20 km/h; lateral pull_to_shoulder; stop after 30 m; start after 2 s }",
+        "goal { speed 40 km/h } goal { lateral change_lane left; start when ego within 20 m }",
     ] {
         assert!(single.accepts(block), "{block}");
     }
     for block in [
         "goal { speed 40 km/h } goal { turn left; start after 2 s }",
-        "goal { speed 40 km/h } goal { lateral change_lane left; start after 2 s }",
         "goal { speed 40 km/h } goal { lateral cross; start after 2 s }",
+        "goal { speed 40 km/h } goal { lateral pull_to_shoulder; lateral change_lane left; start after 2 s }",
         "goal { speed 40 km/h } goal { stop at stop_line; start after 2 s }",
         "goal { speed 40 km/h } goal { speed 0 m/s }",
     ] {
@@ -283,6 +284,21 @@ fn a_phase_that_pulls_over_and_stops_from_the_model_checks() {
         let phase = "goal { speed 40 km/h } goal { speed 20 km/h lateral pull_to_shoulder stop after 25 m start when ego within 25 m }";
         assert!(words.contains(phase), "{plan:?}:\n{text}");
     }
+}
+
+#[test]
+fn a_phase_that_changes_lane_from_the_model_checks() {
+    let mut schema =
+        straight(vec![lane("ego", "sedan", "west", "in", 60.0, 50.0), lane("car", "sedan", "west", "in", 30.0, 40.0)]);
+    schema["road"]["lanes"] = json!(2);
+    schema["agents"][1]["lane"] = json!(2);
+    let goals = "ego: goal { speed 50 km/h }\ncar: goal { speed 40 km/h } goal { lateral change_lane left; start when ego within 20 m }\n";
+    let text = accepted(&schema, &[goals], Plan::Joint);
+    let words = text.replace(';', " ").split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(
+        words.contains("goal { speed 40 km/h } goal { lateral change_lane left start when ego within 20 m }"),
+        "{text}"
+    );
 }
 
 #[test]

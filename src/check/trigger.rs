@@ -66,7 +66,11 @@ impl Checker {
                             ),
                         )
                         .label(other.span(), "not in a later goal block")
-                        .help("turns, crossings and other stops belong to the first goal block; a phase makes one lateral move"),
+                        .help(if matches!(other, ast::GoalStmt::Turn { .. }) {
+                            "a turn sets the route from the start: write it in the first goal block, and let the phase change the speed"
+                        } else {
+                            "crossings and other stops belong to the first goal block; a phase makes one lateral move"
+                        }),
                     );
                     ok = false;
                 }

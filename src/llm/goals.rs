@@ -141,8 +141,8 @@ fn goal_block() -> Cfg {
 }
 
 /// A later phase for decoding: what a phase may change, each at most once (`speed`, `lateral
-/// pull_to_shoulder`, `stop after DIST`), then its required `start`. Turns, lane changes and
-/// crossings are left out, as the checker refuses them in a phase (E0155).
+/// pull_to_shoulder` or `change_lane`, `stop after DIST`), then its required `start`. Turns,
+/// crossings and other stops are left out, as the checker refuses them in a phase (E0155).
 fn phase_block() -> Node {
     let ws = || Node::Ref("ws".into());
     let part = |head: Vec<Node>| {
@@ -157,7 +157,11 @@ fn phase_block() -> Node {
         Node::Lit("{".into()),
         ws(),
         opt(part(vec![Node::Ref("speed_stmt".into())])),
-        opt(part(vec![Node::Lit("lateral pull_to_shoulder".into())])),
+        opt(part(vec![Node::Alt(
+            ["pull_to_shoulder", "change_lane left", "change_lane right"]
+                .map(|w| Node::Lit(format!("lateral {w}")))
+                .to_vec(),
+        )])),
         opt(part(vec![Node::Lit("stop after ".into()), Node::Ref("value".into())])),
         part(vec![Node::Ref("start".into())]),
         Node::Lit("}".into()),
