@@ -294,11 +294,35 @@ fn a_goal_phase_pulls_over_and_stops_on_its_own_trigger() {
     let phase = "goal { lateral pull_to_shoulder; stop after 40 m; start when ego within 25 m }";
     for (with, why) in [
         ("goal { turn left; start when ego within 25 m }", "a turn"),
-        ("goal { lateral change_lane left; start when ego within 25 m }", "a lane change"),
         ("goal { start when ego within 25 m }", "nothing"),
     ] {
         assert_eq!(check_code(&text.replace(phase, with)), "E0155", "{why}");
     }
     let after_easing = text.replace("goal { speed 8 m/s }", "goal { speed 8 m/s; lateral away_from ego }");
     assert_eq!(check_code(&after_easing), "E0155");
+}
+
+#[test]
+fn a_goal_phase_changes_lane_on_its_own_trigger() {
+    let text = case("car-changes-lane-on-a-trigger");
+    let t = &front_of(&text).tracks;
+    let (car, ego) = (idx(t, "car"), idx(t, "ego"));
+    let fired = (0..t.frames).find(|&f| dist(t, car, ego, f) <= 20.0).expect("the ego closes in");
+    // In the outer lane (centre y = -5.25) till its condition holds, in the inner one (y = -1.75)
+    // by the end, its box never outside the two (the road's right edge is at y = -7).
+    assert!((0..=fired).all(|f| (t.poses[car][f].y + 5.25).abs() < 1e-6), "moved before the trigger");
+    assert!((t.poses[car][t.frames - 1].y + 1.75).abs() < 0.05, "ends at y = {:.2}", t.poses[car][t.frames - 1].y);
+    let half_w = t.agents[car].size[1] / 2.0;
+    assert!((0..t.frames).all(|f| t.poses[car][f].y + half_w < 0.0 && t.poses[car][f].y - half_w > -7.0));
+    assert!((0..t.frames).all(|f| !obb(t, car, f).overlaps(&obb(t, ego, f))));
+    // Once per agent, from a first goal that holds its lane and does not turn.
+    // (Indented, so that the scene's first comment, which quotes the phase, stays as it is.)
+    let phase = "        goal { lateral change_lane left; start when ego within 20 m }";
+    let twice = format!("{phase}\n        goal {{ lateral pull_to_shoulder; start after 9 s }}");
+    assert_eq!(check_code(&text.replace(phase, &twice)), "E0156");
+    let turned = text.replace("goal { speed 10 m/s }", "goal { speed 10 m/s; lateral change_lane left }");
+    assert_eq!(check_code(&turned), "E0156");
+    // To a lane that exists: lane 2 of two is the outermost.
+    let right = "        goal { lateral change_lane right; start when ego within 20 m }";
+    assert_eq!(check_code(&text.replace(phase, right)), "E0156");
 }

@@ -279,6 +279,66 @@ fn goal_grammars_admit_triggers_and_one_phase() {
 }
 
 #[test]
+fn phase_grammar_admits_stops_pulling_over_and_lane_changes_but_no_turn() {
+    let single = gbnf::Grammar::parse(&llm::goals::single_grammar());
+    for block in [
+        "goal { speed 40 km/h } goal { stop after 30 m; start after 2 s }",
+        "goal { speed 40 km/h } goal { lateral pull_to_shoulder; start when amb within 40 m }",
+        "goal { speed 40 km/h } goal { speed 20 km/h; lateral pull_to_shoulder; stop after 30 m; start after 2 s }",
+        "goal { speed 40 km/h } goal { lateral change_lane left; start when ego within 20 m }",
+    ] {
+        assert!(single.accepts(block), "{block}");
+    }
+    for block in [
+        "goal { speed 40 km/h } goal { turn left; start after 2 s }",
+        "goal { speed 40 km/h } goal { lateral cross; start after 2 s }",
+        "goal { speed 40 km/h } goal { lateral pull_to_shoulder; lateral change_lane left; start after 2 s }",
+        "goal { speed 40 km/h } goal { stop at stop_line; start after 2 s }",
+        "goal { speed 40 km/h } goal { speed 0 m/s }",
+    ] {
+        assert!(!single.accepts(block), "a phase that the checker refuses (or without a start): {block}");
+    }
+    let joint = gbnf::Grammar::parse(&llm::goals::joint_grammar(&["car".into(), "ego".into()]));
+    assert!(joint.accepts(
+        "car: goal { speed 40 km/h } goal { lateral pull_to_shoulder; stop after 25 m; start when ego within 30 m }\nego: goal { }\n"
+    ));
+}
+
+#[test]
+fn a_phase_that_pulls_over_and_stops_from_the_model_checks() {
+    let schema =
+        straight(vec![lane("ego", "sedan", "west", "in", 60.0, 40.0), lane("car", "sedan", "west", "in", 30.0, 40.0)]);
+    let goals = "ego: goal { speed 40 km/h }\n\
+                 car: goal { speed 40 km/h } goal { speed 20 km/h; lateral pull_to_shoulder; stop after 25 m; start when ego within 25 m }\n";
+    for plan in [Plan::Joint, Plan::Hierarchical] {
+        let replies: Vec<&str> = match plan {
+            Plan::Joint => vec![goals],
+            _ => goals.lines().map(|l| l.split_once(": ").expect("name").1).collect(),
+        };
+        let text = accepted(&schema, &replies, plan);
+        // The writer may break a long block over lines; its words and their order are what count.
+        let words = text.replace(';', " ").split_whitespace().collect::<Vec<_>>().join(" ");
+        let phase = "goal { speed 40 km/h } goal { speed 20 km/h lateral pull_to_shoulder stop after 25 m start when ego within 25 m }";
+        assert!(words.contains(phase), "{plan:?}:\n{text}");
+    }
+}
+
+#[test]
+fn a_phase_that_changes_lane_from_the_model_checks() {
+    let mut schema =
+        straight(vec![lane("ego", "sedan", "west", "in", 60.0, 50.0), lane("car", "sedan", "west", "in", 30.0, 40.0)]);
+    schema["road"]["lanes"] = json!(2);
+    schema["agents"][1]["lane"] = json!(2);
+    let goals = "ego: goal { speed 50 km/h }\ncar: goal { speed 40 km/h } goal { lateral change_lane left; start when ego within 20 m }\n";
+    let text = accepted(&schema, &[goals], Plan::Joint);
+    let words = text.replace(';', " ").split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(
+        words.contains("goal { speed 40 km/h } goal { lateral change_lane left start when ego within 20 m }"),
+        "{text}"
+    );
+}
+
+#[test]
 fn the_grammar_export_has_the_rare_vocabulary() {
     for (format, def) in [(rocc::grammar::Format::Gbnf, " ::= "), (rocc::grammar::Format::Lark, ": ")] {
         let g = rocc::grammar::print(&rocc::grammar::language(), format);

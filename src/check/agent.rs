@@ -182,6 +182,11 @@ impl Checker {
                 .help("a phase pulls over from a goal that holds its lane; drop one of the two lateral moves"),
             );
         }
+        if let (Some(Some(g)), Some(ps)) = (&goal_c, &phases_c) {
+            let nowhere =
+                ps.iter().find_map(|p| p.change).and_then(|s| super::goal::no_lane_beside(place.as_ref(), road, s));
+            self.phase_lane_change(&a.name.name, g, ps, &phases, nowhere);
+        }
         let behaviour_c = match behaviour {
             Some(b) => self.behaviour(b, &a.name.name, motion, is_static, goal),
             None => Some(Behaviour::default()),

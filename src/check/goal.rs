@@ -104,23 +104,7 @@ impl Checker {
                         {
                             Some(format!("{} needs a lane placement", lateral_name(l)))
                         }
-                        Lateral::ChangeLane(side) => match (place, road) {
-                            (Some(Place::Lane { lane, .. }), Some(r)) => {
-                                let lanes = lane_count(r, lane.arm, lane.dir);
-                                // Lane 1 is nearest the centre line: moving left lowers the index.
-                                let target =
-                                    if side == Side::Left { lane.index as i64 - 1 } else { lane.index as i64 + 1 };
-                                (target < 1 || target > lanes as i64).then(|| {
-                                    format!(
-                                        "there is no lane to the {} of lane {} ({} lanes per direction)",
-                                        side_name(side),
-                                        lane.index,
-                                        lanes
-                                    )
-                                })
-                            }
-                            _ => None,
-                        },
+                        Lateral::ChangeLane(side) => no_lane_beside(place, road, side),
                         _ => None,
                     };
                     if let Some(msg) = bad {
@@ -264,4 +248,15 @@ fn lateral_name(l: Lateral) -> &'static str {
 
 fn side_name(s: Side) -> &'static str {
     if s == Side::Left { "left" } else { "right" }
+}
+
+/// Why a lane change to `side` from a lane placement has nowhere to go, if it has not.
+pub(super) fn no_lane_beside(place: Option<&Place>, road: Option<&Road>, side: Side) -> Option<String> {
+    let (Some(Place::Lane { lane, .. }), Some(r)) = (place, road) else { return None };
+    let lanes = lane_count(r, lane.arm, lane.dir);
+    // Lane 1 is nearest the centre line: moving left lowers the index.
+    let target = if side == Side::Left { lane.index as i64 - 1 } else { lane.index as i64 + 1 };
+    (target < 1 || target > lanes as i64).then(|| {
+        format!("there is no lane to the {} of lane {} ({} lanes per direction)", side_name(side), lane.index, lanes)
+    })
 }

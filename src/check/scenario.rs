@@ -734,6 +734,9 @@ pub struct Phase<V = Dist> {
     /// `lateral pull_to_shoulder` (vehicles): pulls over from its start.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub pull_over: bool,
+    /// `lateral change_lane SIDE` (vehicles): moves to the next lane of its road from its start.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub change: Option<Side>,
 }
 
 // ---- expectations (`expect { ... }`) ----

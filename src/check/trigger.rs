@@ -23,7 +23,7 @@ impl Checker {
     pub(super) fn phase(&mut self, g: &ast::Goal, order: &[&str], vehicle: bool) -> Option<Phase> {
         let mut speed = None;
         let mut start: Option<(f64, Option<Trigger>)> = None;
-        let (mut stop_after, mut pull_over) = (None, false);
+        let (mut stop_after, mut pull_over, mut change) = (None, false, None);
         let mut ok = true;
         for st in &g.stmts {
             match st {
@@ -32,9 +32,15 @@ impl Checker {
                     ok &= stop_after.is_some();
                 }
                 ast::GoalStmt::Lateral { lateral: ast::Lateral::Word(w), .. }
-                    if w.name == "pull_to_shoulder" && vehicle && !pull_over =>
+                    if w.name == "pull_to_shoulder" && vehicle && !pull_over && change.is_none() =>
                 {
                     pull_over = true;
+                }
+                ast::GoalStmt::Lateral { lateral: ast::Lateral::ChangeLane(side), .. }
+                    if vehicle && !pull_over && change.is_none() =>
+                {
+                    change = super::word(self, side, &SIDES, "side");
+                    ok &= change.is_some();
                 }
                 ast::GoalStmt::Speed { value, .. } if speed.is_none() => {
                     speed = self.bounded(value, Dim::Speed, "goal speed", 0.0, MAX_SPEED_MS, "0..324 km/h");
@@ -55,18 +61,22 @@ impl Checker {
                         Diagnostic::error(
                             "E0155",
                             format!(
-                                "a goal phase changes the speed, stops (`stop after`) or pulls over, not `{}` here",
+                                "a goal phase changes the speed, stops (`stop after`), pulls over or (a vehicle) changes lane, not `{}` here",
                                 other.keyword()
                             ),
                         )
                         .label(other.span(), "not in a later goal block")
-                        .help("turns, lane changes, crossings and other stops belong to the first goal block"),
+                        .help(if matches!(other, ast::GoalStmt::Turn { .. }) {
+                            "a turn sets the route from the start: write it in the first goal block, and let the phase change the speed"
+                        } else {
+                            "crossings and other stops belong to the first goal block; a phase makes one lateral move"
+                        }),
                     );
                     ok = false;
                 }
             }
         }
-        let changes = speed.is_some() || stop_after.is_some() || pull_over;
+        let changes = speed.is_some() || stop_after.is_some() || pull_over || change.is_some();
         let (true, Some((start_after, start_when))) = (changes, start) else {
             if ok {
                 self.err(
@@ -77,7 +87,38 @@ impl Checker {
             }
             return None;
         };
-        ok.then_some(Phase { speed, start_after, start_when, stop_after, pull_over })
+        ok.then_some(Phase { speed, start_after, start_when, stop_after, pull_over, change })
+    }
+
+    /// A lane change in a phase (E0156): to a lane that exists; the route moves to the next lane
+    /// mid-clip, so the goal before it holds its lane and does not turn, and the agent makes no
+    /// other lateral move in a phase (tests/behaviour-cases/car-changes-lane-on-a-trigger.scn).
+    pub(super) fn phase_lane_change(
+        &mut self,
+        name: &str,
+        g: &Goal,
+        ps: &[Phase],
+        blocks: &[&ast::Goal],
+        nowhere: Option<String>,
+    ) {
+        let Some(k) = ps.iter().position(|p| p.change.is_some()) else { return };
+        let nowhere = nowhere.map(|n| format!("but {n}"));
+        let why = if let Some(n) = &nowhere {
+            n.as_str()
+        } else if g.lateral != Lateral::HoldLane {
+            "after another lateral move in its first goal"
+        } else if g.turn.is_some() || g.reverse.is_some() {
+            "on a goal that turns or reverses"
+        } else if ps.iter().filter(|p| p.change.is_some() || p.pull_over).count() > 1 {
+            "and makes another lateral move in a phase"
+        } else {
+            return;
+        };
+        self.err(
+            Diagnostic::error("E0156", format!("`{name}` changes lane in a goal phase {why}"))
+                .label(blocks[k].span, "changes lane here")
+                .help("a phase changes lane from a first goal that holds its lane and does not turn, once"),
+        );
     }
 
     /// One `start when ...`: its agent resolved, its condition word known and given what it takes.

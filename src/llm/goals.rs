@@ -140,11 +140,40 @@ fn goal_block() -> Cfg {
     grammar::for_decoding(cfg.with_root("goal_block", Node::Seq(seq)))
 }
 
-/// The goal block and at most one later phase after it on the same line (a phase takes `speed`
-/// and `start` only; the checker says so to the repair loop if the model adds more).
+/// A later phase for decoding: what a phase may change, each at most once (`speed`, `lateral
+/// pull_to_shoulder` or `change_lane`, `stop after DIST`), then its required `start`. Turns,
+/// crossings and other stops are left out, as the checker refuses them in a phase (E0155).
+fn phase_block() -> Node {
+    let ws = || Node::Ref("ws".into());
+    let part = |head: Vec<Node>| {
+        let mut seq = head;
+        seq.extend([ws(), Node::Opt(Box::new(Node::Lit(";".into()))), ws()]);
+        Node::Seq(seq)
+    };
+    let opt = |n: Node| Node::Opt(Box::new(n));
+    Node::Seq(vec![
+        Node::Lit("goal".into()),
+        ws(),
+        Node::Lit("{".into()),
+        ws(),
+        opt(part(vec![Node::Ref("speed_stmt".into())])),
+        opt(part(vec![Node::Alt(
+            ["pull_to_shoulder", "change_lane left", "change_lane right"]
+                .map(|w| Node::Lit(format!("lateral {w}")))
+                .to_vec(),
+        )])),
+        opt(part(vec![Node::Lit("stop after ".into()), Node::Ref("value".into())])),
+        part(vec![Node::Ref("start".into())]),
+        Node::Lit("}".into()),
+    ])
+}
+
+/// The goal block and at most one later phase after it on the same line.
 fn goal_phases() -> Cfg {
-    let phase = Node::Opt(Box::new(Node::Seq(vec![Node::Lit(" ".into()), Node::Ref("goal_block".into())])));
-    goal_block().with_root("goal_phases", Node::Seq(vec![Node::Ref("goal_block".into()), phase]))
+    let phase = Node::Opt(Box::new(Node::Seq(vec![Node::Lit(" ".into()), Node::Ref("phase_block".into())])));
+    goal_block()
+        .with_root("phase_block", phase_block())
+        .with_root("goal_phases", Node::Seq(vec![Node::Ref("goal_block".into()), phase]))
 }
 
 /// GBNF for one goal block, or a block and a phase (hierarchical mode).

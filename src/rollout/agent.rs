@@ -72,6 +72,9 @@ pub(crate) struct Actor {
     /// Later goal phases, in order: a goal speed from each's start (`rollout::trigger`).
     pub phases: Vec<Stage>,
     pub lateral: Lat,
+    /// The goal phase (`State::stage`) from which `Lat::Shift` runs: 0 for a lane change in the
+    /// first goal, k for one in its k-th phase (the route is the target lane from the start).
+    pub shift_stage: u8,
     pub stop: StopGoal,
     pub info: TrackAgent,
     /// An emergency vehicle (a kind in or derived from `EMERGENCY_KINDS`): cross traffic holds

@@ -72,6 +72,7 @@ pub(crate) fn base_actor(info: TrackAgent, pose: Pose, motion: Motion, class: Cl
         behaviour: Default::default(),
         phases: vec![],
         lateral: Lat::Hold,
+        shift_stage: 0,
         stop: StopGoal::None,
         emergency: false,
         junction: None,
@@ -161,7 +162,8 @@ pub(crate) fn build_actor(
             prev
         })
         .collect();
-    let lateral = goal.map(|g| g.lateral).unwrap_or(Lateral::HoldLane);
+    let (lateral, shift_stage) = route_lateral(ca, a.vehicle);
+    a.shift_stage = shift_stage;
     let mut facts = LaneFacts { limit: f64::INFINITY, stop_line: None, lane: None };
     if a.vehicle {
         facts = vehicle_route(c, map, p, ca, &mut a, routes, errs);
@@ -276,6 +278,19 @@ fn goal_error(ca: &ConcreteAgent, msg: String, help: &str) -> Diagnostic {
     Diagnostic::error("E0204", msg).label(ca.span, "this goal").help(help.to_string())
 }
 
+/// The lateral move that sets the route, and the phase it waits for (`Actor::shift_stage`): a
+/// lane change in a phase routes on the target lane from the start, the shift towards it
+/// waiting for the phase (tests/behaviour-cases/car-changes-lane-on-a-trigger.scn).
+fn route_lateral(ca: &ConcreteAgent, vehicle: bool) -> (Lateral, u8) {
+    let first = ca.goal.as_ref().map(|g| g.lateral).unwrap_or(Lateral::HoldLane);
+    match ca.phases.iter().enumerate().find_map(|(k, p)| Some((k, p.change?))) {
+        Some((k, side)) if vehicle && first == Lateral::HoldLane => {
+            (Lateral::ChangeLane(side), (k + 1).min(u8::MAX as usize) as u8)
+        }
+        _ => (first, 0),
+    }
+}
+
 /// Vehicle `a`'s route from its lane (the target lane of a lane change), its turn checked against
 /// its turning radius.
 fn vehicle_route(
@@ -289,7 +304,7 @@ fn vehicle_route(
 ) -> LaneFacts {
     let pos = DVec2::new(p.pose.x, p.pose.y);
     let goal = ca.goal.as_ref();
-    let lateral = goal.map(|g| g.lateral).unwrap_or(Lateral::HoldLane);
+    let lateral = route_lateral(ca, true).0;
     let fail = |errs: &mut Vec<Diagnostic>, msg: String, help: &str| errs.push(goal_error(ca, msg, help));
     let mut facts = LaneFacts { limit: f64::INFINITY, stop_line: None, lane: None };
     let found = find_lane(map, pos, p.pose.yaw);

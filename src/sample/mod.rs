@@ -133,6 +133,7 @@ pub fn sample(s: &Scenario, seed: u64) -> Concrete {
                         start_when: p.start_when,
                         stop_after: p.stop_after,
                         pull_over: p.pull_over,
+                        change: p.change,
                     })
                     .collect(),
                 siren: a.siren,

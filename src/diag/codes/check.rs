@@ -343,13 +343,26 @@ moves, `reaches stop_line` a vehicle placed on an in-lane of a road with stop li
 `start` holds (`start after T` counts from the clip's start, `start when ...` is a trigger),\n\
 and only after that goal has started. A phase gives a `start` and what changes then, each at\n\
 most once: a `speed`, `stop after DIST` (counted from where the phase starts) and, for a vehicle\n\
-whose first goal holds its lane, `lateral pull_to_shoulder`; without a `speed` it keeps the one\n\
-before. Turns, lane changes, crossings and the other stops belong to the first goal block.\n\
+whose first goal holds its lane, `lateral pull_to_shoulder` or (E0156) `lateral change_lane\n\
+SIDE`; without a `speed` it keeps the one before. Turns, crossings and the other stops\n\
+belong to the first goal block.\n\
 Static things and replayed tracks have no phases.\n
     goal { speed 10 m/s }
     goal { speed 0 m/s; start when car headway under 1.5 s }     // fine: brakes to a stop
     goal { lateral pull_to_shoulder; stop after 40 m; start after 3 s }  // fine: pulls over
     goal { speed 4 m/s; turn left; start after 1 s }             // error: a turn in a phase",
+    },
+    Code {
+        code: "E0156",
+        title: "lane change in a goal phase that cannot be driven",
+        explanation: "A vehicle's phase may change to the next lane of its road (`lateral change_lane left` or\n\
+`right`): it keeps its lane until the phase starts, then moves over. Its route is the target\n\
+lane from the start, so the first goal holds its lane and neither turns nor reverses, and the\n\
+agent makes no other lateral move in a phase (one lane change, no pull-over besides).\n
+    goal { speed 10 m/s }
+    goal { lateral change_lane left; start when ego within 20 m }   // fine
+    goal { speed 10 m/s; turn left }
+    goal { lateral change_lane left; start after 2 s }              // error: its goal turns",
     },
     // ---- near misses (E0190-E0195) ----
     Code {

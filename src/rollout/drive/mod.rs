@@ -222,7 +222,7 @@ impl Sim<'_, '_> {
         let mut triggered = st.triggered;
         let (target, dur) = match a.lateral {
             Lat::Hold => (None, 1.0),
-            Lat::Shift { target, dur } => (active.then_some(target), dur),
+            Lat::Shift { target, dur } => ((active && st.stage >= a.shift_stage).then_some(target), dur),
             Lat::Away { who, target, dur } => {
                 // Away from something standing: eased to the far side of our lane from it once it
                 // is near ahead.
