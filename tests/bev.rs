@@ -463,3 +463,35 @@ fn boxes_json_and_manifest() {
     assert!(p.bytes > 1000);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A reused `Bev` must come out as a fresh one: boxes of the frame before, off-canvas corners
+/// and a `Bev` read back from a file (whose painted rectangles are unknown) leave no trace.
+#[test]
+fn a_reused_bev_equals_a_fresh_one() {
+    let map = cross_map();
+    let frames = [
+        (
+            Pose { x: -20.0, y: -2.0, yaw: 0.1 },
+            vec![
+                ego_box(Class::Vehicle, 10.0, 5.0, 0.3, 4.5, 1.9, 1.6),
+                ego_box(Class::Structure, 20.0, -15.0, 0.0, 1.0, 1.0, 6.0),
+                ego_box(Class::Barrier, 49.0, -49.5, 0.7, 12.0, 2.5, 3.2),
+            ],
+        ),
+        (Pose { x: 5.0, y: 3.0, yaw: -0.4 }, vec![ego_box(Class::Pedestrian, -3.0, 8.0, 1.0, 0.6, 0.6, 1.8)]),
+        (Pose { x: 0.0, y: 0.0, yaw: 0.0 }, vec![]),
+    ];
+    let (mut raster, mut bev) = (Rasterizer::new(), Bev::zeros());
+    for (pose, boxes) in &frames {
+        raster.rasterize_into(&map, *pose, boxes, &mut bev);
+        assert_eq!(bev, rasterize(&map, *pose, boxes));
+    }
+    let mut read = sample_bev();
+    read.aux.fill(7);
+    read.structure.fill(1);
+    read.masks.fill(1);
+    let mut from_file = Bev::from_arrays(read.masks, read.aux, read.structure);
+    let (pose, boxes) = &frames[1];
+    raster.rasterize_into(&map, *pose, boxes, &mut from_file);
+    assert_eq!(from_file, rasterize(&map, *pose, boxes));
+}

@@ -106,6 +106,19 @@ struct Scratch {
     masks: Masks,
 }
 
+impl Scratch {
+    fn new() -> Self {
+        Scratch {
+            raster: Rasterizer::new(),
+            bev: Bev::zeros(),
+            occ: Occupancy::empty(),
+            flow: Flow::default(),
+            velocities: Vec::new(),
+            masks: Masks::default(),
+        }
+    }
+}
+
 /// Per-frame results kept for the clip-level files.
 struct FrameOut {
     boxes: FrameBoxes,
@@ -376,101 +389,96 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
     let clock = Clock::default();
     let rate = r.rate;
 
+    let frame = |s: &mut Scratch, n: usize, f: usize| -> io::Result<FrameOut> {
+        let t0 = Instant::now();
+        let (ego_pose, boxes) = (r.source)(f, &mut s.raster, &mut s.bev)?;
+        let listed: Vec<EgoBox> = boxes.iter().filter(|b| !is_door(b)).cloned().collect();
+        let world = r.world.map(|w| w.frame(f, ego_pose, &listed));
+        let t2 = Clock::add(&clock.bev, t0);
+        let mut files = vec![write_bev_frame(dir, f, &s.bev)?];
+        let mut t3 = Clock::add(&clock.write, t2);
+        let preview = gif_picks.contains(&n) || sheet_picks.contains(&n);
+        let mut thumbs = [None, None, None];
+        if preview {
+            let mut img = vec![0u8; PREVIEW_SIDE * PREVIEW_SIDE];
+            paint_bev(&s.bev, &mut img);
+            thumbs[0] = Some(img);
+            // The full BEV preview (with legend) shows the first frame, written while
+            // the other frames render.
+            if n == 0 {
+                files.push(write_preview_png(dir, &s.bev)?);
+            }
+            t3 = Clock::add(&clock.preview, t3);
+        }
+        if opts.stage >= Stage::Occ {
+            let input =
+                OccInput { boxes: &boxes, bev: &s.bev, background: r.background, ego: ego_pose, seed, frame: f };
+            backend.occupancy_into(&input, &mut s.occ);
+            let t4 = Clock::add(&clock.occ, t3);
+            let path = occ_frame_path(dir, f);
+            files.push(OutputFile { path: rel(dir, &path), bytes: write_npy(&path, &s.occ)? });
+            if opts.flow
+                && let Some(velocity) = r.velocity
+            {
+                s.velocities.clear();
+                s.velocities.extend(boxes.iter().map(|b| velocity(f, b)));
+                flow_into(&s.occ, &boxes, &s.velocities, &mut s.flow);
+                let path = flow_frame_path(dir, f);
+                files.push(OutputFile { path: rel(dir, &path), bytes: write_flow(&path, &s.flow)? });
+            }
+            t3 = Clock::add(&clock.write, t4);
+            if let Some(cameras) = &opts.visibility {
+                masks_into(&s.occ, &opts.rig, cameras, &mut s.masks);
+                let t5 = Clock::add(&clock.visibility, t3);
+                let path = labels_frame_path(dir, f);
+                files.push(OutputFile { path: rel(dir, &path), bytes: write_labels(&path, &s.occ, &s.masks)? });
+                t3 = Clock::add(&clock.write, t5);
+            }
+            if preview {
+                let mut img = vec![0u8; PREVIEW_SIDE * PREVIEW_SIDE];
+                paint_occ(&s.occ, &mut img);
+                thumbs[1] = Some(img);
+                t3 = Clock::add(&clock.preview, t3);
+            }
+        }
+        if opts.stage >= Stage::Lidar {
+            let pc = scan(&s.occ, &opts.rig, seed, f);
+            let t5 = Clock::add(&clock.lidar, t3);
+            let (bin, pcd) = (bin_frame_path(dir, f), pcd_frame_path(dir, f));
+            files.push(OutputFile { path: rel(dir, &bin), bytes: write_bin(&bin, &pc)? });
+            files.push(OutputFile { path: rel(dir, &pcd), bytes: write_pcd(&pcd, &pc)? });
+            t3 = Clock::add(&clock.write, t5);
+            if preview {
+                let mut img = vec![0u8; PREVIEW_SIDE * PREVIEW_SIDE];
+                paint_lidar(&pc, &mut img);
+                thumbs[2] = Some(img);
+                Clock::add(&clock.preview, t3);
+            }
+        }
+        on_frame();
+        Ok(FrameOut {
+            boxes: FrameBoxes { frame: f, t: f as f64 / rate, boxes: listed },
+            world,
+            files,
+            thumbs: preview.then_some(thumbs),
+        })
+    };
+    let pool = std::sync::Mutex::new(Vec::new());
     let outs: Vec<FrameOut> = r
         .frames
         .par_iter()
         .enumerate()
-        .map_init(
-            || Scratch {
-                raster: Rasterizer::new(),
-                bev: Bev::zeros(),
-                occ: Occupancy::empty(),
-                flow: Flow::default(),
-                velocities: Vec::new(),
-                masks: Masks::default(),
-            },
-            |s, (n, &f)| -> io::Result<FrameOut> {
-                let t0 = Instant::now();
-                let (ego_pose, boxes) = (r.source)(f, &mut s.raster, &mut s.bev)?;
-                let listed: Vec<EgoBox> = boxes.iter().filter(|b| !is_door(b)).cloned().collect();
-                let world = r.world.map(|w| w.frame(f, ego_pose, &listed));
-                let t2 = Clock::add(&clock.bev, t0);
-                let mut files = vec![write_bev_frame(dir, f, &s.bev)?];
-                let mut t3 = Clock::add(&clock.write, t2);
-                let preview = gif_picks.contains(&n) || sheet_picks.contains(&n);
-                let mut thumbs = [None, None, None];
-                if preview {
-                    let mut img = vec![0u8; PREVIEW_SIDE * PREVIEW_SIDE];
-                    paint_bev(&s.bev, &mut img);
-                    thumbs[0] = Some(img);
-                    // The full BEV preview (with legend) shows the first frame, written while
-                    // the other frames render.
-                    if n == 0 {
-                        files.push(write_preview_png(dir, &s.bev)?);
-                    }
-                    t3 = Clock::add(&clock.preview, t3);
-                }
-                if opts.stage >= Stage::Occ {
-                    let input = OccInput {
-                        boxes: &boxes,
-                        bev: &s.bev,
-                        background: r.background,
-                        ego: ego_pose,
-                        seed,
-                        frame: f,
-                    };
-                    backend.occupancy_into(&input, &mut s.occ);
-                    let t4 = Clock::add(&clock.occ, t3);
-                    let path = occ_frame_path(dir, f);
-                    files.push(OutputFile { path: rel(dir, &path), bytes: write_npy(&path, &s.occ)? });
-                    if opts.flow
-                        && let Some(velocity) = r.velocity
-                    {
-                        s.velocities.clear();
-                        s.velocities.extend(boxes.iter().map(|b| velocity(f, b)));
-                        flow_into(&s.occ, &boxes, &s.velocities, &mut s.flow);
-                        let path = flow_frame_path(dir, f);
-                        files.push(OutputFile { path: rel(dir, &path), bytes: write_flow(&path, &s.flow)? });
-                    }
-                    t3 = Clock::add(&clock.write, t4);
-                    if let Some(cameras) = &opts.visibility {
-                        masks_into(&s.occ, &opts.rig, cameras, &mut s.masks);
-                        let t5 = Clock::add(&clock.visibility, t3);
-                        let path = labels_frame_path(dir, f);
-                        files.push(OutputFile { path: rel(dir, &path), bytes: write_labels(&path, &s.occ, &s.masks)? });
-                        t3 = Clock::add(&clock.write, t5);
-                    }
-                    if preview {
-                        let mut img = vec![0u8; PREVIEW_SIDE * PREVIEW_SIDE];
-                        paint_occ(&s.occ, &mut img);
-                        thumbs[1] = Some(img);
-                        t3 = Clock::add(&clock.preview, t3);
-                    }
-                }
-                if opts.stage >= Stage::Lidar {
-                    let pc = scan(&s.occ, &opts.rig, seed, f);
-                    let t5 = Clock::add(&clock.lidar, t3);
-                    let (bin, pcd) = (bin_frame_path(dir, f), pcd_frame_path(dir, f));
-                    files.push(OutputFile { path: rel(dir, &bin), bytes: write_bin(&bin, &pc)? });
-                    files.push(OutputFile { path: rel(dir, &pcd), bytes: write_pcd(&pcd, &pc)? });
-                    t3 = Clock::add(&clock.write, t5);
-                    if preview {
-                        let mut img = vec![0u8; PREVIEW_SIDE * PREVIEW_SIDE];
-                        paint_lidar(&pc, &mut img);
-                        thumbs[2] = Some(img);
-                        Clock::add(&clock.preview, t3);
-                    }
-                }
-                on_frame();
-                Ok(FrameOut {
-                    boxes: FrameBoxes { frame: f, t: f as f64 / rate, boxes: listed },
-                    world,
-                    files,
-                    thumbs: preview.then_some(thumbs),
-                })
-            },
-        )
-        .collect::<io::Result<_>>()?;
+        .map(|(n, &f)| {
+            // Taken from the pool, not per thread: a frame's own parallel work may run another
+            // frame on the same thread, which then takes (or makes) a scratch of its own.
+            let mut s = pool.lock().ok().and_then(|mut p| p.pop()).unwrap_or_else(Scratch::new);
+            let out = frame(&mut s, n, f);
+            if let Ok(mut p) = pool.lock() {
+                p.push(s);
+            }
+            out
+        })
+        .collect::<io::Result<Vec<_>>>()?;
 
     let t0 = Instant::now();
     let mut files: Vec<OutputFile> = outs.iter().flat_map(|o| o.files.iter().cloned()).collect();

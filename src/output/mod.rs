@@ -81,7 +81,7 @@ pub fn read_npz(path: &Path) -> io::Result<Bev> {
         Ok(s) => s,
         Err(_) => Bev::zeros().structure,
     };
-    Ok(Bev { masks, aux, structure })
+    Ok(Bev::from_arrays(masks, aux, structure))
 }
 
 /// `dir/bev/NNNNNN.npz` for frame `frame` (SPEC output layout).

@@ -56,7 +56,11 @@ use layout::*;
 use ndarray::{Array2, Array3};
 
 /// One BEV frame in the nuPlan-Occ layout (see the module comment).
-#[derive(Clone, Debug, PartialEq)]
+///
+/// `Rasterizer::rasterize_into` clears only what its last call painted into this `Bev`: code
+/// that writes the agent channels (8-14), `aux` or `structure` of a `Bev` it then hands back to
+/// the rasterizer must build it with `Bev::from_arrays` (which forgets what was painted).
+#[derive(Clone, Debug)]
 pub struct Bev {
     /// `gt_bev_masks`: (18, 400, 400), values {0, 1}.
     pub masks: Array3<i8>,
@@ -64,6 +68,18 @@ pub struct Bev {
     pub aux: Array3<i32>,
     /// rocc's extra channel: footprints of `Class::Structure` (trees, poles, walls, buildings).
     pub structure: Array2<i8>,
+    /// Canvas rectangles the last `rasterize_into` painted agents into; `None`: unknown, so the
+    /// next one clears everything.
+    painted: Option<Vec<Rect>>,
+}
+
+/// Index ranges [i0, i1) x [j0, j1) of one footprint's bounding box, inside the grid.
+type Rect = (usize, usize, usize, usize);
+
+impl PartialEq for Bev {
+    fn eq(&self, o: &Bev) -> bool {
+        self.masks == o.masks && self.aux == o.aux && self.structure == o.structure
+    }
 }
 
 impl Default for Bev {
@@ -78,7 +94,13 @@ impl Bev {
             masks: Array3::zeros((N_MASKS, GRID, GRID)),
             aux: Array3::zeros((N_AUX, GRID, GRID)),
             structure: Array2::zeros((GRID, GRID)),
+            painted: Some(Vec::new()),
         }
+    }
+
+    /// A `Bev` of given arrays (read from a file, say).
+    pub fn from_arrays(masks: Array3<i8>, aux: Array3<i32>, structure: Array2<i8>) -> Self {
+        Bev { masks, aux, structure, painted: None }
     }
 
     fn reset(&mut self) {
@@ -90,15 +112,38 @@ impl Bev {
             || !self.structure.is_standard_layout();
         if fresh {
             *self = Bev::zeros();
-        } else {
-            // As slices: one memset each (ndarray's `fill` walks the elements).
-            for s in [self.masks.as_slice_mut(), self.structure.as_slice_mut()].into_iter().flatten() {
-                s.fill(0);
-            }
-            if let Some(s) = self.aux.as_slice_mut() {
-                s.fill(0);
+            return;
+        }
+        let (Some(masks), Some(aux), Some(structure)) =
+            (self.masks.as_slice_mut(), self.aux.as_slice_mut(), self.structure.as_slice_mut())
+        else {
+            return;
+        };
+        // Channels 0-7 are overwritten whole by `polygons`; the line and boundary channels are
+        // cleared whole (they are small); agents, aux and structure only where boxes were drawn.
+        masks[CH_DIVIDER * N..].fill(0);
+        let Some(rects) = self.painted.take() else {
+            masks[8 * N..CH_DIVIDER * N].fill(0);
+            aux.fill(0);
+            structure.fill(0);
+            self.painted = Some(Vec::new());
+            return;
+        };
+        for &(i0, i1, j0, j1) in &rects {
+            for i in i0..i1 {
+                let row = i * GRID;
+                for ch in 8..CH_DIVIDER {
+                    masks[ch * N + row + j0..ch * N + row + j1].fill(0);
+                }
+                for ch in 0..N_AUX {
+                    aux[ch * N + row + j0..ch * N + row + j1].fill(0);
+                }
+                structure[row + j0..row + j1].fill(0);
             }
         }
+        let mut rects = rects;
+        rects.clear();
+        self.painted = Some(rects);
     }
 }
 
@@ -279,6 +324,9 @@ impl Rasterizer {
             if hi.0 < 0 || hi.1 < 0 || lo.0 >= G || lo.1 >= G {
                 continue;
             }
+            let span = |a: i64, b: i64| (a.max(0) as usize, (b + 1).min(G) as usize);
+            let ((i0, i1), (j0, j1)) = (span(lo.0, hi.0), span(lo.1, hi.1));
+            out.painted.get_or_insert_with(Vec::new).push((i0, i1, j0, j1));
             let Some(ch) = layout::class_channel(b.class) else {
                 debug_assert_eq!(b.class, Class::Structure);
                 self.filler.fill_poly(G, G, &self.px, &mut |v, u0, u1| {
