@@ -38,9 +38,9 @@ impl Checker {
                     Diagnostic::error(
                         "E0196",
                         format!(
-                            "`{name}` strikes at {:.1} s after a strike written later, at {:.1} s",
-                            when(e),
-                            when(c)
+                            "the strike of `{name}` at {:.1} s is written after its strike at {:.1} s",
+                            when(c),
+                            when(e)
                         ),
                     )
                     .help(format!("write the strikes of `{name}` in the order they happen, or swap their `at` times"))
