@@ -225,3 +225,39 @@ fn stated_masses_weigh_in_the_impact() {
     let van = f.concrete.agents.iter().find(|a| a.name == "van").expect("van");
     assert_eq!(van.mass, Some(6000.0));
 }
+
+/// A car glancing off another into a pole or a post, every contact written as a conflict
+/// (tests/strikes/: a struck sedan strikes a pole; an SUV strikes the sedan, then a post): each
+/// lands on its stated side of the struck box as the boxes measure it, within 1.5 s of its
+/// time, between the agents the file names, and an agent's strikes in the order written.
+#[test]
+fn later_strikes_land_on_their_sides_in_order() {
+    let mut names: Vec<_> =
+        std::fs::read_dir("tests/strikes").expect("scenes").map(|e| e.expect("entry").path()).collect();
+    names.sort();
+    assert_eq!(names.len(), 2, "the scenes of several strikes are missing");
+    for path in names {
+        let f = front_of(&std::fs::read_to_string(&path).expect("scene"));
+        let (t, s) = (&f.tracks, &f.concrete);
+        let mut last: Vec<Option<usize>> = vec![None; t.agents.len()];
+        for (k, c) in s.conflicts.iter().enumerate() {
+            let r = t.impacts.iter().find(|r| r.conflict == k).unwrap_or_else(|| panic!("{path:?} {k}: no impact"));
+            let name = |i: usize| s.agents[i].name.as_str();
+            assert_eq!(t.agents[r.at_fault].name, name(c.at_fault), "{path:?} {k}");
+            assert_eq!(t.agents[r.struck].name, name(c.struck), "{path:?} {k}");
+            let (in_struck, _) = measured_contact(t, r.at_fault, r.struck, r.frame).expect("contact at the impact");
+            let sb = t.agents[r.struck].size;
+            assert_eq!(sector(in_struck, sb[0], sb[1]), c.point, "{path:?} {k}: struck elsewhere");
+            let at = c.at.expect("at");
+            assert!((r.frame as f64 / t.rate - at).abs() <= 1.5 + 0.5 / t.rate, "{path:?} {k} at frame {}", r.frame);
+            if let Some(before) = last[r.at_fault] {
+                assert!(before < r.frame, "{path:?} {k}: struck at frame {} before its earlier strike", r.frame);
+            }
+            last[r.at_fault] = Some(r.frame);
+        }
+        // The poles stand.
+        for (i, a) in t.agents.iter().enumerate().filter(|(_, a)| a.kind == "pole") {
+            assert!(t.poses[i].iter().all(|q| *q == t.poses[i][0]), "{} moved", a.name);
+        }
+    }
+}

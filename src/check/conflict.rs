@@ -8,10 +8,12 @@ use crate::syntax::ast;
 use std::collections::BTreeMap;
 
 impl Checker {
-    /// A crash ends both agents' driving (they slide to rest, or hold `after latch`), so an
-    /// agent's crashes must be possible in that light: it strikes once (one intercept, E0121), a
-    /// pair is staged once (E0123), and an agent strikes before anything strikes it (E0122).
-    /// Struck any number of times, in any order, is fine: a pile-up into a car that has stopped.
+    /// A crash ends both agents' driving (they slide to rest, or hold `after latch`), and the
+    /// motion after it may carry either into a later contact, so an agent may strike several
+    /// times and strike after it was struck. Refused are the orders that cannot happen: two
+    /// strikes at once (E0121), strikes written out of time order (E0196), a strike after a
+    /// latch holds the agent (E0122), a latched strike that follows an impact (E0197), and a
+    /// pair staged twice (E0123).
     pub(super) fn conflicts_in_order(
         &mut self,
         conflicts: &[Option<Conflict>],
@@ -26,14 +28,26 @@ impl Checker {
         for (i, &(c, ca)) in all.iter().enumerate() {
             let name = order[c.at_fault];
             let earlier = &all[..i];
-            if let Some((_, first)) = earlier.iter().find(|(e, _)| e.at_fault == c.at_fault) {
+            if let Some((e, first)) = earlier.iter().find(|(e, _)| e.at_fault == c.at_fault && when(e) >= when(c)) {
+                let same = when(e) == when(c);
+                let d = if same {
+                    Diagnostic::error("E0121", format!("`{name}` strikes twice at {:.1} s", when(c))).help(format!(
+                        "one body makes one contact at a time: give the strikes of `{name}` different `at` times"
+                    ))
+                } else {
+                    Diagnostic::error(
+                        "E0196",
+                        format!(
+                            "the strike of `{name}` at {:.1} s is written after its strike at {:.1} s",
+                            when(c),
+                            when(e)
+                        ),
+                    )
+                    .help(format!("write the strikes of `{name}` in the order they happen, or swap their `at` times"))
+                };
                 self.err(
-                    Diagnostic::error("E0121", format!("`{name}` strikes in two conflicts"))
-                        .label(field(ca, "at_fault"), format!("`{name}` at fault again here"))
-                        .label(first.span, format!("first conflict `{name}` strikes in"))
-                        .help(format!(
-                            "an at-fault agent makes one staged approach; keep one strike for `{name}`, or let another agent strike"
-                        )),
+                    d.label(field(ca, "at"), format!("`{name}` strikes at {:.1} s here", when(c)))
+                        .label(first.span, format!("strike of `{name}` at {:.1} s", when(e))),
                 );
                 continue;
             }
@@ -52,29 +66,42 @@ impl Checker {
                 );
                 continue;
             }
-            // Struck before its own strike: it is no longer driven and cannot strike.
-            let struck_first = all
-                .iter()
-                .filter(|(e, _)| e.struck == c.at_fault && when(e) < when(c))
-                .min_by(|a, b| when(a.0).total_cmp(&when(b.0)));
-            if let Some((e, ea)) = struck_first {
+            // An earlier crash of the striker: latched, it holds it; otherwise the motion after
+            // it must bring the striker here, and a latch cannot be asked of that contact.
+            let before = |e: &Conflict| (e.struck == c.at_fault || e.at_fault == c.at_fault) && when(e) < when(c);
+            let held =
+                all.iter().filter(|(e, _)| before(e) && e.after.latch).min_by(|a, b| when(a.0).total_cmp(&when(b.0)));
+            if let Some((e, ea)) = held {
+                let role = if e.struck == c.at_fault { "is struck" } else { "strikes" };
                 self.err(
                     Diagnostic::error(
                         "E0122",
                         format!(
-                            "`{name}` cannot strike `{}` at {:.1} s: `{}` strikes `{name}` at {:.1} s",
+                            "`{name}` cannot strike `{}` at {:.1} s: it {role} at {:.1} s `after latch`, which holds it there",
                             order[c.struck],
                             when(c),
-                            order[e.at_fault],
                             when(e)
                         ),
                     )
                     .label(field(ca, "at_fault"), format!("`{name}` strikes here"))
-                    .label(field(ea, "struck"), format!("`{name}` is struck first"))
+                    .label(field(ea, "after"), format!("`{name}` is held from {:.1} s", when(e)))
                     .help(format!(
-                        "a struck agent is no longer driven from the contact on (it slides to rest): `{name}` \
-                         must strike first, so move its strike to {:.1} s or before, or the crash that strikes it later",
+                        "drop `after latch` so `{name}` moves on from that crash, or move this strike to {:.1} s or before",
                         when(e)
+                    )),
+                );
+                continue;
+            }
+            if c.after.latch && all.iter().any(|(e, _)| before(e)) {
+                self.err(
+                    Diagnostic::error(
+                        "E0197",
+                        format!("`{name}` cannot latch a strike that follows its earlier crash"),
+                    )
+                    .label(field(ca, "after"), "a latch here")
+                    .help(format!(
+                        "`{name}` is not driven after its earlier crash and its next contact is resolved as an \
+                             impact: drop `after latch`"
                     )),
                 );
             }

@@ -247,6 +247,7 @@ pub(crate) struct State {
 }
 
 /// A conflict with its agents as track indices.
+#[derive(Clone)]
 pub(crate) struct Conf {
     pub index: usize,
     pub af: usize,

@@ -201,25 +201,25 @@ reaches a side or a corner, never the middle of the front or rear face.\n
     },
     Code {
         code: "E0121",
-        title: "agent strikes twice",
-        explanation: "An at-fault agent leaves its goal for one staged approach to the agent it strikes, so an\n\
-agent is `at_fault` in one conflict only; it may be struck in any number of others (a pile-up).\n\
-Both blocks are shown.\n
-    conflict { at_fault a; struck b; impact rear_end; point rear; at 2 s }
-    conflict { at_fault a; struck c; impact angle; point left; at 4 s }     // error: `a` strikes twice\n\n\
-Keep one strike per agent, or let another agent strike.",
+        title: "agent strikes twice at once",
+        explanation: "An agent may strike several times, one contact after the other (it glances off one car\n\
+into another), but not two at the same time: its strikes need different `at` times (a\n\
+conflict without `at` is at half the clip). Both blocks are shown.\n
+    conflict { at_fault a; struck b; impact sideswipe; point left; at 2 s }
+    conflict { at_fault a; struck c; impact angle; point left; at 2 s }     // error: both at 2 s
+    conflict { at_fault a; struck c; impact angle; point left; at 3 s }     // fine: the slide reaches c",
     },
     Code {
         code: "E0122",
-        title: "crashes in an order that cannot happen",
-        explanation: "An agent that is struck is no longer driven from the contact on (it slides to rest, or\n\
-holds `after latch`), so it cannot strike anyone later. An agent's\n\
-own strike comes before, or at the same time as, every crash that strikes it. A chain is\n\
-written front first: the middle car strikes the car ahead, then the one behind strikes it.\n
-    conflict { at_fault mid; struck lead; impact rear_end; point rear; at 2 s }
-    conflict { at_fault tail; struck mid; impact rear_end; point rear; at 3 s }   // fine: a chain
+        title: "a strike after a latch",
+        explanation: "`after latch` holds a crashed pair where it met for the rest of the clip, so neither of\n\
+the two strikes again later. Without the latch both move on from the impact (they slide to\n\
+rest) and either may strike again, or the struck one strike another: the contact its slide\n\
+brings about.\n
+    conflict { at_fault tail; struck mid; impact rear_end; point rear; at 2 s; after latch }
+    conflict { at_fault mid; struck lead; impact rear_end; point rear; at 3 s }   // error: `mid` is held
     conflict { at_fault tail; struck mid; impact rear_end; point rear; at 2 s }
-    conflict { at_fault mid; struck lead; impact rear_end; point rear; at 3 s }   // error: `mid` is struck first",
+    conflict { at_fault mid; struck lead; impact rear_end; point rear; at 3 s }   // fine: pushed into `lead`",
     },
     Code {
         code: "E0123",

@@ -1,7 +1,7 @@
 //! The impact state of a run, plain data: each body's inverse mass and inertia, who moves on
 //! from an impact and how fast, and the open contact windows (`motion` moves them).
 
-use crate::rollout::agent::{Actor, Drive};
+use crate::rollout::agent::{Actor, Conf, Drive};
 use crate::rollout::impact::{box_inertia, prior_mass};
 use glam::DVec2;
 
@@ -32,6 +32,10 @@ pub(crate) struct Wrecks {
     pub windows: Vec<Window>,
     /// Some body has been struck: the passes below have something to do.
     pub any: bool,
+    /// Conflicts whose striker is already moving on from an earlier impact
+    /// (`staging::follow`): their contact is one the motion brings about, with their
+    /// coefficients.
+    pub follows: Vec<Conf>,
 }
 
 impl Wrecks {
@@ -44,6 +48,7 @@ impl Wrecks {
             slide: vec![None; actors.len()],
             windows: vec![],
             any: false,
+            follows: vec![],
         };
         for (i, a) in actors.iter().enumerate() {
             w.set_mass(a, i, prior_mass(a.info.class, a.info.motion, a.info.size));

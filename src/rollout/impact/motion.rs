@@ -9,7 +9,7 @@
 
 use crate::geom::{Obb, wrap_angle};
 use crate::rollout::Tracks;
-use crate::rollout::agent::State;
+use crate::rollout::agent::{Conf, State};
 use crate::rollout::frame::Sim;
 use crate::rollout::impact::bodies::{Slide, Window};
 use crate::rollout::impact::model::{Body, Coefficients, resolve};
@@ -43,6 +43,12 @@ pub(crate) fn penetration(a: &Obb, b: &Obb) -> Option<(DVec2, f64)> {
 
 impl Sim<'_, '_> {
     /// Use the masses a file states (per actor; `None` keeps the class prior).
+    /// The conflicts that follow an impact (`staging::follow`), resolved when their pair meets.
+    pub(crate) fn follows(mut self, follows: &[Conf]) -> Self {
+        self.wreck.follows = follows.to_vec();
+        self
+    }
+
     pub(crate) fn masses(mut self, stated: &[Option<f64>]) -> Self {
         for (i, m) in stated.iter().enumerate().take(self.actors.len()) {
             if let Some(m) = *m {
@@ -241,6 +247,10 @@ impl Sim<'_, '_> {
 
     /// The coefficients of a contact between `i` and `j`: a staged pair's own, or the defaults.
     fn coefficients_of(&self, i: usize, j: usize) -> Hit {
+        let pair = |c: &&Conf| (c.af, c.st) == (i, j) || (c.af, c.st) == (j, i);
+        if let Some(c) = self.wreck.follows.iter().find(pair) {
+            return Hit { coefficients: coefficients(&c.c.after), conflict: Some(c.index) };
+        }
         let after = self
             .confs
             .iter()

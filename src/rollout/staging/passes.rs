@@ -13,6 +13,7 @@ use crate::rollout::junction::dry_run::assign_bends;
 use crate::rollout::junction::order::order_crossings;
 use crate::rollout::junction::zones::{assign_crossings, assign_yields};
 use crate::rollout::setup::{Routes, background_actor, build_actor, face_the_striker};
+use crate::rollout::staging::follow;
 use crate::rollout::staging::near::near_errors;
 use crate::rollout::staging::plan;
 use crate::rollout::staging::plan::Plan;
@@ -47,21 +48,32 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         }
     }
     crate::rollout::drive::slow::measure_rooms(map, &mut actors);
-    let mut confs = vec![];
+    let frames = c.frame_count();
+    let dt = if c.rate > 0.0 { 1.0 / c.rate } else { 0.1 };
+    let (mut confs, mut follows) = (vec![], vec![]);
+    let pairs: Vec<Option<(usize, usize)>> = c
+        .conflicts
+        .iter()
+        .map(|k| match (track_of.get(k.at_fault), track_of.get(k.struck)) {
+            (Some(Some(af)), Some(Some(st))) if af != st => Some((*af, *st)),
+            _ => None,
+        })
+        .collect();
+    let when = |k: &Conflict| plan::requested_time(k, dt, frames, c.duration);
     for (index, k) in c.conflicts.iter().enumerate() {
-        let (Some(Some(af)), Some(Some(st))) = (track_of.get(k.at_fault), track_of.get(k.struck)) else { continue };
-        // An agent strikes once: a second conflict naming the same at-fault agent is not staged.
-        if af == st || confs.iter().any(|x: &Conf| x.af == *af) {
-            continue;
+        let Some((af, st)) = pairs[index] else { continue };
+        let conf = Conf { index, af, st, c: k.clone(), gap: None };
+        // A striker already moving on from an earlier impact is not driven to this one.
+        if follow::follows_an_impact(&c.conflicts, &pairs, index, when) {
+            follows.push(conf);
+        } else if !confs.iter().any(|x: &Conf| x.af == af) {
+            confs.push(conf);
         }
-        confs.push(Conf { index, af: *af, st: *st, c: k.clone(), gap: None });
     }
     confs.extend(near_confs(c, &actors, &track_of));
     for k in confs.iter().filter(|k| k.gap.is_none()) {
         face_the_striker(&mut actors, k);
     }
-    let frames = c.frame_count();
-    let dt = if c.rate > 0.0 { 1.0 / c.rate } else { 0.1 };
     assign_bends(map, &mut actors, dt);
     assign_yields(map, &mut actors, &confs);
     assign_crossings(map, &mut actors, &confs);
@@ -74,11 +86,15 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
     let masses = stated_masses(c, placed, actors.len());
     let mut out = empty_tracks(&actors, c.rate, frames);
     if confs.is_empty() {
-        Sim::new(&actors, &confs, &[], None, dt).masses(&masses).run(&mut out);
+        Sim::new(&actors, &confs, &[], None, dt).masses(&masses).follows(&follows).run(&mut out);
     } else {
         let mut pass1 = empty_tracks(&actors, c.rate, frames);
         let mut states = Vec::with_capacity(frames);
-        Sim::new(&actors, &confs, &[], None, dt).masses(&masses).keep_states(&mut states).run(&mut pass1);
+        Sim::new(&actors, &confs, &[], None, dt)
+            .masses(&masses)
+            .follows(&follows)
+            .keep_states(&mut states)
+            .run(&mut pass1);
         // A staging that misses or lands elsewhere than asked, or that has the overlap safety
         // net stop someone dead, is planned again away from the impact times tried (the plan
         // nearest the request may be the one a bystander spoils), up to `RESTAGE` times. The
@@ -98,6 +114,7 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
             out = empty_tracks(&actors, c.rate, frames);
             let report = Sim::new(&actors, &confs, &plans, Some(&pass1), dt)
                 .masses(&masses)
+                .follows(&follows)
                 .resume(&pass1, &states, start)
                 .run(&mut out);
             let mut failed =
@@ -144,6 +161,9 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
                 break;
             }
         }
+    }
+    if errs.is_empty() {
+        errs.extend(follow::measure(&actors, &follows, &mut out, (dt, frames, c.duration)));
     }
     check_turns(map, &actors, &confs, &out, &mut errs);
     if !errs.is_empty() {
