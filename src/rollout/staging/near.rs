@@ -60,6 +60,24 @@ pub fn box_gap(a: &Obb, b: &Obb) -> f64 {
     ab.min(ba)
 }
 
+/// Agent `i`'s box at frame `f` of the tracks.
+fn box_at(out: &Tracks, i: usize, f: usize) -> Obb {
+    let (p, s) = (out.poses[i][f], out.agents[i].size);
+    Obb { center: DVec2::new(p.x, p.y), yaw: p.yaw, length: s[0], width: s[1] }
+}
+
+/// Of a measure per frame, the first least (frame, value) over the clip and the least within
+/// `TIME_TOL_S` of `t_req`.
+fn least_and_near(per_frame: &[f64], dt: f64, t_req: f64) -> ((usize, f64), f64) {
+    let least =
+        per_frame.iter().copied().enumerate().fold((0, f64::INFINITY), |m, (f, g)| if g < m.1 { (f, g) } else { m });
+    let near = (0..per_frame.len())
+        .filter(|&f| (f as f64 * dt - t_req).abs() <= TIME_TOL_S + 1e-9)
+        .map(|f| per_frame[f])
+        .fold(f64::INFINITY, f64::min);
+    (least, near)
+}
+
 impl Sim<'_, '_> {
     /// At the pass the passer leaves its approach and drives its own route again, from where it
     /// is: its place along the route and its offset are taken from its pose (its approach left
@@ -89,10 +107,7 @@ pub(crate) fn near_errors(
     out: &Tracks,
     (dt, duration): (f64, f64),
 ) -> Vec<(usize, Diagnostic)> {
-    let bx = |k: usize, f: usize| {
-        let (p, s) = (out.poses[k][f], out.agents[k].size);
-        Obb { center: DVec2::new(p.x, p.y), yaw: p.yaw, length: s[0], width: s[1] }
-    };
+    let bx = |i: usize, f: usize| box_at(out, i, f);
     let mut errs = vec![];
     for (ki, k) in confs.iter().enumerate() {
         let gap = match k.near {
@@ -105,12 +120,7 @@ pub(crate) fn near_errors(
         };
         let t_req = plan::requested_time(&k.c, dt, out.frames, duration);
         let gaps: Vec<f64> = (0..out.frames).map(|f| box_gap(&bx(k.af, f), &bx(k.st, f))).collect();
-        let (f_min, least) =
-            gaps.iter().copied().enumerate().fold((0, f64::INFINITY), |m, (f, g)| if g < m.1 { (f, g) } else { m });
-        let near_time = (0..out.frames)
-            .filter(|&f| (f as f64 * dt - t_req).abs() <= TIME_TOL_S + 1e-9)
-            .map(|f| gaps[f])
-            .fold(f64::INFINITY, f64::min);
+        let ((f_min, least), near_time) = least_and_near(&gaps, dt, t_req);
         let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
         let what = if plans[ki].is_none() {
             format!("`{a}` has no way to come alongside `{b}` near {t_req:.1} s")
@@ -147,20 +157,12 @@ fn ttc_error(
     (dt, duration): (f64, f64),
     ttc: f64,
 ) -> Option<Diagnostic> {
-    let bx = |i: usize, f: usize| {
-        let (p, s) = (out.poses[i][f], out.agents[i].size);
-        Obb { center: DVec2::new(p.x, p.y), yaw: p.yaw, length: s[0], width: s[1] }
-    };
+    let bx = |i: usize, f: usize| box_at(out, i, f);
     let vel = |i: usize, f: usize| DVec2::from_angle(out.poses[i][f].yaw) * out.speeds[i][f];
     let t_req = plan::requested_time(&k.c, dt, out.frames, duration);
     let ttcs: Vec<f64> =
         (0..out.frames).map(|f| box_ttc(&bx(k.af, f), vel(k.af, f), &bx(k.st, f), vel(k.st, f))).collect();
-    let (f_min, least) =
-        ttcs.iter().copied().enumerate().fold((0, f64::INFINITY), |m, (f, g)| if g < m.1 { (f, g) } else { m });
-    let near_time = (0..out.frames)
-        .filter(|&f| (f as f64 * dt - t_req).abs() <= TIME_TOL_S + 1e-9)
-        .map(|f| ttcs[f])
-        .fold(f64::INFINITY, f64::min);
+    let ((f_min, least), near_time) = least_and_near(&ttcs, dt, t_req);
     let touch = (0..out.frames).find(|&f| bx(k.af, f).overlaps(&bx(k.st, f)));
     let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
     let what = if !planned {
