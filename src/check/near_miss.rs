@@ -5,6 +5,7 @@ use super::units::Dim;
 use super::{Checker, MAX_DURATION_S, word};
 use crate::diag::Diagnostic;
 use crate::syntax::ast;
+use std::collections::BTreeMap;
 
 /// The gaps a near miss may ask for, m: below the least, box tolerances make it a graze (stage a
 /// `conflict`); beyond the most, two agents are not near.
@@ -13,6 +14,11 @@ pub const GAP_RANGE: (f64, f64) = (0.2, 3.0);
 /// Two requests on one pair closer in time than this are the same moment, s (the window a
 /// staging may move an impact by, `rollout::staging::plan::WINDOW_S`).
 const SAME_TIME_S: f64 = 1.5;
+
+/// The times to collision a near miss may ask for, s: below the least, no braking within a
+/// vehicle's limits stops short of contact from a closing speed worth the name; beyond the most,
+/// the passer is following, not closing.
+pub const TTC_RANGE: (f64, f64) = (0.5, 3.0);
 
 impl Checker {
     pub(super) fn near_miss(
@@ -23,13 +29,17 @@ impl Checker {
         duration: Option<f64>,
     ) -> Option<NearMiss> {
         let (fields, mut ok) = self.fields_once(c, "near_miss");
-        let missing: Vec<&str> = ["passer", "passed", "gap"].into_iter().filter(|k| !fields.contains_key(k)).collect();
+        let mut missing: Vec<&str> = ["passer", "passed"].into_iter().filter(|k| !fields.contains_key(k)).collect();
+        if !fields.contains_key("gap") && !fields.contains_key("ttc") {
+            missing.push("gap or ttc");
+        }
         if !missing.is_empty() {
             self.err(
                 Diagnostic::error("E0106", format!("near_miss has no {}", missing.join(", ")))
                     .label(c.span, "incomplete near miss")
                     .help(
-                        "a near miss needs `passer A; passed B; gap DIST` (and optionally `side left|right; at TIME`)",
+                        "a near miss needs `passer A; passed B; gap DIST` (and optionally `side left|right; at TIME`), \
+                         or `passer A; passed B; ttc TIME` (and optionally `at TIME`)",
                     ),
             );
             return None;
@@ -55,7 +65,14 @@ impl Checker {
                     c.err(
                         Diagnostic::error("E0192", format!("near_miss `{key}` takes a quantity, not a name"))
                             .label(i.span, "expected a quantity")
-                            .help(format!("e.g. `{key} {}`", if key == "gap" { "0.5 m" } else { "4 s" })),
+                            .help(format!(
+                                "e.g. `{key} {}`",
+                                match key {
+                                    "gap" => "0.5 m",
+                                    "ttc" => "0.8 s",
+                                    _ => "4 s",
+                                }
+                            )),
                     );
                     None
                 }
@@ -78,10 +95,10 @@ impl Checker {
                 None
             }),
         };
-        let gap = number(self, "gap")?.and_then(|v| {
+        let gap = number(self, "gap")?.map(|v| {
             let g = self.fixed(v, Dim::Length, "near-miss gap", f64::MIN, f64::MAX, "any length")?;
             if (GAP_RANGE.0..=GAP_RANGE.1).contains(&g) {
-                return Some(g);
+                return Some(Some(g));
             }
             let why = if g < GAP_RANGE.0 {
                 "closer than that is contact within the boxes' tolerance: stage it as a `conflict`"
@@ -95,6 +112,9 @@ impl Checker {
             );
             None
         });
+        let gap = gap.unwrap_or(Some(None));
+        let ttc = number(self, "ttc")?;
+        let ttc = self.near_ttc(&fields, ttc);
         let at = match number(self, "at")? {
             None => Some(None),
             Some(v) => {
@@ -102,7 +122,7 @@ impl Checker {
                 self.fixed(v, Dim::Time, "near-miss time", 0.0, max, &format!("0..{max} s (the clip)")).map(Some)
             }
         };
-        let (passer, passed, side, gap, at) = (passer?, passed?, side?, gap?, at?);
+        let (passer, passed, side, gap, ttc, at) = (passer?, passed?, side?, gap?, ttc?, at?);
         if passer.0 == passed.0 {
             self.err(
                 Diagnostic::error("E0191", "a near miss needs two different agents")
@@ -123,7 +143,45 @@ impl Checker {
             );
             ok = false;
         }
-        ok.then_some(NearMiss { passer: passer.0, passed: passed.0, gap, side, at, span: c.span })
+        ok.then_some(NearMiss { passer: passer.0, passed: passed.0, gap, ttc, side, at, span: c.span })
+    }
+
+    /// The `ttc` form: a positive time within `TTC_RANGE`, instead of `gap` and without `side`
+    /// (the passer closes from behind, on no side). `None`: refused; `Some(None)`: the gap form.
+    fn near_ttc(
+        &mut self,
+        fields: &BTreeMap<&str, &ast::ConflictField>,
+        ttc: Option<&ast::Value>,
+    ) -> Option<Option<f64>> {
+        let Some(v) = ttc else { return Some(None) };
+        for other in ["gap", "side"] {
+            if let Some(f) = fields.get(other) {
+                self.err(
+                    Diagnostic::error("E0187", format!("a near miss by `ttc` takes no `{other}`"))
+                        .label(f.span, format!("`{other}` belongs to the pass alongside"))
+                        .label(v.span, "time to collision")
+                        .help("a `ttc` near miss closes on the passed agent from behind: keep `ttc` or `gap`, not both, and no `side`"),
+                );
+                return None;
+            }
+        }
+        let t = self.fixed(v, Dim::Time, "near-miss time to collision", f64::MIN, f64::MAX, "any time")?;
+        if (TTC_RANGE.0..=TTC_RANGE.1).contains(&t) {
+            return Some(Some(t));
+        }
+        let why = if t <= 0.0 {
+            "a time to collision of zero or less is contact: stage it as a `conflict`"
+        } else if t < TTC_RANGE.0 {
+            "closing that late, no braking within a vehicle's limits stops short of contact"
+        } else {
+            "that far off, the passer is following, not closing"
+        };
+        self.err(
+            Diagnostic::error("E0188", format!("a near-miss time to collision of {t} s is out of range"))
+                .label(v.span, format!("must be within {}..{} s", TTC_RANGE.0, TTC_RANGE.1))
+                .help(format!("the time to collision is the gap between the boxes over their closing speed; {why}")),
+        );
+        None
     }
 
     /// A near miss is staged like a crash, by one approach of its passer: a pair that also crashes

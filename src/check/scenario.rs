@@ -531,13 +531,16 @@ pub struct FlagStep {
 }
 
 /// A near miss: `passer` comes alongside `passed`, on `passed`'s `side`, its box `gap` metres
-/// from `passed`'s at `at`, without touching it (docs/language.md, "Near misses").
+/// from `passed`'s at `at`, or closes on it from behind to a time to collision `ttc` at `at`,
+/// without touching it (docs/language.md, "Near misses"). Exactly one of `gap` and `ttc` is set.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct NearMiss {
     pub passer: usize,
     pub passed: usize,
     /// Least box-to-box distance, m.
-    pub gap: f64,
+    pub gap: Option<f64>,
+    /// Least constant-velocity time to collision between the boxes, s.
+    pub ttc: Option<f64>,
     /// `Point::Left` or `Point::Right` of the passed agent; `None`: the side the passer starts on.
     pub side: Option<Point>,
     /// Time of the closest pass, s.

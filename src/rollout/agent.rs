@@ -253,9 +253,18 @@ pub(crate) struct Conf {
     pub af: usize,
     pub st: usize,
     pub c: crate::check::scenario::Conflict,
-    /// A near miss (`rollout::staging::near`): the gap its passer (`af`) passes `st` at, m.
-    /// `c` then carries the pair, the side and the time; it is staged without contact.
-    pub gap: Option<f64>,
+    /// A near miss (`rollout::staging::near`): `c` then carries the pair, the side and the time;
+    /// it is staged without contact.
+    pub near: Option<Near>,
+}
+
+/// What a near miss asks of its passer (`af`) at the pass.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Near {
+    /// Alongside `st`, its box this far from `st`'s, m.
+    Gap(f64),
+    /// Behind `st` in its line, closing to this constant-velocity time to collision, s.
+    Ttc(f64),
 }
 
 pub(crate) fn initial(a: &Actor) -> State {

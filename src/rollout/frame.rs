@@ -363,12 +363,17 @@ impl<'a, 'b> Sim<'a, 'b> {
     }
 
     /// Conflict pairs may come close and overlap; nobody else may, except where one moves on
-    /// from an impact (its contacts are impacts: `collide`).
+    /// from an impact (its contacts are impacts: `collide`). A `ttc` near miss's pair is one
+    /// only until the pass: then its passer brakes behind the passed agent like any follower
+    /// (tests/near-miss/rear-approach-at-under-a-second.scn).
     #[inline]
     pub(crate) fn exempt(&self, i: usize, j: usize) -> bool {
         self.wreck.moving(i)
             || self.wreck.moving(j)
-            || self.confs.iter().any(|k| (k.af == i && k.st == j) || (k.af == j && k.st == i))
+            || self.confs.iter().enumerate().any(|(n, k)| {
+                ((k.af == i && k.st == j) || (k.af == j && k.st == i))
+                    && !(self.latched[n] && matches!(k.near, Some(crate::rollout::agent::Near::Ttc(_))))
+            })
     }
 
     /// The state of agent `i` at `t + dt`, from everyone's state at `t` (frame `f - 1`).

@@ -423,6 +423,39 @@ other `side`, or move `at`.\n
     near_miss { passer v1; passed v2; gap 0.4 m; side left; at 3 s }    // error: they touch
     near_miss { passer v1; passed v2; gap 0.4 m; side right; at 3 s }   // fine",
     },
+    // ---- near misses by time to collision (E0187-E0189) ----
+    Code {
+        code: "E0187",
+        title: "near miss by `ttc` with `gap` or `side`",
+        explanation: "A near miss is either a pass alongside (`gap`, optionally `side`) or a close approach from\n\
+behind (`ttc`): the passer closes on the passed agent in its line, on no side. Keep one form.\n
+    near_miss { passer a; passed b; ttc 0.8 s; at 3 s }              // fine
+    near_miss { passer a; passed b; gap 0.5 m; ttc 0.8 s }           // error: both forms
+    near_miss { passer a; passed b; ttc 0.8 s; side left }           // error: no side from behind",
+    },
+    Code {
+        code: "E0188",
+        title: "near-miss time to collision out of range",
+        explanation: "`ttc` is the least constant-velocity time to collision between the two boxes, 0.5..3 s:\n\
+zero or less is contact (stage a `conflict`); below 0.5 s no braking within a vehicle's limits\n\
+stops short; beyond 3 s the passer is following, not closing.\n
+    near_miss { passer a; passed b; ttc 0.8 s }              // fine
+    near_miss { passer a; passed b; ttc 0 s }                // error: contact
+    near_miss { passer a; passed b; ttc 10 s }               // error: not near",
+    },
+    Code {
+        code: "E0189",
+        title: "near miss by `ttc` cannot be staged",
+        explanation: "The passer comes up behind the passed agent in its line, faster than it, to a gap of the\n\
+closing speed times `ttc` at the stated time, then drives its route again and brakes behind it.\n\
+The rolled-out boxes are measured: no contact, a time to collision over the clip at most 0.15 s\n\
+below `ttc`, and within 0.5 s of `at` one within `ttc` + 0.15 s. Otherwise the scene is refused,\n\
+saying what happened. Start the passer behind the passed agent in its lane and faster, or move\n\
+`at`.\n
+    // v1 at 15 m/s, 25 m behind v2 at 10 m/s in its lane
+    near_miss { passer v1; passed v2; ttc 0.8 s; at 3 s }     // fine
+    near_miss { passer v1; passed v2; ttc 0.8 s; at 0.5 s }   // error: no way to close so soon",
+    },
     Code {
         code: "E0170",
         title: "siren on a kind without one",

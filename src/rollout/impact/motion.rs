@@ -238,7 +238,7 @@ impl Sim<'_, '_> {
     /// `i` and `j` are a staged pair whose contact is still to come (`latch` resolves it).
     fn contact_pending(&self, i: usize, j: usize) -> bool {
         self.confs.iter().enumerate().any(|(k, c)| {
-            c.gap.is_none()
+            c.near.is_none()
                 && ((c.af, c.st) == (i, j) || (c.af, c.st) == (j, i))
                 && !self.latched[k]
                 && self.plans.get(k).is_some_and(|p| p.is_some())
@@ -254,7 +254,7 @@ impl Sim<'_, '_> {
         let after = self
             .confs
             .iter()
-            .find(|c| c.gap.is_none() && ((c.af, c.st) == (i, j) || (c.af, c.st) == (j, i)))
+            .find(|c| c.near.is_none() && ((c.af, c.st) == (i, j) || (c.af, c.st) == (j, i)))
             .map_or(AfterImpact::default(), |c| c.c.after);
         Hit { coefficients: coefficients(&after), conflict: None }
     }

@@ -1,11 +1,12 @@
 //! Staged near misses (their pose alongside the passed box is `plan::alongside`, planned and
 //! driven like a striker's contact pose): the passer's release back to its own route at the
-//! pass, the gap between two boxes, and why a staging is refused (E0195).
+//! pass, the gap between two boxes, their time to collision, and why a staging is refused
+//! (E0195, E0189).
 
 use crate::diag::Diagnostic;
 use crate::geom::Obb;
 use crate::rollout::Tracks;
-use crate::rollout::agent::{Actor, Conf};
+use crate::rollout::agent::{Actor, Conf, Near};
 use crate::rollout::frame::Sim;
 use crate::rollout::staging::plan;
 use crate::rollout::staging::plan::Plan;
@@ -15,6 +16,28 @@ use glam::DVec2;
 pub const GAP_TOL_M: f64 = 0.15;
 /// How far from the stated time the pass may come, s.
 pub const TIME_TOL_S: f64 = 0.5;
+/// How far the measured least time to collision may be from the stated one, s.
+pub const TTC_TOL_S: f64 = 0.15;
+/// Step and horizon of the time-to-collision sweep, s.
+const TTC_STEP_S: f64 = 0.005;
+const TTC_HORIZON_S: f64 = 6.0;
+
+/// Constant-velocity time to collision of two boxes moving at `va` and `vb` without turning:
+/// the first time their outlines meet, 0 where they overlap, infinite where they do not meet
+/// within `TTC_HORIZON_S`.
+pub fn box_ttc(a: &Obb, va: DVec2, b: &Obb, vb: DVec2) -> f64 {
+    let rel = va - vb;
+    let mut moved = *a;
+    let n = (TTC_HORIZON_S / TTC_STEP_S) as usize;
+    for i in 0..=n {
+        let t = i as f64 * TTC_STEP_S;
+        moved.center = a.center + rel * t;
+        if moved.overlaps(b) {
+            return t;
+        }
+    }
+    f64::INFINITY
+}
 
 /// Distance between two boxes, 0 where they overlap: the least of each one's corners to the
 /// other's edges (two convex polygons apart are nearest at a corner of one of them).
@@ -35,6 +58,24 @@ pub fn box_gap(a: &Obb, b: &Obb) -> f64 {
     let ab = a.corners().iter().map(|&p| to_edges(p, b)).fold(f64::INFINITY, f64::min);
     let ba = b.corners().iter().map(|&p| to_edges(p, a)).fold(f64::INFINITY, f64::min);
     ab.min(ba)
+}
+
+/// Agent `i`'s box at frame `f` of the tracks.
+fn box_at(out: &Tracks, i: usize, f: usize) -> Obb {
+    let (p, s) = (out.poses[i][f], out.agents[i].size);
+    Obb { center: DVec2::new(p.x, p.y), yaw: p.yaw, length: s[0], width: s[1] }
+}
+
+/// Of a measure per frame, the first least (frame, value) over the clip and the least within
+/// `TIME_TOL_S` of `t_req`.
+fn least_and_near(per_frame: &[f64], dt: f64, t_req: f64) -> ((usize, f64), f64) {
+    let least =
+        per_frame.iter().copied().enumerate().fold((0, f64::INFINITY), |m, (f, g)| if g < m.1 { (f, g) } else { m });
+    let near = (0..per_frame.len())
+        .filter(|&f| (f as f64 * dt - t_req).abs() <= TIME_TOL_S + 1e-9)
+        .map(|f| per_frame[f])
+        .fold(f64::INFINITY, f64::min);
+    (least, near)
 }
 
 impl Sim<'_, '_> {
@@ -66,21 +107,20 @@ pub(crate) fn near_errors(
     out: &Tracks,
     (dt, duration): (f64, f64),
 ) -> Vec<(usize, Diagnostic)> {
-    let bx = |k: usize, f: usize| {
-        let (p, s) = (out.poses[k][f], out.agents[k].size);
-        Obb { center: DVec2::new(p.x, p.y), yaw: p.yaw, length: s[0], width: s[1] }
-    };
+    let bx = |i: usize, f: usize| box_at(out, i, f);
     let mut errs = vec![];
     for (ki, k) in confs.iter().enumerate() {
-        let Some(gap) = k.gap else { continue };
+        let gap = match k.near {
+            Some(Near::Gap(gap)) => gap,
+            Some(Near::Ttc(ttc)) => {
+                errs.extend(ttc_error(actors, k, plans[ki].is_some(), out, (dt, duration), ttc).map(|e| (ki, e)));
+                continue;
+            }
+            None => continue,
+        };
         let t_req = plan::requested_time(&k.c, dt, out.frames, duration);
         let gaps: Vec<f64> = (0..out.frames).map(|f| box_gap(&bx(k.af, f), &bx(k.st, f))).collect();
-        let (f_min, least) =
-            gaps.iter().copied().enumerate().fold((0, f64::INFINITY), |m, (f, g)| if g < m.1 { (f, g) } else { m });
-        let near_time = (0..out.frames)
-            .filter(|&f| (f as f64 * dt - t_req).abs() <= TIME_TOL_S + 1e-9)
-            .map(|f| gaps[f])
-            .fold(f64::INFINITY, f64::min);
+        let ((f_min, least), near_time) = least_and_near(&gaps, dt, t_req);
         let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
         let what = if plans[ki].is_none() {
             format!("`{a}` has no way to come alongside `{b}` near {t_req:.1} s")
@@ -104,4 +144,44 @@ pub(crate) fn near_errors(
         ));
     }
     errs
+}
+
+/// A `ttc` near miss that did not come off as stated: contact, a time to collision over the clip
+/// below the stated one by more than `TTC_TOL_S`, or none within `TIME_TOL_S` of the stated time
+/// down to the stated one and tolerance.
+fn ttc_error(
+    actors: &[Actor],
+    k: &Conf,
+    planned: bool,
+    out: &Tracks,
+    (dt, duration): (f64, f64),
+    ttc: f64,
+) -> Option<Diagnostic> {
+    let bx = |i: usize, f: usize| box_at(out, i, f);
+    let vel = |i: usize, f: usize| DVec2::from_angle(out.poses[i][f].yaw) * out.speeds[i][f];
+    let t_req = plan::requested_time(&k.c, dt, out.frames, duration);
+    let ttcs: Vec<f64> =
+        (0..out.frames).map(|f| box_ttc(&bx(k.af, f), vel(k.af, f), &bx(k.st, f), vel(k.st, f))).collect();
+    let ((f_min, least), near_time) = least_and_near(&ttcs, dt, t_req);
+    let touch = (0..out.frames).find(|&f| bx(k.af, f).overlaps(&bx(k.st, f)));
+    let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
+    let what = if !planned {
+        format!("`{a}` has no way to close on `{b}` from behind near {t_req:.1} s")
+    } else if let Some(f) = touch {
+        format!("they touch at {:.1} s", f as f64 * dt)
+    } else if least < ttc - TTC_TOL_S {
+        format!("their time to collision falls to {least:.2} s at {:.1} s", f_min as f64 * dt)
+    } else if near_time > ttc + TTC_TOL_S {
+        format!("within {TIME_TOL_S} s of {t_req:.1} s their time to collision is no less than {near_time:.2} s")
+    } else {
+        return None;
+    };
+    Some(
+        Diagnostic::error("E0189", format!("`{a}` closing on `{b}` to {ttc} s to collision cannot be staged: {what}"))
+            .label(k.c.span, format!("asks for a time to collision of {ttc} s at {t_req:.1} s"))
+            .help(format!(
+                "`{a}` must be able to come up behind `{b}` in its line, faster than it, at that time within its \
+                 limits, and brake short of it: start it behind `{b}` in the same lane and faster, or move `at`"
+            )),
+    )
 }

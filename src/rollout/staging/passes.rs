@@ -1,13 +1,13 @@
 //! The rollout's passes: set up, pass 1 (everyone's natural motion), the staging plans chosen
 //! from it, pass 2 (the strikers on their intercepts), planned again where a staging fails.
 
-use crate::check::scenario::{Conflict, Impact};
+use crate::check::scenario::{Conflict, Impact, Point};
 use crate::diag::Diagnostic;
 use crate::geom::Obb;
 use crate::place::Placed;
 use crate::road::Map;
 use crate::rollout::Tracks;
-use crate::rollout::agent::{Actor, Conf, State, initial};
+use crate::rollout::agent::{Actor, Conf, Near, State, initial};
 use crate::rollout::frame::{HardStop, Sim, empty_tracks};
 use crate::rollout::junction::dry_run::assign_bends;
 use crate::rollout::junction::order::order_crossings;
@@ -62,7 +62,7 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
     let when = |k: &Conflict| plan::requested_time(k, dt, frames, c.duration);
     for (index, k) in c.conflicts.iter().enumerate() {
         let Some((af, st)) = pairs[index] else { continue };
-        let conf = Conf { index, af, st, c: k.clone(), gap: None };
+        let conf = Conf { index, af, st, c: k.clone(), near: None };
         // A striker already moving on from an earlier impact is not driven to this one.
         if follow::follows_an_impact(&c.conflicts, &pairs, index, when) {
             follows.push(conf);
@@ -71,7 +71,7 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         }
     }
     confs.extend(near_confs(c, &actors, &track_of));
-    for k in confs.iter().filter(|k| k.gap.is_none()) {
+    for k in confs.iter().filter(|k| k.near.is_none()) {
         face_the_striker(&mut actors, k);
     }
     assign_bends(map, &mut actors, dt);
@@ -173,23 +173,27 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
 }
 
 /// The near misses as staged approaches: each passer comes alongside its passed agent like a
-/// striker to its contact pose (`plan::alongside`), on the stated side or the one it starts on.
+/// striker to its contact pose (`plan::alongside`), on the stated side or the one it starts on,
+/// or closes on its rear to the stated time to collision (`plan::behind`).
 fn near_confs(c: &Concrete, actors: &[Actor], track_of: &[Option<usize>]) -> Vec<Conf> {
     let mut confs = vec![];
     for (index, n) in c.near_misses.iter().enumerate() {
         let (Some(Some(af)), Some(Some(st))) = (track_of.get(n.passer), track_of.get(n.passed)) else { continue };
         let (a, b) = (initial(&actors[*af]), initial(&actors[*st]));
         let point = n.side.unwrap_or_else(|| plan::start_side(a.pos, b.pos, b.yaw));
+        // The `ttc` form closes on the passed agent's rear (`plan::behind`).
+        let (impact, point) = if n.ttc.is_some() { (Impact::RearEnd, Point::Rear) } else { (Impact::Sideswipe, point) };
         let k = Conflict {
             at_fault: n.passer,
             struck: n.passed,
-            impact: Impact::Sideswipe,
+            impact,
             point,
             at: n.at,
             after: Default::default(),
             span: n.span,
         };
-        confs.push(Conf { index, af: *af, st: *st, c: k, gap: Some(n.gap) });
+        let Some(near) = n.ttc.map(Near::Ttc).or(n.gap.map(Near::Gap)) else { continue };
+        confs.push(Conf { index, af: *af, st: *st, c: k, near: Some(near) });
     }
     confs
 }

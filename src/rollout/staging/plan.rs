@@ -6,7 +6,7 @@ use crate::check::scenario::{Impact, Point};
 use crate::geom::{Obb, wrap_angle};
 use crate::place::Pose;
 use crate::rollout::Tracks;
-use crate::rollout::agent::{Actor, Conf, Drive};
+use crate::rollout::agent::{Actor, Conf, Drive, Near};
 use crate::rollout::path::Hermite;
 use glam::DVec2;
 
@@ -161,6 +161,12 @@ pub(crate) fn alongside(
     (DVec2::new(0.0, side * (passed.1 / 2.0 + gap + passer.1 / 2.0)), yaw, 0.0)
 }
 
+/// The passer's pose at a `ttc` pass in the passed frame: in line behind it, same direction,
+/// its front `gap` behind the passed box's rear. No penetration is planned.
+pub(crate) fn behind(passed: (f64, f64), passer: (f64, f64), gap: f64) -> (DVec2, f64, f64) {
+    (DVec2::new(-(passed.0 / 2.0 + gap + passer.0 / 2.0), 0.0), 0.0, 0.0)
+}
+
 /// The side of `passed` the passer starts on, where the file leaves it open.
 pub(crate) fn start_side(passer: DVec2, passed: DVec2, passed_yaw: f64) -> Point {
     let rel = (passer - passed).rotate(DVec2::from_angle(-passed_yaw));
@@ -196,11 +202,16 @@ pub(crate) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
     };
     let sizes = ((2.0 * st.hl, 2.0 * st.hw), (2.0 * af.hl, 2.0 * af.hw));
     let start = to_struck(pa[0], ps[0]);
-    let (rel_pos0, rel_yaw, delta0) = match k.gap {
-        Some(gap) => alongside(k.c.point, sizes.0, sizes.1, start.1, gap),
+    let ttc = match k.near {
+        Some(Near::Ttc(t)) => Some(t),
+        _ => None,
+    };
+    let (rel_pos0, rel_yaw, delta0) = match k.near {
+        Some(Near::Gap(gap)) => alongside(k.c.point, sizes.0, sizes.1, start.1, gap),
+        Some(Near::Ttc(_)) => behind(sizes.0, sizes.1, 0.0),
         None => relative(k.c.impact, k.c.point, sizes.0, sizes.1, start, 0.0),
     };
-    let swipe = k.c.impact == Impact::Sideswipe && k.gap.is_none();
+    let swipe = k.c.impact == Impact::Sideswipe && k.near.is_none();
     // First frame pass 1 already has them touching: the intercept must leave before it.
     let natural = (0..p1.frames).find(|&f| {
         let a = Obb { center: DVec2::new(pa[f].x, pa[f].y), yaw: pa[f].yaw, length: 2.0 * af.hl, width: 2.0 * af.hw };
@@ -240,7 +251,19 @@ pub(crate) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
             let tau = (fi - fd) as f64 * dt;
             let s = pa[fd];
             let v = p1.speeds[k.af][fd];
-            let v_end0 = 2.0 * DVec2::new(s.x, s.y).distance(g0) / tau - v;
+            let mut v_end0 = 2.0 * DVec2::new(s.x, s.y).distance(g0) / tau - v;
+            // A `ttc` pass: the gap behind is the closing speed times the time, and the closing
+            // speed the approach's end speed, which the gap shortens. On a straight approach
+            // (distance D to the gap-0 pose) v_end = 2 (D - ttc (v_end - v_st)) / tau - v.
+            let mut rel_pos0 = rel_pos0;
+            if let Some(ttc) = ttc {
+                let v_st = p1.speeds[k.st][fi];
+                let v_end =
+                    (2.0 * (DVec2::new(s.x, s.y).distance(g0) + ttc * v_st) / tau - v) / (1.0 + 2.0 * ttc / tau);
+                rel_pos0 = behind(sizes.0, sizes.1, ttc * (v_end - v_st).max(0.0)).0;
+                let (g, _) = compose_turned(struck_at, struck_dir, rel_pos0, rel_yaw);
+                v_end0 = 2.0 * DVec2::new(s.x, s.y).distance(g) / tau - v;
+            }
             // Sideswipes: where the corner first touches depends on the relative motion.
             let (v_rel, v_lat) = (v_end0 * rel_cos - p1.speeds[k.st][fi], (v_end0 * rel_sin).abs());
             let drift = if swipe { v_rel * delta0 / v_lat.max(0.3) } else { 0.0 };

@@ -128,7 +128,7 @@ pub(crate) fn staging_errors(
     (dt, frames, duration): (f64, usize, f64),
 ) -> Vec<(usize, Diagnostic)> {
     let mut errs = vec![];
-    for (ki, (k, _)) in confs.iter().zip(plans).enumerate().filter(|(_, (k, p))| p.is_some() && k.gap.is_none()) {
+    for (ki, (k, _)) in confs.iter().zip(plans).enumerate().filter(|(_, (k, p))| p.is_some() && k.near.is_none()) {
         let t_req = plan::requested_time(&k.c, dt, frames, duration);
         let rec = out.impacts.iter().find(|r| r.conflict == k.index);
         let hit = rec.map(|r| r.frame as f64 * dt);
@@ -242,7 +242,7 @@ mod tests {
                 after: Default::default(),
                 span: Default::default(),
             };
-            let confs = [Conf { index: 0, af: 0, st: 2, c, gap: None }];
+            let confs = [Conf { index: 0, af: 0, st: 2, c, near: None }];
             let plan = Plan {
                 struck: 2,
                 rel_pos: DVec2::ZERO,

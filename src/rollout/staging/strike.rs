@@ -31,7 +31,7 @@ impl Sim<'_, '_> {
     /// struck (pass 2): once the two touch, the latch stops both dead.
     pub(crate) fn crash_partner(&self, j: usize, t: f64) -> Option<usize> {
         self.confs.iter().zip(self.plans).enumerate().find_map(|(k, (c, p))| {
-            let pending = c.gap.is_none() && !self.latched[k] && p.as_ref().is_some_and(|p| t >= p.t_depart - 1e-9);
+            let pending = c.near.is_none() && !self.latched[k] && p.as_ref().is_some_and(|p| t >= p.t_depart - 1e-9);
             match (pending, c.af == j, c.st == j) {
                 (true, true, _) => Some(c.st),
                 (true, _, true) => Some(c.af),
@@ -274,7 +274,7 @@ impl Sim<'_, '_> {
                 continue;
             }
             // A near miss has no contact to latch: at the pass its passer drives on.
-            if conf.gap.is_some() {
+            if conf.near.is_some() {
                 if t >= plan.t_impact - 0.5 * self.dt {
                     self.release(k);
                 }
