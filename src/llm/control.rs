@@ -2,33 +2,8 @@
 //! and the `near_misses` list, as the model states them and as rocc writes them into the file
 //! (docs/llm.md, "Signals, flaggers and near misses").
 
-use super::schema::{AgentSpec, RoadSpec, Schema, TriggerSpec, ident, num, trigger};
-use serde::{Deserialize, Serialize};
+use super::spec::{AgentSpec, FlagSpec, RoadSpec, Schema, ident, num, trigger};
 use serde_json::{Value, json};
-
-/// A flagger's stop/go: what it shows first, and when (a time, or a trigger) it switches.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct FlagSpec {
-    /// `stop` or `go`.
-    pub shows: String,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub switch_after_s: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub switch_when: Option<TriggerSpec>,
-}
-
-/// `near_miss { passer A; passed B; gap G m; side S; at T s }`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct NearMissSpec {
-    pub passer: String,
-    pub passed: String,
-    pub gap_m: f64,
-    /// `left` or `right`; the side the passer starts on when absent.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub side: Option<String>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub at_s: Option<f64>,
-}
 
 /// The JSON schema of a road's signal fields, an agent's `flag` and the `near_misses` list.
 pub fn road_properties() -> Value {

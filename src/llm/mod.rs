@@ -20,6 +20,7 @@ pub mod goals;
 pub mod prompts;
 pub mod repair;
 pub mod schema;
+pub mod spec;
 
 use crate::diag::Diagnostic;
 use crate::source::SourceMap;
