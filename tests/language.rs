@@ -244,6 +244,7 @@ fn blank_line_after_a_bare_number_is_kept_once_and_for_all() {
 fn scenario_library_is_canonically_formatted() {
     let mut files = scn_files(&root().join("scenarios"));
     files.extend(scn_files(&root().join("scenarios/kinds")));
+    files.extend(scn_files(&root().join("scenarios/rare")));
     files.push(root().join("stdlib/kinds.scn"));
     for path in files {
         let text = std::fs::read_to_string(&path).expect("read");
