@@ -200,8 +200,8 @@ pub(super) fn check_order(cx: &Ctx, crash: &Crash, events: &[(u32, Span)]) -> Re
                 "E0804",
                 format!("event {ev}: {msg}"),
                 Some((span, "this event")),
-                "a struck agent holds from its contact on (motion after an impact is not simulated): rocc stages \
-                 chains where each vehicle strikes once, before it is struck",
+                "after its first crash a vehicle only slides to rest, and the importer cannot yet place the next \
+                 party where that slide ends: it stages chains where each vehicle strikes once, before it is struck",
             ))
         };
         if let Some(&j) = strikes.get(k.at_fault.as_str()) {
