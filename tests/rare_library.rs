@@ -7,7 +7,7 @@ mod contact;
 #[path = "support/front.rs"]
 mod front;
 
-use contact::obb;
+use contact::{no_overlap, obb};
 use rocc::rollout::Tracks;
 use std::path::PathBuf;
 use std::process::Command;
@@ -44,22 +44,6 @@ fn in_lane_ahead(t: &Tracks, who: usize, car: usize, lane_width: f64, within: f6
             (w.y - c.y).abs() < lane_width / 2.0 + reach && w.x > c.x && dist(t, who, car, f) < within
         })
         .count()
-}
-
-/// No two declared boxes overlap in any frame.
-fn no_overlap(t: &Tracks) {
-    for f in 0..t.frames {
-        for a in 0..t.agents.len() {
-            for b in a + 1..t.agents.len() {
-                assert!(
-                    !obb(t, a, f).overlaps(&obb(t, b, f)),
-                    "{} and {} overlap at frame {f}",
-                    t.agents[a].name,
-                    t.agents[b].name
-                );
-            }
-        }
-    }
 }
 
 #[test]

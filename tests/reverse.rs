@@ -8,7 +8,7 @@ mod contact;
 #[path = "support/front.rs"]
 mod front;
 
-use contact::obb;
+use contact::{no_overlap, obb};
 use glam::DVec2;
 use rocc::compile::Front;
 use rocc::output::SceneMap;
@@ -25,21 +25,6 @@ fn load(name: &str) -> Front {
 
 fn idx(t: &Tracks, name: &str) -> usize {
     t.agents.iter().position(|a| a.name == name).unwrap_or_else(|| panic!("no agent {name}"))
-}
-
-fn no_overlap(t: &Tracks) {
-    for f in 0..t.frames {
-        for a in 0..t.agents.len() {
-            for b in a + 1..t.agents.len() {
-                assert!(
-                    !obb(t, a, f).overlaps(&obb(t, b, f)),
-                    "{} and {} overlap at frame {f}",
-                    t.agents[a].name,
-                    t.agents[b].name
-                );
-            }
-        }
-    }
 }
 
 /// Frames in which agent `i` moves, each checked to move against its heading with a speed below

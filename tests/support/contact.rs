@@ -15,6 +15,22 @@ pub fn obb(t: &Tracks, a: usize, f: usize) -> Obb {
     Obb { center: DVec2::new(p.x, p.y), yaw: p.yaw, length: t.agents[a].size[0], width: t.agents[a].size[1] }
 }
 
+/// No two declared boxes overlap in any frame.
+pub fn no_overlap(t: &Tracks) {
+    for f in 0..t.frames {
+        for a in 0..t.agents.len() {
+            for b in a + 1..t.agents.len() {
+                assert!(
+                    !obb(t, a, f).overlaps(&obb(t, b, f)),
+                    "{} and {} overlap at frame {f}",
+                    t.agents[a].name,
+                    t.agents[b].name
+                );
+            }
+        }
+    }
+}
+
 /// The contact, measured by sampling: the mean of at-fault box points inside the struck box, in
 /// the struck frame and in the at-fault frame, on a grid fine enough that a bus's step (4 cm)
 /// keeps the centroid of a thin sliver within the 0.1 m that tests allow. A sliver thinner
