@@ -55,9 +55,9 @@ enum TrainWhat {
 enum DeviceArg {
     /// burn's `flex` backend (pure Rust, every build).
     Cpu,
-    /// wgpu (Vulkan/Metal/DX12); needs `--features gpu`.
+    /// wgpu (Vulkan/Metal/DX12); needs `--features wgpu`.
     Wgpu,
-    /// CUDA device 0; needs `--features gpu`.
+    /// CUDA device 0; needs `--features cuda`.
     Cuda,
 }
 
@@ -100,12 +100,15 @@ pub fn run(a: Args) -> Result<(), Failure> {
 fn device(d: DeviceArg) -> Result<burn::tensor::Device, Diagnostic> {
     match d {
         DeviceArg::Cpu => Ok(burn::tensor::Device::flex()),
-        #[cfg(feature = "gpu")]
+        #[cfg(feature = "wgpu")]
         DeviceArg::Wgpu => Ok(burn::tensor::Device::wgpu(Default::default())),
-        #[cfg(feature = "gpu")]
+        #[cfg(not(feature = "wgpu"))]
+        DeviceArg::Wgpu => Err(Diagnostic::error("E0908", "this rocc was built without the `wgpu` device")
+            .help("rebuild with `cargo build --release --features wgpu`, or train with `--device cpu`")),
+        #[cfg(feature = "cuda")]
         DeviceArg::Cuda => Ok(burn::tensor::Device::cuda(0usize)),
-        #[cfg(not(feature = "gpu"))]
-        DeviceArg::Wgpu | DeviceArg::Cuda => Err(Diagnostic::error("E0908", "this rocc was built without GPU support")
-            .help("rebuild with `cargo build --release --features gpu`, or train with `--device cpu`")),
+        #[cfg(not(feature = "cuda"))]
+        DeviceArg::Cuda => Err(Diagnostic::error("E0908", "this rocc was built without the `cuda` device")
+            .help("rebuild with `cargo build --release --features cuda` (needs network access at build time), or use `--device wgpu|cpu`")),
     }
 }

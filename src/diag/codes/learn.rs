@@ -90,8 +90,9 @@ Files are written atomically, so an interrupted run leaves the previous checkpoi
         code: "E0908",
         title: "bad backend or device option",
         explanation: "An option of the learned backend does not apply: `--weights` or `--grounded-config` given\n\
-with `--backend procedural`, or `--device wgpu|cuda` on a build without the `gpu` feature\n\
-(`cargo build --release --features gpu`; CI and the default build are CPU-only).
+with `--backend procedural`, or `--device wgpu|cuda` on a build without that feature\n\
+(`cargo build --release --features wgpu`, or `--features cuda`, which needs network access at build\n\
+time; CI and the default build are CPU-only).
 
     rocc train autoencoder --data corpus --config configs/paper.ron --out paper --device cuda   // error in a default build",
     },
