@@ -473,6 +473,34 @@ fn a_near_miss_from_the_schema_is_written_and_staged() {
     );
 }
 
+/// A close call by time to collision: the rear approach of
+/// tests/near-miss/rear-approach-at-under-a-second.scn, stated as the model would.
+#[test]
+fn a_ttc_near_miss_from_the_schema_is_written_and_staged() {
+    let s = json!({"name": "tailgate", "brief": "a sedan closes on a van to under a second", "duration_s": 6,
+        "road": {"template": "straight", "lanes": 1, "speed_limit_kmh": 60},
+        "agents": [lane("v1", "sedan", "west", "in", 60.0, 54.0), lane("v2", "van", "west", "in", 35.0, 36.0)],
+        "near_misses": [{"passer": "v1", "passed": "v2", "ttc_s": 0.8, "at_s": 3}]});
+    let goals = "v1: goal { speed 54 km/h }\nv2: goal { speed 36 km/h }\n";
+    let text = accepted(&s, &[goals], Plan::Joint);
+    assert!(text.contains("\n    near_miss { passer v1; passed v2; ttc 0.8 s; at 3 s }\n"), "{text}");
+    // Both forms, neither, or a side on the `ttc` form go back to the model.
+    for (field, value, says) in [
+        ("gap_m", json!(0.4), "a near miss takes one of gap_m (a pass alongside) and ttc_s (a time to collision)"),
+        ("ttc_s", json!(null), "a near miss takes one of gap_m (a pass alongside) and ttc_s (a time to collision)"),
+        ("side", json!("left"), "a near miss by ttc_s takes no side"),
+        ("ttc_s", json!(-1), "a near miss's gap_m and ttc_s must be positive and at_s non-negative"),
+    ] {
+        let mut bad = s.clone();
+        bad["near_misses"][0][field] = value;
+        assert_eq!(rocc::llm::schema::parse(&bad.to_string()).expect_err("refused"), says, "{field}");
+    }
+    let v = rocc::llm::schema::json_schema(&["sedan".to_string()]);
+    let item = &v["properties"]["near_misses"]["items"];
+    assert_eq!(item["required"], json!(["passer", "passed"]));
+    assert_eq!(item["properties"]["ttc_s"]["minimum"], json!(0.5));
+}
+
 #[test]
 fn the_schema_and_the_grammar_export_name_signals_flaggers_and_near_misses() {
     let v = rocc::llm::schema::json_schema(&["sedan".to_string(), "adult".to_string()]);

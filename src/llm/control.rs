@@ -32,10 +32,11 @@ pub fn near_misses_property() -> Value {
         "type": "array", "maxItems": 2,
         "items": {
             "type": "object",
-            "required": ["passer", "passed", "gap_m"],
+            "required": ["passer", "passed"],
             "properties": {
                 "passer": name, "passed": name,
                 "gap_m": {"type": "number", "minimum": 0.2, "maximum": 3},
+                "ttc_s": {"type": "number", "minimum": 0.5, "maximum": 3},
                 "side": {"enum": ["left", "right"]},
                 "at_s": {"type": "number", "minimum": 0, "maximum": 30}
             }
@@ -67,8 +68,18 @@ pub fn validate(s: &mut Schema) -> Result<(), String> {
         if n.side.as_deref().is_some_and(|w| !["left", "right"].contains(&w)) {
             return Err(format!("near miss side `{}` is not one of left, right", n.side.as_deref().unwrap_or("")));
         }
-        if !n.gap_m.is_finite() || n.gap_m <= 0.0 || n.at_s.is_some_and(|v| !v.is_finite() || v < 0.0) {
-            return Err("a near miss's gap_m must be positive and at_s non-negative".into());
+        match (n.gap_m, n.ttc_s) {
+            (Some(_), Some(_)) | (None, None) => {
+                return Err("a near miss takes one of gap_m (a pass alongside) and ttc_s (a time to collision)".into());
+            }
+            (None, Some(_)) if n.side.is_some() => {
+                return Err("a near miss by ttc_s takes no side".into());
+            }
+            _ => {}
+        }
+        let bad = |v: f64| !v.is_finite() || v <= 0.0;
+        if n.gap_m.is_some_and(bad) || n.ttc_s.is_some_and(bad) || n.at_s.is_some_and(|v| !v.is_finite() || v < 0.0) {
+            return Err("a near miss's gap_m and ttc_s must be positive and at_s non-negative".into());
         }
         (n.passer, n.passed) = (ident(&n.passer, "agent"), ident(&n.passed, "agent"));
     }
@@ -127,8 +138,13 @@ pub fn flag_block(f: &FlagSpec) -> String {
 pub fn near_miss_blocks(s: &Schema) -> String {
     let mut out = String::new();
     for n in &s.near_misses {
-        let mut parts =
-            vec![format!("passer {}", n.passer), format!("passed {}", n.passed), format!("gap {} m", num(n.gap_m))];
+        let mut parts = vec![format!("passer {}", n.passer), format!("passed {}", n.passed)];
+        if let Some(g) = n.gap_m {
+            parts.push(format!("gap {} m", num(g)));
+        }
+        if let Some(t) = n.ttc_s {
+            parts.push(format!("ttc {} s", num(t)));
+        }
         if let Some(side) = &n.side {
             parts.push(format!("side {side}"));
         }

@@ -220,12 +220,16 @@ pub struct FlagSpec {
     pub switch_when: Option<TriggerSpec>,
 }
 
-/// `near_miss { passer A; passed B; gap G m; side S; at T s }`.
+/// `near_miss { passer A; passed B; gap G m; side S; at T s }`, or by time to collision
+/// `near_miss { passer A; passed B; ttc T s; at T s }`: one of `gap_m` and `ttc_s`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct NearMissSpec {
     pub passer: String,
     pub passed: String,
-    pub gap_m: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gap_m: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ttc_s: Option<f64>,
     /// `left` or `right`; the side the passer starts on when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub side: Option<String>,
