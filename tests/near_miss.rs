@@ -169,6 +169,15 @@ fn ttc_near_misses_close_to_the_stated_time_to_collision_without_contact() {
             let p = path.display();
             let touch = (0..t.frames).find(|&f| gap(t, a, b, f) <= 0.0);
             assert!(touch.is_none(), "{p}: contact at frame {touch:?}");
+            // Over the whole clip they come no nearer to colliding than the block says.
+            let (f_least, least) = (1..t.frames - 1)
+                .map(|f| (f, ttc(t, a, b, f)))
+                .fold((0, f64::INFINITY), |m, (f, x)| if x < m.1 { (f, x) } else { m });
+            assert!(
+                least >= want - TTC_TOL,
+                "{p}: time to collision falls to {least:.3} s at {:.1} s, asked {want}",
+                f_least as f64 * dt
+            );
             let (f_near, near) = (1..t.frames - 1)
                 .filter(|&f| (f as f64 * dt - at).abs() <= TIME_TOL + 1e-9)
                 .map(|f| (f, ttc(t, a, b, f)))
@@ -180,7 +189,7 @@ fn ttc_near_misses_close_to_the_stated_time_to_collision_without_contact() {
             );
         }
     }
-    assert!(staged >= 1, "no `ttc` near-miss scene");
+    assert!(staged >= 3, "the `ttc` near-miss scenes are missing");
 }
 
 /// Without its block the pair would pass well clear: the near miss is staged, not found.
@@ -213,4 +222,59 @@ fn a_ttc_near_miss_out_of_reach_is_refused() {
     let s = rocc::check::check_text("t.scn", &text, std::path::Path::new("."), &mut sources).expect("checks");
     let Err(errs) = rocc::compile::front(s, None) else { panic!("staged a near miss out of reach") };
     assert!(errs.iter().any(|d| d.code == "E0189"), "{:?}", errs.iter().map(|d| &d.message).collect::<Vec<_>>());
+}
+
+/// The scenes of tests/near-miss/ whose `ttc` passer closes across the passed agent's path
+/// rather than from behind: (file stem, passer, passed, stated time to collision).
+const ACROSS: [(&str, &str, &str, f64); 2] = [
+    ("crossing-at-a-junction-within-a-second", "v1", "v2", 0.8),
+    ("car-closes-on-a-crossing-walker", "car", "walker", 1.0),
+];
+
+/// A close call across a path: at the least time to collision the two head across each other
+/// (more than 45 degrees apart), and the passer then stops short, at rest while the passed
+/// agent goes by, before it drives on; the passed agent keeps its way. Without the block
+/// they never come that close: the close call is staged, not found.
+#[test]
+fn ttc_near_misses_across_a_path_stop_short_of_it() {
+    for (name, passer, passed, want) in ACROSS {
+        let text = std::fs::read_to_string(format!("tests/near-miss/{name}.scn")).expect("scene");
+        let t = front_of(&text).tracks;
+        let (a, b) = (index(&t, passer), index(&t, passed));
+        let (f_least, least) = (1..t.frames - 1)
+            .map(|f| (f, ttc(&t, a, b, f)))
+            .fold((0, f64::INFINITY), |m, (f, x)| if x < m.1 { (f, x) } else { m });
+        assert!((least - want).abs() <= TTC_TOL, "{name}: least time to collision {least:.3} s, asked {want}");
+        let across = (t.poses[a][f_least].yaw - t.poses[b][f_least].yaw).sin().abs();
+        assert!(across > 45f64.to_radians().sin(), "{name}: not across at the least time to collision");
+        let rest = (f_least..t.frames).find(|&f| t.speeds[a][f] <= 0.05);
+        assert!(rest.is_some(), "{name}: `{passer}` never stops after the close call");
+        let plain: String =
+            text.lines().filter(|l| !l.trim_start().starts_with("near_miss")).collect::<Vec<_>>().join("\n");
+        let t = front_of(&plain).tracks;
+        let unstaged = (1..t.frames - 1).map(|f| ttc(&t, a, b, f)).fold(f64::INFINITY, f64::min);
+        assert!(unstaged > want + 0.5, "{name}: {unstaged:.2} s to collision without the block");
+    }
+}
+
+/// Close calls across a path that cannot be met are refused with their own codes: one the
+/// passer cannot reach by the stated time (E0870), one whose passer is a walker (E0871).
+#[test]
+fn ttc_near_misses_across_a_path_that_cannot_be_met_are_refused() {
+    let crossing =
+        std::fs::read_to_string("tests/near-miss/crossing-at-a-junction-within-a-second.scn").expect("scene");
+    let walker = std::fs::read_to_string("tests/near-miss/car-closes-on-a-crossing-walker.scn").expect("scene");
+    for (text, code) in [
+        (crossing.replace("ttc 0.8 s; at 3 s", "ttc 0.8 s; at 0.5 s"), "E0870"),
+        (walker.replace("passer car; passed walker", "passer walker; passed car"), "E0871"),
+    ] {
+        let mut sources = rocc::source::SourceMap::default();
+        let s = rocc::check::check_text("t.scn", &text, std::path::Path::new("."), &mut sources).expect("checks");
+        let Err(errs) = rocc::compile::front(s, None) else { panic!("staged a close call that cannot be met") };
+        assert!(
+            errs.iter().any(|d| d.code == code),
+            "{code}: {:?}",
+            errs.iter().map(|d| &d.message).collect::<Vec<_>>()
+        );
+    }
 }

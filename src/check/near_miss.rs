@@ -147,7 +147,7 @@ impl Checker {
     }
 
     /// The `ttc` form: a positive time within `TTC_RANGE`, instead of `gap` and without `side`
-    /// (the passer closes from behind, on no side). `None`: refused; `Some(None)`: the gap form.
+    /// (the passer closes from behind or across a path, on no side). `None`: refused; `Some(None)`: the gap form.
     fn near_ttc(
         &mut self,
         fields: &BTreeMap<&str, &ast::ConflictField>,
@@ -160,7 +160,7 @@ impl Checker {
                     Diagnostic::error("E0187", format!("a near miss by `ttc` takes no `{other}`"))
                         .label(f.span, format!("`{other}` belongs to the pass alongside"))
                         .label(v.span, "time to collision")
-                        .help("a `ttc` near miss closes on the passed agent from behind: keep `ttc` or `gap`, not both, and no `side`"),
+                        .help("a `ttc` near miss closes on the passed agent from behind or across its path: keep `ttc` or `gap`, not both, and no `side`"),
                 );
                 return None;
             }

@@ -265,6 +265,9 @@ pub(crate) enum Near {
     Gap(f64),
     /// Behind `st` in its line, closing to this constant-velocity time to collision, s.
     Ttc(f64),
+    /// Across `st`'s path, closing to this constant-velocity time to collision, s
+    /// (`staging::across`).
+    Across(f64),
 }
 
 pub(crate) fn initial(a: &Actor) -> State {

@@ -26,6 +26,9 @@ pub(crate) struct Sim<'a, 'b> {
     pub(crate) striker: Vec<Option<usize>>,
     pub(crate) latched: Vec<bool>,
     pub(crate) prev_depth: Vec<f64>,
+    /// Per near miss across a path, whether its passer has come to rest since the pass
+    /// (`Sim::brake_across`).
+    pub(crate) halted: Vec<bool>,
     pub(crate) dt: f64,
     pub(crate) cur: Vec<State>,
     pub(crate) next: Vec<State>,
@@ -202,6 +205,7 @@ impl<'a, 'b> Sim<'a, 'b> {
             striker,
             latched: vec![false; confs.len()],
             prev_depth: vec![0.0; confs.len()],
+            halted: vec![false; confs.len()],
             dt,
             next: cur.clone(),
             facts: Facts {
@@ -365,7 +369,8 @@ impl<'a, 'b> Sim<'a, 'b> {
     /// Conflict pairs may come close and overlap; nobody else may, except where one moves on
     /// from an impact (its contacts are impacts: `collide`). A `ttc` near miss's pair is one
     /// only until the pass: then its passer brakes behind the passed agent like any follower
-    /// (tests/near-miss/rear-approach-at-under-a-second.scn).
+    /// (tests/near-miss/rear-approach-at-under-a-second.scn). Across a path the pair stays one:
+    /// the passed agent drives on as it would, and the passer stops short (`Sim::brake_across`).
     #[inline]
     pub(crate) fn exempt(&self, i: usize, j: usize) -> bool {
         self.wreck.moving(i)
@@ -391,7 +396,10 @@ impl<'a, 'b> Sim<'a, 'b> {
             Drive::Mover if st.frozen => State { v: 0.0, ..st },
             Drive::Mover => match self.striker[i].and_then(|k| self.plans[k].as_ref().map(|p| (k, p))) {
                 Some((k, plan)) if t >= plan.t_depart - 1e-9 && !self.latched[k] => self.intercept(sc, i, plan, t, f),
-                _ => self.drive(sc, i, t),
+                _ => {
+                    let d = self.drive(sc, i, t);
+                    self.brake_across(i, d)
+                }
             },
         }
     }

@@ -427,8 +427,8 @@ other `side`, or move `at`.\n
     Code {
         code: "E0187",
         title: "near miss by `ttc` with `gap` or `side`",
-        explanation: "A near miss is either a pass alongside (`gap`, optionally `side`) or a close approach from\n\
-behind (`ttc`): the passer closes on the passed agent in its line, on no side. Keep one form.\n
+        explanation: "A near miss is either a pass alongside (`gap`, optionally `side`) or a close approach by time\n\
+to collision (`ttc`): from behind in its line or across its path, on no side. Keep one form.\n
     near_miss { passer a; passed b; ttc 0.8 s; at 3 s }              // fine
     near_miss { passer a; passed b; gap 0.5 m; ttc 0.8 s }           // error: both forms
     near_miss { passer a; passed b; ttc 0.8 s; side left }           // error: no side from behind",

@@ -6,7 +6,8 @@
 //! E07xx: import, edit and eval.
 //! E06xx: the LLM front end (`rocc text`): the HTTP client, the model's replies, the repair loop.
 //! E08xx: CIREN crash recreation (`rocc ciren`): E0800-E0849 records and SAFE extractions.
-//! E0850-E0899: the CIREN VLM route (`rocc ciren extract`): case files, the conflict descriptor.
+//! E0850-E0899: the CIREN VLM route (`rocc ciren extract`): case files, the conflict descriptor
+//! (E0870-E0879: near misses across a path, `near.rs`).
 //! E09xx: the learned (grounded) occupancy backend and `rocc train`.
 //! E10xx: expectations and `rocc test`.
 //!
@@ -23,6 +24,7 @@ mod io;
 mod kerb;
 mod learn;
 mod llm;
+mod near;
 mod place;
 mod syntax;
 
@@ -45,6 +47,7 @@ pub fn all() -> impl Iterator<Item = &'static Code> {
         import::CODES,
         llm::CODES,
         ciren::CODES,
+        near::CODES,
         learn::CODES,
         expect::CODES,
     ]

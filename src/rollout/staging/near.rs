@@ -1,7 +1,7 @@
 //! Staged near misses (their pose alongside the passed box is `plan::alongside`, planned and
 //! driven like a striker's contact pose): the passer's release back to its own route at the
 //! pass, the gap between two boxes, their time to collision, and why a staging is refused
-//! (E0195, E0189).
+//! (E0195, E0189; across a path E0870, E0871).
 
 use crate::diag::Diagnostic;
 use crate::geom::Obb;
@@ -18,25 +18,37 @@ pub const GAP_TOL_M: f64 = 0.15;
 pub const TIME_TOL_S: f64 = 0.5;
 /// How far the measured least time to collision may be from the stated one, s.
 pub const TTC_TOL_S: f64 = 0.15;
-/// Step and horizon of the time-to-collision sweep, s.
-const TTC_STEP_S: f64 = 0.005;
+/// Horizon of the time to collision, s.
 const TTC_HORIZON_S: f64 = 6.0;
 
 /// Constant-velocity time to collision of two boxes moving at `va` and `vb` without turning:
 /// the first time their outlines meet, 0 where they overlap, infinite where they do not meet
-/// within `TTC_HORIZON_S`.
+/// within `TTC_HORIZON_S`. Two convex outlines first meet where a corner of one, moving at the
+/// relative velocity, crosses an edge of the other.
 pub fn box_ttc(a: &Obb, va: DVec2, b: &Obb, vb: DVec2) -> f64 {
-    let rel = va - vb;
-    let mut moved = *a;
-    let n = (TTC_HORIZON_S / TTC_STEP_S) as usize;
-    for i in 0..=n {
-        let t = i as f64 * TTC_STEP_S;
-        moved.center = a.center + rel * t;
-        if moved.overlaps(b) {
-            return t;
+    if a.overlaps(b) {
+        return 0.0;
+    }
+    let r = va - vb;
+    let (ca, cb) = (a.corners(), b.corners());
+    let mut first = f64::INFINITY;
+    for (ps, es, r) in [(&ca, &cb, r), (&cb, &ca, -r)] {
+        for &p in ps {
+            for i in 0..4 {
+                let (u, e) = (es[i], es[(i + 1) % 4] - es[i]);
+                let den = r.perp_dot(e);
+                if den.abs() < 1e-12 {
+                    continue;
+                }
+                let d = u - p;
+                let (t, along) = (d.perp_dot(e) / den, d.perp_dot(r) / den);
+                if t >= 0.0 && (0.0..=1.0).contains(&along) {
+                    first = first.min(t);
+                }
+            }
         }
     }
-    f64::INFINITY
+    if first <= TTC_HORIZON_S { first } else { f64::INFINITY }
 }
 
 /// Distance between two boxes, 0 where they overlap: the least of each one's corners to the
@@ -112,7 +124,7 @@ pub(crate) fn near_errors(
     for (ki, k) in confs.iter().enumerate() {
         let gap = match k.near {
             Some(Near::Gap(gap)) => gap,
-            Some(Near::Ttc(ttc)) => {
+            Some(Near::Ttc(ttc) | Near::Across(ttc)) => {
                 errs.extend(ttc_error(actors, k, plans[ki].is_some(), out, (dt, duration), ttc).map(|e| (ki, e)));
                 continue;
             }
@@ -165,7 +177,22 @@ fn ttc_error(
     let ((f_min, least), near_time) = least_and_near(&ttcs, dt, t_req);
     let touch = (0..out.frames).find(|&f| bx(k.af, f).overlaps(&bx(k.st, f)));
     let (a, b) = (&actors[k.af].info.name, &actors[k.st].info.name);
-    let what = if !planned {
+    let across = matches!(k.near, Some(Near::Across(_)));
+    if !planned && across && !actors[k.af].vehicle {
+        return Some(
+            Diagnostic::error("E0871", format!("`{a}` is not a vehicle and cannot close across `{b}`'s path by `ttc`"))
+                .label(k.c.span, "the passer of a `ttc` near miss across a path")
+                .help(format!(
+                    "the passer of a close call across a path is the vehicle that closes and brakes: swap `passer` and \
+                     `passed`, or pass `{b}` alongside with `gap`"
+                )),
+        );
+    }
+    let what = if !planned && across {
+        format!(
+            "`{a}` has no way along its route to close across `{b}`'s path to {ttc} s near {t_req:.1} s and stop short"
+        )
+    } else if !planned {
         format!("`{a}` has no way to close on `{b}` from behind near {t_req:.1} s")
     } else if let Some(f) = touch {
         format!("they touch at {:.1} s", f as f64 * dt)
@@ -176,6 +203,17 @@ fn ttc_error(
     } else {
         return None;
     };
+    if across {
+        return Some(
+            Diagnostic::error("E0870", format!("`{a}` closing across `{b}`'s path to {ttc} s to collision cannot be staged: {what}"))
+                .label(k.c.span, format!("asks for a time to collision of {ttc} s at {t_req:.1} s"))
+                .help(format!(
+                    "`{a}` must be able to reach the place on its route where it would meet `{b}` in {ttc} s at that \
+                     time within its limits, and brake hard from there to stop short of `{b}`'s path: give it a speed \
+                     it can stop from within {ttc} s, start the two where their routes cross near that time, or move `at`"
+                )),
+        );
+    }
     Some(
         Diagnostic::error("E0189", format!("`{a}` closing on `{b}` to {ttc} s to collision cannot be staged: {what}"))
             .label(k.c.span, format!("asks for a time to collision of {ttc} s at {t_req:.1} s"))

@@ -3,7 +3,7 @@
 
 use crate::check::scenario::{Conflict, Impact, Point};
 use crate::diag::Diagnostic;
-use crate::geom::Obb;
+use crate::geom::{Obb, wrap_angle};
 use crate::place::Placed;
 use crate::road::Map;
 use crate::rollout::Tracks;
@@ -21,6 +21,7 @@ use crate::rollout::staging::refusals::{forced_braking, forced_error, staging_er
 use crate::rollout::traffic;
 use crate::rollout::turn_check::check_turns;
 use crate::sample::Concrete;
+use glam::DVec2;
 
 pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Vec<Diagnostic>> {
     // Concrete agent index -> track index.
@@ -174,15 +175,20 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
 
 /// The near misses as staged approaches: each passer comes alongside its passed agent like a
 /// striker to its contact pose (`plan::alongside`), on the stated side or the one it starts on,
-/// or closes on its rear to the stated time to collision (`plan::behind`).
+/// or closes to the stated time to collision: on its rear where it starts behind it in its
+/// line (`plan::behind`), across its path otherwise (`across`).
 fn near_confs(c: &Concrete, actors: &[Actor], track_of: &[Option<usize>]) -> Vec<Conf> {
     let mut confs = vec![];
     for (index, n) in c.near_misses.iter().enumerate() {
         let (Some(Some(af)), Some(Some(st))) = (track_of.get(n.passer), track_of.get(n.passed)) else { continue };
         let (a, b) = (initial(&actors[*af]), initial(&actors[*st]));
         let point = n.side.unwrap_or_else(|| plan::start_side(a.pos, b.pos, b.yaw));
-        // The `ttc` form closes on the passed agent's rear (`plan::behind`).
-        let (impact, point) = if n.ttc.is_some() { (Impact::RearEnd, Point::Rear) } else { (Impact::Sideswipe, point) };
+        let behind = in_line_behind(&actors[*af], a, &actors[*st], b);
+        let (impact, point) = match n.ttc {
+            Some(_) if behind => (Impact::RearEnd, Point::Rear),
+            Some(_) => (Impact::Angle, point),
+            None => (Impact::Sideswipe, point),
+        };
         let k = Conflict {
             at_fault: n.passer,
             struck: n.passed,
@@ -192,10 +198,18 @@ fn near_confs(c: &Concrete, actors: &[Actor], track_of: &[Option<usize>]) -> Vec
             after: Default::default(),
             span: n.span,
         };
-        let Some(near) = n.ttc.map(Near::Ttc).or(n.gap.map(Near::Gap)) else { continue };
+        let ttc = n.ttc.map(|t| if behind { Near::Ttc(t) } else { Near::Across(t) });
+        let Some(near) = ttc.or(n.gap.map(Near::Gap)) else { continue };
         confs.push(Conf { index, af: *af, st: *st, c: k, near: Some(near) });
     }
     confs
+}
+
+/// Whether the passer starts behind the passed agent, in its line and heading its way (within
+/// 30 degrees), as a `ttc` near miss from behind asks; elsewhere it closes across its path.
+fn in_line_behind(pa: &Actor, a: State, pb: &Actor, b: State) -> bool {
+    let rel = (a.pos - b.pos).rotate(DVec2::from_angle(-b.yaw));
+    rel.x < 0.0 && rel.y.abs() < pa.hw + pb.hw && wrap_angle(a.yaw - b.yaw).abs() < 30f64.to_radians()
 }
 
 /// The mass each track's agent states, if any (background traffic states none).

@@ -190,6 +190,9 @@ pub(crate) fn requested_time(c: &crate::check::scenario::Conflict, dt: f64, fram
 /// `WINDOW_S` of the requested time, the one of least cost, its impact more than `AVOID_S` from
 /// each time in `avoid` (impact times of plans that failed).
 pub(crate) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration: f64, avoid: &[f64]) -> Option<Plan> {
+    if matches!(k.near, Some(Near::Across(_))) {
+        return super::across::choose(k, actors, p1, (dt, duration), avoid);
+    }
     let (af, st) = (&actors[k.af], &actors[k.st]);
     if !matches!(af.drive, Drive::Mover) || p1.frames < 4 {
         return None;
@@ -208,7 +211,7 @@ pub(crate) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
     };
     let (rel_pos0, rel_yaw, delta0) = match k.near {
         Some(Near::Gap(gap)) => alongside(k.c.point, sizes.0, sizes.1, start.1, gap),
-        Some(Near::Ttc(_)) => behind(sizes.0, sizes.1, 0.0),
+        Some(Near::Ttc(_) | Near::Across(_)) => behind(sizes.0, sizes.1, 0.0),
         None => relative(k.c.impact, k.c.point, sizes.0, sizes.1, start, 0.0),
     };
     let swipe = k.c.impact == Impact::Sideswipe && k.near.is_none();
@@ -353,10 +356,10 @@ pub(crate) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
 
 /// How far from an impact time that failed another plan's impact must be, s: a few frames on,
 /// the same approach meets the same bystander.
-const AVOID_S: f64 = 0.35;
+pub(crate) const AVOID_S: f64 = 0.35;
 
 /// Lead times between an intercept's departure and its impact that `choose` tries, s.
-const TAUS: [f64; 5] = [1.5, 2.0, 2.5, 3.0, 4.0];
+pub(crate) const TAUS: [f64; 5] = [1.5, 2.0, 2.5, 3.0, 4.0];
 
 /// `choose`'s cost of a candidate without its curvature terms (the lateral acceleration above the
 /// limit, the curve tighter than the car can steer) and its closing-speed term, all of them at

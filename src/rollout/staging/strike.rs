@@ -271,6 +271,7 @@ impl Sim<'_, '_> {
         for (k, conf) in confs.iter().enumerate() {
             let Some(plan) = plans.get(k).and_then(|p| p.as_ref()) else { continue };
             if self.latched[k] {
+                self.note_halt(k);
                 continue;
             }
             // A near miss has no contact to latch: at the pass its passer drives on.
