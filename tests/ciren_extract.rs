@@ -6,6 +6,9 @@
 #[path = "llm_support/fake.rs"]
 mod fake;
 
+#[path = "support/tmp.rs"]
+mod tmp;
+
 use fake::{Reply, chat, images_of, serve, text_of};
 use rocc::ciren::descriptor;
 use rocc::ciren::extract::{self, Case, Options, Outcome};
@@ -14,6 +17,7 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
+use tmp::TempDir;
 
 /// A bundled case: `ciren/<id>` or `safe/<id>` under `tests/fixtures/`.
 fn fixture(rel: &str) -> PathBuf {
@@ -22,11 +26,9 @@ fn fixture(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures").join(dir).join(id)
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rocc-ciren-x-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A directory for this test's outputs, removed when dropped.
+fn tmp(name: &str) -> TempDir {
+    TempDir::new("rocc-ciren-x", name)
 }
 
 fn opts(url: &str, server: Server) -> Options {

@@ -1,20 +1,22 @@
 //! `rocc compile` end to end: the SPEC output layout, byte-identical outputs on 1 and N threads,
 //! resume, frame/ego selection, batch failures, and files that load in numpy like nuPlan-Occ's.
 
+#[path = "support/tmp.rs"]
+mod tmp;
+
 use rocc::compile::{Options, Stage, batch};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use tmp::TempDir;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rocc-compile-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
+/// A directory for this test's outputs, removed when dropped.
+fn tmp(name: &str) -> TempDir {
+    TempDir::new("rocc-compile", name)
 }
 
 fn opts(stage: Stage, frames: &str) -> Options {

@@ -1,5 +1,8 @@
 //! Issue 8: the shared scorer, the box-stream importer and scene editing.
 
+#[path = "support/tmp.rs"]
+mod tmp;
+
 use ndarray::{Array2, Array3};
 use ndarray_npy::{NpzWriter, WriteNpyExt};
 use rocc::backend::layout::{NX, NY, NZ};
@@ -13,12 +16,11 @@ use rocc::raster::{Bev, Rasterizer, rasterize};
 use rocc::road::Map;
 use rocc::source::SourceMap;
 use std::path::{Path, PathBuf};
+use tmp::TempDir;
 
-fn tmp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rocc-eval-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A directory for this test's outputs, removed when dropped.
+fn tmp_dir(name: &str) -> TempDir {
+    TempDir::new("rocc-eval", name)
 }
 
 fn fixture(name: &str) -> PathBuf {
@@ -198,7 +200,7 @@ fn eval_lidar_reads_the_clouds_of_clip_directories_and_pcd_files() {
     let clip = compile(&out, "lidar");
     // The clip, the whole output and the lidar folder hold the same two clouds: each frame's
     // `.bin` and `.pcd` count once, and `occ/*.npy` is never read as a cloud.
-    for d in [&clip, &out, &clip.join("lidar")] {
+    for d in [clip.as_path(), out.path(), &clip.join("lidar")] {
         let s = score_lidar_dirs(d, &clip, false).unwrap_or_else(|e| panic!("{}: {}", d.display(), e[0].message));
         assert_eq!((s.pred_clouds, s.gt_clouds, s.mmd, s.jsd), (2, 2, 0.0, 0.0), "{}", d.display());
     }
@@ -223,7 +225,8 @@ fn eval_lidar_reads_the_clouds_of_clip_directories_and_pcd_files() {
     );
     // A clip compiled without LiDAR, or a directory with no clouds: E0703 naming it, not an
     // attempt to read `occ/*.npy` as points.
-    let occ_only = compile(&tmp_dir("lidar-none"), "occ");
+    let none = tmp_dir("lidar-none");
+    let occ_only = compile(&none, "occ");
     let e = score_lidar_dirs(&occ_only, &clip, false).unwrap_err();
     assert_eq!(e[0].code, "E0703");
     assert!(e[0].message.contains("no LiDAR frames") && e[0].message.contains("replayed_cut_in"), "{}", e[0].message);
@@ -369,7 +372,9 @@ fn import_is_lossless_at_the_recorded_frames() {
 
 // ------------------------------------------------------------------ edit
 
-fn compiled_clip(name: &str) -> PathBuf {
+/// A compiled clip of the library's cut-in, and the directory that holds it (removed when
+/// dropped).
+fn compiled_clip(name: &str) -> (TempDir, PathBuf) {
     let out = tmp_dir(name);
     let scn = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/replayed_cut_in.scn");
     let st = std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
@@ -377,12 +382,13 @@ fn compiled_clip(name: &str) -> PathBuf {
         .status()
         .unwrap();
     assert!(st.success());
-    out.join("replayed_cut_in/ego")
+    let clip = out.join("replayed_cut_in/ego");
+    (out, clip)
 }
 
 #[test]
 fn rerasterising_unedited_boxes_reproduces_the_bev() {
-    let dir = compiled_clip("rerast");
+    let (_out, dir) = compiled_clip("rerast");
     let frames = read_boxes_json(&dir.join("boxes.json")).unwrap();
     let mut raster = Rasterizer::new();
     for fb in &frames {
@@ -396,7 +402,7 @@ fn rerasterising_unedited_boxes_reproduces_the_bev() {
 
 #[test]
 fn clip_edits_change_exactly_the_box_list_and_rerun_the_stages() {
-    let dir = compiled_clip("edit");
+    let (_out, dir) = compiled_clip("edit");
     let before = read_boxes_json(&dir.join("boxes.json")).unwrap();
     let bev0 = read_npz(&bev_frame_path(&dir, 0)).unwrap();
     let o = ClipEdit {
@@ -485,7 +491,7 @@ const DRIVE_BY: &str = "scenario drive_by {
 }
 ";
 
-fn drive_by_clip(name: &str, stage: &str) -> (PathBuf, PathBuf) {
+fn drive_by_clip(name: &str, stage: &str) -> (TempDir, PathBuf, PathBuf) {
     let out = tmp_dir(name);
     let scn = out.join("drive_by.scn");
     std::fs::write(&scn, DRIVE_BY).unwrap();
@@ -495,12 +501,13 @@ fn drive_by_clip(name: &str, stage: &str) -> (PathBuf, PathBuf) {
         .status()
         .unwrap();
     assert!(st.success());
-    (out.join("drive_by/ego"), scn)
+    let clip = out.join("drive_by/ego");
+    (out, clip, scn)
 }
 
 #[test]
 fn clip_edits_are_fixed_in_the_world_while_the_ego_moves() {
-    let (dir, scn) = drive_by_clip("world-fixed", "bev");
+    let (_out, dir, scn) = drive_by_clip("world-fixed", "bev");
     let before = read_boxes_json(&dir.join("boxes.json")).unwrap();
     // The recorded static cone, hand-checked: the ego (yaw 0) gains 1 m per frame on it.
     let cone =

@@ -2,6 +2,9 @@
 //! finite differences, Lovász-softmax against a hand-computed case, shapes, padding invariance,
 //! checkpoint round trips (.bpk, safetensors) and the weights diagnostics.
 
+#[path = "support/tmp.rs"]
+mod tmp;
+
 use burn::prelude::*;
 use ndarray::Array3;
 use rocc::backend::grounded::config::GroundedConfig;
@@ -512,9 +515,7 @@ fn bundled_configs_are_valid() {
     assert!(e.contains("multiple of `heads`") && e.contains("max_foreground"), "{e}");
 }
 
-pub fn tempdir(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("rocc-grounded-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A directory for this test's outputs, removed when dropped.
+fn tempdir(name: &str) -> tmp::TempDir {
+    tmp::TempDir::new("rocc-grounded", name)
 }

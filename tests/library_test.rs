@@ -3,19 +3,21 @@
 //! atomically, compared with a diff, reviewed from stdin, refused when foreign or corrupt; the
 //! JUnit and JSON reports; output independent of the thread count.
 
+#[path = "support/tmp.rs"]
+mod tmp;
+
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::{Command, Output, Stdio};
+use tmp::TempDir;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rocc-libtest-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
+/// A directory for this test's outputs, removed when dropped.
+fn tmp(name: &str) -> TempDir {
+    TempDir::new("rocc-libtest", name)
 }
 
 fn rocc(args: &[&str], stdin: &str) -> Output {
@@ -41,7 +43,7 @@ fn rear_end(expect: &str) -> String {
     format!("{}    expect {{\n{expect}\n    }}\n}}\n", &scene[..at])
 }
 
-fn scene_dir(name: &str, expect: &str) -> PathBuf {
+fn scene_dir(name: &str, expect: &str) -> TempDir {
     let d = tmp(name);
     std::fs::write(d.join("queue.scn"), rear_end(expect)).expect("write scene");
     d

@@ -7,6 +7,9 @@ mod fake;
 #[path = "llm_support/gbnf.rs"]
 mod gbnf;
 
+#[path = "support/tmp.rs"]
+mod tmp;
+
 use fake::{Fake, Reply, chat, ok, serve};
 
 use rocc::llm::client::{ClientConfig, Server};
@@ -576,8 +579,7 @@ fn images_travel_as_base64_data_urls() {
     assert_eq!(llm::base64(b"Man"), "TWFu");
     assert_eq!(llm::base64(b"Ma"), "TWE=");
     assert_eq!(llm::base64(b"M"), "TQ==");
-    let dir = std::env::temp_dir().join(format!("rocc-llm-img-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = tmp::TempDir::new("rocc-llm", "img");
     let png = dir.join("sketch.png");
     std::fs::write(&png, b"\x89PNG fake").unwrap();
     let fake = serve(vec![chat(&schema("center")), chat(GOALS)]);
@@ -592,8 +594,7 @@ fn images_travel_as_base64_data_urls() {
 
 #[test]
 fn cli_writes_the_file_or_keeps_the_rejected_attempt() {
-    let dir = std::env::temp_dir().join(format!("rocc-llm-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = tmp::TempDir::new("rocc-llm", "cli");
     let out = dir.join("scene.scn");
     let fake = serve(vec![chat(&schema("center")), chat(GOALS)]);
     let st = std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
@@ -640,8 +641,7 @@ fn real_llamacpp_server() {
     let mut line = String::new();
     std::io::BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
     assert!(line.starts_with("READY"), "server did not start: {line}");
-    let dir = std::env::temp_dir().join(format!("rocc-llm-real-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = tmp::TempDir::new("rocc-llm", "real");
     let out = dir.join("scene.scn");
     let st = std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
         .args(["text", "a car follows a truck on a straight road", "-o", out.to_str().unwrap()])

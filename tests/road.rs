@@ -4,6 +4,9 @@
 //! BEV) and on placement (examples place, every placement form lands on its hand-computed pose,
 //! each class starts only on its surfaces, overlaps and off-road placements are reported).
 
+#[path = "support/tmp.rs"]
+mod tmp;
+
 use glam::DVec2;
 use proptest::prelude::*;
 use rocc::check::lane_count;
@@ -277,10 +280,11 @@ fn place_file(path: &Path) -> Result<rocc::place::Placed, Vec<rocc::diag::Diagno
 }
 
 fn place_src(src: &str) -> Result<rocc::place::Placed, Vec<rocc::diag::Diagnostic>> {
-    let dir = std::env::temp_dir().join(format!("rocc_road_test_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let name = format!("t{}.scn", src.len() ^ (src.bytes().map(u64::from).sum::<u64>() as usize));
-    let path = dir.join(name);
+    // One directory per call: tests run on several threads, and each removes its own.
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = tmp::TempDir::new("rocc-road-test", &call.to_string());
+    let path = dir.join("t.scn");
     std::fs::write(&path, src).expect("write scenario");
     place_file(&path)
 }

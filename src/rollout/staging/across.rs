@@ -29,14 +29,7 @@ const BRAKING_DIP_S: f64 = 1.5;
 /// The passer, box `a` at speed `v` along its heading, braking at `brake` from now while box
 /// `b` moves on at `vb`: the least time to collision on the way and how long from now it comes,
 /// s, or the first below `floor`; `None` where the two come within `CLEAR_M`.
-pub(crate) fn braking_least(
-    a: &Obb,
-    v: f64,
-    brake: f64,
-    (b, vb): (&Obb, DVec2),
-    dt: f64,
-    floor: f64,
-) -> Option<(f64, f64)> {
+fn braking_least(a: &Obb, v: f64, brake: f64, (b, vb): (&Obb, DVec2), dt: f64, floor: f64) -> Option<(f64, f64)> {
     let dir = DVec2::from_angle(a.yaw);
     let (mut least, mut when) = (f64::INFINITY, 0.0);
     let (mut x, mut u) = (0.0, v);
