@@ -13,11 +13,11 @@ use crate::rollout::junction::dry_run::assign_bends;
 use crate::rollout::junction::order::order_crossings;
 use crate::rollout::junction::zones::{assign_crossings, assign_yields};
 use crate::rollout::setup::{Routes, background_actor, build_actor, face_the_striker};
-use crate::rollout::staging::follow;
 use crate::rollout::staging::near::near_errors;
 use crate::rollout::staging::plan;
 use crate::rollout::staging::plan::Plan;
 use crate::rollout::staging::refusals::{forced_braking, forced_error, staging_errors, stopped_dead};
+use crate::rollout::staging::{across, follow};
 use crate::rollout::traffic;
 use crate::rollout::turn_check::check_turns;
 use crate::sample::Concrete;
@@ -107,7 +107,7 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
         // better: its crashes landed) and its errors.
         let (mut first_tracks, mut first_failed, mut first_hard, mut first_forced) = (None, Vec::new(), None, None);
         let mut plans: Vec<Option<Plan>> =
-            confs.iter().map(|k| plan::choose(k, &actors, &pass1, dt, c.duration, &[])).collect();
+            confs.iter().map(|k| choose(k, &actors, &pass1, (dt, c.duration), &[])).collect();
         for attempt in 0..=RESTAGE {
             // Pass 2 is pass 1 until a planned striker departs or a planned pair first
             // overlaps: those frames are copied, not simulated again.
@@ -139,7 +139,7 @@ pub(crate) fn run(c: &Concrete, map: &Map, placed: &Placed) -> Result<Tracks, Ve
                 for ki in redo {
                     let Some(tried) = plans[ki].as_ref().map(|p| p.t_impact) else { continue };
                     avoid[ki].push(tried);
-                    if let Some(p) = plan::choose(&confs[ki], &actors, &pass1, dt, c.duration, &avoid[ki]) {
+                    if let Some(p) = choose(&confs[ki], &actors, &pass1, (dt, c.duration), &avoid[ki]) {
                         plans[ki] = Some(p);
                         replanned = true;
                     }
@@ -210,6 +210,14 @@ fn near_confs(c: &Concrete, actors: &[Actor], track_of: &[Option<usize>]) -> Vec
 fn in_line_behind(pa: &Actor, a: State, pb: &Actor, b: State) -> bool {
     let rel = (a.pos - b.pos).rotate(DVec2::from_angle(-b.yaw));
     rel.x < 0.0 && rel.y.abs() < pa.hw + pb.hw && wrap_angle(a.yaw - b.yaw).abs() < 30f64.to_radians()
+}
+
+/// The plan of staging `k` from pass 1: a near miss across a path has its own (`across`).
+fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, (dt, duration): (f64, f64), avoid: &[f64]) -> Option<Plan> {
+    match k.near {
+        Some(Near::Across(_)) => across::choose(k, actors, p1, (dt, duration), avoid),
+        _ => plan::choose(k, actors, p1, dt, duration, avoid),
+    }
 }
 
 /// The mass each track's agent states, if any (background traffic states none).

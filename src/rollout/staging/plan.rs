@@ -190,9 +190,6 @@ pub(crate) fn requested_time(c: &crate::check::scenario::Conflict, dt: f64, fram
 /// `WINDOW_S` of the requested time, the one of least cost, its impact more than `AVOID_S` from
 /// each time in `avoid` (impact times of plans that failed).
 pub(crate) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration: f64, avoid: &[f64]) -> Option<Plan> {
-    if matches!(k.near, Some(Near::Across(_))) {
-        return super::across::choose(k, actors, p1, (dt, duration), avoid);
-    }
     let (af, st) = (&actors[k.af], &actors[k.st]);
     if !matches!(af.drive, Drive::Mover) || p1.frames < 4 {
         return None;
@@ -211,7 +208,8 @@ pub(crate) fn choose(k: &Conf, actors: &[Actor], p1: &Tracks, dt: f64, duration:
     };
     let (rel_pos0, rel_yaw, delta0) = match k.near {
         Some(Near::Gap(gap)) => alongside(k.c.point, sizes.0, sizes.1, start.1, gap),
-        Some(Near::Ttc(_) | Near::Across(_)) => behind(sizes.0, sizes.1, 0.0),
+        Some(Near::Ttc(_)) => behind(sizes.0, sizes.1, 0.0),
+        Some(Near::Across(_)) => return None,
         None => relative(k.c.impact, k.c.point, sizes.0, sizes.1, start, 0.0),
     };
     let swipe = k.c.impact == Impact::Sideswipe && k.near.is_none();
