@@ -11,6 +11,8 @@
 const BLOCK: usize = 1 << 14;
 const MATCH: u16 = 256;
 const MAX_RUN: usize = 258;
+/// Token values: 256 literals, then `MATCH + length` up to the longest run.
+const TOKENS: usize = MATCH as usize + MAX_RUN + 1;
 /// Zero runs at least this long enter the CRC by multiplication; shorter ones cost less byte by
 /// byte (crc32fast folds some 10 bytes per nanosecond; a multiplication costs about 0.3 us).
 const ZERO_SKIP: usize = 4096;
@@ -18,13 +20,20 @@ const ZERO_SKIP: usize = 4096;
 /// The coder of one member: `write` its bytes in order, then `finish`.
 pub struct RunCoder {
     tokens: Vec<u16>,
+    /// How often each token value occurs in `tokens`.
+    counts: Vec<u32>,
     bits: Bits,
     crc: crc32fast::Hasher,
 }
 
 impl Default for RunCoder {
     fn default() -> Self {
-        Self { tokens: Vec::with_capacity(BLOCK + 2 * MAX_RUN), bits: Bits::default(), crc: crc32fast::Hasher::new() }
+        Self {
+            tokens: Vec::with_capacity(BLOCK + 2 * MAX_RUN),
+            counts: vec![0; TOKENS],
+            bits: Bits::default(),
+            crc: crc32fast::Hasher::new(),
+        }
     }
 }
 
@@ -35,14 +44,18 @@ impl RunCoder {
         while i < data.len() {
             let b = data[i];
             let end = run_end(data, i + 1, b);
-            self.tokens.push(b.into());
             let mut left = end - i - 1;
-            while left >= 3 {
+            // A literal, then the run as matches; a remainder under 3 bytes as literals.
+            let literals = 1 + left % MAX_RUN * usize::from(left % MAX_RUN < 3);
+            left -= literals - 1;
+            self.tokens.extend(std::iter::repeat_n(u16::from(b), literals));
+            self.counts[b as usize] += literals as u32;
+            while left > 0 {
                 let n = left.min(MAX_RUN);
                 self.tokens.push(MATCH + n as u16);
+                self.counts[MATCH as usize + n] += 1;
                 left -= n;
             }
-            self.tokens.extend(std::iter::repeat_n(u16::from(b), left));
             if b == 0 && end - i >= ZERO_SKIP {
                 self.crc.update(&data[crc_from..i]);
                 self.crc = crc32fast::Hasher::new_with_initial(append_zeros(self.crc.clone().finalize(), end - i));
@@ -66,9 +79,8 @@ impl RunCoder {
     fn block(&mut self, last: bool) {
         let mut freq = [0u32; 286];
         freq[256] = 1;
-        for &t in &self.tokens {
-            let s = if t < MATCH { t as usize } else { 257 + LEN_CODE[(t - MATCH) as usize] as usize };
-            freq[s] += 1;
+        for (t, &c) in self.counts.iter().enumerate() {
+            freq[symbol(t)] += c;
         }
         let mut lit_len = [0u8; 286];
         code_lengths(&freq, 15, &mut lit_len);
@@ -106,22 +118,32 @@ impl RunCoder {
         }
         let code = canonical(&lit_len);
         let dist_code = canonical(&dist_len)[0];
-        for &t in &self.tokens {
-            if t < MATCH {
-                b.put(code[t as usize].into(), lit_len[t as usize].into());
-            } else {
-                let n = (t - MATCH) as usize;
-                let c = LEN_CODE[n] as usize;
-                let (s, e) = (257 + c, LEN_EXTRA[c]);
-                let v = u64::from(code[s])
-                    | ((n - LEN_BASE[c] as usize) as u64) << lit_len[s]
-                    | u64::from(dist_code) << (lit_len[s] + e);
-                b.put(v, u32::from(lit_len[s] + e + dist_len[0]));
+        // Each token's whole bit string: a literal's code, or a length code, its extra bits and
+        // the distance code.
+        let mut table = [(0u32, 0u32); TOKENS];
+        for (t, e) in table.iter_mut().enumerate().filter(|(t, _)| *t < 256 || *t >= MATCH as usize + 3) {
+            let s = symbol(t);
+            *e = (code[s].into(), lit_len[s].into());
+            if t >= MATCH as usize {
+                let c = s - 257;
+                let extra = (t - MATCH as usize - LEN_BASE[c] as usize) as u32;
+                e.0 |= (extra | u32::from(dist_code) << LEN_EXTRA[c]) << e.1;
+                e.1 += u32::from(LEN_EXTRA[c] + dist_len[0]);
             }
+        }
+        for &t in &self.tokens {
+            let (v, n) = table[t as usize];
+            b.put(v.into(), n);
         }
         b.put(code[256].into(), lit_len[256].into());
         self.tokens.clear();
+        self.counts.fill(0);
     }
+}
+
+/// The lit/len symbol of a token.
+fn symbol(t: usize) -> usize {
+    if t < MATCH as usize { t } else { 257 + LEN_CODE[t - MATCH as usize] as usize }
 }
 
 /// The first index from `j` on where `data` stops repeating `b` (`data.len()` if it never does).
