@@ -1,7 +1,7 @@
 //! A raw deflate coder for arrays made of runs, with the CRC-32 a zip member needs computed in
 //! the same pass. Like zlib's RLE strategy it codes each byte as a literal or as a run of the
 //! previous byte (a match at distance 1) and searches for nothing else, but it has no window or
-//! hash chains to keep (zlib slides them every 32 kB), finds runs eight bytes at a time, and feeds
+//! hash chains to keep (zlib slides them every 32 kB), finds runs 32 bytes at a step, and feeds
 //! runs of zeros to the CRC arithmetically (appending n zero bytes multiplies the CRC register by
 //! x^(8n) modulo the polynomial) instead of byte by byte. Blocks use dynamic Huffman codes, so a
 //! run of 258 zeros costs a few bits. BEV frames are mostly long runs of zeros (docs/benchmarks.md,
