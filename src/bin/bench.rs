@@ -529,6 +529,7 @@ fn bench_npz() {
         Deflate::ZlibRsRle(1),
         Deflate::ZlibRsRle(2),
         Deflate::ZlibRsRle(3),
+        Deflate::Runs,
     ]
     .map(|how| {
         let name = match how {
@@ -536,6 +537,7 @@ fn bench_npz() {
             Deflate::Rle(l) => format!("rocc rle {l}"),
             Deflate::Zlib(l) => format!("rocc level {l}"),
             Deflate::ZlibRsRle(l) => format!("rocc zlib-rs rle {l}"),
+            Deflate::Runs => "rocc runs".to_string(),
         };
         let mark = if how == DEFLATE { " *" } else { "" };
         (format!("{name}{mark}"), Box::new(move |p: &Path, b: &Bev| write_npz_with(p, b, how)) as Writer)

@@ -12,9 +12,9 @@ use crate::backend::flow::{Flow, flow_into, to_ego_axes};
 use crate::backend::{Background, OccInput, Occupancy, occ_frame_path, write_npy};
 use crate::lidar::{bin_frame_path, pcd_frame_path, scan, write_bin, write_pcd};
 use crate::output::{
-    FrameBoxes, FrameWorld, Manifest, OutputFile, PREVIEW_SIDE, StageTiming, flow_frame_path, labels_frame_path,
-    paint_bev, paint_lidar, paint_occ, write_bev_frame, write_boxes_json, write_boxes_json_with, write_flow, write_gif,
-    write_labels, write_manifest, write_preview_png, write_scene_json, write_sheet,
+    FrameBoxes, FrameWorld, GifFrame, Manifest, OutputFile, PREVIEW_SIDE, StageTiming, flow_frame_path, gif_frame,
+    labels_frame_path, paint_bev, paint_lidar, paint_occ, write_bev_frame, write_boxes_json, write_boxes_json_with,
+    write_flow, write_gif, write_labels, write_manifest, write_preview_png, write_scene_json, write_sheet,
 };
 use crate::place::Pose;
 use crate::raster::layout::{HALF_EXTENT_M, box_reaches_patch};
@@ -27,6 +27,7 @@ use crate::visibility::{Masks, masks_into};
 use rayon::prelude::*;
 use std::io;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
@@ -119,14 +120,33 @@ impl Scratch {
     }
 }
 
+/// Scratch kept between clips, so a batch's clips reuse it rather than zero and fault in some
+/// 13 MB per scratch per clip (`bench clip`). Reuse across clips is reuse across frames: each
+/// buffer is rewritten or cleared by what fills it (`rasterize_into` clears what it painted).
+static SCRATCH: Mutex<Vec<Scratch>> = Mutex::new(Vec::new());
+
 /// Per-frame results kept for the clip-level files.
 struct FrameOut {
     boxes: FrameBoxes,
     files: Vec<OutputFile>,
     /// Ego pose, box motion and timestamp, when the clip knows its world.
     world: Option<FrameWorld>,
-    /// Preview images (bev, occ, lidar) when this frame is sampled for a preview.
-    thumbs: Option<[Option<Vec<u8>>; 3]>,
+    thumbs: Thumbs,
+}
+
+/// One frame's preview images per stage (bev, occ, lidar): drawn for the contact sheet, coded for
+/// the GIFs.
+#[derive(Default)]
+struct Thumbs {
+    sheet: [Option<Vec<u8>>; 3],
+    gif: [Option<GifFrame>; 3],
+}
+
+impl Thumbs {
+    fn keep(&mut self, stage: usize, img: Vec<u8>, gif_delay: Option<u16>, sheet: bool) {
+        self.gif[stage] = gif_delay.map(|d| gif_frame(&img, d));
+        self.sheet[stage] = sheet.then_some(img);
+    }
 }
 
 /// The clip's output directory.
@@ -388,6 +408,9 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
     let (gif_picks, sheet_picks) = if opts.previews { preview_picks(r.frames.len()) } else { (vec![], vec![]) };
     let clock = Clock::default();
     let rate = r.rate;
+    // GIF frames play at the clip's real speed.
+    let stride = gif_picks.get(1).copied().unwrap_or(1);
+    let delay_cs = ((100.0 * stride as f64 / rate).round() as u16).max(2);
 
     let frame = |s: &mut Scratch, n: usize, f: usize| -> io::Result<FrameOut> {
         let t0 = Instant::now();
@@ -397,12 +420,13 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
         let t2 = Clock::add(&clock.bev, t0);
         let mut files = vec![write_bev_frame(dir, f, &s.bev)?];
         let mut t3 = Clock::add(&clock.write, t2);
-        let preview = gif_picks.contains(&n) || sheet_picks.contains(&n);
-        let mut thumbs = [None, None, None];
+        let (gif_delay, in_sheet) = (gif_picks.contains(&n).then_some(delay_cs), sheet_picks.contains(&n));
+        let preview = gif_delay.is_some() || in_sheet;
+        let mut thumbs = Thumbs::default();
         if preview {
             let mut img = vec![0u8; PREVIEW_SIDE * PREVIEW_SIDE];
             paint_bev(&s.bev, &mut img);
-            thumbs[0] = Some(img);
+            thumbs.keep(0, img, gif_delay, in_sheet);
             // The full BEV preview (with legend) shows the first frame, written while
             // the other frames render.
             if n == 0 {
@@ -437,7 +461,7 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
             if preview {
                 let mut img = vec![0u8; PREVIEW_SIDE * PREVIEW_SIDE];
                 paint_occ(&s.occ, &mut img);
-                thumbs[1] = Some(img);
+                thumbs.keep(1, img, gif_delay, in_sheet);
                 t3 = Clock::add(&clock.preview, t3);
             }
         }
@@ -451,19 +475,14 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
             if preview {
                 let mut img = vec![0u8; PREVIEW_SIDE * PREVIEW_SIDE];
                 paint_lidar(&pc, &mut img);
-                thumbs[2] = Some(img);
+                thumbs.keep(2, img, gif_delay, in_sheet);
                 Clock::add(&clock.preview, t3);
             }
         }
         on_frame();
-        Ok(FrameOut {
-            boxes: FrameBoxes { frame: f, t: f as f64 / rate, boxes: listed },
-            world,
-            files,
-            thumbs: preview.then_some(thumbs),
-        })
+        Ok(FrameOut { boxes: FrameBoxes { frame: f, t: f as f64 / rate, boxes: listed }, world, files, thumbs })
     };
-    let pool = std::sync::Mutex::new(Vec::new());
+    let pool = &SCRATCH;
     let outs: Vec<FrameOut> = r
         .frames
         .par_iter()
@@ -473,7 +492,9 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
             // frame on the same thread, which then takes (or makes) a scratch of its own.
             let mut s = pool.lock().ok().and_then(|mut p| p.pop()).unwrap_or_else(Scratch::new);
             let out = frame(&mut s, n, f);
-            if let Ok(mut p) = pool.lock() {
+            if let Ok(mut p) = pool.lock()
+                && p.len() < 2 * rayon::current_num_threads()
+            {
                 p.push(s);
             }
             out
@@ -494,22 +515,20 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
     let t1 = Clock::add(&clock.write, t0);
 
     if opts.previews {
-        // Frames play at the clip's real speed.
-        let stride = gif_picks.get(1).copied().unwrap_or(1);
-        let delay_cs = ((100.0 * stride as f64 / rate).round() as u16).max(2);
         let names = ["bev", "occ", "lidar"];
         let stages = 1 + (opts.stage >= Stage::Occ) as usize + (opts.stage >= Stage::Lidar) as usize;
-        let pick = |s: usize, picks: &[usize]| -> Vec<Vec<u8>> {
-            picks.iter().filter_map(|&n| outs[n].thumbs.as_ref().and_then(|t| t[s].clone())).collect()
+        let sheet = |s: usize| -> Vec<Vec<u8>> {
+            sheet_picks.iter().filter_map(|&n| outs[n].thumbs.sheet[s].clone()).collect()
         };
-        let rows: Vec<(&str, Vec<Vec<u8>>)> = (0..stages).map(|s| (names[s], pick(s, &sheet_picks))).collect();
+        let gif =
+            |s: usize| -> Vec<&GifFrame> { gif_picks.iter().filter_map(|&n| outs[n].thumbs.gif[s].as_ref()).collect() };
+        let rows: Vec<(&str, Vec<Vec<u8>>)> = (0..stages).map(|s| (names[s], sheet(s))).collect();
         let sheet_frames: Vec<usize> = sheet_picks.iter().map(|&n| r.frames[n]).collect();
-        // Each GIF and the sheet are independent files: encoded side by side.
+        // The GIFs' frames are coded already; the sheet is coded beside them.
         let (gifs, sheet) = rayon::join(
             || {
                 (0..stages)
-                    .into_par_iter()
-                    .map(|s| write_gif(dir, &format!("{}.gif", names[s]), &pick(s, &gif_picks), delay_cs))
+                    .map(|s| write_gif(dir, &format!("{}.gif", names[s]), &gif(s)))
                     .collect::<io::Result<Vec<_>>>()
             },
             || write_sheet(dir, &sheet_frames, &rows),

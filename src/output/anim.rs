@@ -6,23 +6,33 @@ use super::{OutputFile, write_atomic};
 use std::io;
 use std::path::Path;
 
-/// Write an animated GIF of `frames` (each `SIDE * SIDE` palette indices), looping, `delay_cs`
-/// hundredths of a second per frame.
-pub fn write_gif(dir: &Path, name: &str, frames: &[Vec<u8>], delay_cs: u16) -> io::Result<OutputFile> {
+/// One GIF frame, LZW-coded by the thread that drew it, so a clip's frames code in parallel and
+/// `write_gif` only copies them (the bytes are those `gif` writes from the indices).
+pub struct GifFrame(gif::Frame<'static>);
+
+/// Code `img` (`SIDE * SIDE` palette indices) as a GIF frame shown `delay_cs` hundredths of a
+/// second.
+pub fn gif_frame(img: &[u8], delay_cs: u16) -> GifFrame {
+    let mut frame = gif::Frame {
+        width: SIDE as u16,
+        height: SIDE as u16,
+        delay: delay_cs,
+        buffer: std::borrow::Cow::Owned(img.to_vec()),
+        ..Default::default()
+    };
+    frame.make_lzw_pre_encoded();
+    GifFrame(frame)
+}
+
+/// Write an animated GIF of `frames`, looping.
+pub fn write_gif(dir: &Path, name: &str, frames: &[&GifFrame]) -> io::Result<OutputFile> {
     let rel = format!("preview/{name}");
     let flat: Vec<u8> = palette().iter().flatten().copied().collect();
     let bytes = write_atomic(&dir.join(&rel), |out| {
         let mut enc = gif::Encoder::new(&mut *out, SIDE as u16, SIDE as u16, &flat).map_err(io::Error::other)?;
         enc.set_repeat(gif::Repeat::Infinite).map_err(io::Error::other)?;
         for f in frames {
-            let frame = gif::Frame {
-                width: SIDE as u16,
-                height: SIDE as u16,
-                delay: delay_cs,
-                buffer: std::borrow::Cow::Borrowed(f),
-                ..Default::default()
-            };
-            enc.write_frame(&frame).map_err(io::Error::other)?;
+            enc.write_lzw_pre_encoded_frame(&f.0).map_err(io::Error::other)?;
         }
         enc.into_inner().map_err(io::Error::other)?;
         Ok(())

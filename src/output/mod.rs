@@ -11,9 +11,10 @@ mod labels;
 mod npz;
 mod paint;
 mod preview;
+mod runs;
 mod vector_map;
 
-pub use anim::{write_gif, write_sheet};
+pub use anim::{GifFrame, gif_frame, write_gif, write_sheet};
 pub use flow::{FLOW_KEY, flow_frame_path, write_flow};
 pub use labels::{MASK_CAMERA_KEY, MASK_LIDAR_KEY, SEMANTICS_KEY, labels_frame_path, write_labels};
 pub use npz::{DEFLATE, Deflate, NpyElem, Npz};

@@ -1,11 +1,12 @@
 //! The `.npz` container, written directly: a zip archive (no zip64, fixed 1980-01-01 timestamps,
 //! so the bytes depend only on the arrays) of `.npy` v1.0 members, each raw-deflated by the
-//! coder `DEFLATE` names: zlib-rs with zlib's RLE strategy, which codes runs of the previous
-//! byte and searches for nothing else. BEV arrays are mostly zeros: it takes about 1 ms more CPU
-//! per BEV frame than `fdeflate`'s zero-run coder for a quarter of its size, within 2x of zlib
-//! level 6's (`bench npz` measures every coder here against zlib's levels; docs/benchmarks.md
-//! has the figures). numpy's `np.load` and `ndarray_npy::NpzReader` read the result.
+//! coder `DEFLATE` names: rocc's run coder (`runs.rs`), which codes runs of the previous byte
+//! (as zlib's RLE strategy does) and checksums in the same pass. BEV arrays are mostly zeros: it
+//! takes half the CPU of zlib-rs's RLE strategy for the same size, a quarter of `fdeflate`'s
+//! (`bench npz` measures every coder here against zlib's levels; docs/benchmarks.md has the
+//! figures). numpy's `np.load` and `ndarray_npy::NpzReader` read the result.
 
+use super::runs::RunCoder;
 use miniz_oxide::deflate::core::{
     CompressionStrategy, CompressorOxide, TDEFLFlush, TDEFLStatus, compress_to_output,
     create_comp_flags_from_zip_params,
@@ -89,11 +90,14 @@ pub enum Deflate {
     /// zlib-rs (zlib-ng's coder, under `zip`) at this level with the RLE strategy: zlib's
     /// `deflate_rle`, which scans for runs of the previous byte and never hashes.
     ZlibRsRle(u8),
+    /// rocc's own run coder (`runs.rs`): the runs zlib's RLE strategy finds, without its window,
+    /// with the CRC-32 in the same pass.
+    Runs,
 }
 
-/// The deflate rocc writes with: on BEV frames zlib-rs's RLE strategy is the fastest coder
-/// whose files stay within 2x of zlib level 6's (docs/benchmarks.md, `bench npz`).
-pub const DEFLATE: Deflate = Deflate::ZlibRsRle(1);
+/// The deflate rocc writes with: on BEV frames the run coder is the fastest coder here, its files
+/// within 2x of zlib level 6's (docs/benchmarks.md, `bench npz`).
+pub const DEFLATE: Deflate = Deflate::Runs;
 
 /// One member's raw deflate stream being built.
 enum Deflater {
@@ -101,6 +105,7 @@ enum Deflater {
     Oxide(Box<CompressorOxide>, Vec<u8>),
     /// The coder, a scratch block it writes into, and what it wrote so far.
     ZlibRs(zlib_rs::Deflate, Box<[u8; SCRATCH]>, Vec<u8>),
+    Runs(RunCoder),
 }
 
 /// Output block of the zlib-rs coder.
@@ -121,6 +126,7 @@ impl Deflater {
                 };
                 Self::ZlibRs(zlib_rs::Deflate::new_with_config(config), Box::new([0; SCRATCH]), Vec::new())
             }
+            Deflate::Runs => Self::Runs(RunCoder::default()),
         })
     }
 
@@ -135,11 +141,20 @@ impl Deflater {
             Self::Fdeflate(z) => z.write_data(bytes),
             Self::Oxide(z, out) => oxide_step(z, out, bytes, TDEFLFlush::None),
             Self::ZlibRs(z, buf, out) => zlib_rs_step(z, buf, out, bytes, zlib_rs::DeflateFlush::NoFlush),
+            Self::Runs(z) => {
+                z.write(bytes);
+                Ok(())
+            }
         }
     }
 
-    fn finish(self) -> io::Result<Vec<u8>> {
-        match self {
+    /// The raw deflate stream, and the CRC-32 of the input when the coder computed it.
+    fn finish(self) -> io::Result<(Vec<u8>, Option<u32>)> {
+        if let Self::Runs(z) = self {
+            let (raw, crc) = z.finish();
+            return Ok((raw, Some(crc)));
+        }
+        let raw: io::Result<Vec<u8>> = match self {
             Self::Fdeflate(z) => {
                 let zlib = z.finish()?;
                 // A zlib stream is a 2-byte header, the raw deflate data a zip member holds,
@@ -154,7 +169,9 @@ impl Deflater {
                 zlib_rs_step(&mut z, &mut buf, &mut out, &[], zlib_rs::DeflateFlush::Finish)?;
                 Ok(out)
             }
-        }
+            Self::Runs(_) => unreachable!("returned above"),
+        };
+        Ok((raw?, None))
     }
 }
 
@@ -228,14 +245,20 @@ impl Npz {
         crc.update(&header);
         z.write(&header)?;
         let mut buf = Vec::new();
-        for chunk in data.chunks(STEP) {
+        // The run coder checksums as it codes, and its runs stop at the end of each slice.
+        let own_crc = matches!(z, Deflater::Runs(_));
+        let step = if own_crc { data.len().max(1) } else { STEP };
+        for chunk in data.chunks(step) {
             let bytes = le_bytes(chunk, &mut buf);
-            crc.update(bytes);
+            if !own_crc {
+                crc.update(bytes);
+            }
             z.write(bytes)?;
         }
-        let deflated = z.finish()?;
+        let (deflated, coder_crc) = z.finish()?;
         let raw = (header.len() + std::mem::size_of_val(data)) as u64;
-        self.members.push(Member { name: format!("{name}.npy"), crc: crc.finalize(), raw, deflated });
+        let crc = coder_crc.unwrap_or_else(|| crc.finalize());
+        self.members.push(Member { name: format!("{name}.npy"), crc, raw, deflated });
         Ok(())
     }
 
@@ -306,7 +329,14 @@ mod tests {
         let a = Array3::from_shape_fn((3, 50, 70), |(c, i, j)| ((c * 7 + i * j) % 5) as i8 - 2);
         let b = Array1::from_shape_fn(200_000, |i| if i % 1000 == 0 { -(i as i32) } else { 0 });
         let f = Array1::from_shape_fn(9, |i| i as f32 * 0.5);
-        for how in [Deflate::Fdeflate, Deflate::Rle(1), Deflate::Rle(2), Deflate::Zlib(2), Deflate::ZlibRsRle(1)] {
+        for how in [
+            Deflate::Fdeflate,
+            Deflate::Rle(1),
+            Deflate::Rle(2),
+            Deflate::Zlib(2),
+            Deflate::ZlibRsRle(1),
+            Deflate::Runs,
+        ] {
             let mut npz = Npz::with_deflate(how);
             npz.add("a", &[3, 50, 70], a.as_slice().unwrap()).unwrap();
             npz.add("b", &[200_000], b.as_slice().unwrap()).unwrap();

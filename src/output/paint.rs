@@ -140,26 +140,35 @@ fn mark_ego(img: &mut [u8]) {
     }
 }
 
+/// Pixels painted through all layers at a time by `paint_bev`.
+const STRIP: usize = 4096;
+
 /// The BEV as palette indices, `SIDE * SIDE`, layers in `PAINT_ORDER`.
 pub fn paint_bev(bev: &Bev, img: &mut [u8]) {
     // `px` maps cell (i, j) to SIDE * SIDE - 1 - (i SIDE + j): the image is the grid in reverse.
     // Painting in grid order lets each layer be one branch-free pass over two slices.
     img.fill(I_BACKGROUND);
-    for layer in PAINT_ORDER {
-        let (plane, col) = match layer {
-            Some(ch) => (bev.masks.index_axis(ndarray::Axis(0), ch), I_BEV + ch as u8),
-            None => (bev.structure.view(), I_STRUCTURE),
-        };
-        match plane.as_slice() {
-            Some(cells) => {
-                for (d, &m) in img.iter_mut().zip(cells) {
-                    *d = if m != 0 { col } else { *d };
+    let planes = PAINT_ORDER.map(|layer| match layer {
+        Some(ch) => (bev.masks.index_axis(ndarray::Axis(0), ch), I_BEV + ch as u8),
+        None => (bev.structure.view(), I_STRUCTURE),
+    });
+    let cells: Option<Vec<(&[i8], u8)>> = planes.iter().map(|(p, col)| Some((p.as_slice()?, *col))).collect();
+    match cells {
+        // A strip of the image at a time through every layer, so the strip stays in cache.
+        Some(cells) => {
+            for (n, strip) in img[..SIDE * SIDE].chunks_mut(STRIP).enumerate() {
+                for &(plane, col) in &cells {
+                    for (d, &m) in strip.iter_mut().zip(&plane[n * STRIP..]) {
+                        *d = if m != 0 { col } else { *d };
+                    }
                 }
             }
-            None => {
+        }
+        None => {
+            for (plane, col) in &planes {
                 for ((i, j), &m) in plane.indexed_iter() {
                     if m != 0 {
-                        img[i * SIDE + j] = col;
+                        img[i * SIDE + j] = *col;
                     }
                 }
             }
