@@ -739,3 +739,103 @@ fn every_event_of_a_chain_lands_on_its_coded_sides_in_order() {
         }
     }
 }
+
+// ------------------------------------------------------------------ strikes on a slide
+
+type CodedContact = (u32, u32, Part, Option<(u32, Part)>);
+
+/// Each `EventSum` of a record in event order, with objects: (event, vehicle, its area, the
+/// other vehicle or `None` for a fixed object, its area), read with roxmltree.
+fn coded_contacts(xml: &str) -> Vec<CodedContact> {
+    let doc = roxmltree::Document::parse(xml).expect("xml");
+    let text = |e: roxmltree::Node, tag: &str| {
+        e.children().find(|n| n.has_tag_name(tag)).and_then(|n| n.text()).unwrap_or("").to_string()
+    };
+    let part = |t: String| part(t.split_whitespace().next().unwrap_or("")).expect("a part");
+    let mut out: Vec<_> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("EventSum"))
+        .map(|e| {
+            let num = |a: &str| e.attribute(a).and_then(|x| x.parse::<u32>().ok()).expect("number");
+            let contacted = text(e, "Contacted");
+            let other = contacted
+                .strip_prefix("Vehicle#")
+                .map(|n| (n.parse().expect("vehicle number"), part(text(e, "ContactedAreaOfDamage"))));
+            (num("EventNumber"), num("VehicleNumber"), part(text(e, "AreaOfDamage")), other)
+        })
+        .collect();
+    out.sort_by_key(|e| e.0);
+    out
+}
+
+/// A vehicle that strikes a fixed object after its first impact (tests/fixtures/ciren-slides/:
+/// a car struck at a junction slides into a pole): the record imports, the object is placed
+/// where the slide goes, and on the rolled-out boxes each contact happens in event order, within
+/// 1.5 s of its `at`: the struck vehicle on its coded side and the striker with its front, then
+/// the sliding vehicle's coded face on the object. No one else touches the object.
+#[test]
+fn a_struck_car_slides_into_a_pole_with_its_coded_face() {
+    let mut files: Vec<PathBuf> = std::fs::read_dir("tests/fixtures/ciren-slides")
+        .expect("slide records")
+        .map(|e| e.expect("entry").path())
+        .collect();
+    files.sort();
+    assert!(!files.is_empty());
+    for p in files {
+        let xml = std::fs::read_to_string(&p).expect("xml");
+        let mut sources = SourceMap::default();
+        let imp = ciren::import_case(&p, &mut sources).unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+        let scen = rocc::check::check_text(&imp.file_name(), &imp.staged.text, Path::new("."), &mut sources)
+            .unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+        let at: Vec<f64> = scen.conflicts.iter().map(|c| c.at.expect("at")).collect();
+        let t = rocc::compile::front(scen, None).expect("front").tracks;
+        let id = imp.crash.id.clone();
+        let events = coded_contacts(&xml);
+        assert_eq!(at.len(), events.len(), "{id}: one conflict per event");
+        assert!(events.iter().any(|e| e.3.is_none()), "{id}: an object is struck");
+        let idx = |n: &str| t.agents.iter().position(|a| a.name == n).expect("agent");
+        let objects: Vec<usize> = (0..t.agents.len()).filter(|&i| t.agents[i].name.starts_with("obj")).collect();
+        let mut firsts = vec![];
+        for (i, &(ev, v, va, other)) in events.iter().enumerate() {
+            let ((a, face), b, struck) = match other {
+                Some((o, oa)) => {
+                    let ((s, sp), (f, fp)) = if oa == Part::Front { ((v, va), (o, oa)) } else { ((o, oa), (v, va)) };
+                    ((idx(&format!("v{f}")), fp), idx(&format!("v{s}")), Some(sp))
+                }
+                None => ((idx(&format!("v{v}")), va), objects[0], None),
+            };
+            let first = (1..t.frames)
+                .find(|&fr| obb(&t, a, fr).overlaps(&obb(&t, b, fr)))
+                .unwrap_or_else(|| panic!("{id}: event {ev}: {} never touches {}", t.agents[a].name, t.agents[b].name));
+            assert!((first as f64 / t.rate - at[i]).abs() <= 1.5, "{id}: event {ev} at frame {first}, asked {}", at[i]);
+            let (on_struck, on_striker) = measured_contact(&t, a, b, first).expect("contact");
+            if let Some(sp) = struck {
+                let sb = t.agents[b].size;
+                let want = match sp {
+                    Part::Front => Point::Front,
+                    Part::Left => Point::Left,
+                    Part::Right => Point::Right,
+                    Part::Rear => Point::Rear,
+                };
+                assert_eq!(sector(on_struck, sb[0], sb[1]), want, "{id}: event {ev}: struck elsewhere");
+            }
+            let (l, w) = (t.agents[a].size[0] / 2.0, t.agents[a].size[1] / 2.0);
+            let on_face = match face {
+                Part::Front => on_striker.x > 0.6 * l,
+                Part::Rear => on_striker.x < -0.6 * l,
+                Part::Left => on_striker.y > 0.6 * w,
+                Part::Right => on_striker.y < -0.6 * w,
+            };
+            assert!(on_face, "{id}: event {ev}: {} touches at {on_striker:?}, not its {face:?}", t.agents[a].name);
+            firsts.push(first);
+        }
+        assert!(firsts.windows(2).all(|w| w[0] <= w[1]), "{id}: contacts out of order {firsts:?}");
+        for &o in &objects {
+            let striker = idx(&format!("v{}", events.iter().find(|e| e.3.is_none()).expect("object event").1));
+            for a in (0..t.agents.len()).filter(|&a| a != o && a != striker) {
+                let touch = (0..t.frames).any(|fr| obb(&t, a, fr).overlaps(&obb(&t, o, fr)));
+                assert!(!touch, "{id}: {} touches {}", t.agents[a].name, t.agents[o].name);
+            }
+        }
+    }
+}

@@ -181,6 +181,11 @@ pub struct ObjectDesc {
     pub kind: String,
     /// Which side of the striker's road it stands on.
     pub side: Side,
+    /// Struck by a vehicle sliding from an earlier impact: it stands where the slide carries the
+    /// striker (`emit::slide`), not beside the road.
+    pub on_slide: bool,
+    /// Its world pose once placed on the slide: x, y (m) and heading (rad).
+    pub at: Option<[f64; 3]>,
     pub notes: Vec<String>,
 }
 
@@ -190,6 +195,8 @@ pub enum Face {
     Front,
     Left,
     Right,
+    /// Only in a strike that follows an impact: a car sliding backwards into a pole.
+    Back,
 }
 
 impl Face {
@@ -198,6 +205,7 @@ impl Face {
             Face::Front => "front",
             Face::Left => "left side",
             Face::Right => "right side",
+            Face::Back => "back",
         }
     }
 }
@@ -216,6 +224,9 @@ pub struct ConflictDesc {
     pub clocks: Vec<ClockDesc>,
     /// Closing speed at contact implied by a coded delta-V (km/h), and the vehicle it is of.
     pub closing: Option<Closing>,
+    /// The time (s) of a strike into an object on the striker's slide, as measured; `None` for a
+    /// staged strike, whose time is its slot (`emit::EVENT_GAP` apart).
+    pub at: Option<f64>,
     pub notes: Vec<String>,
 }
 
@@ -276,6 +287,10 @@ impl Crash {
     }
     pub fn vehicle(&self, name: &str) -> Option<&VehicleDesc> {
         self.vehicles.iter().find(|v| v.name == name)
+    }
+    /// Whether conflict `k` strikes an object placed on its striker's slide (not staged).
+    pub fn on_slide(&self, k: &ConflictDesc) -> bool {
+        self.objects.iter().any(|o| o.name == k.struck && o.on_slide)
     }
 }
 

@@ -1,15 +1,17 @@
 //! Every contact of a case: the `EventSum` rows decoded, one per contact (a contact coded from
 //! both vehicles' rows counts once), in time order (the event number). The first-ranked contact
 //! sets the road and its pair; each other one joins the crash as a further conflict, its new
-//! vehicle placed on the same road; what the language cannot stage (a vehicle striking twice,
-//! a struck vehicle striking later, a pair meeting twice, an object struck beside other
-//! contacts) refuses the case with the reason.
+//! vehicle placed on the same road; a fixed object struck after its striker's earlier contact is
+//! placed on that slide (`ciren::slide`); what the importer cannot stage (a vehicle striking
+//! another twice, a struck vehicle striking another later, a pair meeting twice, an object struck
+//! before any other contact of its striker) refuses the case with the reason.
 
 use super::ctx::Ctx;
 use super::fields::{Area, area};
 use super::pair::{extra_vehicle, pair_conflict};
+use crate::check::scenario::{Impact, Point};
 use crate::ciren::case::{CaseVehicle, Coded, Event};
-use crate::ciren::crash::{ConflictDesc, Crash};
+use crate::ciren::crash::{ConflictDesc, Crash, Face, ObjectDesc, Side};
 use crate::diag::Diagnostic;
 use crate::source::Span;
 use std::collections::BTreeMap;
@@ -127,28 +129,19 @@ pub(super) fn contacts<'a>(cx: &Ctx<'a>) -> Result<(Vec<Contact<'a>>, usize), Ve
     }
 }
 
-/// Add a contact other than the first-ranked one to the crash: its conflict, and a vehicle it
-/// brings that the crash does not hold yet.
+/// Add a contact other than the first-ranked one to the crash: its conflict, and a vehicle or
+/// object it brings that the crash does not hold yet. `earlier` are the conflicts before it in
+/// time order.
 pub(super) fn join(
     cx: &mut Ctx,
     story: &crate::ciren::narrative::Narrative,
     crash: &mut Crash,
     c: &Contact,
+    earlier: &[ConflictDesc],
 ) -> Result<ConflictDesc, Vec<Diagnostic>> {
     let span = cx.tag_span(&c.ev.range, "EventSum");
     let Party::Vehicle(other, oa, oc) = &c.other else {
-        return Err(cx.err(
-            "E0804",
-            format!(
-                "event {}: V{} struck {} beside the case's other contacts; rocc places a struck fixed object only \
-                 in a single-vehicle case",
-                c.ev.number,
-                c.me.number,
-                c.contacted.cite("Contacted")
-            ),
-            Some((span, "this event")),
-            "write the object into the imported scenario by hand, or import the vehicle contacts alone",
-        ));
+        return slide_object(cx, crash, c, earlier);
     };
     let (af, st, impact, point, face, why) = pair_conflict(cx, (c.me, c.own, &c.own_c), (other, *oa, oc))?;
     let (af_n, st_n) = (format!("v{af}"), format!("v{st}"));
@@ -177,6 +170,7 @@ pub(super) fn join(
     }
     crash.header.push(c.cite());
     Ok(ConflictDesc {
+        at: None,
         at_fault: af_n,
         struck: st_n,
         impact,
@@ -188,20 +182,102 @@ pub(super) fn join(
     })
 }
 
+/// A fixed object struck by a vehicle after its earlier contact: the slide from that contact
+/// brings the vehicle to it, so the object is placed where the slide goes (`emit::slide`), and the
+/// struck side is the one the slide reaches (CIREN codes none for an object). An object struck
+/// before any contact of its striker would need a staged strike beside the other contacts:
+/// refused.
+fn slide_object(
+    cx: &mut Ctx,
+    crash: &mut Crash,
+    c: &Contact,
+    earlier: &[ConflictDesc],
+) -> Result<ConflictDesc, Vec<Diagnostic>> {
+    let span = cx.tag_span(&c.ev.range, "EventSum");
+    let me = format!("v{}", c.me.number);
+    let involved = |k: &&ConflictDesc| k.at_fault == me || k.struck == me;
+    let Some(before) = earlier.iter().rev().find(involved) else {
+        return Err(cx.err(
+            "E0804",
+            format!(
+                "event {}: V{} struck {} before any contact with the case's other vehicles; rocc places a fixed \
+                 object either beside the road of a single-vehicle case or on the slide after an impact",
+                c.ev.number,
+                c.me.number,
+                c.contacted.cite("Contacted")
+            ),
+            Some((span, "this event")),
+            "write the object into the imported scenario by hand, or import the vehicle contacts alone",
+        ));
+    };
+    let kind = super::object::object_kind(cx, c.me, &c.contacted)?;
+    let face = match c.own {
+        Area::Front => Face::Front,
+        Area::Left => Face::Left,
+        Area::Right => Face::Right,
+        Area::Back => Face::Back,
+        _ => {
+            return Err(cx.err(
+                "E0804",
+                format!("event {}: V{}'s {} struck a {kind}", c.ev.number, c.me.number, c.own.name()),
+                Some((cx.span(&c.own_c), "coded here")),
+                "rocc stages planar contacts: a vehicle strikes with its front, back or a side",
+            ));
+        }
+    };
+    let name = format!("obj{}", crash.objects.len() + 1);
+    let partner = if before.at_fault == me { &before.struck } else { &before.at_fault };
+    crash.objects.push(ObjectDesc {
+        name: name.clone(),
+        kind: kind.into(),
+        side: Side::Right,
+        on_slide: true,
+        at: None,
+        notes: vec![format!(
+            "{name}: {} -> {kind} (a structure), where {me}'s slide from its impact with {partner} takes its {}",
+            c.contacted.cite("Contacted"),
+            face.name()
+        )],
+    });
+    crash.header.push(c.cite());
+    Ok(ConflictDesc {
+        at_fault: me.clone(),
+        struck: name,
+        impact: Impact::Object,
+        point: Point::Front,
+        face,
+        clocks: Vec::new(),
+        closing: None,
+        at: None,
+        notes: vec![format!(
+            "Event {}: {me}'s {} ({}) strikes the {kind} on its slide from the impact with {partner}: not staged, \
+             the slide brings it there; `point` is the side the slide reaches.",
+            c.ev.number,
+            face.name(),
+            c.own_c.cite("AreaOfDamage")
+        )],
+    })
+}
+
 /// The language's rules for several crashes, checked before emission: a vehicle strikes in one
 /// contact, is struck only after (or when) it strikes, and a pair meets once.
 pub(super) fn check_order(cx: &Ctx, crash: &Crash, events: &[(u32, Span)]) -> Result<(), Vec<Diagnostic>> {
     let mut strikes: BTreeMap<&str, usize> = BTreeMap::new();
     let mut first_struck: BTreeMap<&str, usize> = BTreeMap::new();
     for (i, k) in crash.conflicts.iter().enumerate() {
+        // A strike on the slide after an impact is brought about by that slide, not staged.
+        if crash.on_slide(k) {
+            continue;
+        }
         let (ev, span) = events[i];
         let refuse = |msg: String| {
             Err(cx.err(
                 "E0804",
                 format!("event {ev}: {msg}"),
                 Some((span, "this event")),
-                "after its first crash a vehicle only slides to rest, and the importer cannot yet place the next \
-                 party where that slide ends: it stages chains where each vehicle strikes once, before it is struck",
+                "after its first crash a vehicle only slides to rest; the importer places a struck fixed object where \
+                 that slide goes, but not another vehicle: it stages chains where each vehicle strikes another once, \
+                 before it is struck",
             ))
         };
         if let Some(&j) = strikes.get(k.at_fault.as_str()) {

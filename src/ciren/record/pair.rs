@@ -309,6 +309,7 @@ pub(super) fn two_vehicles(
         mans[i].0 = man;
     }
     let conflict = ConflictDesc {
+        at: None,
         clocks: Vec::new(),
         closing: None,
         at_fault: format!("v{af_no}"),

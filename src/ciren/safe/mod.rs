@@ -731,6 +731,7 @@ fn map(cx: &mut Ctx, root: &Value, path: &Path) -> Result<Crash, Vec<Diagnostic>
         vehicles,
         objects: Vec::new(),
         conflicts: vec![ConflictDesc {
+            at: None,
             clocks: Vec::new(),
             closing: None,
             at_fault: format!("v{striker}"),
