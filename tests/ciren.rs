@@ -118,8 +118,14 @@ fn check_contact(imp: &Imported, stated: &[(String, Part)]) -> Tracks {
         rocc::compile::front(scen, None).unwrap_or_else(|d| panic!("{}: {}", imp.crash.id, rendered(&d, &sources)));
     let t = front.tracks;
     let rec = t.impacts.first().unwrap_or_else(|| panic!("{}: no impact", imp.crash.id));
+    check_parts(&t, rec, stated, &imp.crash.id);
+    t
+}
+
+/// The contact of impact `rec` on the parts `stated` (each vehicle's damaged part).
+fn check_parts(t: &Tracks, rec: &rocc::rollout::ImpactRecord, stated: &[(String, Part)], id: &str) {
     let (af, st, f) = (rec.at_fault, rec.struck, rec.frame);
-    let (in_struck, in_af) = measured_contact(&t, af, st, f).expect("contact at the latched frame");
+    let (in_struck, in_af) = measured_contact(t, af, st, f).expect("contact at the latched frame");
     let mut checked = 0;
     for (name, p) in stated {
         let Some(i) = t.agents.iter().position(|a| &a.name == name) else { continue };
@@ -131,8 +137,8 @@ fn check_contact(imp: &Imported, stated: &[(String, Part)]) -> Tracks {
                 Part::Right => Point::Right,
                 Part::Rear => Point::Rear,
             };
-            assert_eq!(sector(in_struck, s[0], s[1]), want, "{}: struck {name} contact {in_struck}", imp.crash.id);
-            assert_eq!(rec.struck_side, want, "{}", imp.crash.id);
+            assert_eq!(sector(in_struck, s[0], s[1]), want, "{id}: struck {name} contact {in_struck}");
+            assert_eq!(rec.struck_side, want, "{id}");
         } else if i == af {
             let ok = match p {
                 Part::Front => in_af.x > 0.6 * s[0] / 2.0,
@@ -140,14 +146,13 @@ fn check_contact(imp: &Imported, stated: &[(String, Part)]) -> Tracks {
                 Part::Right => in_af.y < -0.6 * s[1] / 2.0,
                 Part::Rear => in_af.x < -0.6 * s[0] / 2.0,
             };
-            assert!(ok, "{}: striker {name} touches at {in_af}, not its {p:?}", imp.crash.id);
+            assert!(ok, "{id}: striker {name} touches at {in_af}, not its {p:?}");
         } else {
-            panic!("{}: {name} is damaged in the source but not in the staged impact", imp.crash.id);
+            panic!("{id}: {name} is damaged in the source but not in the staged impact");
         }
         checked += 1;
     }
-    assert!(checked >= 1, "{}: nothing checked", imp.crash.id);
-    t
+    assert!(checked >= 1, "{id}: nothing checked");
 }
 
 #[test]
@@ -181,19 +186,66 @@ fn safe_contacts_land_on_the_parts_in_point_of_impact() {
         let mut sources = SourceMap::default();
         let imp = ciren::import_safe(&p, &mut sources).unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
         let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&p).expect("read")).expect("json");
-        let poi = json["dsl"]["Conflict"]["point_of_impact"].as_str().expect("point_of_impact").to_ascii_lowercase();
-        // "PART of Vn" phrases, read independently of the importer's parser.
-        let mut stated = Vec::new();
-        for (i, _) in poi.match_indices(" of v") {
-            let n = poi[i + 5..].chars().take_while(char::is_ascii_digit).collect::<String>();
-            let before: Vec<&str> = poi[..i].split_whitespace().collect();
-            let two = before.iter().rev().take(2).rev().copied().collect::<Vec<_>>().join(" ");
-            let one = before.last().copied().unwrap_or("");
-            if let Some(pt) = part(&two).or_else(|| part(one)) {
-                stated.push((format!("v{n}"), pt));
+        let poi = json["dsl"]["Conflict"]["point_of_impact"].as_str().expect("point_of_impact");
+        check_contact(&imp, &stated_parts(poi));
+    }
+}
+
+/// The "PART of Vn" phrases of a `point_of_impact`, read independently of the importer's parser.
+fn stated_parts(poi: &str) -> Vec<(String, Part)> {
+    let poi = poi.to_ascii_lowercase();
+    let mut stated = Vec::new();
+    for (i, _) in poi.match_indices(" of v") {
+        let n = poi[i + 5..].chars().take_while(char::is_ascii_digit).collect::<String>();
+        let before: Vec<&str> = poi[..i].split_whitespace().collect();
+        let two = before.iter().rev().take(2).rev().copied().collect::<Vec<_>>().join(" ");
+        let one = before.last().copied().unwrap_or("");
+        if let Some(pt) = part(&two).or_else(|| part(one)) {
+            stated.push((format!("v{n}"), pt));
+        }
+    }
+    stated
+}
+
+/// SAFE extractions whose `Conflict` lists several impacts (tests/fixtures/safe-chains/: a
+/// rear-end chain of three, a junction crash then a rear end into the struck car) import with
+/// one conflict per entry, and on the rolled-out boxes each impact lands on the parts its
+/// `point_of_impact` names, in the listed order; no pair outside the entries touches.
+#[test]
+fn every_impact_of_a_safe_list_lands_on_its_parts_in_order() {
+    let files = dirs("tests/fixtures/safe-chains", false);
+    assert_eq!(files.len(), 2);
+    for p in files {
+        let mut sources = SourceMap::default();
+        let imp = ciren::import_safe(&p, &mut sources).unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+        let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&p).expect("read")).expect("json");
+        let list = json["dsl"]["Conflict"].as_array().expect("a list");
+        let id = imp.crash.id.clone();
+        let scen = rocc::check::check_text(&imp.file_name(), &imp.staged.text, Path::new("."), &mut sources)
+            .unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+        assert_eq!(scen.conflicts.len(), list.len(), "{id}: one conflict per entry");
+        let t = rocc::compile::front(scen, None).expect("front").tracks;
+        let mut frames = vec![];
+        let mut pairs = vec![];
+        for (i, c) in list.iter().enumerate() {
+            let rec =
+                t.impacts.iter().find(|r| r.conflict == i).unwrap_or_else(|| panic!("{id}: entry {i}: no impact"));
+            let stated = stated_parts(c["point_of_impact"].as_str().expect("point_of_impact"));
+            assert_eq!(stated.len(), 2, "{id}: entry {i} names both parts");
+            check_parts(&t, rec, &stated, &id);
+            // The first touch of the pair is this impact's, not an earlier graze.
+            let first = (0..t.frames).find(|&f| obb(&t, rec.at_fault, f).overlaps(&obb(&t, rec.struck, f)));
+            assert!(first.is_some_and(|f| f + 15 >= rec.frame), "{id}: entry {i} touched at {first:?}");
+            frames.push(rec.frame);
+            pairs.push((rec.at_fault.min(rec.struck), rec.at_fault.max(rec.struck)));
+        }
+        assert!(frames.windows(2).all(|w| w[0] < w[1]), "{id}: impacts out of order {frames:?}");
+        for a in 0..t.agents.len() {
+            for b in a + 1..t.agents.len() {
+                let touch = (0..t.frames).any(|f| obb(&t, a, f).overlaps(&obb(&t, b, f)));
+                assert!(pairs.contains(&(a, b)) || !touch, "{id}: {} and {} touch", t.agents[a].name, t.agents[b].name);
             }
         }
-        check_contact(&imp, &stated);
     }
 }
 

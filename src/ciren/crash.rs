@@ -294,6 +294,69 @@ impl Crash {
     }
 }
 
+/// How a list of contacts in time order breaks the chains the importers stage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ChainBreak {
+    /// The striker struck another vehicle before.
+    StrikesAgain,
+    /// The striker was struck before.
+    StrikesAfterStruck,
+    /// The pair met before.
+    MetAgain,
+}
+
+impl ChainBreak {
+    /// The reason, `earlier` naming the contact it conflicts with (`event 2`).
+    pub fn say(self, k: &ConflictDesc, earlier: &str) -> String {
+        match self {
+            ChainBreak::StrikesAgain => format!("{} strikes again (it struck in {earlier})", k.at_fault),
+            ChainBreak::StrikesAfterStruck => format!("{} strikes after it was struck in {earlier}", k.at_fault),
+            ChainBreak::MetAgain => format!("{} and {} met already in {earlier}", k.at_fault, k.struck),
+        }
+    }
+    /// What the importers can stage instead.
+    pub fn help(self) -> &'static str {
+        match self {
+            ChainBreak::MetAgain => {
+                "two vehicles are staged to crash once (the language's E0123): keep the pair's first contact"
+            }
+            _ => {
+                "after its first crash a vehicle only slides to rest; the importers place a struck fixed object where \
+                 that slide goes, but not another vehicle: they stage chains where each vehicle strikes another \
+                 once, before it is struck"
+            }
+        }
+    }
+}
+
+/// The first contact of `conflicts` (time order) that breaks the chain, the earlier one it
+/// conflicts with, and how: each vehicle strikes another once, before it is struck, and a pair
+/// meets once. A strike into an object on a slide (`on_slide`) is brought about by that slide:
+/// skipped.
+pub fn chain_break(
+    conflicts: &[ConflictDesc],
+    on_slide: impl Fn(&ConflictDesc) -> bool,
+) -> Option<(usize, usize, ChainBreak)> {
+    let pair = |x: &ConflictDesc| {
+        let mut p = [x.at_fault.clone(), x.struck.clone()];
+        p.sort();
+        p
+    };
+    for (i, k) in conflicts.iter().enumerate().filter(|(_, k)| !on_slide(k)) {
+        let before = || conflicts[..i].iter().enumerate().filter(|(_, x)| !on_slide(x));
+        if let Some((j, _)) = before().find(|(_, x)| pair(x) == pair(k)) {
+            return Some((i, j, ChainBreak::MetAgain));
+        }
+        if let Some((j, _)) = before().find(|(_, x)| x.at_fault == k.at_fault) {
+            return Some((i, j, ChainBreak::StrikesAgain));
+        }
+        if let Some((j, _)) = before().find(|(_, x)| x.struck == k.at_fault) {
+            return Some((i, j, ChainBreak::StrikesAfterStruck));
+        }
+    }
+    None
+}
+
 /// The rocc impact name.
 pub fn impact_name(i: Impact) -> &'static str {
     crate::check::scenario::IMPACTS.iter().find(|x| x.1 == i).map(|x| x.0).unwrap_or("angle")

@@ -14,7 +14,6 @@ use crate::ciren::case::{CaseVehicle, Coded, Event};
 use crate::ciren::crash::{ConflictDesc, Crash, Face, ObjectDesc, Side};
 use crate::diag::Diagnostic;
 use crate::source::Span;
-use std::collections::BTreeMap;
 
 /// What an event's vehicle met.
 pub(super) enum Party<'a> {
@@ -262,40 +261,14 @@ fn slide_object(
 /// The language's rules for several crashes, checked before emission: a vehicle strikes in one
 /// contact, is struck only after (or when) it strikes, and a pair meets once.
 pub(super) fn check_order(cx: &Ctx, crash: &Crash, events: &[(u32, Span)]) -> Result<(), Vec<Diagnostic>> {
-    let mut strikes: BTreeMap<&str, usize> = BTreeMap::new();
-    let mut first_struck: BTreeMap<&str, usize> = BTreeMap::new();
-    for (i, k) in crash.conflicts.iter().enumerate() {
-        // A strike on the slide after an impact is brought about by that slide, not staged.
-        if crash.on_slide(k) {
-            continue;
-        }
-        let (ev, span) = events[i];
-        let refuse = |msg: String| {
-            Err(cx.err(
-                "E0804",
-                format!("event {ev}: {msg}"),
-                Some((span, "this event")),
-                "after its first crash a vehicle only slides to rest; the importer places a struck fixed object where \
-                 that slide goes, but not another vehicle: it stages chains where each vehicle strikes another once, \
-                 before it is struck",
-            ))
-        };
-        if let Some(&j) = strikes.get(k.at_fault.as_str()) {
-            return refuse(format!("{} strikes again (it struck in event {})", k.at_fault, events[j].0));
-        }
-        if let Some(&j) = first_struck.get(k.at_fault.as_str()) {
-            return refuse(format!("{} strikes after it was struck in event {}", k.at_fault, events[j].0));
-        }
-        fn pair(x: &ConflictDesc) -> [&str; 2] {
-            let mut p = [x.at_fault.as_str(), x.struck.as_str()];
-            p.sort();
-            p
-        }
-        if let Some(j) = crash.conflicts[..i].iter().position(|x| pair(x) == pair(k)) {
-            return refuse(format!("{} and {} met already in event {}", k.at_fault, k.struck, events[j].0));
-        }
-        strikes.insert(&k.at_fault, i);
-        first_struck.entry(&k.struck).or_insert(i);
-    }
-    Ok(())
+    let Some((i, j, how)) = crate::ciren::crash::chain_break(&crash.conflicts, |k| crash.on_slide(k)) else {
+        return Ok(());
+    };
+    let ((ev, span), earlier) = (events[i], events[j].0);
+    Err(cx.err(
+        "E0804",
+        format!("event {ev}: {}", how.say(&crash.conflicts[i], &format!("event {earlier}"))),
+        Some((span, "this event")),
+        how.help(),
+    ))
 }

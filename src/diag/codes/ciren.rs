@@ -58,8 +58,8 @@ non-collision, a pedestrian record, a contact by a vehicle's back, top or underc
 strikes with a front or a side), a fixed object rocc has no kind for (ditch, embankment, curb),
 a side impact with a tree, a T-junction approached from its missing leg, a vehicle travelling
 across a road the record codes without a junction (out of a driveway: write it by hand on a
-`t_junction`), or a SAFE extraction with one vehicle, more than two, or several impacts. For records with several
-events: a vehicle that strikes another vehicle in two events, or strikes another vehicle after
+`t_junction`), or a SAFE extraction with one vehicle, or more than two and one impact. For
+records with several events and SAFE `Conflict` lists: a vehicle that strikes another vehicle in two events, or strikes another vehicle after
 it was struck (the slide after an impact is not staged; a fixed object is placed where it goes,
 another vehicle is not), a pair that meets in two events, a later event involving neither
 vehicle of the first-ranked one, or a fixed object struck before any other contact of its
