@@ -404,7 +404,7 @@ fn generated_files_check_format_and_are_deterministic() {
 // ------------------------------------------------------------------ generated records
 
 /// A later contact of a generated record: vehicle `by` (3 brings a third vehicle) with its
-/// `area` against `other` (0: a tree) and its `other_area`.
+/// `area` against `other` (0: a tree, or a pole when `pole`) and its `other_area`.
 #[derive(Debug, Clone)]
 struct Extra {
     by: u32,
@@ -412,6 +412,7 @@ struct Extra {
     other: u32,
     other_area: &'static str,
     dir: Option<&'static str>,
+    pole: bool,
 }
 
 /// One coded record built from the fields the importer reads: the configuration, the narrated
@@ -497,7 +498,9 @@ impl Record {
             f2 = form(1),
             f3 = if self.extras.iter().any(|e| e.by == 3 || e.other == 3) { form(2) } else { String::new() },
             later = self.extras.iter().enumerate().map(|(i, e)| {
-                let contacted = if e.other == 0 {
+                let contacted = if e.other == 0 && e.pole {
+                    r#"<Contacted value="43" sasCode="43">Pole/post (&lt;= 10 cm in diameter)</Contacted><ContactedAreaOfDamage value="1" sasCode="0">Not a motor vehicle</ContactedAreaOfDamage>"#.to_string()
+                } else if e.other == 0 {
                     r#"<Contacted value="42" sasCode="42">Tree(&gt; 10 cm in diameter)</Contacted><ContactedAreaOfDamage value="1" sasCode="0">Not a motor vehicle</ContactedAreaOfDamage>"#.to_string()
                 } else {
                     format!(
@@ -542,17 +545,21 @@ fn record() -> impl proptest::strategy::Strategy<Value = Record> {
         prop_oneof![Just("Straight"), Just("Curve right"), Just("Curve left")],
         1u32..=4,
     );
-    // Mostly a third vehicle's front into the pair (a chain), sometimes a tree or a second strike.
-    let by = prop_oneof![3 => Just(3u32), 1 => 1u32..=2];
+    // Mostly a third vehicle's front into the pair (a chain), often a tree or pole struck on the
+    // slide after the first impact (by either vehicle of the pair, with any face), or a second
+    // strike.
+    let by = prop_oneof![2 => Just(3u32), 1 => 1u32..=2];
     let front_mostly = prop_oneof![3 => Just("Front"), 1 => area.clone()];
-    let extra =
-        (by, front_mostly, 0u32..=3, area.clone(), dir.clone()).prop_map(|(by, area, other, other_area, dir)| Extra {
+    let extra = (by, front_mostly, 0u32..=3, area.clone(), dir.clone(), proptest::bool::ANY).prop_map(
+        |(by, area, other, other_area, dir, pole)| Extra {
             by,
             area,
             other: if other == by { 0 } else { other },
             other_area,
             dir,
-        });
+            pole,
+        },
+    );
     let extras = proptest::collection::vec(extra, 0..=2);
     (road, [dir.clone(), dir], [area.clone(), area], [mv.clone(), mv], [body.clone(), body], extras).prop_map(
         |((config, junction, relation, alignment, lanes), dirs, areas, moves, bodies, extras)| Record {
@@ -586,8 +593,17 @@ proptest::proptest! {
             // Every later contact is staged, none left out.
             proptest::prop_assert_eq!(imp.crash.conflicts.len(), 1 + r.extras.len());
             proptest::prop_assert_eq!(imp.staged.text.matches("conflict {").count(), 1 + r.extras.len());
+            // Every object a later event strikes stands where the striker's slide took it.
+            let objects = r.extras.iter().filter(|e| e.other == 0).count();
+            proptest::prop_assert_eq!(imp.staged.text.matches(" { at (").count(), objects);
         }
         if let Err(diags) = &got {
+            // An object struck on the slide never breaks the chain rules.
+            if r.extras.iter().all(|e| e.other == 0) {
+                for x in diags {
+                    proptest::prop_assert!(!x.message.contains("strikes again") && !x.message.contains("strikes after"));
+                }
+            }
                 for x in diags {
                 proptest::prop_assert!(
                     !x.message.contains("does not check"),

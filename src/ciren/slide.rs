@@ -135,11 +135,12 @@ fn obb(t: &Tracks, i: usize, f: usize) -> Obb {
 }
 
 /// Places (x, y, heading) tried for an object of `kind` on agent `a`'s slide from frame `f0`:
-/// touching the middle of its `face` at frames where it still slides at 1 m/s or more with that
-/// face leading the motion (within 78 deg), no sooner than 0.2 s after the impact and no
-/// later than 2 s before the clip ends (the strike lies inside the staged clip). The middle of
-/// those frames first, then a quarter either way, then the ends. The object faces the striker:
-/// a tree or pole with its front, a wall or barrier with its long side.
+/// 0.1 m into the middle of its `face` (deep enough to be a strike, not a graze) at frames where
+/// it still slides at 1 m/s or more with that face leading the motion (within 78 deg), no
+/// sooner than 0.2 s after the impact and no later than 2 s before the clip ends (the strike
+/// lies inside the staged clip). The middle of those frames first, then a quarter either way,
+/// then the ends. The object faces the striker: a tree or pole with its front, a wall or
+/// barrier with its long side.
 fn places(t: &Tracks, a: usize, f0: usize, face: Face, kind: &str) -> Vec<[f64; 3]> {
     let (hl, hw) = (t.agents[a].size[0] / 2.0, t.agents[a].size[1] / 2.0);
     let (at, normal) = match face {
@@ -171,19 +172,19 @@ fn places(t: &Tracks, a: usize, f0: usize, face: Face, kind: &str) -> Vec<[f64; 
         if rot.rotate(normal).dot(u) < 0.2 {
             continue;
         }
-        let c = DVec2::new(p.x, p.y) + rot.rotate(at) + u * depth;
+        let c = DVec2::new(p.x, p.y) + rot.rotate(at) + u * (depth - 0.1);
         let heading = if broadside { u.perp().to_angle() } else { (-u).to_angle() };
-        // Clear of everyone else over the whole clip, with a margin: the other party of the
-        // impact often slides beside the striker.
+        // Clear of everyone else over the whole clip by 0.1 m: the other party of the impact
+        // often slides beside the striker.
         let (length, width) = if broadside { (across, 2.0 * depth) } else { (2.0 * depth, across) };
-        let me = Obb { center: c, yaw: heading, length: length + 0.6, width: width + 0.6 };
+        let me = Obb { center: c, yaw: heading, length: length + 0.2, width: width + 0.2 };
         let clear = (0..t.agents.len()).filter(|&j| j != a).all(|j| (0..t.frames).all(|g| !obb(t, j, g).overlaps(&me)));
         if clear {
             ok.push([c.x, c.y, heading]);
         }
     }
     let mut out: Vec<[f64; 3]> = Vec::new();
-    for q in [0.5, 0.25, 0.75, 0.1, 0.9, 0.0] {
+    for q in [0.5, 0.25, 0.75, 0.1, 0.9, 0.0, 0.4, 0.6] {
         let Some(n) = ok.len().checked_sub(1) else { break };
         let p = ok[(q * n as f64).round() as usize];
         if !out.contains(&p) {
