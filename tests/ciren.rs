@@ -430,6 +430,8 @@ struct Record {
     areas: [&'static str; 2],
     moves: [&'static str; 2],
     bodies: [&'static str; 2],
+    /// V3 is coded stopped (a car a slide may run into).
+    third_stopped: bool,
 }
 
 impl Record {
@@ -465,7 +467,7 @@ impl Record {
                 rel = self.relation,
                 l = self.lanes,
                 al = self.alignment,
-                mv = self.moves[n % 2],
+                mv = if n == 2 && self.third_stopped { "Stopped in traffic lane" } else { self.moves[n % 2] },
             )
         };
         format!(
@@ -547,7 +549,7 @@ fn record() -> impl proptest::strategy::Strategy<Value = Record> {
     );
     // Mostly a third vehicle's front into the pair (a chain), often a tree or pole struck on the
     // slide after the first impact (by either vehicle of the pair, with any face), or a second
-    // strike.
+    // strike, into the third vehicle too (stopped or moving).
     let by = prop_oneof![2 => Just(3u32), 1 => 1u32..=2];
     let front_mostly = prop_oneof![3 => Just("Front"), 1 => area.clone()];
     let extra = (by, front_mostly, 0u32..=3, area.clone(), dir.clone(), proptest::bool::ANY).prop_map(
@@ -561,18 +563,10 @@ fn record() -> impl proptest::strategy::Strategy<Value = Record> {
         },
     );
     let extras = proptest::collection::vec(extra, 0..=2);
-    (road, [dir.clone(), dir], [area.clone(), area], [mv.clone(), mv], [body.clone(), body], extras).prop_map(
-        |((config, junction, relation, alignment, lanes), dirs, areas, moves, bodies, extras)| Record {
-            extras,
-            config,
-            junction,
-            relation,
-            alignment,
-            lanes,
-            dirs,
-            areas,
-            moves,
-            bodies,
+    let parts = (road, [dir.clone(), dir], [area.clone(), area], [mv.clone(), mv], [body.clone(), body]);
+    (parts, extras, proptest::bool::ANY).prop_map(
+        |(((config, junction, relation, alignment, lanes), dirs, areas, moves, bodies), extras, third_stopped)| {
+            Record { extras, config, junction, relation, alignment, lanes, dirs, areas, moves, bodies, third_stopped }
         },
     )
 }
@@ -836,13 +830,14 @@ fn coded_contacts(xml: &str) -> Vec<CodedContact> {
     out
 }
 
-/// A vehicle that strikes a fixed object after its first impact (tests/fixtures/ciren-slides/:
-/// a car struck at a junction slides into a pole): the record imports, the object is placed
-/// where the slide goes, and on the rolled-out boxes each contact happens in event order, within
-/// 1.5 s of its `at`: the struck vehicle on its coded side and the striker with its front, then
-/// the sliding vehicle's coded face on the object. No one else touches the object.
+/// A vehicle that strikes again after its first impact, on its slide
+/// (tests/fixtures/ciren-slides/: a car struck at a junction slides into a pole, or into a
+/// stopped car): the record imports, the struck party is placed where the slide goes, and on
+/// the rolled-out boxes each contact happens in event order, within 1.5 s of its `at`: a struck
+/// vehicle on its coded side, the striker with its coded face. No pair outside the events
+/// touches.
 #[test]
-fn a_struck_car_slides_into_a_pole_with_its_coded_face() {
+fn strikes_on_a_slide_land_on_their_coded_sides() {
     let mut files: Vec<PathBuf> = std::fs::read_dir("tests/fixtures/ciren-slides")
         .expect("slide records")
         .map(|e| e.expect("entry").path())
@@ -860,10 +855,18 @@ fn a_struck_car_slides_into_a_pole_with_its_coded_face() {
         let id = imp.crash.id.clone();
         let events = coded_contacts(&xml);
         assert_eq!(at.len(), events.len(), "{id}: one conflict per event");
-        assert!(events.iter().any(|e| e.3.is_none()), "{id}: an object is struck");
+        // Some event's striker was in an earlier one: it strikes on its slide.
+        let slides = events.iter().enumerate().any(|(i, e)| {
+            let striker = match e.3 {
+                Some((o, Part::Front)) if e.2 != Part::Front => o,
+                _ => e.1,
+            };
+            events[..i].iter().any(|x| x.1 == striker || x.3.is_some_and(|(o, _)| o == striker))
+        });
+        assert!(slides, "{id}: a strike on a slide");
         let idx = |n: &str| t.agents.iter().position(|a| a.name == n).expect("agent");
         let objects: Vec<usize> = (0..t.agents.len()).filter(|&i| t.agents[i].name.starts_with("obj")).collect();
-        let mut firsts = vec![];
+        let (mut firsts, mut pairs) = (vec![], vec![]);
         for (i, &(ev, v, va, other)) in events.iter().enumerate() {
             let ((a, face), b, struck) = match other {
                 Some((o, oa)) => {
@@ -896,13 +899,13 @@ fn a_struck_car_slides_into_a_pole_with_its_coded_face() {
             };
             assert!(on_face, "{id}: event {ev}: {} touches at {on_striker:?}, not its {face:?}", t.agents[a].name);
             firsts.push(first);
+            pairs.push((a.min(b), a.max(b)));
         }
         assert!(firsts.windows(2).all(|w| w[0] <= w[1]), "{id}: contacts out of order {firsts:?}");
-        for &o in &objects {
-            let striker = idx(&format!("v{}", events.iter().find(|e| e.3.is_none()).expect("object event").1));
-            for a in (0..t.agents.len()).filter(|&a| a != o && a != striker) {
-                let touch = (0..t.frames).any(|fr| obb(&t, a, fr).overlaps(&obb(&t, o, fr)));
-                assert!(!touch, "{id}: {} touches {}", t.agents[a].name, t.agents[o].name);
+        for a in 0..t.agents.len() {
+            for b in a + 1..t.agents.len() {
+                let touch = (0..t.frames).any(|fr| obb(&t, a, fr).overlaps(&obb(&t, b, fr)));
+                assert!(pairs.contains(&(a, b)) || !touch, "{id}: {} and {} touch", t.agents[a].name, t.agents[b].name);
             }
         }
     }

@@ -163,6 +163,10 @@ pub struct VehicleDesc {
     pub lane: u32,
     pub speed_kmh: f64,
     pub manoeuvre: Manoeuvre,
+    /// Stopped where a vehicle sliding from an earlier impact strikes it (`ciren::slide`); its
+    /// world pose once placed there: x, y (m) and heading (rad).
+    pub on_slide: bool,
+    pub at: Option<[f64; 3]>,
     pub notes: Vec<String>,
 }
 
@@ -182,7 +186,7 @@ pub struct ObjectDesc {
     /// Which side of the striker's road it stands on.
     pub side: Side,
     /// Struck by a vehicle sliding from an earlier impact: it stands where the slide carries the
-    /// striker (`emit::slide`), not beside the road.
+    /// striker (`ciren::slide`), not beside the road.
     pub on_slide: bool,
     /// Its world pose once placed on the slide: x, y (m) and heading (rad).
     pub at: Option<[f64; 3]>,
@@ -288,9 +292,11 @@ impl Crash {
     pub fn vehicle(&self, name: &str) -> Option<&VehicleDesc> {
         self.vehicles.iter().find(|v| v.name == name)
     }
-    /// Whether conflict `k` strikes an object placed on its striker's slide (not staged).
+    /// Whether conflict `k` strikes an object or a stopped vehicle placed on its striker's slide
+    /// (not staged).
     pub fn on_slide(&self, k: &ConflictDesc) -> bool {
         self.objects.iter().any(|o| o.name == k.struck && o.on_slide)
+            || self.vehicles.iter().any(|v| v.name == k.struck && v.on_slide)
     }
 }
 

@@ -245,7 +245,16 @@ pub fn emit(c: &Crash, st: Staging) -> String {
         // A single-vehicle crash into an object: the object stands 10 m past the centre.
         let d = if c.objects.iter().all(|o| o.on_slide) { *d } else { (d - 10.0).max(3.0) };
         let _ = writeln!(out, "    agent {}: {} {{", v.name, v.kind);
-        let _ = writeln!(out, "        at {}.in[{}], {} m before {}", v.arm, v.lane, num(d), landmark(r.template));
+        match v.at {
+            Some([x, y, h]) => {
+                let (x, y, h) = (num2(x), num2(y), num(h.to_degrees()));
+                let _ = writeln!(out, "        at ({x} m, {y} m) heading {h} deg");
+            }
+            None => {
+                let _ =
+                    writeln!(out, "        at {}.in[{}], {} m before {}", v.arm, v.lane, num(d), landmark(r.template));
+            }
+        }
         let _ = writeln!(
             out,
             "        speed {} km/h",
@@ -307,9 +316,10 @@ const FORCE_ROUNDS: usize = 4;
 /// speeds `impact::propose` derives from that contact's headings are taken and the staging
 /// starts again (at most `FORCE_ROUNDS` times). An error says what the last attempt did.
 ///
-/// Objects struck on a slide are placed after the staged contacts are (`slide::stage`).
+/// Objects and stopped vehicles struck on a slide are placed after the staged contacts are
+/// (`slide::stage`).
 pub fn stage(c: &Crash) -> Result<Staged, Vec<Diagnostic>> {
-    if c.objects.iter().any(|o| o.on_slide) {
+    if c.conflicts.iter().any(|k| c.on_slide(k)) {
         return super::slide::stage(c);
     }
     stage_staged(c).map(|(s, _)| s)

@@ -11,8 +11,9 @@
 //! face where that face leads the motion. The first place whose contact lands on the coded face,
 //! with no one else touching the object, is kept: deterministic, and never unverified.
 
-use super::crash::{Crash, Face};
+use super::crash::{ConflictDesc, Crash, Face};
 use super::emit::{Staged, Staging, contacts_on_sides, roll, stage_staged};
+use crate::check::scenario::Point;
 use crate::diag::Diagnostic;
 use crate::geom::Obb;
 use crate::rollout::Tracks;
@@ -23,10 +24,14 @@ pub fn stage(c: &Crash) -> Result<Staged, Vec<Diagnostic>> {
     let mut base = c.clone();
     base.conflicts.retain(|k| !c.on_slide(k));
     base.objects.retain(|o| !o.on_slide);
+    base.vehicles.retain(|v| !v.on_slide);
     let (staged, adjusted) = stage_staged(&base)?;
     let st = staged.staging;
     let mut crash = c.clone();
-    crash.vehicles = adjusted.vehicles;
+    for v in adjusted.vehicles {
+        let i = crash.vehicles.iter().position(|x| x.name == v.name).expect("the same vehicles");
+        crash.vehicles[i] = v;
+    }
     for i in 0..c.conflicts.len() {
         if c.on_slide(&c.conflicts[i]) {
             place(&mut crash, i, st)?;
@@ -61,17 +66,20 @@ fn upto(c: &Crash, i: usize, with_i: bool, with_obj: bool) -> Crash {
     let keep = |j: usize| !c.on_slide(&c.conflicts[j]) || j < i || (j == i && with_i);
     out.conflicts = (0..c.conflicts.len()).filter(|&j| keep(j)).map(|j| c.conflicts[j].clone()).collect();
     let obj = &c.conflicts[i].struck;
-    out.objects
-        .retain(|o| !o.on_slide || out.conflicts.iter().any(|k| k.struck == o.name) || (with_obj && &o.name == obj));
+    let kept = |on_slide: bool, name: &str| {
+        !on_slide || out.conflicts.iter().any(|k| k.struck == name) || (with_obj && name == obj)
+    };
+    let objects = c.objects.iter().filter(|o| kept(o.on_slide, &o.name)).cloned().collect();
+    let vehicles = c.vehicles.iter().filter(|v| kept(v.on_slide, &v.name)).cloned().collect();
+    (out.objects, out.vehicles) = (objects, vehicles);
     out
 }
 
 /// Place the object of slide strike `i` (its pose, the strike's time and struck side).
 fn place(crash: &mut Crash, i: usize, st: Staging) -> Result<(), Vec<Diagnostic>> {
     let k = crash.conflicts[i].clone();
-    let oi = crash.objects.iter().position(|o| o.name == k.struck).expect("a slide object");
-    let kind = crash.objects[oi].kind.clone();
-    let what = format!("{} ({kind}) where {}'s slide takes its {}", k.struck, k.at_fault, k.face.name());
+    let target = Target::of(crash, &k);
+    let what = format!("{} ({}) where {}'s slide takes its {}", k.struck, target.kind, k.at_fault, k.face.name());
     let before = upto(crash, i, false, false);
     let (_, t) = roll(&before, st)?.map_err(|m| refuse(crash, &format!("{what}: {m}")))?;
     let a = agent(&t, &k.at_fault).expect("the striker is an agent");
@@ -81,8 +89,8 @@ fn place(crash: &mut Crash, i: usize, st: Staging) -> Result<(), Vec<Diagnostic>
         return Err(refuse(crash, &format!("{what}: {} has no contact before it", k.at_fault)));
     };
     let mut last = format!("its {} leads the slide at 1 m/s or more nowhere clear of the others", k.face.name());
-    for pose in places(&t, a, f0, k.face, &kind) {
-        crash.objects[oi].at = Some(pose);
+    for pose in places(&t, a, f0, k.face, &target) {
+        target.set(crash, Some(pose));
         let probe = upto(crash, i, false, true);
         let (_, t) = match roll(&probe, st)? {
             Ok(x) => x,
@@ -107,11 +115,18 @@ fn place(crash: &mut Crash, i: usize, st: Staging) -> Result<(), Vec<Diagnostic>
         let (ab, ob) = (obb(&t, a, hit.frame), obb(&t, o, hit.frame));
         let p = crate::rollout::contact_centroid(&ab, &ob).unwrap_or((ab.center + ob.center) / 2.0);
         let local = (p - ob.center).rotate(DVec2::from_angle(-ob.yaw));
+        let side = crate::rollout::side_of(local, ob.length, ob.width);
+        // A vehicle's struck side is coded; an object's is the one the slide reaches.
+        if target.vehicle && side != k.point {
+            last = format!("{} is struck on its {}, not its {}", k.struck, side.name(), k.point.name());
+            continue;
+        }
         let mut trial = crash.clone();
         trial.conflicts[i].at = Some((hit.frame as f64 / t.rate * 10.0).round() / 10.0);
-        trial.conflicts[i].point = crate::rollout::side_of(local, ob.length, ob.width);
+        trial.conflicts[i].point = side;
         let check = upto(&trial, i, true, true);
-        match roll(&check, st)? {
+        let r = roll(&check, st)?;
+        match r {
             Ok((_, t)) => match contacts_on_sides(&check, &t) {
                 Ok(_) => {
                     *crash = trial;
@@ -123,6 +138,64 @@ fn place(crash: &mut Crash, i: usize, st: Staging) -> Result<(), Vec<Diagnostic>
         }
     }
     Err(refuse(crash, &format!("no place for {what}: {last}")))
+}
+
+/// What a slide strikes: an object, or a stopped vehicle on its coded side.
+struct Target {
+    name: String,
+    kind: String,
+    vehicle: bool,
+    /// Its box (length, width), the largest of its kind's sizes (the prelude's ranges).
+    size: (f64, f64),
+    /// Half its depth along the slide, and the outward normal (its own frame) of the side that
+    /// meets the striker.
+    depth: f64,
+    facing: DVec2,
+}
+
+impl Target {
+    fn of(c: &Crash, k: &ConflictDesc) -> Target {
+        let vehicle = c.vehicles.iter().find(|v| v.name == k.struck);
+        let kind = vehicle.map_or_else(
+            || c.objects.iter().find(|o| o.name == k.struck).map(|o| o.kind.clone()).unwrap_or_default(),
+            |v| v.kind.clone(),
+        );
+        let size = match kind.as_str() {
+            "tree" => (0.8, 0.8),
+            "pole" => (0.35, 0.35),
+            "wall" => (20.0, 0.4),
+            "jersey_barrier" => (3.8, 0.65),
+            "building" => (30.0, 20.0),
+            "hatchback" => (4.3, 1.8),
+            "suv" => (4.95, 2.0),
+            "pickup_truck" => (5.9, 2.05),
+            "van" => (5.5, 2.05),
+            "bus" => (12.5, 2.55),
+            "truck" => (9.5, 2.55),
+            "semi_truck" => (18.0, 2.6),
+            "motorcycle" => (2.3, 0.9),
+            _ => (4.9, 1.85),
+        };
+        // An object faces the striker with its front (a tree, a pole) or its long side (a wall,
+        // a barrier, a building); a vehicle with its coded side.
+        let facing = match (vehicle.is_some(), k.point) {
+            (false, _) if size.0 > 2.0 * size.1 => DVec2::Y,
+            (false, _) => DVec2::X,
+            (true, Point::Rear | Point::RearLeft | Point::RearRight) => -DVec2::X,
+            (true, Point::Left) => DVec2::Y,
+            (true, Point::Right) => -DVec2::Y,
+            (true, _) => DVec2::X,
+        };
+        let depth = if facing.x != 0.0 { size.0 / 2.0 } else { size.1 / 2.0 };
+        Target { name: k.struck.clone(), kind, vehicle: vehicle.is_some(), size, depth, facing }
+    }
+    fn set(&self, c: &mut Crash, at: Option<[f64; 3]>) {
+        if let Some(v) = c.vehicles.iter_mut().find(|v| v.name == self.name) {
+            v.at = at;
+        } else if let Some(o) = c.objects.iter_mut().find(|o| o.name == self.name) {
+            o.at = at;
+        }
+    }
 }
 
 fn agent(t: &Tracks, name: &str) -> Option<usize> {
@@ -141,21 +214,13 @@ fn obb(t: &Tracks, i: usize, f: usize) -> Obb {
 /// lies inside the staged clip). The middle of those frames first, then a quarter either way,
 /// then the ends. The object faces the striker: a tree or pole with its front, a wall or
 /// barrier with its long side.
-fn places(t: &Tracks, a: usize, f0: usize, face: Face, kind: &str) -> Vec<[f64; 3]> {
+fn places(t: &Tracks, a: usize, f0: usize, face: Face, target: &Target) -> Vec<[f64; 3]> {
     let (hl, hw) = (t.agents[a].size[0] / 2.0, t.agents[a].size[1] / 2.0);
     let (at, normal) = match face {
         Face::Front => (DVec2::new(hl, 0.0), DVec2::X),
         Face::Back => (DVec2::new(-hl, 0.0), -DVec2::X),
         Face::Left => (DVec2::new(0.0, hw), DVec2::Y),
         Face::Right => (DVec2::new(0.0, -hw), -DVec2::Y),
-    };
-    // Half its depth toward the striker, and its largest size across (the prelude's ranges).
-    let (depth, across, broadside) = match kind {
-        "tree" => (0.3, 0.8, false),
-        "pole" => (0.15, 0.35, false),
-        "wall" => (0.17, 20.0, true),
-        "jersey_barrier" => (0.32, 3.8, true),
-        _ => (7.0, 30.0, true),
     };
     let start = f0 + (0.2 * t.rate).round() as usize;
     let end = t.frames.saturating_sub(1 + (2.0 * t.rate).round() as usize);
@@ -172,11 +237,11 @@ fn places(t: &Tracks, a: usize, f0: usize, face: Face, kind: &str) -> Vec<[f64; 
         if rot.rotate(normal).dot(u) < 0.2 {
             continue;
         }
-        let c = DVec2::new(p.x, p.y) + rot.rotate(at) + u * (depth - 0.1);
-        let heading = if broadside { u.perp().to_angle() } else { (-u).to_angle() };
+        let c = DVec2::new(p.x, p.y) + rot.rotate(at) + u * (target.depth - 0.1);
+        let (length, width) = target.size;
+        let heading = (-u).to_angle() - target.facing.to_angle();
         // Clear of everyone else over the whole clip by 0.1 m: the other party of the impact
         // often slides beside the striker.
-        let (length, width) = if broadside { (across, 2.0 * depth) } else { (2.0 * depth, across) };
         let me = Obb { center: c, yaw: heading, length: length + 0.2, width: width + 0.2 };
         let clear = (0..t.agents.len()).filter(|&j| j != a).all(|j| (0..t.frames).all(|g| !obb(t, j, g).overlaps(&me)));
         if clear {

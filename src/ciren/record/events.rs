@@ -1,17 +1,19 @@
 //! Every contact of a case: the `EventSum` rows decoded, one per contact (a contact coded from
 //! both vehicles' rows counts once), in time order (the event number). The first-ranked contact
 //! sets the road and its pair; each other one joins the crash as a further conflict, its new
-//! vehicle placed on the same road; a fixed object struck after its striker's earlier contact is
-//! placed on that slide (`ciren::slide`); what the importer cannot stage (a vehicle striking
-//! another twice, a struck vehicle striking another later, a pair meeting twice, an object struck
-//! before any other contact of its striker) refuses the case with the reason.
+//! vehicle placed on the same road; a fixed object or a stopped vehicle struck after its
+//! striker's earlier contact is placed on that slide (`ciren::slide`); what the importer cannot
+//! stage (a vehicle striking one already in the crash twice or after it was struck, a moving
+//! vehicle struck on a slide, a pair meeting twice, an object struck before any other contact
+//! of its striker) refuses the case with the reason.
 
 use super::ctx::Ctx;
 use super::fields::{Area, area};
+use super::fields::{cx_class, manoeuvre, vehicle_kind};
 use super::pair::{extra_vehicle, pair_conflict};
 use crate::check::scenario::{Impact, Point};
 use crate::ciren::case::{CaseVehicle, Coded, Event};
-use crate::ciren::crash::{ConflictDesc, Crash, Face, ObjectDesc, Side};
+use crate::ciren::crash::{ConflictDesc, Crash, Face, Manoeuvre, ObjectDesc, Side, VehicleDesc};
 use crate::diag::Diagnostic;
 use crate::source::Span;
 
@@ -164,7 +166,12 @@ pub(super) fn join(
     };
     if let Some(n) = new {
         let v = cx.case.vehicles.iter().find(|v| v.number == n).expect("decoded vehicle");
-        let desc = extra_vehicle(cx, story, crash, v, &partner, impact)?;
+        let sliding = earlier.iter().rev().find(|k| k.at_fault == af_n || k.struck == af_n);
+        let desc = match sliding {
+            // Struck by a vehicle sliding from its earlier impact: stopped where the slide goes.
+            Some(k) if n == st => stopped_on_slide(cx, story, v, c, (&af_n, k))?,
+            _ => extra_vehicle(cx, story, crash, v, &partner, impact)?,
+        };
         crash.vehicles.push(desc);
     }
     crash.header.push(c.cite());
@@ -178,6 +185,51 @@ pub(super) fn join(
         clocks: Vec::new(),
         closing: None,
         notes: vec![format!("Event {}: {why} (EventSum damage areas).", c.ev.number)],
+    })
+}
+
+/// A vehicle the record brings, struck by `striker` on its slide from its earlier contact
+/// `before`: stopped where that slide goes (`ciren::slide`). A moving one would have to be timed
+/// onto the slide: refused.
+fn stopped_on_slide(
+    cx: &mut Ctx,
+    story: &crate::ciren::narrative::Narrative,
+    v: &CaseVehicle,
+    c: &Contact,
+    (striker, before): (&str, &ConflictDesc),
+) -> Result<VehicleDesc, Vec<Diagnostic>> {
+    let span = cx.tag_span(&c.ev.range, "EventSum");
+    let (man, man_cite) = manoeuvre(v, story.vehicle(v.number));
+    if man != Manoeuvre::Stopped {
+        return Err(cx.err(
+            "E0804",
+            format!(
+                "event {}: V{} is struck by {striker} on its slide from an earlier impact while moving ({man_cite}); \
+                 the importer places only a stopped vehicle or a fixed object where a slide goes",
+                c.ev.number, v.number
+            ),
+            Some((span, "this event")),
+            "import the case's other contacts, or write the vehicle into the imported scenario by hand",
+        ));
+    }
+    let (kind, kind_cite) = vehicle_kind(cx, v, cx_class(cx.case, v.number).as_ref())?;
+    let partner = if before.at_fault == striker { &before.struck } else { &before.at_fault };
+    Ok(VehicleDesc {
+        name: format!("v{}", v.number),
+        kind,
+        arm: "west",
+        lane: 1,
+        speed_kmh: 0.0,
+        manoeuvre: Manoeuvre::Stopped,
+        on_slide: true,
+        at: None,
+        notes: vec![
+            format!("v{}: {kind_cite}", v.number),
+            format!(
+                "stopped ({man_cite}), where {striker}'s slide from its impact with {partner} reaches it, its coded \
+                 side toward the slide"
+            ),
+        ],
     })
 }
 

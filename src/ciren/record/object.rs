@@ -66,6 +66,8 @@ pub(super) fn single_vehicle(
     let (speed, speed_cite) = speed_of(cx, me, limit, Manoeuvre::Straight);
     let rel = me.relation_to_junction.as_ref().map(|r| r.cite("RelationToJunction")).unwrap_or_default();
     let v = VehicleDesc {
+        on_slide: false,
+        at: None,
         name: format!("v{}", me.number),
         kind: kind_v,
         arm: "west",

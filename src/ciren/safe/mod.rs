@@ -488,6 +488,8 @@ fn map(cx: &mut Ctx, root: &Value, path: &Path) -> Result<Crash, Vec<Diagnostic>
         };
         notes.push(format!("Actions \"{}\" -> {}; speed: {speed_note}", a.action, man_word(man)));
         vehicles.push(VehicleDesc {
+            on_slide: false,
+            at: None,
             name: format!("v{}", a.n),
             kind: kind.into(),
             arm,

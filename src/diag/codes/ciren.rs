@@ -59,9 +59,10 @@ strikes with a front or a side), a fixed object rocc has no kind for (ditch, emb
 a side impact with a tree, a T-junction approached from its missing leg, a vehicle travelling
 across a road the record codes without a junction (out of a driveway: write it by hand on a
 `t_junction`), or a SAFE extraction with one vehicle, or more than two and one impact. For
-records with several events and SAFE `Conflict` lists: a vehicle that strikes another vehicle in two events, or strikes another vehicle after
-it was struck (the slide after an impact is not staged; a fixed object is placed where it goes,
-another vehicle is not), a pair that meets in two events, a later event involving neither
+records with several events and SAFE `Conflict` lists: a vehicle that strikes a vehicle
+already in the crash in two events, or after it was struck, or strikes a moving vehicle on its
+slide (the slide after an impact is not staged; a fixed object or a stopped vehicle is placed
+where it goes, others are not), a pair that meets in two events, a later event involving neither
 vehicle of the first-ranked one, or a fixed object struck before any other contact of its
 striker.
 
@@ -77,8 +78,8 @@ meets the coded clock direction of the principal force within an hour. Several i
 speeds solved for the coded force, are tried; this error means none of them landed there, and it
 names what the last attempt did. Nothing is written. Typical cause: an impact the rollout meets square-on (`angle`)
 between vehicles whose paths do not let the striker reach the struck side, e.g. a vehicle hit
-on its side by oncoming traffic after it spun. A fixed object struck on the slide after an
-impact is placed where the slide takes the striker's coded face; E0805 then says why no place
+on its side by oncoming traffic after it spun. A fixed object or stopped vehicle struck on
+the slide after an impact is placed where the slide takes the striker's coded face; E0805 then says why no place
 worked (that face never leads the slide at 1 m/s or more clear of the others, as when a T-bone
 striker stops against the car it struck).
 
