@@ -711,28 +711,11 @@ fn each_impact_meets_its_coded_clock_direction_and_delta_v() {
 /// Each `EventSum` of a record in event order: (event, vehicle, its area, other vehicle, its
 /// area), read with roxmltree, independently of the importer.
 fn coded_events(xml: &str) -> Vec<(u32, u32, Part, u32, Part)> {
-    let doc = roxmltree::Document::parse(xml).expect("xml");
-    let text = |e: roxmltree::Node, tag: &str| {
-        e.children().find(|n| n.has_tag_name(tag)).and_then(|n| n.text()).unwrap_or("").to_string()
+    let vehicle = |(e, v, a, o): CodedContact| {
+        let (o, oa) = o.expect("a vehicle");
+        (e, v, a, o, oa)
     };
-    let mut out: Vec<_> = doc
-        .descendants()
-        .filter(|n| n.has_tag_name("EventSum"))
-        .map(|e| {
-            let num = |a: &str| e.attribute(a).and_then(|x| x.parse::<u32>().ok()).expect("number");
-            let other = text(e, "Contacted").rsplit('#').next().and_then(|x| x.parse().ok()).expect("a vehicle");
-            let part = |t: String| part(t.split_whitespace().next().unwrap_or("")).expect("a part");
-            (
-                num("EventNumber"),
-                num("VehicleNumber"),
-                part(text(e, "AreaOfDamage")),
-                other,
-                part(text(e, "ContactedAreaOfDamage")),
-            )
-        })
-        .collect();
-    out.sort_by_key(|e| e.0);
-    out
+    coded_contacts(xml).into_iter().map(vehicle).collect()
 }
 
 /// Records with several contacts (tests/fixtures/ciren-chains/) import with one conflict per

@@ -309,6 +309,8 @@ pub enum ChainBreak {
     StrikesAfterStruck,
     /// The pair met before.
     MetAgain,
+    /// A party placed where a slide strikes it takes part in another contact.
+    PlacedOnSlide,
 }
 
 impl ChainBreak {
@@ -318,6 +320,9 @@ impl ChainBreak {
             ChainBreak::StrikesAgain => format!("{} strikes again (it struck in {earlier})", k.at_fault),
             ChainBreak::StrikesAfterStruck => format!("{} strikes after it was struck in {earlier}", k.at_fault),
             ChainBreak::MetAgain => format!("{} and {} met already in {earlier}", k.at_fault, k.struck),
+            ChainBreak::PlacedOnSlide => {
+                format!("{} and {}: one of them stands where a slide reaches it in {earlier}", k.at_fault, k.struck)
+            }
         }
     }
     /// What the importers can stage instead.
@@ -325,6 +330,9 @@ impl ChainBreak {
         match self {
             ChainBreak::MetAgain => {
                 "two vehicles are staged to crash once (the language's E0123): keep the pair's first contact"
+            }
+            ChainBreak::PlacedOnSlide => {
+                "the importer places a party where a slide strikes it for that strike alone: import the other contacts"
             }
             _ => {
                 "after its first crash a vehicle only slides to rest; the importers place a struck fixed object where \
@@ -337,8 +345,8 @@ impl ChainBreak {
 
 /// The first contact of `conflicts` (time order) that breaks the chain, the earlier one it
 /// conflicts with, and how: each vehicle strikes another once, before it is struck, and a pair
-/// meets once. A strike into an object on a slide (`on_slide`) is brought about by that slide:
-/// skipped.
+/// meets once. A strike on a slide (`on_slide`) is brought about by that slide: its striker
+/// may have struck before, and what it strikes there takes part in no other contact.
 pub fn chain_break(
     conflicts: &[ConflictDesc],
     on_slide: impl Fn(&ConflictDesc) -> bool,
@@ -348,11 +356,19 @@ pub fn chain_break(
         p.sort();
         p
     };
-    for (i, k) in conflicts.iter().enumerate().filter(|(_, k)| !on_slide(k)) {
-        let before = || conflicts[..i].iter().enumerate().filter(|(_, x)| !on_slide(x));
-        if let Some((j, _)) = before().find(|(_, x)| pair(x) == pair(k)) {
+    let involves = |x: &ConflictDesc, name: &str| x.at_fault == name || x.struck == name;
+    for (i, k) in conflicts.iter().enumerate() {
+        if let Some(j) = conflicts[..i].iter().position(|x| pair(x) == pair(k)) {
             return Some((i, j, ChainBreak::MetAgain));
         }
+        let placed = |(j, x): &(usize, &ConflictDesc)| *j != i && on_slide(x) && involves(k, &x.struck);
+        if let Some((j, _)) = conflicts.iter().enumerate().find(placed) {
+            return Some((i.max(j), i.min(j), ChainBreak::PlacedOnSlide));
+        }
+        if on_slide(k) {
+            continue;
+        }
+        let before = || conflicts[..i].iter().enumerate().filter(|(_, x)| !on_slide(x));
         if let Some((j, _)) = before().find(|(_, x)| x.at_fault == k.at_fault) {
             return Some((i, j, ChainBreak::StrikesAgain));
         }

@@ -311,21 +311,12 @@ pub fn on_coded_sides(
 /// Rounds of speed adjustment toward the coded force (clock direction, delta-V).
 const FORCE_ROUNDS: usize = 4;
 
-/// Emit, check and roll out; keep the first staging whose latched contacts are all on their
-/// coded sides and meet their coded force. When the sides are right but a force is not, the
-/// speeds `impact::propose` derives from that contact's headings are taken and the staging
-/// starts again (at most `FORCE_ROUNDS` times). An error says what the last attempt did.
-///
-/// Objects and stopped vehicles struck on a slide are placed after the staged contacts are
-/// (`slide::stage`).
-pub fn stage(c: &Crash) -> Result<Staged, Vec<Diagnostic>> {
-    if c.conflicts.iter().any(|k| c.on_slide(k)) {
-        return super::slide::stage(c);
-    }
-    stage_staged(c).map(|(s, _)| s)
-}
-
-/// `stage` of a crash whose every contact is staged; also the crash with the speeds taken.
+/// Emit, check and roll out a crash whose every contact is staged; keep the first staging whose
+/// latched contacts are all on their coded sides and meet their coded force. When the sides are
+/// right but a force is not, the speeds `impact::propose` derives from that contact's headings
+/// are taken and the staging starts again (at most `FORCE_ROUNDS` times). An error says what
+/// the last attempt did. Also the crash with the speeds taken. (`slide::stage` is the entry
+/// point: it places what a slide strikes after these are staged.)
 pub(super) fn stage_staged(c: &Crash) -> Result<(Staged, Crash), Vec<Diagnostic>> {
     let mut crash = c.clone();
     let mut last = String::new();
@@ -402,7 +393,7 @@ fn stage_sides(c: &Crash, last: &mut String) -> Result<Option<Rolled>, Vec<Diagn
     for (t, lag) in tries {
         let st = Staging { t_impact: t, lag };
         let (text, tracks) = match roll(c, st)? {
-            Ok(x) => x,
+            Ok((text, f)) => (text, f.tracks),
             Err(m) => {
                 *last = m;
                 continue;
@@ -427,12 +418,10 @@ fn stage_sides(c: &Crash, last: &mut String) -> Result<Option<Rolled>, Vec<Diagn
     Ok(None)
 }
 
-/// The text of `c` under `st` and its rolled-out tracks; the inner error says why the front
-/// refused it. A text the checker refuses is a bug in the importer, reported as one.
-pub(super) fn roll(
-    c: &Crash,
-    st: Staging,
-) -> Result<Result<(String, crate::rollout::Tracks), String>, Vec<Diagnostic>> {
+/// The text of `c` under `st` and its front (the checked scenario, the rolled-out tracks); the
+/// inner error says why the front refused it. A text the checker refuses is a bug in the
+/// importer, reported as one.
+pub(super) fn roll(c: &Crash, st: Staging) -> Result<Result<(String, crate::compile::Front), String>, Vec<Diagnostic>> {
     let text = emit(c, st);
     let mut sources = SourceMap::default();
     let name = format!("{}.scn", c.file_stem());
@@ -452,7 +441,7 @@ pub(super) fn roll(
         }
     };
     Ok(match crate::compile::front(scen, None) {
-        Ok(f) => Ok((text, f.tracks)),
+        Ok(f) => Ok((text, f)),
         Err(d) => Err(d.iter().map(|x| format!("{}: {}", x.code, x.message)).collect::<Vec<_>>().join("; ")),
     })
 }

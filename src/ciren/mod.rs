@@ -26,7 +26,8 @@ mod slide;
 
 pub use case::{CirenCase, read_case};
 pub use crash::Crash;
-pub use emit::{Staged, emit, stage};
+pub use emit::{Staged, emit};
+pub use slide::stage;
 
 use crate::diag::Diagnostic;
 use crate::source::SourceMap;

@@ -13,14 +13,20 @@
 
 use super::crash::{ConflictDesc, Crash, Face};
 use super::emit::{Staged, Staging, contacts_on_sides, roll, stage_staged};
-use crate::check::scenario::Point;
+use crate::check::scenario::{Kind, Point};
 use crate::diag::Diagnostic;
 use crate::geom::Obb;
 use crate::rollout::Tracks;
 use glam::DVec2;
+use std::collections::BTreeMap;
 
-/// Stage `c`: its staged contacts first, then each object struck on a slide, in time order.
+/// Emit, check and roll out `c`, keeping the first staging whose contacts land on their coded
+/// sides and meet their coded force (`emit::stage_staged`), then place each party struck on a
+/// slide, in time order. Deterministic; an error says what the last attempt did.
 pub fn stage(c: &Crash) -> Result<Staged, Vec<Diagnostic>> {
+    if !c.conflicts.iter().any(|k| c.on_slide(k)) {
+        return stage_staged(c).map(|(s, _)| s);
+    }
     let mut base = c.clone();
     base.conflicts.retain(|k| !c.on_slide(k));
     base.objects.retain(|o| !o.on_slide);
@@ -37,7 +43,7 @@ pub fn stage(c: &Crash) -> Result<Staged, Vec<Diagnostic>> {
             place(&mut crash, i, st)?;
         }
     }
-    let (text, tracks) = roll(&crash, st)?.map_err(|m| refuse(c, &m))?;
+    let (text, tracks) = roll(&crash, st)?.map(|(text, f)| (text, f.tracks)).map_err(|m| refuse(c, &m))?;
     let recs = contacts_on_sides(&crash, &tracks).map_err(|m| refuse(c, &m))?;
     Ok(Staged {
         text,
@@ -78,10 +84,11 @@ fn upto(c: &Crash, i: usize, with_i: bool, with_obj: bool) -> Crash {
 /// Place the object of slide strike `i` (its pose, the strike's time and struck side).
 fn place(crash: &mut Crash, i: usize, st: Staging) -> Result<(), Vec<Diagnostic>> {
     let k = crash.conflicts[i].clone();
-    let target = Target::of(crash, &k);
-    let what = format!("{} ({}) where {}'s slide takes its {}", k.struck, target.kind, k.at_fault, k.face.name());
+    let what = format!("{} where {}'s slide takes its {}", k.struck, k.at_fault, k.face.name());
     let before = upto(crash, i, false, false);
-    let (_, t) = roll(&before, st)?.map_err(|m| refuse(crash, &format!("{what}: {m}")))?;
+    let (_, front) = roll(&before, st)?.map_err(|m| refuse(crash, &format!("{what}: {m}")))?;
+    let target = Target::of(crash, &k, &front.scenario.kinds);
+    let t = front.tracks;
     let a = agent(&t, &k.at_fault).expect("the striker is an agent");
     // Its last contact before this strike: every conflict before `i` keeps its index here.
     let f0 = t.impacts.iter().filter(|r| r.conflict < i && (r.at_fault == a || r.struck == a)).map(|r| r.frame).max();
@@ -92,8 +99,8 @@ fn place(crash: &mut Crash, i: usize, st: Staging) -> Result<(), Vec<Diagnostic>
     for pose in places(&t, a, f0, k.face, &target) {
         target.set(crash, Some(pose));
         let probe = upto(crash, i, false, true);
-        let (_, t) = match roll(&probe, st)? {
-            Ok(x) => x,
+        let t = match roll(&probe, st)? {
+            Ok((_, f)) => f.tracks,
             Err(m) => {
                 last = m;
                 continue;
@@ -127,7 +134,7 @@ fn place(crash: &mut Crash, i: usize, st: Staging) -> Result<(), Vec<Diagnostic>
         let check = upto(&trial, i, true, true);
         let r = roll(&check, st)?;
         match r {
-            Ok((_, t)) => match contacts_on_sides(&check, &t) {
+            Ok((_, f)) => match contacts_on_sides(&check, &f.tracks) {
                 Ok(_) => {
                     *crash = trial;
                     return Ok(());
@@ -143,9 +150,8 @@ fn place(crash: &mut Crash, i: usize, st: Staging) -> Result<(), Vec<Diagnostic>
 /// What a slide strikes: an object, or a stopped vehicle on its coded side.
 struct Target {
     name: String,
-    kind: String,
     vehicle: bool,
-    /// Its box (length, width), the largest of its kind's sizes (the prelude's ranges).
+    /// Its box (length, width), the largest of its kind's sizes.
     size: (f64, f64),
     /// Half its depth along the slide, and the outward normal (its own frame) of the side that
     /// meets the striker.
@@ -154,28 +160,14 @@ struct Target {
 }
 
 impl Target {
-    fn of(c: &Crash, k: &ConflictDesc) -> Target {
+    fn of(c: &Crash, k: &ConflictDesc, kinds: &BTreeMap<String, Kind>) -> Target {
         let vehicle = c.vehicles.iter().find(|v| v.name == k.struck);
         let kind = vehicle.map_or_else(
             || c.objects.iter().find(|o| o.name == k.struck).map(|o| o.kind.clone()).unwrap_or_default(),
             |v| v.kind.clone(),
         );
-        let size = match kind.as_str() {
-            "tree" => (0.8, 0.8),
-            "pole" => (0.35, 0.35),
-            "wall" => (20.0, 0.4),
-            "jersey_barrier" => (3.8, 0.65),
-            "building" => (30.0, 20.0),
-            "hatchback" => (4.3, 1.8),
-            "suv" => (4.95, 2.0),
-            "pickup_truck" => (5.9, 2.05),
-            "van" => (5.5, 2.05),
-            "bus" => (12.5, 2.55),
-            "truck" => (9.5, 2.55),
-            "semi_truck" => (18.0, 2.6),
-            "motorcycle" => (2.3, 0.9),
-            _ => (4.9, 1.85),
-        };
+        // The largest box of its kind: the object is placed before it is sampled.
+        let size = kinds.get(&kind).map_or((1.0, 1.0), |d| (d.length.hi(), d.width.hi()));
         // An object faces the striker with its front (a tree, a pole) or its long side (a wall,
         // a barrier, a building); a vehicle with its coded side.
         let facing = match (vehicle.is_some(), k.point) {
@@ -187,7 +179,7 @@ impl Target {
             (true, _) => DVec2::X,
         };
         let depth = if facing.x != 0.0 { size.0 / 2.0 } else { size.1 / 2.0 };
-        Target { name: k.struck.clone(), kind, vehicle: vehicle.is_some(), size, depth, facing }
+        Target { name: k.struck.clone(), vehicle: vehicle.is_some(), size, depth, facing }
     }
     fn set(&self, c: &mut Crash, at: Option<[f64; 3]>) {
         if let Some(v) = c.vehicles.iter_mut().find(|v| v.name == self.name) {
