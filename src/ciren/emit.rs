@@ -84,7 +84,7 @@ pub const EVENT_GAP: f64 = 2.0;
 
 /// The time of each conflict (time order): the staged ones in slots `EVENT_GAP` apart, a strike on
 /// a slide at its measured time.
-fn conflict_times(c: &Crash, st: Staging) -> Vec<f64> {
+pub(super) fn conflict_times(c: &Crash, st: Staging) -> Vec<f64> {
     let mut slot = 0;
     c.conflicts
         .iter()

@@ -12,7 +12,7 @@
 //! with no one else touching the object, is kept: deterministic, and never unverified.
 
 use super::crash::{ConflictDesc, Crash, Face};
-use super::emit::{Staged, Staging, contacts_on_sides, roll, stage_staged};
+use super::emit::{Staged, Staging, conflict_times, contacts_on_sides, roll, stage_staged};
 use crate::check::scenario::{Kind, Point};
 use crate::diag::Diagnostic;
 use crate::geom::Obb;
@@ -95,6 +95,9 @@ fn place(crash: &mut Crash, i: usize, st: Staging) -> Result<(), Vec<Diagnostic>
     let Some(f0) = f0 else {
         return Err(refuse(crash, &format!("{what}: {} has no contact before it", k.at_fault)));
     };
+    let asked = conflict_times(&before, st);
+    let mine = (0..i).filter(|&j| before.conflicts[j].at_fault == k.at_fault);
+    let after = mine.map(|j| asked[j] + 0.1).fold(0.0, f64::max);
     let mut last = format!("its {} leads the slide at 1 m/s or more nowhere clear of the others", k.face.name());
     for pose in places(&t, a, f0, k.face, &target) {
         target.set(crash, Some(pose));
@@ -128,8 +131,11 @@ fn place(crash: &mut Crash, i: usize, st: Staging) -> Result<(), Vec<Diagnostic>
             last = format!("{} is struck on its {}, not its {}", k.struck, side.name(), k.point.name());
             continue;
         }
+        // Written after the striker's earlier strikes, so no earlier than they are asked for
+        // (E0196, E0121): the staged ones land within their window of it, sometimes before.
+        let measured = (hit.frame as f64 / t.rate * 10.0).round() / 10.0;
         let mut trial = crash.clone();
-        trial.conflicts[i].at = Some((hit.frame as f64 / t.rate * 10.0).round() / 10.0);
+        trial.conflicts[i].at = Some(measured.max(after));
         trial.conflicts[i].point = side;
         let check = upto(&trial, i, true, true);
         let r = roll(&check, st)?;
