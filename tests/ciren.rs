@@ -118,8 +118,14 @@ fn check_contact(imp: &Imported, stated: &[(String, Part)]) -> Tracks {
         rocc::compile::front(scen, None).unwrap_or_else(|d| panic!("{}: {}", imp.crash.id, rendered(&d, &sources)));
     let t = front.tracks;
     let rec = t.impacts.first().unwrap_or_else(|| panic!("{}: no impact", imp.crash.id));
+    check_parts(&t, rec, stated, &imp.crash.id);
+    t
+}
+
+/// The contact of impact `rec` on the parts `stated` (each vehicle's damaged part).
+fn check_parts(t: &Tracks, rec: &rocc::rollout::ImpactRecord, stated: &[(String, Part)], id: &str) {
     let (af, st, f) = (rec.at_fault, rec.struck, rec.frame);
-    let (in_struck, in_af) = measured_contact(&t, af, st, f).expect("contact at the latched frame");
+    let (in_struck, in_af) = measured_contact(t, af, st, f).expect("contact at the latched frame");
     let mut checked = 0;
     for (name, p) in stated {
         let Some(i) = t.agents.iter().position(|a| &a.name == name) else { continue };
@@ -131,8 +137,8 @@ fn check_contact(imp: &Imported, stated: &[(String, Part)]) -> Tracks {
                 Part::Right => Point::Right,
                 Part::Rear => Point::Rear,
             };
-            assert_eq!(sector(in_struck, s[0], s[1]), want, "{}: struck {name} contact {in_struck}", imp.crash.id);
-            assert_eq!(rec.struck_side, want, "{}", imp.crash.id);
+            assert_eq!(sector(in_struck, s[0], s[1]), want, "{id}: struck {name} contact {in_struck}");
+            assert_eq!(rec.struck_side, want, "{id}");
         } else if i == af {
             let ok = match p {
                 Part::Front => in_af.x > 0.6 * s[0] / 2.0,
@@ -140,14 +146,13 @@ fn check_contact(imp: &Imported, stated: &[(String, Part)]) -> Tracks {
                 Part::Right => in_af.y < -0.6 * s[1] / 2.0,
                 Part::Rear => in_af.x < -0.6 * s[0] / 2.0,
             };
-            assert!(ok, "{}: striker {name} touches at {in_af}, not its {p:?}", imp.crash.id);
+            assert!(ok, "{id}: striker {name} touches at {in_af}, not its {p:?}");
         } else {
-            panic!("{}: {name} is damaged in the source but not in the staged impact", imp.crash.id);
+            panic!("{id}: {name} is damaged in the source but not in the staged impact");
         }
         checked += 1;
     }
-    assert!(checked >= 1, "{}: nothing checked", imp.crash.id);
-    t
+    assert!(checked >= 1, "{id}: nothing checked");
 }
 
 #[test]
@@ -181,19 +186,66 @@ fn safe_contacts_land_on_the_parts_in_point_of_impact() {
         let mut sources = SourceMap::default();
         let imp = ciren::import_safe(&p, &mut sources).unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
         let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&p).expect("read")).expect("json");
-        let poi = json["dsl"]["Conflict"]["point_of_impact"].as_str().expect("point_of_impact").to_ascii_lowercase();
-        // "PART of Vn" phrases, read independently of the importer's parser.
-        let mut stated = Vec::new();
-        for (i, _) in poi.match_indices(" of v") {
-            let n = poi[i + 5..].chars().take_while(char::is_ascii_digit).collect::<String>();
-            let before: Vec<&str> = poi[..i].split_whitespace().collect();
-            let two = before.iter().rev().take(2).rev().copied().collect::<Vec<_>>().join(" ");
-            let one = before.last().copied().unwrap_or("");
-            if let Some(pt) = part(&two).or_else(|| part(one)) {
-                stated.push((format!("v{n}"), pt));
+        let poi = json["dsl"]["Conflict"]["point_of_impact"].as_str().expect("point_of_impact");
+        check_contact(&imp, &stated_parts(poi));
+    }
+}
+
+/// The "PART of Vn" phrases of a `point_of_impact`, read independently of the importer's parser.
+fn stated_parts(poi: &str) -> Vec<(String, Part)> {
+    let poi = poi.to_ascii_lowercase();
+    let mut stated = Vec::new();
+    for (i, _) in poi.match_indices(" of v") {
+        let n = poi[i + 5..].chars().take_while(char::is_ascii_digit).collect::<String>();
+        let before: Vec<&str> = poi[..i].split_whitespace().collect();
+        let two = before.iter().rev().take(2).rev().copied().collect::<Vec<_>>().join(" ");
+        let one = before.last().copied().unwrap_or("");
+        if let Some(pt) = part(&two).or_else(|| part(one)) {
+            stated.push((format!("v{n}"), pt));
+        }
+    }
+    stated
+}
+
+/// SAFE extractions whose `Conflict` lists several impacts (tests/fixtures/safe-chains/: a
+/// rear-end chain of three, a junction crash then a rear end into the struck car) import with
+/// one conflict per entry, and on the rolled-out boxes each impact lands on the parts its
+/// `point_of_impact` names, in the listed order; no pair outside the entries touches.
+#[test]
+fn every_impact_of_a_safe_list_lands_on_its_parts_in_order() {
+    let files = dirs("tests/fixtures/safe-chains", false);
+    assert_eq!(files.len(), 2);
+    for p in files {
+        let mut sources = SourceMap::default();
+        let imp = ciren::import_safe(&p, &mut sources).unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+        let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&p).expect("read")).expect("json");
+        let list = json["dsl"]["Conflict"].as_array().expect("a list");
+        let id = imp.crash.id.clone();
+        let scen = rocc::check::check_text(&imp.file_name(), &imp.staged.text, Path::new("."), &mut sources)
+            .unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+        assert_eq!(scen.conflicts.len(), list.len(), "{id}: one conflict per entry");
+        let t = rocc::compile::front(scen, None).expect("front").tracks;
+        let mut frames = vec![];
+        let mut pairs = vec![];
+        for (i, c) in list.iter().enumerate() {
+            let rec =
+                t.impacts.iter().find(|r| r.conflict == i).unwrap_or_else(|| panic!("{id}: entry {i}: no impact"));
+            let stated = stated_parts(c["point_of_impact"].as_str().expect("point_of_impact"));
+            assert_eq!(stated.len(), 2, "{id}: entry {i} names both parts");
+            check_parts(&t, rec, &stated, &id);
+            // The first touch of the pair is this impact's, not an earlier graze.
+            let first = (0..t.frames).find(|&f| obb(&t, rec.at_fault, f).overlaps(&obb(&t, rec.struck, f)));
+            assert!(first.is_some_and(|f| f + 15 >= rec.frame), "{id}: entry {i} touched at {first:?}");
+            frames.push(rec.frame);
+            pairs.push((rec.at_fault.min(rec.struck), rec.at_fault.max(rec.struck)));
+        }
+        assert!(frames.windows(2).all(|w| w[0] < w[1]), "{id}: impacts out of order {frames:?}");
+        for a in 0..t.agents.len() {
+            for b in a + 1..t.agents.len() {
+                let touch = (0..t.frames).any(|f| obb(&t, a, f).overlaps(&obb(&t, b, f)));
+                assert!(pairs.contains(&(a, b)) || !touch, "{id}: {} and {} touch", t.agents[a].name, t.agents[b].name);
             }
         }
-        check_contact(&imp, &stated);
     }
 }
 
@@ -326,17 +378,26 @@ fn a_case_and_its_safe_extraction_import_side_by_side() {
 fn generated_files_check_format_and_are_deterministic() {
     let out = tmp("det");
     let run = || {
-        std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
+        let safe = std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
             .args(["ciren", "import-safe", "tests/fixtures/safe/117330.json", "tests/fixtures/safe/121520.json", "-o"])
             .arg(&out)
             .status()
-            .expect("run rocc")
+            .expect("run rocc");
+        // A party placed on a slide is written at a world point.
+        let slide = std::process::Command::new(env!("CARGO_BIN_EXE_rocc"))
+            .args(["ciren", "import", "tests/fixtures/ciren-slides/glanced-into-stopped-car.xml", "-o"])
+            .arg(&out)
+            .status()
+            .expect("run rocc");
+        safe.success() && slide.success()
     };
-    assert!(run().success());
-    let first = std::fs::read_to_string(out.join("safe_117330.scn")).expect("written");
-    assert!(run().success());
-    assert_eq!(first, std::fs::read_to_string(out.join("safe_117330.scn")).expect("written"));
-    let files = [out.join("safe_117330.scn"), out.join("safe_121520.scn")];
+    assert!(run());
+    let files = [out.join("safe_117330.scn"), out.join("safe_121520.scn"), out.join("900203.scn")];
+    let first: Vec<String> = files.iter().map(|f| std::fs::read_to_string(f).expect("written")).collect();
+    assert!(run());
+    for (f, text) in files.iter().zip(&first) {
+        assert_eq!(text, &std::fs::read_to_string(f).expect("written"));
+    }
     let check =
         std::process::Command::new(env!("CARGO_BIN_EXE_rocc")).arg("check").args(&files).status().expect("check");
     assert!(check.success());
@@ -352,7 +413,7 @@ fn generated_files_check_format_and_are_deterministic() {
 // ------------------------------------------------------------------ generated records
 
 /// A later contact of a generated record: vehicle `by` (3 brings a third vehicle) with its
-/// `area` against `other` (0: a tree) and its `other_area`.
+/// `area` against `other` (0: a tree, or a pole when `pole`) and its `other_area`.
 #[derive(Debug, Clone)]
 struct Extra {
     by: u32,
@@ -360,6 +421,7 @@ struct Extra {
     other: u32,
     other_area: &'static str,
     dir: Option<&'static str>,
+    pole: bool,
 }
 
 /// One coded record built from the fields the importer reads: the configuration, the narrated
@@ -377,6 +439,8 @@ struct Record {
     areas: [&'static str; 2],
     moves: [&'static str; 2],
     bodies: [&'static str; 2],
+    /// V3 is coded stopped (a car a slide may run into).
+    third_stopped: bool,
 }
 
 impl Record {
@@ -412,7 +476,7 @@ impl Record {
                 rel = self.relation,
                 l = self.lanes,
                 al = self.alignment,
-                mv = self.moves[n % 2],
+                mv = if n == 2 && self.third_stopped { "Stopped in traffic lane" } else { self.moves[n % 2] },
             )
         };
         format!(
@@ -445,7 +509,9 @@ impl Record {
             f2 = form(1),
             f3 = if self.extras.iter().any(|e| e.by == 3 || e.other == 3) { form(2) } else { String::new() },
             later = self.extras.iter().enumerate().map(|(i, e)| {
-                let contacted = if e.other == 0 {
+                let contacted = if e.other == 0 && e.pole {
+                    r#"<Contacted value="43" sasCode="43">Pole/post (&lt;= 10 cm in diameter)</Contacted><ContactedAreaOfDamage value="1" sasCode="0">Not a motor vehicle</ContactedAreaOfDamage>"#.to_string()
+                } else if e.other == 0 {
                     r#"<Contacted value="42" sasCode="42">Tree(&gt; 10 cm in diameter)</Contacted><ContactedAreaOfDamage value="1" sasCode="0">Not a motor vehicle</ContactedAreaOfDamage>"#.to_string()
                 } else {
                     format!(
@@ -490,30 +556,26 @@ fn record() -> impl proptest::strategy::Strategy<Value = Record> {
         prop_oneof![Just("Straight"), Just("Curve right"), Just("Curve left")],
         1u32..=4,
     );
-    // Mostly a third vehicle's front into the pair (a chain), sometimes a tree or a second strike.
-    let by = prop_oneof![3 => Just(3u32), 1 => 1u32..=2];
+    // Mostly a third vehicle's front into the pair (a chain), often a tree or pole struck on the
+    // slide after the first impact (by either vehicle of the pair, with any face), or a second
+    // strike, into the third vehicle too (stopped or moving).
+    let by = prop_oneof![2 => Just(3u32), 1 => 1u32..=2];
     let front_mostly = prop_oneof![3 => Just("Front"), 1 => area.clone()];
-    let extra =
-        (by, front_mostly, 0u32..=3, area.clone(), dir.clone()).prop_map(|(by, area, other, other_area, dir)| Extra {
+    let extra = (by, front_mostly, 0u32..=3, area.clone(), dir.clone(), proptest::bool::ANY).prop_map(
+        |(by, area, other, other_area, dir, pole)| Extra {
             by,
             area,
             other: if other == by { 0 } else { other },
             other_area,
             dir,
-        });
+            pole,
+        },
+    );
     let extras = proptest::collection::vec(extra, 0..=2);
-    (road, [dir.clone(), dir], [area.clone(), area], [mv.clone(), mv], [body.clone(), body], extras).prop_map(
-        |((config, junction, relation, alignment, lanes), dirs, areas, moves, bodies, extras)| Record {
-            extras,
-            config,
-            junction,
-            relation,
-            alignment,
-            lanes,
-            dirs,
-            areas,
-            moves,
-            bodies,
+    let parts = (road, [dir.clone(), dir], [area.clone(), area], [mv.clone(), mv], [body.clone(), body]);
+    (parts, extras, proptest::bool::ANY).prop_map(
+        |(((config, junction, relation, alignment, lanes), dirs, areas, moves, bodies), extras, third_stopped)| {
+            Record { extras, config, junction, relation, alignment, lanes, dirs, areas, moves, bodies, third_stopped }
         },
     )
 }
@@ -534,8 +596,17 @@ proptest::proptest! {
             // Every later contact is staged, none left out.
             proptest::prop_assert_eq!(imp.crash.conflicts.len(), 1 + r.extras.len());
             proptest::prop_assert_eq!(imp.staged.text.matches("conflict {").count(), 1 + r.extras.len());
+            // Every object a later event strikes stands where the striker's slide took it.
+            let objects = r.extras.iter().filter(|e| e.other == 0).count();
+            proptest::prop_assert_eq!(imp.staged.text.matches(" { at (").count(), objects);
         }
         if let Err(diags) = &got {
+            // An object struck on the slide never breaks the chain rules.
+            if r.extras.iter().all(|e| e.other == 0) {
+                for x in diags {
+                    proptest::prop_assert!(!x.message.contains("strikes again") && !x.message.contains("strikes after"));
+                }
+            }
                 for x in diags {
                 proptest::prop_assert!(
                     !x.message.contains("does not check"),
@@ -649,28 +720,11 @@ fn each_impact_meets_its_coded_clock_direction_and_delta_v() {
 /// Each `EventSum` of a record in event order: (event, vehicle, its area, other vehicle, its
 /// area), read with roxmltree, independently of the importer.
 fn coded_events(xml: &str) -> Vec<(u32, u32, Part, u32, Part)> {
-    let doc = roxmltree::Document::parse(xml).expect("xml");
-    let text = |e: roxmltree::Node, tag: &str| {
-        e.children().find(|n| n.has_tag_name(tag)).and_then(|n| n.text()).unwrap_or("").to_string()
+    let vehicle = |(e, v, a, o): CodedContact| {
+        let (o, oa) = o.expect("a vehicle");
+        (e, v, a, o, oa)
     };
-    let mut out: Vec<_> = doc
-        .descendants()
-        .filter(|n| n.has_tag_name("EventSum"))
-        .map(|e| {
-            let num = |a: &str| e.attribute(a).and_then(|x| x.parse::<u32>().ok()).expect("number");
-            let other = text(e, "Contacted").rsplit('#').next().and_then(|x| x.parse().ok()).expect("a vehicle");
-            let part = |t: String| part(t.split_whitespace().next().unwrap_or("")).expect("a part");
-            (
-                num("EventNumber"),
-                num("VehicleNumber"),
-                part(text(e, "AreaOfDamage")),
-                other,
-                part(text(e, "ContactedAreaOfDamage")),
-            )
-        })
-        .collect();
-    out.sort_by_key(|e| e.0);
-    out
+    coded_contacts(xml).into_iter().map(vehicle).collect()
 }
 
 /// Records with several contacts (tests/fixtures/ciren-chains/) import with one conflict per
@@ -735,6 +789,115 @@ fn every_event_of_a_chain_lands_on_its_coded_sides_in_order() {
                 });
                 let touch = (0..t.frames).any(|fr| obb(&t, a, fr).overlaps(&obb(&t, b, fr)));
                 assert!(listed || !touch, "{id}: {} and {} touch", t.agents[a].name, t.agents[b].name);
+            }
+        }
+    }
+}
+
+// ------------------------------------------------------------------ strikes on a slide
+
+type CodedContact = (u32, u32, Part, Option<(u32, Part)>);
+
+/// Each `EventSum` of a record in event order, with objects: (event, vehicle, its area, the
+/// other vehicle or `None` for a fixed object, its area), read with roxmltree.
+fn coded_contacts(xml: &str) -> Vec<CodedContact> {
+    let doc = roxmltree::Document::parse(xml).expect("xml");
+    let text = |e: roxmltree::Node, tag: &str| {
+        e.children().find(|n| n.has_tag_name(tag)).and_then(|n| n.text()).unwrap_or("").to_string()
+    };
+    let part = |t: String| part(t.split_whitespace().next().unwrap_or("")).expect("a part");
+    let mut out: Vec<_> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("EventSum"))
+        .map(|e| {
+            let num = |a: &str| e.attribute(a).and_then(|x| x.parse::<u32>().ok()).expect("number");
+            let contacted = text(e, "Contacted");
+            let other = contacted
+                .strip_prefix("Vehicle#")
+                .map(|n| (n.parse().expect("vehicle number"), part(text(e, "ContactedAreaOfDamage"))));
+            (num("EventNumber"), num("VehicleNumber"), part(text(e, "AreaOfDamage")), other)
+        })
+        .collect();
+    out.sort_by_key(|e| e.0);
+    out
+}
+
+/// A vehicle that strikes again after its first impact, on its slide
+/// (tests/fixtures/ciren-slides/: a car struck at a junction slides into a pole, or into a
+/// stopped car): the record imports, the struck party is placed where the slide goes, and on
+/// the rolled-out boxes each contact happens in event order, within 1.5 s of its `at`: a struck
+/// vehicle on its coded side, the striker with its coded face. No pair outside the events
+/// touches.
+#[test]
+fn strikes_on_a_slide_land_on_their_coded_sides() {
+    let mut files: Vec<PathBuf> = std::fs::read_dir("tests/fixtures/ciren-slides")
+        .expect("slide records")
+        .map(|e| e.expect("entry").path())
+        .collect();
+    files.sort();
+    assert!(!files.is_empty());
+    for p in files {
+        let xml = std::fs::read_to_string(&p).expect("xml");
+        let mut sources = SourceMap::default();
+        let imp = ciren::import_case(&p, &mut sources).unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+        let scen = rocc::check::check_text(&imp.file_name(), &imp.staged.text, Path::new("."), &mut sources)
+            .unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+        let at: Vec<f64> = scen.conflicts.iter().map(|c| c.at.expect("at")).collect();
+        let t = rocc::compile::front(scen, None).expect("front").tracks;
+        let id = imp.crash.id.clone();
+        let events = coded_contacts(&xml);
+        assert_eq!(at.len(), events.len(), "{id}: one conflict per event");
+        // Some event's striker was in an earlier one: it strikes on its slide.
+        let slides = events.iter().enumerate().any(|(i, e)| {
+            let striker = match e.3 {
+                Some((o, Part::Front)) if e.2 != Part::Front => o,
+                _ => e.1,
+            };
+            events[..i].iter().any(|x| x.1 == striker || x.3.is_some_and(|(o, _)| o == striker))
+        });
+        assert!(slides, "{id}: a strike on a slide");
+        let idx = |n: &str| t.agents.iter().position(|a| a.name == n).expect("agent");
+        let objects: Vec<usize> = (0..t.agents.len()).filter(|&i| t.agents[i].name.starts_with("obj")).collect();
+        let (mut firsts, mut pairs) = (vec![], vec![]);
+        for (i, &(ev, v, va, other)) in events.iter().enumerate() {
+            let ((a, face), b, struck) = match other {
+                Some((o, oa)) => {
+                    let ((s, sp), (f, fp)) = if oa == Part::Front { ((v, va), (o, oa)) } else { ((o, oa), (v, va)) };
+                    ((idx(&format!("v{f}")), fp), idx(&format!("v{s}")), Some(sp))
+                }
+                None => ((idx(&format!("v{v}")), va), objects[0], None),
+            };
+            let first = (1..t.frames)
+                .find(|&fr| obb(&t, a, fr).overlaps(&obb(&t, b, fr)))
+                .unwrap_or_else(|| panic!("{id}: event {ev}: {} never touches {}", t.agents[a].name, t.agents[b].name));
+            assert!((first as f64 / t.rate - at[i]).abs() <= 1.5, "{id}: event {ev} at frame {first}, asked {}", at[i]);
+            let (on_struck, on_striker) = measured_contact(&t, a, b, first).expect("contact");
+            if let Some(sp) = struck {
+                let sb = t.agents[b].size;
+                let want = match sp {
+                    Part::Front => Point::Front,
+                    Part::Left => Point::Left,
+                    Part::Right => Point::Right,
+                    Part::Rear => Point::Rear,
+                };
+                assert_eq!(sector(on_struck, sb[0], sb[1]), want, "{id}: event {ev}: struck elsewhere");
+            }
+            let (l, w) = (t.agents[a].size[0] / 2.0, t.agents[a].size[1] / 2.0);
+            let on_face = match face {
+                Part::Front => on_striker.x > 0.6 * l,
+                Part::Rear => on_striker.x < -0.6 * l,
+                Part::Left => on_striker.y > 0.6 * w,
+                Part::Right => on_striker.y < -0.6 * w,
+            };
+            assert!(on_face, "{id}: event {ev}: {} touches at {on_striker:?}, not its {face:?}", t.agents[a].name);
+            firsts.push(first);
+            pairs.push((a.min(b), a.max(b)));
+        }
+        assert!(firsts.windows(2).all(|w| w[0] <= w[1]), "{id}: contacts out of order {firsts:?}");
+        for a in 0..t.agents.len() {
+            for b in a + 1..t.agents.len() {
+                let touch = (0..t.frames).any(|fr| obb(&t, a, fr).overlaps(&obb(&t, b, fr)));
+                assert!(pairs.contains(&(a, b)) || !touch, "{id}: {} and {} touch", t.agents[a].name, t.agents[b].name);
             }
         }
     }

@@ -163,6 +163,10 @@ pub struct VehicleDesc {
     pub lane: u32,
     pub speed_kmh: f64,
     pub manoeuvre: Manoeuvre,
+    /// Stopped where a vehicle sliding from an earlier impact strikes it (`ciren::slide`); its
+    /// world pose once placed there: x, y (m) and heading (rad).
+    pub on_slide: bool,
+    pub at: Option<[f64; 3]>,
     pub notes: Vec<String>,
 }
 
@@ -181,6 +185,11 @@ pub struct ObjectDesc {
     pub kind: String,
     /// Which side of the striker's road it stands on.
     pub side: Side,
+    /// Struck by a vehicle sliding from an earlier impact: it stands where the slide carries the
+    /// striker (`ciren::slide`), not beside the road.
+    pub on_slide: bool,
+    /// Its world pose once placed on the slide: x, y (m) and heading (rad).
+    pub at: Option<[f64; 3]>,
     pub notes: Vec<String>,
 }
 
@@ -190,6 +199,8 @@ pub enum Face {
     Front,
     Left,
     Right,
+    /// Only in a strike that follows an impact: a car sliding backwards into a pole.
+    Back,
 }
 
 impl Face {
@@ -198,6 +209,7 @@ impl Face {
             Face::Front => "front",
             Face::Left => "left side",
             Face::Right => "right side",
+            Face::Back => "back",
         }
     }
 }
@@ -216,6 +228,9 @@ pub struct ConflictDesc {
     pub clocks: Vec<ClockDesc>,
     /// Closing speed at contact implied by a coded delta-V (km/h), and the vehicle it is of.
     pub closing: Option<Closing>,
+    /// The time (s) of a strike into an object on the striker's slide, as measured; `None` for a
+    /// staged strike, whose time is its slot (`emit::EVENT_GAP` apart).
+    pub at: Option<f64>,
     pub notes: Vec<String>,
 }
 
@@ -277,6 +292,91 @@ impl Crash {
     pub fn vehicle(&self, name: &str) -> Option<&VehicleDesc> {
         self.vehicles.iter().find(|v| v.name == name)
     }
+    /// Whether conflict `k` strikes an object or a stopped vehicle placed on its striker's slide
+    /// (not staged).
+    pub fn on_slide(&self, k: &ConflictDesc) -> bool {
+        self.objects.iter().any(|o| o.name == k.struck && o.on_slide)
+            || self.vehicles.iter().any(|v| v.name == k.struck && v.on_slide)
+    }
+}
+
+/// How a list of contacts in time order breaks the chains the importers stage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ChainBreak {
+    /// The striker struck another vehicle before.
+    StrikesAgain,
+    /// The striker was struck before.
+    StrikesAfterStruck,
+    /// The pair met before.
+    MetAgain,
+    /// A party placed where a slide strikes it takes part in another contact.
+    PlacedOnSlide,
+}
+
+impl ChainBreak {
+    /// The reason, `earlier` naming the contact it conflicts with (`event 2`).
+    pub fn say(self, k: &ConflictDesc, earlier: &str) -> String {
+        match self {
+            ChainBreak::StrikesAgain => format!("{} strikes again (it struck in {earlier})", k.at_fault),
+            ChainBreak::StrikesAfterStruck => format!("{} strikes after it was struck in {earlier}", k.at_fault),
+            ChainBreak::MetAgain => format!("{} and {} met already in {earlier}", k.at_fault, k.struck),
+            ChainBreak::PlacedOnSlide => {
+                format!("{} and {}: one of them stands where a slide reaches it in {earlier}", k.at_fault, k.struck)
+            }
+        }
+    }
+    /// What the importers can stage instead.
+    pub fn help(self) -> &'static str {
+        match self {
+            ChainBreak::MetAgain => {
+                "two vehicles are staged to crash once (the language's E0123): keep the pair's first contact"
+            }
+            ChainBreak::PlacedOnSlide => {
+                "the importer places a party where a slide strikes it for that strike alone: import the other contacts"
+            }
+            _ => {
+                "after its first crash a vehicle only slides to rest; the importers place a struck fixed object where \
+                 that slide goes, but not another vehicle: they stage chains where each vehicle strikes another \
+                 once, before it is struck"
+            }
+        }
+    }
+}
+
+/// The first contact of `conflicts` (time order) that breaks the chain, the earlier one it
+/// conflicts with, and how: each vehicle strikes another once, before it is struck, and a pair
+/// meets once. A strike on a slide (`on_slide`) is brought about by that slide: its striker
+/// may have struck before, and what it strikes there takes part in no other contact.
+pub fn chain_break(
+    conflicts: &[ConflictDesc],
+    on_slide: impl Fn(&ConflictDesc) -> bool,
+) -> Option<(usize, usize, ChainBreak)> {
+    let pair = |x: &ConflictDesc| {
+        let mut p = [x.at_fault.clone(), x.struck.clone()];
+        p.sort();
+        p
+    };
+    let involves = |x: &ConflictDesc, name: &str| x.at_fault == name || x.struck == name;
+    for (i, k) in conflicts.iter().enumerate() {
+        if let Some(j) = conflicts[..i].iter().position(|x| pair(x) == pair(k)) {
+            return Some((i, j, ChainBreak::MetAgain));
+        }
+        let placed = |(j, x): &(usize, &ConflictDesc)| *j != i && on_slide(x) && involves(k, &x.struck);
+        if let Some((j, _)) = conflicts.iter().enumerate().find(placed) {
+            return Some((i.max(j), i.min(j), ChainBreak::PlacedOnSlide));
+        }
+        if on_slide(k) {
+            continue;
+        }
+        let before = || conflicts[..i].iter().enumerate().filter(|(_, x)| !on_slide(x));
+        if let Some((j, _)) = before().find(|(_, x)| x.at_fault == k.at_fault) {
+            return Some((i, j, ChainBreak::StrikesAgain));
+        }
+        if let Some((j, _)) = before().find(|(_, x)| x.struck == k.at_fault) {
+            return Some((i, j, ChainBreak::StrikesAfterStruck));
+        }
+    }
+    None
 }
 
 /// The rocc impact name.

@@ -43,6 +43,14 @@ pub fn num(x: f64) -> String {
     if (r - r.round()).abs() < 1e-9 { format!("{}", r.round() as i64) } else { format!("{r:.1}") }
 }
 
+/// A coordinate to the centimetre, as the language writes it.
+fn num2(x: f64) -> String {
+    let r = (x * 100.0).round() / 100.0;
+    let s = format!("{r:.2}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" { "0".into() } else { s.into() }
+}
+
 fn comment_lines(out: &mut String, indent: &str, lines: &[String]) {
     for l in lines {
         for part in l.lines() {
@@ -74,16 +82,27 @@ fn lead_distance(c: &Crash, v: &VehicleDesc, t: f64) -> f64 {
 /// Seconds between successive contacts of a multi-event crash, in time order.
 pub const EVENT_GAP: f64 = 2.0;
 
-/// The target time of conflict `i` (time order).
-fn conflict_time(st: Staging, i: usize) -> f64 {
-    st.t_impact + EVENT_GAP * i as f64
+/// The time of each conflict (time order): the staged ones in slots `EVENT_GAP` apart, a strike on
+/// a slide at its measured time.
+pub(super) fn conflict_times(c: &Crash, st: Staging) -> Vec<f64> {
+    let mut slot = 0;
+    c.conflicts
+        .iter()
+        .map(|k| {
+            k.at.unwrap_or_else(|| {
+                slot += 1;
+                st.t_impact + EVENT_GAP * (slot - 1) as f64
+            })
+        })
+        .collect()
 }
 
 /// When `name` first reaches a contact: its own strike (the striker's lag added) or the first
 /// contact that strikes it; the first contact's time for a vehicle in none.
 fn first_contact(c: &Crash, st: Staging, name: &str) -> f64 {
+    let at = conflict_times(c, st);
     let times = c.conflicts.iter().enumerate().filter_map(|(i, k)| {
-        let t = conflict_time(st, i);
+        let t = at[i];
         if k.at_fault == name {
             Some(t + st.lag)
         } else if k.struck == name {
@@ -152,8 +171,10 @@ pub fn emit(c: &Crash, st: Staging) -> String {
     let far = ds.iter().copied().fold(0.0, f64::max);
     let mut out = String::new();
     comment_lines(&mut out, "", &c.header);
-    let last = conflict_time(st, c.conflicts.len().saturating_sub(1));
-    let duration = (last + 4.0).ceil().max(8.0);
+    let at = conflict_times(c, st);
+    // The staged contacts set the clip's length; a strike on a slide lies inside it (`slide`).
+    let staged = c.conflicts.iter().zip(&at).filter(|(k, _)| k.at.is_none()).map(|(_, t)| *t);
+    let duration = (staged.fold(st.t_impact, f64::max) + 4.0).ceil().max(8.0);
     let _ = writeln!(out, "scenario {} {{", c.scenario_name());
     let _ = writeln!(out, "    seed {}", seed(&c.id));
     let _ = writeln!(out, "    duration {} s", num(duration));
@@ -190,6 +211,18 @@ pub fn emit(c: &Crash, st: Staging) -> String {
     for o in &c.objects {
         out.push('\n');
         comment_lines(&mut out, "    ", &o.notes);
+        if let Some([x, y, h]) = o.at {
+            let _ = writeln!(
+                out,
+                "    object {}: {} {{ at ({} m, {} m) heading {} deg }}",
+                o.name,
+                o.kind,
+                num2(x),
+                num2(y),
+                num(h.to_degrees())
+            );
+            continue;
+        }
         // Beside the striker's lane, past the conflict point, clear of the carriageway.
         // Offsets are from `east.out[1]`, the striker's direction's lane nearest the centre line.
         let n = f64::from(r.lanes);
@@ -210,9 +243,18 @@ pub fn emit(c: &Crash, st: Staging) -> String {
         out.push('\n');
         comment_lines(&mut out, "    ", &v.notes);
         // A single-vehicle crash into an object: the object stands 10 m past the centre.
-        let d = if c.objects.is_empty() { *d } else { (d - 10.0).max(3.0) };
+        let d = if c.objects.iter().all(|o| o.on_slide) { *d } else { (d - 10.0).max(3.0) };
         let _ = writeln!(out, "    agent {}: {} {{", v.name, v.kind);
-        let _ = writeln!(out, "        at {}.in[{}], {} m before {}", v.arm, v.lane, num(d), landmark(r.template));
+        match v.at {
+            Some([x, y, h]) => {
+                let (x, y, h) = (num2(x), num2(y), num(h.to_degrees()));
+                let _ = writeln!(out, "        at ({x} m, {y} m) heading {h} deg");
+            }
+            None => {
+                let _ =
+                    writeln!(out, "        at {}.in[{}], {} m before {}", v.arm, v.lane, num(d), landmark(r.template));
+            }
+        }
         let _ = writeln!(
             out,
             "        speed {} km/h",
@@ -230,7 +272,7 @@ pub fn emit(c: &Crash, st: Staging) -> String {
         let _ = writeln!(out, "        struck {}", k.struck);
         let _ = writeln!(out, "        impact {}", impact_name(k.impact));
         let _ = writeln!(out, "        point {}", k.point.name());
-        let _ = writeln!(out, "        at {} s", num(conflict_time(st, i)));
+        let _ = writeln!(out, "        at {} s", num(at[i]));
         let _ = writeln!(out, "    }}");
     }
     out.push_str("}\n");
@@ -257,6 +299,7 @@ pub fn on_coded_sides(
         Face::Front => x > 0.6 * af_size[0] / 2.0,
         Face::Left => y > 0.6 * af_size[1] / 2.0,
         Face::Right => y < -0.6 * af_size[1] / 2.0,
+        Face::Back => x < -0.6 * af_size[0] / 2.0,
     };
     if ok {
         Ok(())
@@ -268,16 +311,18 @@ pub fn on_coded_sides(
 /// Rounds of speed adjustment toward the coded force (clock direction, delta-V).
 const FORCE_ROUNDS: usize = 4;
 
-/// Emit, check and roll out; keep the first staging whose latched contacts are all on their
-/// coded sides and meet their coded force. When the sides are right but a force is not, the
-/// speeds `impact::propose` derives from that contact's headings are taken and the staging
-/// starts again (at most `FORCE_ROUNDS` times). An error says what the last attempt did.
-pub fn stage(c: &Crash) -> Result<Staged, Vec<Diagnostic>> {
+/// Emit, check and roll out a crash whose every contact is staged; keep the first staging whose
+/// latched contacts are all on their coded sides and meet their coded force. When the sides are
+/// right but a force is not, the speeds `impact::propose` derives from that contact's headings
+/// are taken and the staging starts again (at most `FORCE_ROUNDS` times). An error says what
+/// the last attempt did. Also the crash with the speeds taken. (`slide::stage` is the entry
+/// point: it places what a slide strikes after these are staged.)
+pub(super) fn stage_staged(c: &Crash) -> Result<(Staged, Crash), Vec<Diagnostic>> {
     let mut crash = c.clone();
     let mut last = String::new();
     // The first staging whose clocks are met but a closing speed is not: kept, with a warning,
     // when no round meets both (the rollout's staging sets the striker's last-second speed).
-    let mut partial: Option<Staged> = None;
+    let mut partial: Option<(Staged, Crash)> = None;
     'rounds: for _ in 0..FORCE_ROUNDS {
         let Some((mut staged, tracks, recs)) = stage_sides(&crash, &mut last)? else { break };
         let mut shortfalls = Vec::new();
@@ -296,7 +341,7 @@ pub fn stage(c: &Crash) -> Result<Staged, Vec<Diagnostic>> {
             }
         }
         if shortfalls.is_empty() {
-            return Ok(staged);
+            return Ok((staged, crash));
         }
         let (k, rec) = crash
             .conflicts
@@ -306,7 +351,7 @@ pub fn stage(c: &Crash) -> Result<Staged, Vec<Diagnostic>> {
             .expect("a shortfall");
         let speeds = super::impact::propose(&crash, k, &tracks, rec);
         staged.shortfalls = shortfalls;
-        partial.get_or_insert(staged);
+        partial.get_or_insert((staged, crash.clone()));
         match speeds {
             Some(s) => set_speeds(&mut crash, &s),
             None => break,
@@ -347,43 +392,25 @@ fn stage_sides(c: &Crash, last: &mut String) -> Result<Option<Rolled>, Vec<Diagn
     let tries = LAGS.iter().flat_map(|&lag| TIMES.iter().map(move |&t| (t, lag)));
     for (t, lag) in tries {
         let st = Staging { t_impact: t, lag };
-        let text = emit(c, st);
-        let mut sources = SourceMap::default();
-        let name = format!("{}.scn", c.file_stem());
-        let scen = match crate::check::check_text(&name, &text, Path::new("."), &mut sources) {
-            Ok(s) => s,
-            Err(d) => {
-                // The emitter writes only what the checker accepts: a failure here is a bug,
-                // reported with the checker's own words rather than hidden.
-                let what: Vec<String> = d.iter().map(|x| format!("{}: {}", x.code, x.message)).collect();
-                return Err(vec![
-                    Diagnostic::error(
-                        "E0805",
-                        format!("case {}: the generated scenario does not check: {}", c.id, what.join("; ")),
-                    )
-                    .help("this is a bug in the importer; please report it with the case file"),
-                ]);
-            }
-        };
-        let front = match crate::compile::front(scen, None) {
-            Ok(f) => f,
-            Err(d) => {
-                *last = d.iter().map(|x| format!("{}: {}", x.code, x.message)).collect::<Vec<_>>().join("; ");
+        let (text, tracks) = match roll(c, st)? {
+            Ok((text, f)) => (text, f.tracks),
+            Err(m) => {
+                *last = m;
                 continue;
             }
         };
-        match contacts_on_sides(c, &front.tracks) {
+        match contacts_on_sides(c, &tracks) {
             Ok(recs) => {
                 let first = &recs[0];
                 let staged = Staged {
                     text,
                     staging: st,
                     frame: first.frame,
-                    time: first.frame as f64 / front.tracks.rate,
+                    time: first.frame as f64 / tracks.rate,
                     struck_side: first.struck_side,
                     shortfalls: Vec::new(),
                 };
-                return Ok(Some((staged, front.tracks, recs)));
+                return Ok(Some((staged, tracks, recs)));
             }
             Err(m) => *last = format!("{m} (impact at {} s)", num(t)),
         }
@@ -391,8 +418,39 @@ fn stage_sides(c: &Crash, last: &mut String) -> Result<Option<Rolled>, Vec<Diagn
     Ok(None)
 }
 
+/// The text of `c` under `st` and its front (the checked scenario, the rolled-out tracks); the
+/// inner error says why the front refused it. A text the checker refuses is a bug in the
+/// importer, reported as one.
+pub(super) fn roll(c: &Crash, st: Staging) -> Result<Result<(String, crate::compile::Front), String>, Vec<Diagnostic>> {
+    let text = emit(c, st);
+    let mut sources = SourceMap::default();
+    let name = format!("{}.scn", c.file_stem());
+    let scen = match crate::check::check_text(&name, &text, Path::new("."), &mut sources) {
+        Ok(s) => s,
+        Err(d) => {
+            // The emitter writes only what the checker accepts: a failure here is a bug,
+            // reported with the checker's own words rather than hidden.
+            let what: Vec<String> = d.iter().map(|x| format!("{}: {}", x.code, x.message)).collect();
+            return Err(vec![
+                Diagnostic::error(
+                    "E0805",
+                    format!("case {}: the generated scenario does not check: {}", c.id, what.join("; ")),
+                )
+                .help("this is a bug in the importer; please report it with the case file"),
+            ]);
+        }
+    };
+    Ok(match crate::compile::front(scen, None) {
+        Ok(f) => Ok((text, f)),
+        Err(d) => Err(d.iter().map(|x| format!("{}: {}", x.code, x.message)).collect::<Vec<_>>().join("; ")),
+    })
+}
+
 /// One latched impact per conflict, each deep enough and on its coded sides.
-fn contacts_on_sides(c: &Crash, t: &crate::rollout::Tracks) -> Result<Vec<crate::rollout::ImpactRecord>, String> {
+pub(super) fn contacts_on_sides(
+    c: &Crash,
+    t: &crate::rollout::Tracks,
+) -> Result<Vec<crate::rollout::ImpactRecord>, String> {
     let mut out = Vec::new();
     for (i, k) in c.conflicts.iter().enumerate() {
         let pair = format!("{} into {}", k.at_fault, k.struck);

@@ -8,7 +8,8 @@
 //! rules; `record/` maps a case (field decoders, a pair of vehicles, a vehicle and an object),
 //! and `safe/` a SAFE extraction (its `point_of_impact` rules in `safe/poi.rs`), to a plain `Crash`
 //! (`crash.rs`); `emit.rs` writes the `.scn` and keeps it only once the checker and the rollout
-//! agree that the latched contact is on the coded sides. The VLM route (`extract.rs`) sends the sketch and summary to a vision model, checks and
+//! agree that the latched contact is on the coded sides; `slide.rs` places a fixed object struck on
+//! the slide after an impact where that slide goes. The VLM route (`extract.rs`) sends the sketch and summary to a vision model, checks and
 //! repairs the scene like `rocc text`, and merges the conflict of a separate greedy call by span
 //! (`descriptor.rs`).
 
@@ -21,10 +22,12 @@ pub mod impact;
 pub mod narrative;
 pub mod record;
 pub mod safe;
+mod slide;
 
 pub use case::{CirenCase, read_case};
 pub use crash::Crash;
-pub use emit::{Staged, emit, stage};
+pub use emit::{Staged, emit};
+pub use slide::stage;
 
 use crate::diag::Diagnostic;
 use crate::source::SourceMap;

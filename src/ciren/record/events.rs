@@ -1,18 +1,21 @@
 //! Every contact of a case: the `EventSum` rows decoded, one per contact (a contact coded from
 //! both vehicles' rows counts once), in time order (the event number). The first-ranked contact
 //! sets the road and its pair; each other one joins the crash as a further conflict, its new
-//! vehicle placed on the same road; what the language cannot stage (a vehicle striking twice,
-//! a struck vehicle striking later, a pair meeting twice, an object struck beside other
-//! contacts) refuses the case with the reason.
+//! vehicle placed on the same road; a fixed object or a stopped vehicle struck after its
+//! striker's earlier contact is placed on that slide (`ciren::slide`); what the importer cannot
+//! stage (a vehicle striking one already in the crash twice or after it was struck, a moving
+//! vehicle struck on a slide, a pair meeting twice, an object struck before any other contact
+//! of its striker) refuses the case with the reason.
 
 use super::ctx::Ctx;
 use super::fields::{Area, area};
+use super::fields::{cx_class, manoeuvre, vehicle_kind};
 use super::pair::{extra_vehicle, pair_conflict};
+use crate::check::scenario::{Impact, Point};
 use crate::ciren::case::{CaseVehicle, Coded, Event};
-use crate::ciren::crash::{ConflictDesc, Crash};
+use crate::ciren::crash::{ConflictDesc, Crash, Face, Manoeuvre, ObjectDesc, Side, VehicleDesc};
 use crate::diag::Diagnostic;
 use crate::source::Span;
-use std::collections::BTreeMap;
 
 /// What an event's vehicle met.
 pub(super) enum Party<'a> {
@@ -127,28 +130,19 @@ pub(super) fn contacts<'a>(cx: &Ctx<'a>) -> Result<(Vec<Contact<'a>>, usize), Ve
     }
 }
 
-/// Add a contact other than the first-ranked one to the crash: its conflict, and a vehicle it
-/// brings that the crash does not hold yet.
+/// Add a contact other than the first-ranked one to the crash: its conflict, and a vehicle or
+/// object it brings that the crash does not hold yet. `earlier` are the conflicts before it in
+/// time order.
 pub(super) fn join(
     cx: &mut Ctx,
     story: &crate::ciren::narrative::Narrative,
     crash: &mut Crash,
     c: &Contact,
+    earlier: &[ConflictDesc],
 ) -> Result<ConflictDesc, Vec<Diagnostic>> {
     let span = cx.tag_span(&c.ev.range, "EventSum");
     let Party::Vehicle(other, oa, oc) = &c.other else {
-        return Err(cx.err(
-            "E0804",
-            format!(
-                "event {}: V{} struck {} beside the case's other contacts; rocc places a struck fixed object only \
-                 in a single-vehicle case",
-                c.ev.number,
-                c.me.number,
-                c.contacted.cite("Contacted")
-            ),
-            Some((span, "this event")),
-            "write the object into the imported scenario by hand, or import the vehicle contacts alone",
-        ));
+        return slide_object(cx, crash, c, earlier);
     };
     let (af, st, impact, point, face, why) = pair_conflict(cx, (c.me, c.own, &c.own_c), (other, *oa, oc))?;
     let (af_n, st_n) = (format!("v{af}"), format!("v{st}"));
@@ -172,11 +166,17 @@ pub(super) fn join(
     };
     if let Some(n) = new {
         let v = cx.case.vehicles.iter().find(|v| v.number == n).expect("decoded vehicle");
-        let desc = extra_vehicle(cx, story, crash, v, &partner, impact)?;
+        let sliding = earlier.iter().rev().find(|k| k.at_fault == af_n || k.struck == af_n);
+        let desc = match sliding {
+            // Struck by a vehicle sliding from its earlier impact: stopped where the slide goes.
+            Some(k) if n == st => stopped_on_slide(cx, story, v, c, (&af_n, k))?,
+            _ => extra_vehicle(cx, story, crash, v, &partner, impact)?,
+        };
         crash.vehicles.push(desc);
     }
     crash.header.push(c.cite());
     Ok(ConflictDesc {
+        at: None,
         at_fault: af_n,
         struck: st_n,
         impact,
@@ -188,38 +188,139 @@ pub(super) fn join(
     })
 }
 
+/// A vehicle the record brings, struck by `striker` on its slide from its earlier contact
+/// `before`: stopped where that slide goes (`ciren::slide`). A moving one would have to be timed
+/// onto the slide: refused.
+fn stopped_on_slide(
+    cx: &mut Ctx,
+    story: &crate::ciren::narrative::Narrative,
+    v: &CaseVehicle,
+    c: &Contact,
+    (striker, before): (&str, &ConflictDesc),
+) -> Result<VehicleDesc, Vec<Diagnostic>> {
+    let span = cx.tag_span(&c.ev.range, "EventSum");
+    let (man, man_cite) = manoeuvre(v, story.vehicle(v.number));
+    if man != Manoeuvre::Stopped {
+        return Err(cx.err(
+            "E0804",
+            format!(
+                "event {}: V{} is struck by {striker} on its slide from an earlier impact while moving ({man_cite}); \
+                 the importer places only a stopped vehicle or a fixed object where a slide goes",
+                c.ev.number, v.number
+            ),
+            Some((span, "this event")),
+            "import the case's other contacts, or write the vehicle into the imported scenario by hand",
+        ));
+    }
+    let (kind, kind_cite) = vehicle_kind(cx, v, cx_class(cx.case, v.number).as_ref())?;
+    let partner = if before.at_fault == striker { &before.struck } else { &before.at_fault };
+    Ok(VehicleDesc {
+        name: format!("v{}", v.number),
+        kind,
+        arm: "west",
+        lane: 1,
+        speed_kmh: 0.0,
+        manoeuvre: Manoeuvre::Stopped,
+        on_slide: true,
+        at: None,
+        notes: vec![
+            format!("v{}: {kind_cite}", v.number),
+            format!(
+                "stopped ({man_cite}), where {striker}'s slide from its impact with {partner} reaches it, its coded \
+                 side toward the slide"
+            ),
+        ],
+    })
+}
+
+/// A fixed object struck by a vehicle after its earlier contact: the slide from that contact
+/// brings the vehicle to it, so the object is placed where the slide goes (`emit::slide`), and the
+/// struck side is the one the slide reaches (CIREN codes none for an object). An object struck
+/// before any contact of its striker would need a staged strike beside the other contacts:
+/// refused.
+fn slide_object(
+    cx: &mut Ctx,
+    crash: &mut Crash,
+    c: &Contact,
+    earlier: &[ConflictDesc],
+) -> Result<ConflictDesc, Vec<Diagnostic>> {
+    let span = cx.tag_span(&c.ev.range, "EventSum");
+    let me = format!("v{}", c.me.number);
+    let involved = |k: &&ConflictDesc| k.at_fault == me || k.struck == me;
+    let Some(before) = earlier.iter().rev().find(involved) else {
+        return Err(cx.err(
+            "E0804",
+            format!(
+                "event {}: V{} struck {} before any contact with the case's other vehicles; rocc places a fixed \
+                 object either beside the road of a single-vehicle case or on the slide after an impact",
+                c.ev.number,
+                c.me.number,
+                c.contacted.cite("Contacted")
+            ),
+            Some((span, "this event")),
+            "write the object into the imported scenario by hand, or import the vehicle contacts alone",
+        ));
+    };
+    let kind = super::object::object_kind(cx, c.me, &c.contacted)?;
+    let face = match c.own {
+        Area::Front => Face::Front,
+        Area::Left => Face::Left,
+        Area::Right => Face::Right,
+        Area::Back => Face::Back,
+        _ => {
+            return Err(cx.err(
+                "E0804",
+                format!("event {}: V{}'s {} struck a {kind}", c.ev.number, c.me.number, c.own.name()),
+                Some((cx.span(&c.own_c), "coded here")),
+                "rocc stages planar contacts: a vehicle strikes with its front, back or a side",
+            ));
+        }
+    };
+    let name = format!("obj{}", crash.objects.len() + 1);
+    let partner = if before.at_fault == me { &before.struck } else { &before.at_fault };
+    crash.objects.push(ObjectDesc {
+        name: name.clone(),
+        kind: kind.into(),
+        side: Side::Right,
+        on_slide: true,
+        at: None,
+        notes: vec![format!(
+            "{name}: {} -> {kind} (a structure), where {me}'s slide from its impact with {partner} takes its {}",
+            c.contacted.cite("Contacted"),
+            face.name()
+        )],
+    });
+    crash.header.push(c.cite());
+    Ok(ConflictDesc {
+        at_fault: me.clone(),
+        struck: name,
+        impact: Impact::Object,
+        point: Point::Front,
+        face,
+        clocks: Vec::new(),
+        closing: None,
+        at: None,
+        notes: vec![format!(
+            "Event {}: {me}'s {} ({}) strikes the {kind} on its slide from the impact with {partner}: not staged, \
+             the slide brings it there; `point` is the side the slide reaches.",
+            c.ev.number,
+            face.name(),
+            c.own_c.cite("AreaOfDamage")
+        )],
+    })
+}
+
 /// The language's rules for several crashes, checked before emission: a vehicle strikes in one
 /// contact, is struck only after (or when) it strikes, and a pair meets once.
 pub(super) fn check_order(cx: &Ctx, crash: &Crash, events: &[(u32, Span)]) -> Result<(), Vec<Diagnostic>> {
-    let mut strikes: BTreeMap<&str, usize> = BTreeMap::new();
-    let mut first_struck: BTreeMap<&str, usize> = BTreeMap::new();
-    for (i, k) in crash.conflicts.iter().enumerate() {
-        let (ev, span) = events[i];
-        let refuse = |msg: String| {
-            Err(cx.err(
-                "E0804",
-                format!("event {ev}: {msg}"),
-                Some((span, "this event")),
-                "after its first crash a vehicle only slides to rest, and the importer cannot yet place the next \
-                 party where that slide ends: it stages chains where each vehicle strikes once, before it is struck",
-            ))
-        };
-        if let Some(&j) = strikes.get(k.at_fault.as_str()) {
-            return refuse(format!("{} strikes again (it struck in event {})", k.at_fault, events[j].0));
-        }
-        if let Some(&j) = first_struck.get(k.at_fault.as_str()) {
-            return refuse(format!("{} strikes after it was struck in event {}", k.at_fault, events[j].0));
-        }
-        fn pair(x: &ConflictDesc) -> [&str; 2] {
-            let mut p = [x.at_fault.as_str(), x.struck.as_str()];
-            p.sort();
-            p
-        }
-        if let Some(j) = crash.conflicts[..i].iter().position(|x| pair(x) == pair(k)) {
-            return refuse(format!("{} and {} met already in event {}", k.at_fault, k.struck, events[j].0));
-        }
-        strikes.insert(&k.at_fault, i);
-        first_struck.entry(&k.struck).or_insert(i);
-    }
-    Ok(())
+    let Some((i, j, how)) = crate::ciren::crash::chain_break(&crash.conflicts, |k| crash.on_slide(k)) else {
+        return Ok(());
+    };
+    let ((ev, span), earlier) = (events[i], events[j].0);
+    Err(cx.err(
+        "E0804",
+        format!("event {ev}: {}", how.say(&crash.conflicts[i], &format!("event {earlier}"))),
+        Some((span, "this event")),
+        how.help(),
+    ))
 }

@@ -104,7 +104,11 @@ pub fn map_case(case: &CirenCase, file: u32) -> Result<Mapped, Vec<Diagnostic>> 
     // The others join in time order around it.
     let mut conflicts = Vec::new();
     for (i, c) in contacts.iter().enumerate() {
-        let k = if i == primary { crash.conflicts[0].clone() } else { events::join(&mut cx, &story, &mut crash, c)? };
+        let k = if i == primary {
+            crash.conflicts[0].clone()
+        } else {
+            events::join(&mut cx, &story, &mut crash, c, &conflicts)?
+        };
         conflicts.push(k);
     }
     crash.conflicts = conflicts;
@@ -112,7 +116,10 @@ pub fn map_case(case: &CirenCase, file: u32) -> Result<Mapped, Vec<Diagnostic>> 
         contacts.iter().map(|c| (c.ev.number, cx.tag_span(&c.ev.range, "EventSum"))).collect();
     events::check_order(&cx, &crash, &spans)?;
     for (i, c) in contacts.iter().enumerate() {
-        force::annotate(&cx, &mut crash, i, c.ev.number);
+        // The slide sets the force of a strike it brings about; only staged strikes are held to theirs.
+        if !crash.on_slide(&crash.conflicts[i]) {
+            force::annotate(&cx, &mut crash, i, c.ev.number);
+        }
     }
     Ok(Mapped { crash, warnings: cx.warnings })
 }

@@ -20,25 +20,7 @@ pub(super) fn single_vehicle(
     own_c: &Coded,
     contacted: &Coded,
 ) -> Result<Crash, Vec<Diagnostic>> {
-    let t = contacted.lower();
-    let kind = if t.contains("tree") {
-        "tree"
-    } else if t.contains("pole") || t.contains("post") {
-        "pole"
-    } else if t.contains("wall") {
-        "wall"
-    } else if t.contains("building") {
-        "building"
-    } else if t.contains("barrier") || t.contains("guardrail") || t.contains("guard rail") {
-        "jersey_barrier"
-    } else {
-        return Err(cx.err(
-            "E0804",
-            format!("V{} struck {}: rocc has no kind for it", me.number, contacted.cite("Contacted")),
-            Some((cx.span(contacted), "coded here")),
-            "rocc's fixed objects: tree, pole, wall, building and barriers; ditches, embankments, curbs and culverts are terrain it does not model",
-        ));
-    };
+    let kind = object_kind(cx, me, contacted)?;
     if own != Area::Front {
         return Err(cx.err(
             "E0804",
@@ -84,6 +66,8 @@ pub(super) fn single_vehicle(
     let (speed, speed_cite) = speed_of(cx, me, limit, Manoeuvre::Straight);
     let rel = me.relation_to_junction.as_ref().map(|r| r.cite("RelationToJunction")).unwrap_or_default();
     let v = VehicleDesc {
+        on_slide: false,
+        at: None,
         name: format!("v{}", me.number),
         kind: kind_v,
         arm: "west",
@@ -101,6 +85,8 @@ pub(super) fn single_vehicle(
         name: "obj1".into(),
         kind: kind.into(),
         side,
+        on_slide: false,
+        at: None,
         notes: vec![format!(
             "obj1: {} -> {kind} (a structure), off the {} side ({side_cite})",
             contacted.cite("Contacted"),
@@ -132,6 +118,7 @@ pub(super) fn single_vehicle(
         vehicles: vec![v],
         objects: vec![obj],
         conflicts: vec![ConflictDesc {
+            at: None,
             clocks: Vec::new(),
             closing: None,
             at_fault: format!("v{}", me.number),
@@ -145,5 +132,28 @@ pub(super) fn single_vehicle(
                 own_c.cite("AreaOfDamage")
             )],
         }],
+    })
+}
+
+/// rocc's kind for a struck fixed object, or the reason there is none.
+pub(super) fn object_kind(cx: &Ctx, me: &CaseVehicle, contacted: &Coded) -> Result<&'static str, Vec<Diagnostic>> {
+    let t = contacted.lower();
+    Ok(if t.contains("tree") {
+        "tree"
+    } else if t.contains("pole") || t.contains("post") {
+        "pole"
+    } else if t.contains("wall") {
+        "wall"
+    } else if t.contains("building") {
+        "building"
+    } else if t.contains("barrier") || t.contains("guardrail") || t.contains("guard rail") {
+        "jersey_barrier"
+    } else {
+        return Err(cx.err(
+            "E0804",
+            format!("V{} struck {}: rocc has no kind for it", me.number, contacted.cite("Contacted")),
+            Some((cx.span(contacted), "coded here")),
+            "rocc's fixed objects: tree, pole, wall, building and barriers; ditches, embankments, curbs and culverts are terrain it does not model",
+        ));
     })
 }

@@ -298,6 +298,8 @@ pub(super) fn two_vehicles(
         let (speed, speed_cite) = speed_of(cx, v, limit, man);
         notes.push(format!("speed: {speed_cite}"));
         vehicles.push(VehicleDesc {
+            on_slide: false,
+            at: None,
             name: format!("v{}", v.number),
             kind,
             arm,
@@ -309,6 +311,7 @@ pub(super) fn two_vehicles(
         mans[i].0 = man;
     }
     let conflict = ConflictDesc {
+        at: None,
         clocks: Vec::new(),
         closing: None,
         at_fault: format!("v{af_no}"),
@@ -400,5 +403,15 @@ pub(super) fn extra_vehicle(
     notes.push(format!("manoeuvre {}: {man_cite}", man_word(man)));
     let (speed, speed_cite) = speed_of(cx, v, road.speed_limit_kmh, man);
     notes.push(format!("speed: {speed_cite}"));
-    Ok(VehicleDesc { name: format!("v{}", v.number), kind, arm, lane, speed_kmh: speed, manoeuvre: man, notes })
+    Ok(VehicleDesc {
+        name: format!("v{}", v.number),
+        kind,
+        arm,
+        lane,
+        speed_kmh: speed,
+        manoeuvre: man,
+        on_slide: false,
+        at: None,
+        notes,
+    })
 }

@@ -58,10 +58,13 @@ non-collision, a pedestrian record, a contact by a vehicle's back, top or underc
 strikes with a front or a side), a fixed object rocc has no kind for (ditch, embankment, curb),
 a side impact with a tree, a T-junction approached from its missing leg, a vehicle travelling
 across a road the record codes without a junction (out of a driveway: write it by hand on a
-`t_junction`), or a SAFE extraction with one vehicle, more than two, or several impacts. For records with several
-events: a vehicle that strikes in two events, or strikes after it was struck, a pair that meets
-in two events (a struck agent holds from its contact on), a later event involving neither
-vehicle of the first-ranked one, or a fixed object struck beside other contacts.
+`t_junction`), or a SAFE extraction with one vehicle, or more than two and one impact. For
+records with several events and SAFE `Conflict` lists: a vehicle that strikes a vehicle
+already in the crash in two events, or after it was struck, or strikes a moving vehicle on its
+slide (the slide after an impact is not staged; a fixed object or a stopped vehicle is placed
+where it goes, others are not), a pair that meets in two events, a later event involving neither
+vehicle of the first-ranked one, or a fixed object struck before any other contact of its
+striker.
 
     rocc ciren import ciren/100412 -o scn/   # error: the case codes a rollover",
     },
@@ -75,7 +78,10 @@ meets the coded clock direction of the principal force within an hour. Several i
 speeds solved for the coded force, are tried; this error means none of them landed there, and it
 names what the last attempt did. Nothing is written. Typical cause: an impact the rollout meets square-on (`angle`)
 between vehicles whose paths do not let the striker reach the struck side, e.g. a vehicle hit
-on its side by oncoming traffic after it spun.
+on its side by oncoming traffic after it spun. A fixed object or stopped vehicle struck on
+the slide after an impact is placed where the slide takes the striker's coded face; E0805 then says why no place
+worked (that face never leads the slide at 1 m/s or more clear of the others, as when a T-bone
+striker stops against the car it struck).
 
     rocc ciren import ciren/100237 -o scn/   # error: contact landed on the struck vehicle's front, not its right side",
     },
