@@ -11,7 +11,9 @@
 //! - e2e: `rocc compile` of the whole library at full stage into a temporary directory
 //!   (BEV + occupancy + LiDAR + compressed writes + previews), frames/s, CPU time per frame and
 //!   peak memory; with and without previews at the default 0.4 deg, and at the sensor's native
-//!   0.2 deg without previews.
+//!   0.2 deg without previews. `bench e2e-lean [FRAMES]` measures the 0.2 deg run without
+//!   keeping its outputs (file by file, each deleted before the next), optionally on the first
+//!   FRAMES frames of each clip; opt in.
 //! - bev20: BEV frames/s on one core at exactly 20 boxes per frame (each frame's boxes, repeated
 //!   3.5 m further left until there are 20), on every map of the library (roundabout included);
 //!   opt in (`bench bev20`).
@@ -429,6 +431,42 @@ fn bench_e2e() {
     }
 }
 
+/// `bench e2e`'s 0.2 deg run (all stages, no previews) without keeping its 14 GB: one library
+/// file at a time, each file's outputs deleted before the next (a clip's frames still run on
+/// every core), optionally only the first `frames` frames of each clip. Frames/s and process
+/// CPU ms per frame, the writes included.
+fn bench_e2e_lean(frames: Option<usize>) {
+    let inputs = library();
+    let out = std::env::temp_dir().join(format!("rocc-bench-e2e-lean-{}", std::process::id()));
+    let mut rig = Rig::nuplan();
+    rig.horizontal_resolution_deg = 0.2;
+    for s in &mut rig.sensors {
+        s.horizontal_resolution_deg = None;
+    }
+    let opts =
+        Options { previews: false, force: true, rig, frames: frames.map(|n| format!("0..{n}")), ..Options::default() };
+    let (mut done, mut failed, mut secs) = (0, 0, 0.0);
+    let c0 = cpu_secs();
+    for input in &inputs {
+        let _ = std::fs::remove_dir_all(&out);
+        let t0 = Instant::now();
+        let r = batch::run(std::slice::from_ref(input), &out, &opts, true);
+        secs += t0.elapsed().as_secs_f64();
+        done += r.clips.iter().map(|c| c.frames).sum::<usize>();
+        failed += r.failures.len();
+    }
+    let _ = std::fs::remove_dir_all(&out);
+    let cpu = cpu_secs().zip(c0).map_or(String::new(), |(c1, c0)| {
+        format!(", {:.1} ms CPU per frame (deletes included)", 1e3 * (c1 - c0) / done.max(1) as f64)
+    });
+    println!(
+        "== e2e-lean (0.2 deg, no previews, {} per clip, outputs deleted file by file): {done} frames in {secs:.1} s on {} cores: {:.1} frames/s{cpu} ({failed} failed)",
+        frames.map_or("every frame".to_string(), |n| format!("first {n} frames")),
+        rayon::current_num_threads(),
+        done as f64 / secs.max(1e-9),
+    );
+}
+
 /// One 16-frame clip of the ambulance example at the BEV stage with previews (the size of a
 /// CIREN case's clip), on every core: median wall time of 9 runs, mean process CPU time, and the
 /// manifest's per-stage seconds (wall time summed over threads) of the median run.
@@ -642,6 +680,9 @@ fn main() {
     }
     if want("e2e") {
         bench_e2e();
+    }
+    if let Some(i) = args.iter().position(|a| a == "e2e-lean") {
+        bench_e2e_lean(args.get(i + 1).and_then(|s| s.parse().ok()));
     }
     if want("clip") {
         bench_clip();

@@ -12,7 +12,9 @@
 //! a 2D walk over blocks of 8 x 8 columns skips every block whose highest occupied voxel lies
 //! below the ray's lowest point over that block, and runs the voxel walk only inside the others.
 //! The voxel walk's boundaries are always computed from the ray origin, so the result is the same
-//! voxel and distance as `cast`'s (a test compares them on a full scene).
+//! voxel and distance as `cast`'s (a test compares them on a full scene). `Skip::cast_from`
+//! starts the block walk part-way along the ray, where `super::fan` shows it has passed above
+//! every block before (a test there compares its hits with `cast`'s).
 
 use crate::backend::layout::{K_GROUND, K_GROUND_TOP, NX, NY, NZ, ORIGIN, UPPER, VOXEL, flat};
 
@@ -54,6 +56,16 @@ fn floor_i64(x: f64) -> i64 {
     if (t as f64) > x { t.saturating_sub(1) } else { t }
 }
 
+/// Bit b set when byte b of `x` (little endian) is not zero.
+#[inline]
+fn nonzero_bytes(x: u64) -> u32 {
+    const LOW7: u64 = 0x7f7f_7f7f_7f7f_7f7f;
+    // High bit of each byte: set when any of its bits is (no carry crosses a byte).
+    let high = (((x & LOW7) + LOW7) | x) & !LOW7;
+    // Gather the eight high bits into the top byte.
+    ((high >> 7).wrapping_mul(0x0102_0408_1020_4080) >> 56) as u32
+}
+
 /// Per axis 1 / d: every boundary distance is a product with it (one division per axis and
 /// ray, not one per boundary).
 #[inline]
@@ -66,7 +78,8 @@ pub fn cast(labels: &[u8], o: [f64; 3], d: [f64; 3], t_max: f64) -> Option<Hit> 
     let inv = inverse(d);
     let (t_in, t_out) = clip_to_grid(o, d, inv, t_max)?;
     let axis = if t_in > 0.0 { entry_axis(o, d, t_in) } else { 3 };
-    walk(labels, o, d, inv, t_in, t_out, axis, [0, 0, 0], [NX as i64, NY as i64, NZ as i64], |_| {})
+    let occupied = |at: usize| labels[at] != 0;
+    walk(labels, occupied, o, d, inv, t_in, t_out, axis, [0, 0, 0], [NX as i64, NY as i64, NZ as i64], |_| {})
 }
 
 /// `cast`, calling `seen` with the flat index (`layout::flat`) of every free voxel the ray
@@ -76,13 +89,16 @@ pub fn traverse(labels: &[u8], o: [f64; 3], d: [f64; 3], t_max: f64, seen: impl 
     let inv = inverse(d);
     let (t_in, t_out) = clip_to_grid(o, d, inv, t_max)?;
     let axis = if t_in > 0.0 { entry_axis(o, d, t_in) } else { 3 };
-    walk(labels, o, d, inv, t_in, t_out, axis, [0, 0, 0], [NX as i64, NY as i64, NZ as i64], seen)
+    let occupied = |at: usize| labels[at] != 0;
+    walk(labels, occupied, o, d, inv, t_in, t_out, axis, [0, 0, 0], [NX as i64, NY as i64, NZ as i64], seen)
 }
 
 /// Columns per block side in `Skip`.
 const B: usize = 8;
-const NBX: usize = NX / B;
-const NBY: usize = NY / B;
+/// Blocks along x and y, and their side (m).
+pub const NBX: usize = NX / B;
+pub const NBY: usize = NY / B;
+pub const BLOCK_M: f64 = VOXEL * B as f64;
 
 /// Per-block height of the highest occupied voxel's top face (m), for empty-space skipping.
 #[derive(Clone, Debug)]
@@ -97,35 +113,44 @@ pub struct Skip {
     /// `top` of every block a ray moving that way can still reach from it. A rising ray at or
     /// above it has nothing left to hit (the level-ray test of `max_top`, made local).
     ahead: [Vec<f64>; 4],
+    /// Per column (`layout::flat(i, j, 0) / NZ`), bit k set when voxel k is not free: the voxel
+    /// walk reads 4 bytes per column from 640 kB instead of the labels' 5 MB, which stay in
+    /// memory when the cache does not hold them; only the hit voxel's label is read from there.
+    cols: Vec<u32>,
+    /// Per ground-only block, the label its ground voxels all share (0 if they differ): the
+    /// ground shortcut then reads no voxel at all.
+    ground_label: Vec<u8>,
 }
 
 impl Skip {
     pub fn new(labels: &[u8]) -> Self {
-        let mut top = vec![f64::NEG_INFINITY; NBX * NBY];
+        let mut cols = vec![0u32; NX * NY];
+        // Per block: the highest occupied layer + 1 (0: none), whether every column holds the
+        // ground voxel and nothing else, and the ground label (u16::MAX: no column yet,
+        // u16::MAX - 1: two labels differ).
+        let mut top_k = vec![0u32; NBX * NBY];
         let mut ground_only = vec![true; NBX * NBY];
-        // The column as little-endian words, byte k of the column at bits 8 (k % 8) of word k / 8.
-        const W: usize = NZ / 8;
-        let ground_bit = 0xffu64 << (8 * (K_GROUND % 8));
+        let mut ground_label = vec![u16::MAX; NBX * NBY];
         for (c, col) in labels.chunks_exact(NZ).enumerate() {
-            let (i, j) = (c / NY, c % NY);
-            let mut w = [0u64; W];
-            for (q, b) in col.chunks_exact(8).enumerate() {
-                w[q] = u64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]);
-            }
-            let ground = w[K_GROUND / 8] & ground_bit != 0;
-            let others =
-                w.iter().enumerate().any(|(q, &x)| if q == K_GROUND / 8 { x & !ground_bit != 0 } else { x != 0 });
-            if !ground || others {
-                ground_only[(i / B) * NBY + j / B] = false;
-            }
-            // Highest non-zero byte of the column.
-            if let Some(q) = (0..W).rev().find(|&q| w[q] != 0) {
-                let k = 8 * q + 7 - (w[q].leading_zeros() / 8) as usize;
-                let z = ORIGIN[2] + VOXEL * (k + 1) as f64;
-                let b = &mut top[(i / B) * NBY + j / B];
-                *b = b.max(z);
-            }
+            // The column as little-endian words, byte k of the column at bits 8 (k % 8) of word k / 8.
+            let m = col
+                .chunks_exact(8)
+                .enumerate()
+                .map(|(q, b)| {
+                    nonzero_bytes(u64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]])) << (8 * q)
+                })
+                .fold(0, |m, q| m | q);
+            cols[c] = m;
+            let block = (c / NY / B) * NBY + c % NY / B;
+            ground_only[block] &= m == 1 << K_GROUND;
+            top_k[block] = top_k[block].max(32 - m.leading_zeros());
+            let g = &mut ground_label[block];
+            let l = u16::from(col[K_GROUND]);
+            *g = if *g == u16::MAX || *g == l { l } else { u16::MAX - 1 };
         }
+        // The top face of the highest occupied voxel (m).
+        let top: Vec<f64> =
+            top_k.iter().map(|&k| if k == 0 { f64::NEG_INFINITY } else { ORIGIN[2] + VOXEL * f64::from(k) }).collect();
         let max_top = top.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let ahead = [0, 1, 2, 3].map(|q| {
             let (px, py) = (q >> 1 == 1, q & 1 == 1);
@@ -149,13 +174,30 @@ impl Skip {
             }
             m
         });
-        Skip { top, max_top, ground_only, ahead }
+        let ground_label = ground_label.iter().map(|&g| u8::try_from(g).unwrap_or(0)).collect();
+        Skip { top, max_top, ground_only, ahead, cols, ground_label }
     }
 
     /// Same result as `cast`, skipping blocks the ray passes above.
     pub fn cast(&self, labels: &[u8], o: [f64; 3], d: [f64; 3], t_max: f64) -> Option<Hit> {
+        self.cast_from(labels, o, d, t_max, 0.0)
+    }
+
+    /// Per block (x-major, `NBX` x `NBY`), the top face of its highest occupied voxel (m;
+    /// -infinity for an empty block).
+    pub fn tops(&self) -> &[f64] {
+        &self.top
+    }
+
+    /// `cast` for a ray that meets no block it could pass below before distance `t_start`
+    /// (`fan`): the block walk starts there.
+    pub fn cast_from(&self, labels: &[u8], o: [f64; 3], d: [f64; 3], t_max: f64, t_start: f64) -> Option<Hit> {
         let inv = inverse(d);
-        let (t_in, t_out) = clip_to_grid(o, d, inv, t_max)?;
+        let (t_grid, t_out) = clip_to_grid(o, d, inv, t_max)?;
+        let t_in = t_grid.max(t_start);
+        if t_in > t_out {
+            return None;
+        }
         // Level or rising rays above every occupied voxel (most of the upper beams): nothing to hit.
         if d[2] >= 0.0 && o[2] + t_in * d[2] >= self.max_top {
             return None;
@@ -179,46 +221,92 @@ impl Skip {
                 t_delta[a] = -bs * inv[a];
             }
         }
-        let mut t = t_in;
-        let mut axis = if t_in > 0.0 { entry_axis(o, d, t_in) } else { 3 };
-        // A rising ray only climbs: once it is above every block it can still reach, it is done.
-        let ahead = (d[2] >= 0.0).then(|| &self.ahead[2 * (d[0] >= 0.0) as usize + (d[1] >= 0.0) as usize]);
+        let ray = BlockRay {
+            t_out,
+            step,
+            t_delta,
+            // A rising ray only climbs: once it is above every block it can still reach, it is done.
+            ahead: (d[2] >= 0.0).then(|| &self.ahead[2 * (d[0] >= 0.0) as usize + (d[1] >= 0.0) as usize][..]),
+        };
+        // Started inside the grid, the first block has no entry face; it is one the ray passes
+        // above (or the sensor's own), so no hit reports it.
+        let axis = if t_grid > 0.0 && t_in == t_grid { entry_axis(o, d, t_in) } else { 3 };
+        let mut w = BlockWalk { t: t_in, tx: t_next[0], ty: t_next[1], ix: idx[0], iy: idx[1], axis };
+        let descending = d[2] < 0.0;
         loop {
-            let a = if t_next[0] <= t_next[1] { 0 } else { 1 };
-            let t_end = t_next[a].min(t_out);
-            let block = idx[0] as usize * NBY + idx[1] as usize;
+            let y_first = w.ty < w.tx;
+            let tn = if y_first { w.ty } else { w.tx };
+            let t_end = if tn < t_out { tn } else { t_out };
+            let block = w.ix as usize * NBY + w.iy as usize;
             let top = self.top[block];
-            if let Some(m) = ahead
-                && o[2] + t * d[2] >= m[block]
+            let z_in = o[2] + w.t * d[2];
+            if let Some(m) = ray.ahead
+                && z_in >= m[block]
             {
                 return None;
             }
-            let z_low = (o[2] + t * d[2]).min(o[2] + t_end * d[2]);
-            if z_low < top && self.ground_only[block] && d[2] < 0.0 && o[2] + t * d[2] >= GROUND_Z {
-                // Above the ground on entry and descending: the only thing to hit is the ground's
-                // top face, at the same distance the voxel walk computes for that boundary.
-                let tg = (GROUND_Z - o[2]) * inv[2];
-                if tg <= t_end {
-                    return ground_hit(labels, o, d, inv, tg, t_out);
-                }
-            } else if z_low < top {
-                let lo = [idx[0] * B as i64, idx[1] * B as i64, 0];
-                let hi = [lo[0] + B as i64, lo[1] + B as i64, NZ as i64];
-                if let Some(h) = walk(labels, o, d, inv, t, t_end, axis, lo, hi, |_| {}) {
-                    return Some(h);
+            // The lowest point over the block: where it leaves it if descending.
+            let z_low = if descending { o[2] + t_end * d[2] } else { z_in };
+            if z_low < top {
+                if self.ground_only[block] && descending && z_in >= GROUND_Z {
+                    // Above the ground on entry and descending: the only thing to hit is the
+                    // ground's top face, at the same distance the voxel walk computes for it.
+                    let tg = (GROUND_Z - o[2]) * inv[2];
+                    if tg <= t_end {
+                        return ground_hit(labels, self.ground_label[block], o, d, inv, tg, t_out);
+                    }
+                } else {
+                    let lo = [w.ix * B as i64, w.iy * B as i64, 0];
+                    let hi = [lo[0] + B as i64, lo[1] + B as i64, NZ as i64];
+                    let occupied = |at: usize| self.cols[at / NZ] >> (at % NZ) & 1 != 0;
+                    if let Some(h) = walk(labels, occupied, o, d, inv, w.t, t_end, w.axis, lo, hi, |_| {}) {
+                        return Some(h);
+                    }
                 }
             }
-            if t_next[a] > t_out {
+            if !w.step(&ray, y_first) {
                 return None;
             }
-            t = t_next[a];
-            idx[a] += step[a];
-            if idx[a] < 0 || idx[a] >= nb[a] {
-                return None;
-            }
-            t_next[a] += t_delta[a];
-            axis = a;
         }
+    }
+}
+
+/// What `Skip::cast_from` knows of a ray for its block walk.
+struct BlockRay<'a> {
+    t_out: f64,
+    step: [i64; 2],
+    t_delta: [f64; 2],
+    /// `Skip::ahead` of the ray's quadrant, for a rising ray.
+    ahead: Option<&'a [f64]>,
+}
+
+/// The block walk's state: the distance at which the ray entered the current block, the next
+/// boundary distances, the block and the axis of the face it entered through.
+struct BlockWalk {
+    t: f64,
+    tx: f64,
+    ty: f64,
+    ix: i64,
+    iy: i64,
+    axis: usize,
+}
+
+impl BlockWalk {
+    /// Step to the next block along y (`y` true) or x; false when the ray leaves the grid or
+    /// passes `t_out` first.
+    #[inline]
+    fn step(&mut self, ray: &BlockRay, y: bool) -> bool {
+        let tn = if y { self.ty } else { self.tx };
+        if tn > ray.t_out {
+            return false;
+        }
+        self.t = tn;
+        self.ix = if y { self.ix } else { self.ix + ray.step[0] };
+        self.iy = if y { self.iy + ray.step[1] } else { self.iy };
+        self.tx = if y { self.tx } else { self.tx + ray.t_delta[0] };
+        self.ty = if y { self.ty + ray.t_delta[1] } else { self.ty };
+        self.axis = y as usize;
+        (self.ix as u64) < NBX as u64 && (self.iy as u64) < NBY as u64
     }
 }
 
@@ -226,7 +314,8 @@ impl Skip {
 const GROUND_Z: f64 = ORIGIN[2] + VOXEL * K_GROUND_TOP as f64;
 
 /// The hit on the ground voxel a descending ray enters through its top face at distance `tg`.
-fn ground_hit(labels: &[u8], o: [f64; 3], d: [f64; 3], inv: [f64; 3], tg: f64, t_out: f64) -> Option<Hit> {
+/// `label`: the label of every ground voxel there, or 0 to read it from `labels`.
+fn ground_hit(labels: &[u8], label: u8, o: [f64; 3], d: [f64; 3], inv: [f64; 3], tg: f64, t_out: f64) -> Option<Hit> {
     let n = [NX, NY];
     let mut voxel = [0usize, 0, K_GROUND];
     let mut t_exit = (GROUND_Z - VOXEL - o[2]) * inv[2];
@@ -240,7 +329,7 @@ fn ground_hit(labels: &[u8], o: [f64; 3], d: [f64; 3], inv: [f64; 3], tg: f64, t
             t_exit = t_exit.min((ORIGIN[a] + i as f64 * VOXEL - o[a]) * inv[a]);
         }
     }
-    let label = labels[flat(voxel[0], voxel[1], voxel[2])];
+    let label = if label != 0 { label } else { labels[flat(voxel[0], voxel[1], voxel[2])] };
     Some(Hit { t: tg, t_exit: t_exit.min(t_out.max(tg)), voxel, label, axis: 2 })
 }
 
@@ -250,6 +339,7 @@ fn ground_hit(labels: &[u8], o: [f64; 3], d: [f64; 3], inv: [f64; 3], tg: f64, t
 #[allow(clippy::too_many_arguments)]
 fn walk(
     labels: &[u8],
+    occupied: impl Fn(usize) -> bool,
     o: [f64; 3],
     d: [f64; 3],
     inv: [f64; 3],
@@ -294,8 +384,8 @@ fn walk(
             2
         };
         let at = flat(i as usize, j as usize, k as usize);
-        let label = labels[at];
-        if label != 0 {
+        if occupied(at) {
+            let label = labels[at];
             let tn = [tx, ty, tz][a];
             let voxel = [i as usize, j as usize, k as usize];
             return Some(Hit { t, t_exit: tn.min(t_out.max(t)), voxel, label, axis });
@@ -506,6 +596,9 @@ mod tests {
             if rng.unit() < 0.01 {
                 c[rng.index(NZ)] = 2;
             }
+            if rng.unit() < 0.001 {
+                c[K_GROUND] = 3;
+            }
         }
         let skip = Skip::new(&g);
         for bi in 0..NBX {
@@ -518,6 +611,13 @@ mod tests {
                     .fold(f64::NEG_INFINITY, f64::max);
                 assert_eq!(skip.ground_only[bi * NBY + bj], ground_only);
                 assert_eq!(skip.top[bi * NBY + bj], top);
+                let grounds: Vec<u8> = cols().map(|(i, j)| g[flat(i, j, K_GROUND)]).collect();
+                let same = grounds.iter().all(|&l| l == grounds[0]);
+                assert_eq!(skip.ground_label[bi * NBY + bj], if same { grounds[0] } else { 0 });
+                for (i, j) in cols() {
+                    let bits = (0..NZ).filter(|&k| g[flat(i, j, k)] != 0).fold(0u32, |m, k| m | 1 << k);
+                    assert_eq!(skip.cols[i * NY + j], bits);
+                }
             }
         }
         // `ahead`: the highest top over every block a ray of each quadrant can still reach.
