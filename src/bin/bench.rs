@@ -699,9 +699,9 @@ fn bench_grounded(args: &[String]) {
         };
         let set = latents::build(&cfg, &inputs[0].boxes, inputs[0].masks);
         let fg = set.iter().filter(|a| a.foreground).count();
-        let g = match Grounded::from_model(cfg.clone(), Generator::new(&cfg, &rocc::backend::grounded::cpu()), name)
-            .on(kind, batch)
-        {
+        let model = Generator::new(&cfg, &rocc::backend::grounded::cpu());
+        let on_cpu = Grounded::from_model(cfg.clone(), model.clone(), name);
+        let g = match Grounded::from_model(cfg.clone(), model, name).on(kind, batch) {
             Ok(g) => g,
             Err(d) => return println!("  {name}: {} {}", d.code, d.message),
         };
@@ -720,6 +720,14 @@ fn bench_grounded(args: &[String]) {
             burn::module::Module::num_params(&g.model),
             t * 1e3 / batch as f64
         );
+        if kind.is_gpu() {
+            // Float sums run in another order on a GPU: how many labels of the first frame match.
+            let here = on_cpu.predict(&inputs[0].boxes, inputs[0].masks, inputs[0].aux);
+            if let Ok(there) = g.predict_frames(&inputs[..1]) {
+                let same = here.iter().zip(there[0].iter()).filter(|(a, b)| a == b).count();
+                println!("  {name:<10} labels equal to the CPU's: {:.4} %", 100.0 * same as f64 / here.len() as f64);
+            }
+        }
     }
 }
 

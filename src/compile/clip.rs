@@ -402,8 +402,7 @@ fn batched_frames(
             })
             .collect::<io::Result<_>>()?;
         let t0 = Instant::now();
-        let mut occ: Vec<Occupancy> =
-            scratch.iter_mut().map(|s| std::mem::replace(&mut s.occ, Occupancy::empty())).collect();
+        let mut occ: Vec<Occupancy> = scratch.iter_mut().map(|s| std::mem::take(&mut s.occ)).collect();
         let inputs: Vec<OccInput> = scratch
             .iter()
             .zip(&made)

@@ -62,9 +62,15 @@ impl DeviceKind {
     pub fn open(self) -> Result<Device, Diagnostic> {
         let device = self.device()?;
         if self.is_gpu() {
+            // Whatever stops two floats from making the round trip leaves the device unusable.
             guarded(|| {
                 let t = Tensor::<1>::from_data(TensorData::new(vec![1.0f32, 2.0], [2]), &device);
                 (t * 2.0).to_data()
+            })
+            .map_err(|d| match d.code {
+                "E0913" => Diagnostic::error("E0910", format!("the {self} device failed a first test: {}", d.message))
+                    .help("check the GPU driver (`vulkaninfo`, `nvidia-smi`), or use `--device cpu`"),
+                _ => d,
             })?;
         }
         Ok(device)
