@@ -17,26 +17,9 @@ use rocc::backend::layout::{BACKGROUND, N_LABELS, NX, NY, NZ, PEDESTRIAN, VEHICL
 use rocc::raster::layout::{CH_DRIVABLE, GRID, N_AUX, N_MASKS};
 use rocc::sample::Rng;
 
-/// A model small enough for unit tests.
-pub fn tiny() -> GroundedConfig {
-    let mut c = GroundedConfig::from_ron(include_str!("../configs/cpu-small.ron")).unwrap();
-    c.name = "tiny".into();
-    c.latents = 64;
-    c.max_foreground = 32;
-    c.latent_dim = 8;
-    c.decoder = rocc::backend::grounded::config::DecoderConfig { width: 16, blocks: 1, heads: 2, ff: 32 };
-    c.gaussians.vehicle = 6;
-    c.gaussians.mid = 4;
-    c.gaussians.small = 3;
-    c.gaussians.background = 2;
-    c.lattice.spacing_m = 10.0;
-    c.encoder.samples = vec![3, 2, 2];
-    c.encoder.hidden = 16;
-    c.bev.channels = vec![4, 8];
-    c.bev.strides = vec![2, 2];
-    c.bev.hidden = 16;
-    c
-}
+#[path = "support/grounded_tiny.rs"]
+mod grounded_tiny;
+pub use grounded_tiny::tiny;
 
 fn raw_params(n: usize, seed: u64) -> Vec<f32> {
     let mut r = Rng::new(seed);

@@ -42,6 +42,7 @@ pub use background::{Background, BgItem, BgKind, BgParams};
 pub use voxel::Mode;
 
 use crate::check::scenario::Class;
+use crate::diag::Diagnostic;
 use crate::place::Pose;
 use crate::raster::Bev;
 use crate::raster::layout::{CH_CARPARKS, CH_CROSSWALKS, CH_DRIVABLE, CH_INTERSECTIONS, CH_WALKWAYS};
@@ -126,7 +127,34 @@ pub trait OccupancyBackend: Send + Sync {
     fn occupancy_into(&self, input: &OccInput, out: &mut Occupancy) {
         *out = self.occupancy(input);
     }
+
+    /// Frames this backend wants per `occupancy_batch` call; `None` (the default): one frame at
+    /// a time, inside each frame's own work.
+    fn batch(&self) -> Option<usize> {
+        None
+    }
+
+    /// The occupancy of several frames at once; a failure (a GPU's) is a diagnostic.
+    fn occupancy_batch(&self, inputs: &[OccInput], out: &mut [Occupancy]) -> Result<(), Diagnostic> {
+        for (input, o) in inputs.iter().zip(out) {
+            self.occupancy_into(input, o);
+        }
+        Ok(())
+    }
 }
+
+/// A backend's diagnostic carried through the `io::Error` of the compile pipeline, so the
+/// failed clip reports it instead of a write error.
+#[derive(Debug)]
+pub struct BackendFailure(pub Diagnostic);
+
+impl std::fmt::Display for BackendFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl std::error::Error for BackendFailure {}
 
 /// The weight-free default backend (see the module doc).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -18,8 +18,10 @@
 //!   3.5 m further left until there are 20), on every map of the library (roundabout included);
 //!   opt in (`bench bev20`).
 //! - grounded: inference time per frame of the learned backend (random weights: the cost does
-//!   not depend on their values) for `configs/cpu-small.ron` and `configs/paper.ron` on the CPU,
-//!   on the ambulance example's first frame; opt in (`bench grounded`), it is not in the default set.
+//!   not depend on their values) for `configs/cpu-small.ron` and `configs/paper.ron`, on frames
+//!   of the ambulance example; opt in (`bench grounded`, not in the default set), with
+//!   `--device wgpu|cuda` (a build with that feature), `--batch N` frames per forward pass
+//!   (default 1 on the CPU, 4 on a GPU) and `--configs cpu-small,paper`.
 
 use rayon::prelude::*;
 use rocc::backend::{Background, OccInput, Occupancy, OccupancyBackend, Procedural, write_npy};
@@ -698,21 +700,39 @@ fn main() {
     }
     // Minutes on a 2-core machine with the paper's configuration: only when asked for.
     if args.iter().any(|a| a == "grounded") {
-        bench_grounded();
+        bench_grounded(&args);
     }
 }
 
-fn bench_grounded() {
-    use rocc::backend::grounded::{GBox, Generator, Grounded, GroundedConfig, cpu, latents};
-    println!("== grounded: inference per frame on the CPU (flex backend, one thread per frame), random weights");
+/// `bench grounded [--device cpu|wgpu|cuda] [--batch N] [--configs a,b]`: inference time per
+/// frame of each config on one device, `batch` frames of the ambulance example per forward pass.
+fn bench_grounded(args: &[String]) {
+    use rocc::backend::grounded::{DeviceKind, FrameIn, GBox, Generator, Grounded, GroundedConfig, latents};
+    let opt = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).map(String::as_str);
+    let kind: DeviceKind = match opt("--device").unwrap_or("cpu").parse() {
+        Ok(k) => k,
+        Err(e) => return println!("  {e}"),
+    };
+    let batch: usize = opt("--batch").and_then(|b| b.parse().ok()).unwrap_or(kind.default_batch()).max(1);
+    let configs = opt("--configs").unwrap_or("cpu-small,paper");
+    println!(
+        "== grounded: inference per frame on {kind} (batch {batch}; random weights, the cost does not depend on them)"
+    );
     let Some(f) = load(&root().join("scenarios/ambulance_crowded_intersection.scn")) else { return };
     let ego = f.concrete.egos.first().copied().unwrap_or(0);
-    let boxes = frame_boxes(&f, ego, 0);
     let mut raster = Rasterizer::new();
-    let mut bev = Bev::zeros();
-    raster.rasterize_into(&f.map, f.tracks.poses[ego][0], &boxes, &mut bev);
-    let gboxes: Vec<GBox> = boxes.iter().map(GBox::from_ego).collect();
-    for name in ["cpu-small", "paper"] {
+    let frames: Vec<(Vec<GBox>, Bev)> = (0..batch)
+        .map(|n| {
+            let fr = (n * 5).min(f.tracks.frames.saturating_sub(1));
+            let boxes = frame_boxes(&f, ego, fr);
+            let mut bev = Bev::zeros();
+            raster.rasterize_into(&f.map, f.tracks.poses[ego][fr], &boxes, &mut bev);
+            (boxes.iter().map(GBox::from_ego).collect(), bev)
+        })
+        .collect();
+    let inputs: Vec<FrameIn> =
+        frames.iter().map(|(b, bev)| FrameIn { boxes: b.clone(), masks: &bev.masks, aux: &bev.aux }).collect();
+    for name in configs.split(',') {
         let path = root().join(format!("configs/{name}.ron"));
         let Ok(cfg) =
             std::fs::read_to_string(&path).map_err(|e| e.to_string()).and_then(|t| GroundedConfig::from_ron(&t))
@@ -720,20 +740,37 @@ fn bench_grounded() {
             println!("  {name}: cannot read {}", path.display());
             continue;
         };
-        let set = latents::build(&cfg, &gboxes, &bev.masks);
+        let set = latents::build(&cfg, &inputs[0].boxes, inputs[0].masks);
         let fg = set.iter().filter(|a| a.foreground).count();
-        let g = Grounded::from_model(cfg.clone(), Generator::new(&cfg, &cpu()), name);
-        let reps = if name == "paper" { 1 } else { 3 };
-        let _warm = g.predict(&gboxes, &bev.masks, &bev.aux);
+        let model = Generator::new(&cfg, &rocc::backend::grounded::cpu());
+        let on_cpu = Grounded::from_model(cfg.clone(), model.clone(), name);
+        let g = match Grounded::from_model(cfg.clone(), model, name).on(kind, batch) {
+            Ok(g) => g,
+            Err(d) => return println!("  {name}: {} {}", d.code, d.message),
+        };
+        let run = || g.predict_frames(&inputs).map(|l| std::hint::black_box(l.len()));
+        if let Err(d) = run() {
+            println!("  {name:<10} {} {}", d.code, d.message);
+            continue;
+        }
+        let reps = if name == "paper" && !kind.is_gpu() { 1 } else { 5 };
         let t = median(reps, || {
-            std::hint::black_box(g.predict(&gboxes, &bev.masks, &bev.aux));
+            let _ = run();
         });
         println!(
-            "  {name:<10} {:>5} latents ({fg} foreground), {:>7} parameters: {:>8.2} s per frame",
+            "  {name:<10} {:>5} latents ({fg} foreground), {:>8} parameters: {:>9.1} ms per frame",
             set.len(),
             burn::module::Module::num_params(&g.model),
-            t
+            t * 1e3 / batch as f64
         );
+        if kind.is_gpu() {
+            // Float sums run in another order on a GPU: how many labels of the first frame match.
+            let here = on_cpu.predict(&inputs[0].boxes, inputs[0].masks, inputs[0].aux);
+            if let Ok(there) = g.predict_frames(&inputs[..1]) {
+                let same = here.iter().zip(there[0].iter()).filter(|(a, b)| a == b).count();
+                println!("  {name:<10} labels equal to the CPU's: {:.4} %", 100.0 * same as f64 / here.len() as f64);
+            }
+        }
     }
 }
 

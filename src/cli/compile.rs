@@ -3,11 +3,13 @@
 
 use super::{Failure, show};
 use clap::ValueEnum;
-use rocc::compile::{OccBackend, Options, Stage, StaticBev, batch};
+use rocc::backend::grounded::DeviceKind;
+use rocc::compile::{GroundedRun, OccBackend, Options, Stage, StaticBev, batch};
 use rocc::diag::Diagnostic;
 use rocc::lidar::Rig;
 use rocc::visibility::CameraRig;
 use std::path::PathBuf;
+use std::str::FromStr;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -63,6 +65,13 @@ pub struct Args {
     /// `--backend grounded`: the model config (default: the `.ron` beside the weights).
     #[arg(long)]
     grounded_config: Option<PathBuf>,
+    /// `--backend grounded`: where the model runs: cpu, wgpu (`--features wgpu`) or cuda
+    /// (`--features cuda`).
+    #[arg(long, value_parser = DeviceKind::from_str)]
+    device: Option<DeviceKind>,
+    /// `--backend grounded`: frames per forward pass (default 1 on the cpu, 4 on a GPU).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=256))]
+    grounded_batch: Option<u64>,
     /// Also write `flow/NNNNNN.npz`: each moving agent's velocity on its voxels (docs/output.md).
     #[arg(long)]
     flow: bool,
@@ -131,10 +140,11 @@ pub fn run(a: Args) -> Result<(), Failure> {
         previews: !a.no_previews,
         force: a.force,
         static_bev: a.static_bev.as_deref().map(StaticBev::load).transpose()?,
-        backend: OccBackend::select(
+        backend: OccBackend::select_on(
             a.backend == BackendArg::Grounded,
             a.weights.as_deref(),
             a.grounded_config.as_deref(),
+            &GroundedRun { device: a.device, batch: a.grounded_batch.map(|b| b as usize) },
         )?,
         flow: a.flow,
         visibility,

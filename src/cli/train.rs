@@ -2,9 +2,12 @@
 
 use super::Failure;
 use clap::ValueEnum;
+use rocc::backend::grounded::DeviceKind;
+use rocc::backend::grounded::guard::guarded;
 use rocc::diag::Diagnostic;
 use rocc::learn::{Stage, TrainOptions};
 use std::path::PathBuf;
+use std::str::FromStr;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -28,8 +31,9 @@ pub struct Args {
     /// Generator: autoencoder weights to start the decoder from (default OUT/autoencoder.bpk).
     #[arg(long)]
     init: Option<PathBuf>,
-    #[arg(long, value_enum, default_value = "cpu")]
-    device: DeviceArg,
+    /// cpu (every build), wgpu (Vulkan/Metal/DX12; `--features wgpu`) or cuda (`--features cuda`).
+    #[arg(long, default_value = "cpu", value_parser = DeviceKind::from_str)]
+    device: DeviceKind,
     /// Override the stage's epoch count.
     #[arg(long)]
     epochs: Option<usize>,
@@ -49,16 +53,6 @@ enum TrainWhat {
     Autoencoder,
     /// BEV + boxes -> grounded latents -> decoder (warm-started from the autoencoder).
     Generator,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum DeviceArg {
-    /// burn's `flex` backend (pure Rust, every build).
-    Cpu,
-    /// wgpu (Vulkan/Metal/DX12); needs `--features wgpu`.
-    Wgpu,
-    /// CUDA device 0; needs `--features cuda`.
-    Cuda,
 }
 
 pub fn run(a: Args) -> Result<(), Failure> {
@@ -82,12 +76,14 @@ pub fn run(a: Args) -> Result<(), Failure> {
         out: a.out,
         resume: a.resume,
         init: a.init,
-        device: device(a.device)?,
+        device: a.device.open()?,
         quiet: a.quiet,
         max_steps: a.max_steps,
         epochs: a.epochs,
     };
-    let report = rocc::learn::train(&opts)?;
+    // On a GPU, a device failure (memory, a buffer limit) is a diagnostic; checkpoints
+    // already written stay, so `--resume` continues after the cause is fixed.
+    let report = if a.device.is_gpu() { guarded(|| rocc::learn::train(&opts))?? } else { rocc::learn::train(&opts)? };
     if a.safetensors {
         let st = rocc::learn::export_safetensors(stage, &opts.config, &report.weights)?;
         if !a.quiet {
@@ -95,20 +91,4 @@ pub fn run(a: Args) -> Result<(), Failure> {
         }
     }
     Ok(())
-}
-
-fn device(d: DeviceArg) -> Result<burn::tensor::Device, Diagnostic> {
-    match d {
-        DeviceArg::Cpu => Ok(burn::tensor::Device::flex()),
-        #[cfg(feature = "wgpu")]
-        DeviceArg::Wgpu => Ok(burn::tensor::Device::wgpu(Default::default())),
-        #[cfg(not(feature = "wgpu"))]
-        DeviceArg::Wgpu => Err(Diagnostic::error("E0908", "this rocc was built without the `wgpu` device")
-            .help("rebuild with `cargo build --release --features wgpu`, or train with `--device cpu`")),
-        #[cfg(feature = "cuda")]
-        DeviceArg::Cuda => Ok(burn::tensor::Device::cuda(0usize)),
-        #[cfg(not(feature = "cuda"))]
-        DeviceArg::Cuda => Err(Diagnostic::error("E0908", "this rocc was built without the `cuda` device")
-            .help("rebuild with `cargo build --release --features cuda` (needs network access at build time), or use `--device wgpu|cpu`")),
-    }
 }

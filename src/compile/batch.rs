@@ -189,13 +189,14 @@ fn render(p: &Prepared, ego: usize, out: &Path, opts: &Options, progress: &Progr
         Ok(c) => progress.line(&format!("compiled  {} ({} frames)", dir.display(), c.frames)),
         Err(_) => {}
     }
-    r.map_err(|e| Failure {
-        input: p.input.clone(),
-        diags: vec![
-            Diagnostic::error("E0401", format!("cannot write `{}`: {e}", dir.display()))
+    r.map_err(|e| {
+        let backend = e.get_ref().and_then(|inner| inner.downcast_ref::<crate::backend::BackendFailure>());
+        let diag = match backend {
+            Some(f) => f.0.clone(),
+            None => Diagnostic::error("E0401", format!("cannot write `{}`: {e}", dir.display()))
                 .help("check the output directory's permissions and free space; a re-run resumes"),
-        ],
-        sources: SourceMap::default(),
+        };
+        Failure { input: p.input.clone(), diags: vec![diag], sources: SourceMap::default() }
     })
 }
 

@@ -183,6 +183,7 @@ fn expected_manifest(ci: &ClipInput, opts: &Options, backend: &str) -> Manifest 
     {
         m.weights = Some(w.display().to_string());
         m.grounded_config = Some(c.display().to_string());
+        m.device = Some(g.device().name().to_string());
     }
     m.flow = opts.flow && opts.stage >= Stage::Occ;
     let cameras = opts.visibility.as_ref().filter(|_| opts.stage >= Stage::Occ);
@@ -391,6 +392,72 @@ pub fn compile_clip(
     render_clip(&render, opts, dir, on_frame)
 }
 
+type FrameFn<'f> = dyn Fn(&mut Scratch, usize, usize, Option<(Pose, Vec<EgoBox>)>) -> io::Result<FrameOut> + Sync + 'f;
+
+/// The frames of a backend that computes occupancy several frames at a time (the learned one):
+/// `per_call` frames at once get their BEV (side by side), then their occupancy in one call,
+/// then the rest of their work (side by side). A backend failure is the clip's diagnostic.
+fn batched_frames(
+    r: &Render,
+    backend: &dyn crate::backend::OccupancyBackend,
+    per_call: usize,
+    clock: &Clock,
+    pool: &std::sync::Mutex<Vec<Scratch>>,
+    frame: &FrameFn,
+) -> io::Result<Vec<FrameOut>> {
+    let mut outs = Vec::with_capacity(r.frames.len());
+    for (c, chunk) in r.frames.chunks(per_call.max(1)).enumerate() {
+        let mut scratch: Vec<Scratch> = {
+            let mut p = pool.lock().map_err(|_| io::Error::other("scratch pool poisoned"))?;
+            (0..chunk.len()).map(|_| p.pop().unwrap_or_else(Scratch::new)).collect()
+        };
+        let made: Vec<(Pose, Vec<EgoBox>)> = scratch
+            .par_iter_mut()
+            .zip(chunk)
+            .map(|(s, &f)| {
+                let t0 = Instant::now();
+                let m = (r.source)(f, &mut s.raster, &mut s.bev);
+                Clock::add(&clock.bev, t0);
+                m
+            })
+            .collect::<io::Result<_>>()?;
+        let t0 = Instant::now();
+        let mut occ: Vec<Occupancy> = scratch.iter_mut().map(|s| std::mem::take(&mut s.occ)).collect();
+        let inputs: Vec<OccInput> = scratch
+            .iter()
+            .zip(&made)
+            .zip(chunk)
+            .map(|((s, (pose, boxes)), &f)| OccInput {
+                boxes,
+                bev: &s.bev,
+                background: r.background,
+                ego: *pose,
+                seed: r.seed,
+                frame: f,
+            })
+            .collect();
+        let done = backend.occupancy_batch(&inputs, &mut occ);
+        drop(inputs);
+        for (s, o) in scratch.iter_mut().zip(occ) {
+            s.occ = o;
+        }
+        done.map_err(|d| io::Error::other(crate::backend::BackendFailure(d)))?;
+        Clock::add(&clock.occ, t0);
+        let base = c * per_call.max(1);
+        let part = scratch
+            .par_iter_mut()
+            .zip(made)
+            .enumerate()
+            .map(|(i, (s, m))| frame(s, base + i, chunk[i], Some(m)))
+            .collect::<io::Result<Vec<_>>>()?;
+        outs.extend(part);
+        if let Ok(mut p) = pool.lock() {
+            p.extend(scratch);
+        }
+    }
+    Ok(outs)
+}
+
 /// Render every frame of `r` (BEV, then occupancy and LiDAR as `opts.stage` asks), the clip-level
 /// files and the manifest, into `dir`.
 pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() + Sync)) -> io::Result<ClipReport> {
@@ -412,9 +479,15 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
     let stride = gif_picks.get(1).copied().unwrap_or(1);
     let delay_cs = ((100.0 * stride as f64 / rate).round() as u16).max(2);
 
-    let frame = |s: &mut Scratch, n: usize, f: usize| -> io::Result<FrameOut> {
+    // `made`: the frame's pose and boxes when its BEV and occupancy are already in `s`
+    // (`batched_frames`).
+    let frame = |s: &mut Scratch, n: usize, f: usize, made: Option<(Pose, Vec<EgoBox>)>| -> io::Result<FrameOut> {
         let t0 = Instant::now();
-        let (ego_pose, boxes) = (r.source)(f, &mut s.raster, &mut s.bev)?;
+        let occ_ready = made.is_some();
+        let (ego_pose, boxes) = match made {
+            Some(m) => m,
+            None => (r.source)(f, &mut s.raster, &mut s.bev)?,
+        };
         let listed: Vec<EgoBox> = boxes.iter().filter(|b| !is_door(b)).cloned().collect();
         let world = r.world.map(|w| w.frame(f, ego_pose, &listed));
         let t2 = Clock::add(&clock.bev, t0);
@@ -437,7 +510,9 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
         if opts.stage >= Stage::Occ {
             let input =
                 OccInput { boxes: &boxes, bev: &s.bev, background: r.background, ego: ego_pose, seed, frame: f };
-            backend.occupancy_into(&input, &mut s.occ);
+            if !occ_ready {
+                backend.occupancy_into(&input, &mut s.occ);
+            }
             let t4 = Clock::add(&clock.occ, t3);
             let path = occ_frame_path(dir, f);
             files.push(OutputFile { path: rel(dir, &path), bytes: write_npy(&path, &s.occ)? });
@@ -482,24 +557,28 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
         on_frame();
         Ok(FrameOut { boxes: FrameBoxes { frame: f, t: f as f64 / rate, boxes: listed }, world, files, thumbs })
     };
-    let pool = &SCRATCH;
-    let outs: Vec<FrameOut> = r
-        .frames
-        .par_iter()
-        .enumerate()
-        .map(|(n, &f)| {
-            // Taken from the pool, not per thread: a frame's own parallel work may run another
-            // frame on the same thread, which then takes (or makes) a scratch of its own.
-            let mut s = pool.lock().ok().and_then(|mut p| p.pop()).unwrap_or_else(Scratch::new);
-            let out = frame(&mut s, n, f);
-            if let Ok(mut p) = pool.lock()
-                && p.len() < 2 * rayon::current_num_threads()
-            {
-                p.push(s);
-            }
-            out
-        })
-        .collect::<io::Result<Vec<_>>>()?;
+    let pool: &Mutex<Vec<Scratch>> = &SCRATCH;
+    let batch = backend.batch().filter(|_| opts.stage >= Stage::Occ);
+    let outs: Vec<FrameOut> = match batch {
+        Some(per_call) => batched_frames(r, &*backend, per_call, &clock, pool, &frame)?,
+        None => r
+            .frames
+            .par_iter()
+            .enumerate()
+            .map(|(n, &f)| {
+                // Taken from the pool, not per thread: a frame's own parallel work may run another
+                // frame on the same thread, which then takes (or makes) a scratch of its own.
+                let mut s = pool.lock().ok().and_then(|mut p| p.pop()).unwrap_or_else(Scratch::new);
+                let out = frame(&mut s, n, f, None);
+                if let Ok(mut p) = pool.lock()
+                    && p.len() < 2 * rayon::current_num_threads()
+                {
+                    p.push(s);
+                }
+                out
+            })
+            .collect::<io::Result<Vec<_>>>()?,
+    };
 
     let t0 = Instant::now();
     let mut files: Vec<OutputFile> = outs.iter().flat_map(|o| o.files.iter().cloned()).collect();

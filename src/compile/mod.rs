@@ -89,6 +89,24 @@ impl OccBackend {
     /// The backend `--backend` names: `grounded` loads `weights` (with `config`, by default the
     /// `.ron` beside them); the procedural one takes neither (E0908 if given them).
     pub fn select(grounded: bool, weights: Option<&Path>, config: Option<&Path>) -> Result<OccBackend, Diagnostic> {
+        Self::select_on(grounded, weights, config, &GroundedRun::default())
+    }
+
+    /// `select` with where and how the learned backend runs (`--device`, `--grounded-batch`;
+    /// E0908 when given to the procedural backend).
+    pub fn select_on(
+        grounded: bool,
+        weights: Option<&Path>,
+        config: Option<&Path>,
+        run: &GroundedRun,
+    ) -> Result<OccBackend, Diagnostic> {
+        if !grounded && *run != GroundedRun::default() {
+            return Err(Diagnostic::error(
+                "E0908",
+                "`--device` and `--grounded-batch` apply to `--backend grounded` only",
+            )
+            .help("add `--backend grounded --weights FILE`, or drop them for the procedural backend"));
+        }
         match (grounded, weights) {
             (false, None) if config.is_none() => Ok(OccBackend::Procedural),
             (false, _) => Err(Diagnostic::error(
@@ -98,10 +116,21 @@ impl OccBackend {
             .help("add `--backend grounded`, or drop the weights options for the procedural backend")),
             (true, None) => Err(Diagnostic::error("E0901", "`--backend grounded` needs `--weights FILE`")
                 .help("train weights with `rocc train generator ...` (docs/learned-backend.md, \"Training\")")),
-            (true, Some(w)) => crate::backend::grounded::Grounded::load(w, config)
-                .map(|g| OccBackend::Grounded(std::sync::Arc::new(g))),
+            (true, Some(w)) => {
+                crate::backend::grounded::Grounded::load_on(w, config, run.device.unwrap_or_default(), run.batch)
+                    .map(|g| OccBackend::Grounded(std::sync::Arc::new(g)))
+            }
         }
     }
+}
+
+/// Where the learned backend runs (`--device`) and how many frames one forward pass takes
+/// (`--grounded-batch`; `None`: the device's default).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GroundedRun {
+    /// `None`: the CPU.
+    pub device: Option<crate::backend::grounded::DeviceKind>,
+    pub batch: Option<usize>,
 }
 
 impl std::fmt::Debug for OccBackend {

@@ -307,6 +307,10 @@ pub struct Manifest {
     pub weights: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub grounded_config: Option<String>,
+    /// With `--backend grounded`: the device the model ran on (`cpu`, `wgpu`, `cuda`). Not
+    /// compared when a run resumes: a clip made on one device stands for the same model's output.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub device: Option<String>,
     /// Whether `flow/` was written (`--flow`).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub flow: bool,
@@ -340,6 +344,7 @@ impl Manifest {
             static_bev: None,
             weights: None,
             grounded_config: None,
+            device: None,
             flow: false,
             visibility: None,
             edits: Vec::new(),

@@ -8,31 +8,35 @@
 //! (plus its box), and the shared transformer decoder turns each latent into a class-dependent
 //! budget of anisotropic 3D Gaussians, splatted (`splat`) into per-voxel class logits with free
 //! space on its own channel; a zero-initialised, foreground-gated background head adds a
-//! residual. Inference is one deterministic forward pass on burn's `flex` CPU backend; labels
-//! are the per-voxel argmax. Training lives in `crate::learn`.
+//! residual. Inference (`infer`) is a deterministic forward pass over a few frames at once, on
+//! burn's `flex` CPU backend or a GPU (`device`; failures there are diagnostics, `guard`);
+//! labels are the per-voxel argmax. Training lives in `crate::learn`.
 //!
 //! Weights: burnpack `.bpk` (what `rocc train` writes) or `.safetensors` (tensor names as burn's
 //! module paths, e.g. `decoder.head.weight`), plus the RON config the model was built from
 //! (`configs/*.ron`; by default the `.ron` next to the weights file, which `rocc train` writes).
 
 pub mod config;
+pub mod device;
+pub mod guard;
+mod infer;
 pub mod latents;
 pub mod loss;
 pub mod model;
 pub mod splat;
 
 pub use config::GroundedConfig;
+pub use device::DeviceKind;
+pub use infer::FrameIn;
 pub use latents::{Anchor, GBox};
 pub use model::{Autoencoder, BEV_CHANNELS, Generator, HostBatch};
 
 use super::layout::{N_LABELS, NX, NY, NZ, class_label};
-use super::{OccInput, Occupancy, OccupancyBackend};
 use crate::diag::Diagnostic;
 use crate::view::EgoBox;
 use burn::module::Module;
 use burn::prelude::*;
 use ndarray::Array3;
-use splat::Region;
 use std::path::{Path, PathBuf};
 
 impl GBox {
@@ -41,7 +45,7 @@ impl GBox {
     }
 }
 
-/// The CPU device every rocc inference runs on.
+/// The CPU device (`--device cpu`, the default).
 pub fn cpu() -> Device {
     Device::flex()
 }
@@ -128,7 +132,7 @@ pub fn save_safetensors<M: Module + burn::store::ModuleSnapshot>(module: &M, pat
     module.save_into(&mut store).map_err(|e| e.to_string())
 }
 
-/// The learned backend: a generator on the CPU.
+/// The learned backend: a generator on a device (`infer` runs it).
 pub struct Grounded {
     pub config: GroundedConfig,
     pub model: Generator,
@@ -136,17 +140,32 @@ pub struct Grounded {
     /// The files it was loaded from (`None` for a model built in memory), recorded in the
     /// manifest so `rocc edit` can rerun the same model.
     files: Option<(PathBuf, PathBuf)>,
+    /// Where the model lives, and how many frames one forward pass takes.
+    kind: DeviceKind,
+    batch: usize,
 }
 
 impl Grounded {
-    /// Load `weights` with its config (`config` or the `.ron` beside the weights).
+    /// Load `weights` with its config (`config` or the `.ron` beside the weights), on the CPU.
     pub fn load(weights: &Path, config: Option<&Path>) -> Result<Self, Diagnostic> {
+        Self::load_on(weights, config, DeviceKind::Cpu, None)
+    }
+
+    /// Load onto `kind` (probed first: E0908, E0910), running `batch` frames per forward pass
+    /// (default `DeviceKind::default_batch`).
+    pub fn load_on(
+        weights: &Path,
+        config: Option<&Path>,
+        kind: DeviceKind,
+        batch: Option<usize>,
+    ) -> Result<Self, Diagnostic> {
         if !weights.is_file() {
             return Err(missing_weights(weights));
         }
         let cfg_path = config_path(weights, config);
         let cfg = load_config(&cfg_path)?;
-        let model = load_weights(Generator::new(&cfg, &cpu()), weights)?;
+        let device = kind.open()?;
+        let model = guard::guarded(|| load_weights(Generator::new(&cfg, &device), weights))??;
         let bytes = std::fs::read(weights).map_err(|e| {
             Diagnostic::error("E0901", format!("cannot read weights `{}`: {e}", weights.display()))
                 .help("check the path and its permissions")
@@ -158,27 +177,33 @@ impl Grounded {
             config: cfg,
             model,
             files: Some((weights.to_path_buf(), cfg_path)),
+            kind,
+            batch: batch.unwrap_or(kind.default_batch()).max(1),
         })
     }
 
-    /// Wrap a model in memory (tests, benchmarks).
+    /// Wrap a model in memory (tests, benchmarks); `kind` is the device the model was built on.
     pub fn from_model(config: GroundedConfig, model: Generator, name: &str) -> Self {
-        Grounded { config, model, name: name.to_string(), files: None }
+        Grounded { config, model, name: name.to_string(), files: None, kind: DeviceKind::Cpu, batch: 1 }
+    }
+
+    /// The same model on `kind`, `batch` frames per forward pass (benchmarks and tests).
+    pub fn on(mut self, kind: DeviceKind, batch: usize) -> Result<Self, Diagnostic> {
+        let device = kind.open()?;
+        self.model = guard::guarded(|| self.model.to_device(&device))?;
+        self.kind = kind;
+        self.batch = batch.max(1);
+        Ok(self)
+    }
+
+    /// The device the model runs on.
+    pub fn device(&self) -> DeviceKind {
+        self.kind
     }
 
     /// The weights and config files it was loaded from (as given), if loaded from files.
     pub fn files(&self) -> Option<(&Path, &Path)> {
         self.files.as_ref().map(|(w, c)| (w.as_path(), c.as_path()))
-    }
-
-    /// Labels (400, 400, 32) for one frame.
-    pub fn predict(&self, boxes: &[GBox], masks: &Array3<i8>, aux: &Array3<i32>) -> Array3<u8> {
-        let anchors = latents::build(&self.config, boxes, masks);
-        let hb = HostBatch::new(vec![anchors]);
-        let mut bev = Vec::with_capacity(BEV_CHANNELS * NX * NY);
-        model::bev_input(masks, aux, &mut bev);
-        let out = self.model.forward(bev, &hb, Region::full());
-        logits_to_labels(out.logits)
     }
 }
 
@@ -191,25 +216,4 @@ pub fn logits_to_labels(logits: Tensor<2>) -> Array3<u8> {
 fn missing_weights(path: &Path) -> Diagnostic {
     Diagnostic::error("E0901", format!("weights file `{}` does not exist", path.display()))
         .help("train one with `rocc train generator --data DIR --config FILE --out DIR` (it writes DIR/generator.bpk)")
-}
-
-impl OccupancyBackend for Grounded {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn occupancy(&self, input: &OccInput) -> Occupancy {
-        let boxes: Vec<GBox> = input.boxes.iter().map(GBox::from_ego).collect();
-        Occupancy { labels: self.predict(&boxes, &input.bev.masks, &input.bev.aux) }
-    }
-}
-
-impl OccupancyBackend for &Grounded {
-    fn name(&self) -> &str {
-        (**self).name()
-    }
-
-    fn occupancy(&self, input: &OccInput) -> Occupancy {
-        (**self).occupancy(input)
-    }
 }

@@ -69,7 +69,12 @@ pub struct HostBatch {
 
 impl HostBatch {
     pub fn new(anchors: Vec<Vec<Anchor>>) -> Self {
-        let q = anchors.iter().map(Vec::len).max().unwrap_or(0).max(1);
+        Self::padded_to(anchors, 1)
+    }
+
+    /// Padded to at least `q` (inference pads to the config's `latents`, see `infer`).
+    pub fn padded_to(anchors: Vec<Vec<Anchor>>, q: usize) -> Self {
+        let q = anchors.iter().map(Vec::len).max().unwrap_or(0).max(q).max(1);
         let mut feats = Vec::with_capacity(anchors.len() * q * ANCHOR_FEATS);
         let mut pad = Vec::with_capacity(anchors.len() * q);
         for set in &anchors {

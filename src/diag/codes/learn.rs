@@ -96,4 +96,52 @@ time; CI and the default build are CPU-only).
 
     rocc train autoencoder --data corpus --config configs/paper.ron --out paper --device cuda   // error in a default build",
     },
+    Code {
+        code: "E0910",
+        title: "no usable GPU device",
+        explanation: "`--device wgpu` or `--device cuda` was asked for, the build has the feature, but no device\n\
+answered: no Vulkan/Metal/DX12 adapter (wgpu), no CUDA driver or GPU (cuda), or the driver\n\
+refused to create a device. rocc probes the device before any work, so nothing was written.\n\
+Check the driver (`vulkaninfo --summary`, `nvidia-smi`); in a container, the GPU and its\n\
+Vulkan ICD must be passed through. `--device cpu` always works.
+
+    rocc compile scene.scn -o out --backend grounded --weights model/generator.bpk --device wgpu
+    // error on a machine without a GPU driver: no usable GPU device",
+    },
+    Code {
+        code: "E0911",
+        title: "out of device memory",
+        explanation: "The GPU had no memory left for an allocation of the learned backend. Inference holds the\n\
+full-grid logits of every frame of a forward pass (400 x 400 x 32 voxels x 9 classes, about\n\
+180 MB per frame) and the splat's intermediates; training also holds the gradients. Lower\n\
+`--grounded-batch` (frames per forward pass of `rocc compile`), or the config's `batch` or\n\
+`train.crop` for `rocc train` (`--resume` continues from the last checkpoint), free the GPU of\n\
+other work, or use another device.
+
+    rocc compile scenarios/ -o out --backend grounded --weights paper/generator.bpk --device wgpu --grounded-batch 16
+    // error on a small GPU: lower --grounded-batch",
+    },
+    Code {
+        code: "E0912",
+        title: "a buffer beyond the device's limits",
+        explanation: "One tensor of the learned backend is larger than the device lets a single buffer be\n\
+(wgpu's `max_buffer_size` and `max_storage_buffer_binding_size`; cubecl says `can't allocate\n\
+buffer of size: N`). This depends on the size of one forward pass, not on free memory: lower\n\
+`--grounded-batch` (compile) or the config's `batch` or `train.crop` (train), or use a device\n\
+with larger limits (`--device cuda`).
+
+    rocc train generator --data nuplan/train --config configs/paper.ron --out paper --device wgpu
+    // error where one splat buffer of batch 6 exceeds the adapter's limit: lower `batch` or `train.crop`",
+    },
+    Code {
+        code: "E0913",
+        title: "the device failed",
+        explanation: "A GPU operation of the learned backend failed in a way rocc does not recognise (not a\n\
+missing device, E0910, nor memory, E0911 and E0912); the message quotes the device's own\n\
+words. Nothing of the failed clip is kept as complete: a re-run starts it again. Rerun with\n\
+`--device cpu` to tell a fault of the device or its driver from one of the model or weights.
+
+    rocc compile scene.scn -o out --backend grounded --weights model/generator.bpk --device wgpu
+    // error: the device failed: `...` (the driver's message)",
+    },
 ];

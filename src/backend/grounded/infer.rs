@@ -1,0 +1,122 @@
+//! Inference: boxes and BEV of frames -> per-voxel labels, several frames per forward pass.
+//!
+//! Every frame's latent set is padded to the config's `latents` (Q), whatever the batch: the
+//! attention then sees the same shapes for a frame alone or among others, so labels do not
+//! depend on `--grounded-batch` or on which frames share a pass (on the CPU they are
+//! byte-identical; tests/grounded.rs checks a batch of 3 against single frames). On a GPU the
+//! device work runs under `guard::guarded`, so a device failure is a diagnostic.
+
+use super::guard::guarded;
+use super::model::{BEV_CHANNELS, HostBatch, bev_input};
+use super::splat::Region;
+use super::{GBox, Grounded, latents};
+use crate::backend::layout::{N_LABELS, NX, NY, NZ};
+use crate::backend::{OccInput, Occupancy, OccupancyBackend};
+use crate::diag::Diagnostic;
+use ndarray::Array3;
+use rayon::prelude::*;
+
+/// One frame as the model reads it.
+pub struct FrameIn<'a> {
+    pub boxes: Vec<GBox>,
+    pub masks: &'a Array3<i8>,
+    pub aux: &'a Array3<i32>,
+}
+
+impl<'a> FrameIn<'a> {
+    pub fn of(input: &OccInput<'a>) -> Self {
+        FrameIn {
+            boxes: input.boxes.iter().map(GBox::from_ego).collect(),
+            masks: &input.bev.masks,
+            aux: &input.bev.aux,
+        }
+    }
+}
+
+impl Grounded {
+    /// Labels (400, 400, 32) for one frame.
+    pub fn predict(&self, boxes: &[GBox], masks: &Array3<i8>, aux: &Array3<i32>) -> Array3<u8> {
+        let frame = FrameIn { boxes: boxes.to_vec(), masks, aux };
+        self.forward_labels(std::slice::from_ref(&frame)).pop().unwrap_or_else(|| Array3::zeros((NX, NY, NZ)))
+    }
+
+    /// Labels of every frame, `batch` frames per forward pass: on the CPU the passes run side by
+    /// side on the thread pool, on a GPU one after another (its memory holds one pass).
+    pub fn predict_frames(&self, frames: &[FrameIn]) -> Result<Vec<Array3<u8>>, Diagnostic> {
+        if !self.device().is_gpu() {
+            let parts: Vec<Vec<Array3<u8>>> = frames.par_chunks(self.batch).map(|c| self.forward_labels(c)).collect();
+            return Ok(parts.into_iter().flatten().collect());
+        }
+        let mut out = Vec::with_capacity(frames.len());
+        for c in frames.chunks(self.batch) {
+            out.extend(guarded(|| self.forward_labels(c))?);
+        }
+        Ok(out)
+    }
+
+    /// Frames one `predict_frames` call should get to keep the device busy.
+    fn frames_per_call(&self) -> usize {
+        if self.device().is_gpu() { self.batch } else { self.batch * rayon::current_num_threads() }
+    }
+
+    /// One forward pass over `frames`.
+    fn forward_labels(&self, frames: &[FrameIn]) -> Vec<Array3<u8>> {
+        if frames.is_empty() {
+            return Vec::new();
+        }
+        let sets: Vec<_> = frames.iter().map(|f| latents::build(&self.config, &f.boxes, f.masks)).collect();
+        let hb = HostBatch::padded_to(sets, self.config.latents);
+        let mut bev = Vec::with_capacity(frames.len() * BEV_CHANNELS * NX * NY);
+        for f in frames {
+            bev_input(f.masks, f.aux, &mut bev);
+        }
+        let out = self.model.forward(bev, &hb, Region::full());
+        let labels: Vec<u8> =
+            out.logits.argmax(1).to_data().iter::<i64>().map(|l| l.clamp(0, N_LABELS as i64 - 1) as u8).collect();
+        labels
+            .chunks(NX * NY * NZ)
+            .map(|c| Array3::from_shape_vec((NX, NY, NZ), c.to_vec()).unwrap_or_else(|_| Array3::zeros((NX, NY, NZ))))
+            .collect()
+    }
+}
+
+impl OccupancyBackend for Grounded {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn occupancy(&self, input: &OccInput) -> Occupancy {
+        let f = FrameIn::of(input);
+        Occupancy { labels: self.predict(&f.boxes, f.masks, f.aux) }
+    }
+
+    fn batch(&self) -> Option<usize> {
+        Some(self.frames_per_call())
+    }
+
+    fn occupancy_batch(&self, inputs: &[OccInput], out: &mut [Occupancy]) -> Result<(), Diagnostic> {
+        let frames: Vec<FrameIn> = inputs.iter().map(FrameIn::of).collect();
+        for (o, labels) in out.iter_mut().zip(self.predict_frames(&frames)?) {
+            o.labels = labels;
+        }
+        Ok(())
+    }
+}
+
+impl OccupancyBackend for &Grounded {
+    fn name(&self) -> &str {
+        (**self).name()
+    }
+
+    fn occupancy(&self, input: &OccInput) -> Occupancy {
+        (**self).occupancy(input)
+    }
+
+    fn batch(&self) -> Option<usize> {
+        (**self).batch()
+    }
+
+    fn occupancy_batch(&self, inputs: &[OccInput], out: &mut [Occupancy]) -> Result<(), Diagnostic> {
+        (**self).occupancy_batch(inputs, out)
+    }
+}
