@@ -6,10 +6,16 @@
 //! logits(p) = sum_i a_i exp(-1/2 d^T Sigma_i^-1 d) c_i, d = m_i - p, Sigma = R diag(s^2) R^T,
 //! evaluated only on the (2 r + 1)^3 voxels around the voxel holding m_i (the window, `r` =
 //! `GaussianConfig::window`; scales are capped at r / 3 so the 3-sigma ellipsoid fits it). The
-//! window indices are computed on the host from the means' values; the weights are tensor
-//! operations on [N, window] and the sum is one index-add into the region's flat grid, so the
-//! cost is N x window, never Gaussians x voxels, and gradients reach means, scales, rotations,
-//! opacities and features through ordinary autodiff.
+//! cost is N x window, never Gaussians x voxels. `splat` packs the Gaussians into one table
+//! (`layout`) and runs one backend operation (`op`) with its own backward pass: host code on the
+//! CPU (`host`), a kernel on wgpu and CUDA (`cube`). `splat_tensor_ops` is the same sum written
+//! with ordinary tensor operations and autodiff: the reference both are tested against.
+
+#[cfg(any(feature = "wgpu", feature = "cuda"))]
+pub mod cube;
+pub mod host;
+pub mod layout;
+pub mod op;
 
 use crate::backend::layout::{N_LABELS, NX, NY, NZ};
 use burn::prelude::*;
@@ -141,6 +147,29 @@ pub fn activate(
 
 /// Splat into `region` of each of `batch` grids: logits `[batch * region.voxels(), 9]`.
 pub fn splat(g: &Gaussians, region: Region, batch: usize, window: usize) -> Tensor<2> {
+    let device = g.mean.device();
+    let n = g.mean.dims()[0];
+    let shape = layout::SplatShape {
+        i0: region.i0 as u32,
+        j0: region.j0 as u32,
+        ni: region.ni as u32,
+        nj: region.nj as u32,
+        batch: batch as u32,
+        window: window as u32,
+    };
+    if n == 0 {
+        return Tensor::<2>::zeros([batch * region.voxels(), N_LABELS], &device);
+    }
+    let b = column(g.batch.iter().map(|&b| b as f32).collect(), &device);
+    let packed =
+        Tensor::cat(vec![g.mean.clone(), g.scale.clone(), g.rot.clone(), g.opacity.clone(), g.feat.clone(), b], 1);
+    op::splat_packed(packed, shape)
+}
+
+/// `splat` written with tensor operations and autodiff: window indices computed on the host, a
+/// dense [N, window, 9] contribution, one index-add. Slow and memory-hungry; the reference the
+/// splat operation's values and gradients are tested against.
+pub fn splat_tensor_ops(g: &Gaussians, region: Region, batch: usize, window: usize) -> Tensor<2> {
     let device = g.mean.device();
     let n = g.mean.dims()[0];
     let out = Tensor::<2>::zeros([batch * region.voxels(), N_LABELS], &device);

@@ -1,0 +1,153 @@
+//! The splat as one backend operation with its own backward pass (burn's backend extension):
+//! the host code (`host`) on the `flex` backend, a device kernel (`cube`) on wgpu and CUDA, and
+//! autodiff that calls the backward operation of whichever backend runs it. Nothing of window
+//! size is ever materialised and no tensor makes a round trip through the host on a device.
+
+use super::host;
+use super::layout::{COLS, SplatShape};
+use crate::backend::layout::N_LABELS;
+use burn::backend::autodiff::checkpoint::{base::Checkpointer, strategy::CheckpointStrategy};
+use burn::backend::autodiff::grads::Gradients;
+use burn::backend::autodiff::ops::{Backward, Ops, OpsKind, unary};
+use burn::backend::tensor::FloatTensor;
+use burn::backend::{Autodiff, AutodiffBackend, Backend, Dispatch, Flex, TensorMetadata, backend_extension};
+use burn::prelude::*;
+
+#[backend_extension(Flex, Cube: cfg(any(feature = "wgpu", feature = "cuda")), Autodiff)]
+pub trait SplatOps: burn::backend::Backend {
+    /// Packed Gaussians `[N, COLS]` -> logits `[batch * voxels, 9]`.
+    #[allow(clippy::too_many_arguments)]
+    fn splat_forward(
+        g: FloatTensor<Self>,
+        i0: u32,
+        j0: u32,
+        ni: u32,
+        nj: u32,
+        batch: u32,
+        window: u32,
+    ) -> FloatTensor<Self>;
+    /// Packed Gaussians and the logits' gradient -> the Gaussians' gradient `[N, COLS]`.
+    #[allow(clippy::too_many_arguments)]
+    fn splat_backward(
+        g: FloatTensor<Self>,
+        grad: FloatTensor<Self>,
+        i0: u32,
+        j0: u32,
+        ni: u32,
+        nj: u32,
+        batch: u32,
+        window: u32,
+    ) -> FloatTensor<Self>;
+}
+
+fn shape_of(i0: u32, j0: u32, ni: u32, nj: u32, batch: u32, window: u32) -> SplatShape {
+    SplatShape { i0, j0, ni, nj, batch, window }
+}
+
+fn host_vec<B: Backend>(t: FloatTensor<B>) -> Vec<f32> {
+    // A host backend reads synchronously; a device read only happens on the fallback path.
+    let data = burn::tensor::read_sync(B::float_into_data(t)).expect("reading a tensor back from its device");
+    data.convert::<f32>().try_into_vec::<f32>().unwrap_or_default()
+}
+
+/// The host implementation on any backend: read, compute, upload (the `flex` path, and the
+/// device fallback where the device has no atomic float add).
+pub fn host_forward<B: Backend>(g: FloatTensor<B>, s: SplatShape) -> FloatTensor<B> {
+    let device = g.device();
+    let out = host::forward(&host_vec::<B>(g), &s);
+    let rows = s.batch as usize * s.voxels();
+    B::float_from_data(TensorData::new(out, [rows, N_LABELS]), &device)
+}
+
+pub fn host_backward<B: Backend>(g: FloatTensor<B>, grad: FloatTensor<B>, s: SplatShape) -> FloatTensor<B> {
+    let device = g.device();
+    let gv = host_vec::<B>(g);
+    let n = gv.len() / COLS;
+    let out = host::backward(&gv, &host_vec::<B>(grad), &s);
+    B::float_from_data(TensorData::new(out, [n, COLS]), &device)
+}
+
+impl SplatOps for Flex {
+    fn splat_forward(
+        g: FloatTensor<Self>,
+        i0: u32,
+        j0: u32,
+        ni: u32,
+        nj: u32,
+        batch: u32,
+        window: u32,
+    ) -> FloatTensor<Self> {
+        host_forward::<Self>(g, shape_of(i0, j0, ni, nj, batch, window))
+    }
+
+    fn splat_backward(
+        g: FloatTensor<Self>,
+        grad: FloatTensor<Self>,
+        i0: u32,
+        j0: u32,
+        ni: u32,
+        nj: u32,
+        batch: u32,
+        window: u32,
+    ) -> FloatTensor<Self> {
+        host_backward::<Self>(g, grad, shape_of(i0, j0, ni, nj, batch, window))
+    }
+}
+
+#[derive(Debug)]
+struct SplatBackward;
+
+impl<B: Backend + SplatOps> Backward<B, 1> for SplatBackward {
+    type State = (FloatTensor<B>, SplatShape);
+
+    fn backward(self, ops: Ops<Self::State, 1>, grads: &mut Gradients, _checkpointer: &mut Checkpointer) {
+        let (g, s) = ops.state;
+        unary::<B, _>(ops.parents, ops.node, grads, |grad| {
+            B::splat_backward(g, grad, s.i0, s.j0, s.ni, s.nj, s.batch, s.window)
+        });
+    }
+}
+
+impl<B: Backend + SplatOps, C: CheckpointStrategy> SplatOps for Autodiff<B, C> {
+    fn splat_forward(
+        g: FloatTensor<Self>,
+        i0: u32,
+        j0: u32,
+        ni: u32,
+        nj: u32,
+        batch: u32,
+        window: u32,
+    ) -> FloatTensor<Self> {
+        let s = shape_of(i0, j0, ni, nj, batch, window);
+        match SplatBackward.prepare::<C>([g.node()]).compute_bound().stateful() {
+            OpsKind::Tracked(prep) => {
+                let inner = g.primitive().clone();
+                let out = B::splat_forward(inner.clone(), i0, j0, ni, nj, batch, window);
+                prep.finish((inner, s), out)
+            }
+            OpsKind::UnTracked(prep) => {
+                prep.finish(B::splat_forward(g.into_primitive(), i0, j0, ni, nj, batch, window))
+            }
+        }
+    }
+
+    fn splat_backward(
+        g: FloatTensor<Self>,
+        grad: FloatTensor<Self>,
+        i0: u32,
+        j0: u32,
+        ni: u32,
+        nj: u32,
+        batch: u32,
+        window: u32,
+    ) -> FloatTensor<Self> {
+        let out = B::splat_backward(Self::inner(g), Self::inner(grad), i0, j0, ni, nj, batch, window);
+        Self::from_inner(out)
+    }
+}
+
+/// Logits `[batch * voxels, 9]` of packed Gaussians `[N, COLS]` on whatever device they live on.
+pub fn splat_packed(g: Tensor<2>, s: SplatShape) -> Tensor<2> {
+    let out = <Dispatch as SplatOps>::splat_forward(g.into_dispatch(), s.i0, s.j0, s.ni, s.nj, s.batch, s.window);
+    Tensor::from_dispatch(out)
+}
