@@ -702,6 +702,82 @@ fn main() {
     if args.iter().any(|a| a == "grounded") {
         bench_grounded(&args);
     }
+    if args.iter().any(|a| a == "train") {
+        bench_train(&args);
+    }
+}
+
+/// Training seconds per step of the generator on a corpus compiled here (12 frames of the
+/// crowded junction), `cpu-small` by default, `paper` too with `paper`; `--device wgpu|cuda` in a
+/// build with that feature.
+fn bench_train(args: &[String]) {
+    use rocc::backend::grounded::GroundedConfig;
+    use rocc::compile::{OccBackend, Stage};
+    let device = match args.iter().position(|a| a == "--device").and_then(|i| args.get(i + 1)).map(String::as_str) {
+        None | Some("cpu") => burn::tensor::Device::flex(),
+        #[cfg(feature = "wgpu")]
+        Some("wgpu") => burn::tensor::Device::wgpu(Default::default()),
+        #[cfg(feature = "cuda")]
+        Some("cuda") => burn::tensor::Device::cuda(0usize),
+        Some(other) => {
+            println!("  --device {other}: not in this build (features wgpu, cuda)");
+            return;
+        }
+    };
+    println!("== train: generator seconds per step on {device:?} (a corpus of 12 frames compiled here)");
+    let dir = std::env::temp_dir().join(format!("rocc-bench-train-{}", std::process::id()));
+    let corpus = dir.join("corpus");
+    let opts = Options {
+        stage: Stage::Occ,
+        frames: Some("0..12".into()),
+        previews: false,
+        backend: OccBackend::Procedural,
+        ..Options::default()
+    };
+    let r = batch::run(&[root().join("scenarios/ambulance_crowded_intersection.scn")], &corpus, &opts, true);
+    if !r.failures.is_empty() {
+        println!("  the corpus did not compile");
+        return;
+    }
+    let mut names = vec!["cpu-small"];
+    if args.iter().any(|a| a == "paper") {
+        names.push("paper");
+    }
+    for name in names {
+        let Ok(config) = std::fs::read_to_string(root().join(format!("configs/{name}.ron")))
+            .map_err(|e| e.to_string())
+            .and_then(|t| GroundedConfig::from_ron(&t))
+        else {
+            println!("  {name}: cannot read its config");
+            continue;
+        };
+        let topts = rocc::learn::TrainOptions {
+            stage: rocc::learn::Stage::Generator,
+            data: corpus.clone(),
+            val: None,
+            config: GroundedConfig {
+                train: rocc::backend::grounded::config::TrainConfig { val_fraction: 0.0, ..config.train.clone() },
+                ..config.clone()
+            },
+            out: dir.join(name),
+            resume: false,
+            init: None,
+            device: device.clone(),
+            quiet: true,
+            max_steps: Some(6),
+            epochs: Some(100),
+        };
+        match rocc::learn::train(&topts) {
+            Ok(rep) => println!(
+                "  {name:<10} batch {} crop {}: {}",
+                config.train.batch,
+                config.train.crop,
+                rocc::learn::step_summary(&rep.step_seconds).unwrap_or_default()
+            ),
+            Err(e) => println!("  {name}: {e}"),
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// `bench grounded [--device cpu|wgpu|cuda] [--batch N] [--configs a,b]`: inference time per

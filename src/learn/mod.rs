@@ -6,4 +6,4 @@
 pub mod data;
 pub mod train;
 
-pub use train::{Stage, TrainOptions, TrainReport, export_safetensors, train};
+pub use train::{Stage, TrainOptions, TrainReport, export_safetensors, step_summary, train};

@@ -91,6 +91,8 @@ pub struct TrainReport {
     pub epochs: Vec<EpochReport>,
     pub weights: PathBuf,
     pub steps: usize,
+    /// Wall time of each step of this run (data loading, forward, backward, optimiser), seconds.
+    pub step_seconds: Vec<f64>,
 }
 
 /// Where a run stands, for `--resume`.
@@ -314,6 +316,34 @@ pub fn score(
     Ok(sc.scores())
 }
 
+/// `score`, saying the inference time per frame (median after the first, which compiles the
+/// device's kernels).
+fn timed_score(
+    frames: &[Sample],
+    max: usize,
+    say: &impl Fn(String),
+    mut predict: impl FnMut(&Frame) -> Array3<u8>,
+) -> Result<OccScores, Diagnostic> {
+    let mut times = Vec::new();
+    let scores = score(frames, max, |f| {
+        let t0 = Instant::now();
+        let p = predict(f);
+        times.push(t0.elapsed().as_secs_f64());
+        p
+    })?;
+    if let Some(rest) = times.get(1..).filter(|r| !r.is_empty()) {
+        let mut sorted = rest.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        say(format!(
+            "validation: {} frame(s), inference median {:.0} ms per frame after the first ({:.0} ms)",
+            times.len(),
+            sorted[sorted.len() / 2] * 1e3,
+            times[0] * 1e3
+        ));
+    }
+    Ok(scores)
+}
+
 /// `k` samples spread evenly over `v` (deterministic).
 fn evenly<T>(v: &[T], k: usize) -> impl Iterator<Item = &T> {
     let n = v.len();
@@ -350,6 +380,23 @@ pub fn train(opts: &TrainOptions) -> Result<TrainReport, Diagnostic> {
             Ok((g, false))
         }),
     }
+}
+
+/// "N steps: median X s per step" over the steps after the first (which compiles the device's
+/// kernels and warms its allocator), `None` before any step.
+pub fn step_summary(seconds: &[f64]) -> Option<String> {
+    let (first, rest) = seconds.split_first()?;
+    if rest.is_empty() {
+        return Some(format!("1 step in {first:.3} s"));
+    }
+    let mut sorted = rest.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    Some(format!(
+        "{} steps: median {:.3} s per step after the first ({:.3} s)",
+        seconds.len(),
+        sorted[sorted.len() / 2],
+        first
+    ))
 }
 
 /// Write a stage's trained `weights` (`.bpk`) again as `.safetensors` beside them; returns that
@@ -476,6 +523,7 @@ fn run<M: Net>(
 
     let mut reports = Vec::new();
     let (run_t0, first_step) = (Instant::now(), pos.step);
+    let mut step_seconds = Vec::new();
     let mut history_path = opts.out.join(format!("{stage}-history.json"));
     if opts.resume && history_path.is_file() {
         history_path = opts.out.join(format!("{stage}-history.json"));
@@ -488,6 +536,7 @@ fn run<M: Net>(
             if pos.step >= limit {
                 break 'epochs;
             }
+            let step_t0 = Instant::now();
             let mut rng = Rng::stream(tc.seed, &format!("step:{epoch}:{bi}"));
             let frames: Vec<Frame> = order[bi * tc.batch..((bi + 1) * tc.batch).min(train.len())]
                 .iter()
@@ -504,6 +553,7 @@ fn run<M: Net>(
             }
             let grads = GradientsParams::from_grads(loss.backward(), &model);
             model = optim.step(cosine_lr(stage_cfg, pos.step, total), model, grads);
+            step_seconds.push(step_t0.elapsed().as_secs_f64());
             pos.step += 1;
             pos.batch = bi + 1;
             sum += l;
@@ -523,8 +573,11 @@ fn run<M: Net>(
         }
         pos = Position { epoch: epoch + 1, batch: 0, step: pos.step };
         let valid = model.valid();
-        let scores =
-            if val.is_empty() { None } else { Some(score(&val, tc.val_max_frames, |f| valid.predict(cfg, f))?) };
+        let scores = if val.is_empty() {
+            None
+        } else {
+            Some(timed_score(&val, tc.val_max_frames, &say, |f| valid.predict(cfg, f))?)
+        };
         let rep = EpochReport {
             epoch: epoch + 1,
             steps,
@@ -549,8 +602,11 @@ fn run<M: Net>(
     if reports.last().is_none_or(|r| r.epoch != pos.epoch || pos.batch != 0) && pos.step > 0 {
         let per_step = run_t0.elapsed().as_secs_f64() / (pos.step - first_step).max(1) as f64;
         let valid = model.valid();
-        let scores =
-            if val.is_empty() { None } else { Some(score(&val, tc.val_max_frames, |f| valid.predict(cfg, f))?) };
+        let scores = if val.is_empty() {
+            None
+        } else {
+            Some(timed_score(&val, tc.val_max_frames, &say, |f| valid.predict(cfg, f))?)
+        };
         if let Some(s) = &scores {
             say(format!(
                 "stopped at step {} ({:.2} s per step): validation fg-mIoU {:.2}  mIoU_US {:.2}  occ-IoU {:.2}",
@@ -559,6 +615,9 @@ fn run<M: Net>(
         }
         reports.push(EpochReport { epoch: pos.epoch + 1, steps: 0, mean_loss: f64::NAN, seconds: 0.0, val: scores });
         save(&model, &optim, pos)?;
+    }
+    if let Some(line) = step_summary(&step_seconds) {
+        say(line);
     }
     let weights_path = opts.out.join(format!("{stage}.bpk"));
     save_module(&model.valid(), &weights_path)?;
@@ -573,6 +632,7 @@ fn run<M: Net>(
         epochs: reports,
         weights: weights_path,
         steps: pos.step,
+        step_seconds,
     };
     write_text(&history_path, &serde_json::to_string_pretty(&report).unwrap_or_default())?;
     say(format!("wrote {} (+ .ron)", report.weights.display()));

@@ -40,7 +40,14 @@ pub struct DecoderShape {
     pub max_scale: f32,
     pub window: usize,
     pub budgets: [usize; N_LABELS],
+    pub heads: usize,
 }
+
+/// The largest attention-score tensor (bytes) the decoder builds at once: beyond it the batch's
+/// latent sets pass the transformer one at a time (the same arithmetic per set, since sets never
+/// attend to each other), which keeps `paper` (6 heads x 4096^2 scores per frame) inside a GPU
+/// buffer at batch 6.
+const ATTENTION_BYTES: usize = 512 << 20;
 
 impl DecoderShape {
     pub fn new(cfg: &GroundedConfig) -> Self {
@@ -51,6 +58,7 @@ impl DecoderShape {
             max_scale: cfg.max_scale(),
             window: cfg.gaussians.window,
             budgets: std::array::from_fn(|l| budget(cfg, l as u8)),
+            heads: cfg.decoder.heads,
         }
     }
 }
@@ -153,7 +161,18 @@ impl Decoder {
     pub fn raw(&self, latents: Tensor<3>, hb: &HostBatch) -> Tensor<2> {
         let device = latents.device();
         let x = self.input.forward(Tensor::cat(vec![latents, hb.feats_tensor(&device)], 2));
-        let x = self.transformer.forward(TransformerEncoderInput::new(x).mask_pad(hb.pad_tensor(&device)));
+        let pad = hb.pad_tensor(&device);
+        let (b, q) = (hb.b(), hb.q);
+        let x = if b > 1 && b * self.shape.heads * q * q * 4 > ATTENTION_BYTES {
+            let per_set = (0..b).map(|i| {
+                let xi = x.clone().slice([i..i + 1]);
+                let pi = pad.clone().slice([i..i + 1]);
+                self.transformer.forward(TransformerEncoderInput::new(xi).mask_pad(pi))
+            });
+            Tensor::cat(per_set.collect(), 0)
+        } else {
+            self.transformer.forward(TransformerEncoderInput::new(x).mask_pad(pad))
+        };
         let out = self.head.forward(x);
         out.reshape([hb.b() * hb.q * self.shape.gaussians, PARAMS])
     }

@@ -129,7 +129,7 @@ fn splat_backward_kernel(
                         let d0 = f32::cast_from(vi) + 0.5f32 - mx;
                         let d1 = f32::cast_from(vj) + 0.5f32 - my;
                         let d2 = f32::cast_from(vk) + 0.5f32 - mz;
-                        let mut u = Array::<f32>::new(3);
+                        let mut u = Array::<f32>::new(3usize);
                         let mut q = 0.0f32;
                         #[unroll]
                         for j in 0..3usize {
@@ -151,7 +151,7 @@ fn splat_backward_kernel(
                         }
                         acc[layout::OPACITY] += gw * e;
                         let gq = -0.5f32 * gw * w;
-                        let mut gu = Array::<f32>::new(3);
+                        let mut gu = Array::<f32>::new(3usize);
                         #[unroll]
                         for j in 0..3usize {
                             let inv = 1.0f32 / g[base + layout::SCALE + j];
