@@ -1,9 +1,9 @@
 //! Inference: boxes and BEV of frames -> per-voxel labels, several frames per forward pass.
 //!
-//! Every frame's latent set is padded to the config's `latents` (Q), whatever the batch: the
-//! attention then sees the same shapes for a frame alone or among others, so labels do not
-//! depend on `--grounded-batch` or on which frames share a pass (on the CPU they are
-//! byte-identical; tests/grounded.rs checks a batch of 3 against single frames). On a GPU the
+//! Every frame's latent set passes the transformer alone at its own length (`set_by_set`); the
+//! other layers work row by row. So labels do not depend on `--grounded-batch` or on which frames
+//! share a pass (on the CPU they are byte-identical; tests/grounded.rs checks a batch of 3
+//! against single frames). On a GPU the
 //! device work runs under `guard::guarded`, so a device failure is a diagnostic.
 
 use super::guard::guarded;
@@ -65,7 +65,8 @@ impl Grounded {
             return Vec::new();
         }
         let sets: Vec<_> = frames.iter().map(|f| latents::build(&self.config, &f.boxes, f.masks)).collect();
-        let hb = HostBatch::padded_to(sets, self.config.latents);
+        let mut hb = HostBatch::new(sets);
+        hb.set_by_set = true;
         let mut bev = Vec::with_capacity(frames.len() * BEV_CHANNELS * NX * NY);
         for f in frames {
             bev_input(f.masks, f.aux, &mut bev);

@@ -73,16 +73,15 @@ pub struct HostBatch {
     pub feats: Vec<f32>,
     /// [b * q], true = padding.
     pub pad: Vec<bool>,
+    /// Each set passes the transformer alone at its own length (inference: a frame's labels do
+    /// not depend on the frames batched with it, since nothing of another set's length reaches
+    /// its arithmetic).
+    pub set_by_set: bool,
 }
 
 impl HostBatch {
     pub fn new(anchors: Vec<Vec<Anchor>>) -> Self {
-        Self::padded_to(anchors, 1)
-    }
-
-    /// Padded to at least `q` (inference pads to the config's `latents`, see `infer`).
-    pub fn padded_to(anchors: Vec<Vec<Anchor>>, q: usize) -> Self {
-        let q = anchors.iter().map(Vec::len).max().unwrap_or(0).max(q).max(1);
+        let q = anchors.iter().map(Vec::len).max().unwrap_or(0).max(1);
         let mut feats = Vec::with_capacity(anchors.len() * q * ANCHOR_FEATS);
         let mut pad = Vec::with_capacity(anchors.len() * q);
         for set in &anchors {
@@ -95,7 +94,7 @@ impl HostBatch {
             // visible (it emits nothing: only real anchors get Gaussians).
             pad.extend((set.len()..q).map(|i| !(set.is_empty() && i == 0)));
         }
-        HostBatch { anchors, q, feats, pad }
+        HostBatch { anchors, q, feats, pad, set_by_set: false }
     }
 
     pub fn b(&self) -> usize {
@@ -163,11 +162,15 @@ impl Decoder {
         let x = self.input.forward(Tensor::cat(vec![latents, hb.feats_tensor(&device)], 2));
         let pad = hb.pad_tensor(&device);
         let (b, q) = (hb.b(), hb.q);
-        let x = if b > 1 && b * self.shape.heads * q * q * 4 > ATTENTION_BYTES {
+        let x = if hb.set_by_set || (b > 1 && b * self.shape.heads * q * q * 4 > ATTENTION_BYTES) {
+            let width = x.dims()[2];
             let per_set = (0..b).map(|i| {
-                let xi = x.clone().slice([i..i + 1]);
-                let pi = pad.clone().slice([i..i + 1]);
-                self.transformer.forward(TransformerEncoderInput::new(xi).mask_pad(pi))
+                // Set by set at its own length (an empty set keeps its one visible slot).
+                let len = if hb.set_by_set { hb.anchors[i].len().max(1) } else { q };
+                let xi = x.clone().slice([i..i + 1, 0..len]);
+                let pi = pad.clone().slice([i..i + 1, 0..len]);
+                let y = self.transformer.forward(TransformerEncoderInput::new(xi).mask_pad(pi));
+                if len < q { Tensor::cat(vec![y, Tensor::zeros([1, q - len, width], &device)], 1) } else { y }
             });
             Tensor::cat(per_set.collect(), 0)
         } else {
