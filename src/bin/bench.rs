@@ -707,24 +707,21 @@ fn main() {
     }
 }
 
-/// Training seconds per step of the generator on a corpus compiled here (12 frames of the
-/// crowded junction), `cpu-small` by default, `paper` too with `paper`; `--device wgpu|cuda` in a
-/// build with that feature.
+/// `bench train [paper] [--device cpu|wgpu|cuda]`: training seconds per step of the generator on a
+/// corpus compiled here (12 frames of the crowded junction), `cpu-small`, and `paper` when asked.
 fn bench_train(args: &[String]) {
     use rocc::backend::grounded::GroundedConfig;
     use rocc::compile::{OccBackend, Stage};
-    let device = match args.iter().position(|a| a == "--device").and_then(|i| args.get(i + 1)).map(String::as_str) {
-        None | Some("cpu") => burn::tensor::Device::flex(),
-        #[cfg(feature = "wgpu")]
-        Some("wgpu") => burn::tensor::Device::wgpu(Default::default()),
-        #[cfg(feature = "cuda")]
-        Some("cuda") => burn::tensor::Device::cuda(0usize),
-        Some(other) => {
-            println!("  --device {other}: not in this build (features wgpu, cuda)");
-            return;
-        }
+    let kind: rocc::backend::grounded::DeviceKind =
+        match args.iter().position(|a| a == "--device").and_then(|i| args.get(i + 1)).map_or(Ok(Default::default()), |d| d.parse()) {
+            Ok(k) => k,
+            Err(e) => return println!("  {e}"),
+        };
+    let device = match kind.open() {
+        Ok(d) => d,
+        Err(e) => return println!("  {e}"),
     };
-    println!("== train: generator seconds per step on {device:?} (a corpus of 12 frames compiled here)");
+    println!("== train: generator seconds per step on {kind} (a corpus of 12 frames compiled here)");
     let dir = std::env::temp_dir().join(format!("rocc-bench-train-{}", std::process::id()));
     let corpus = dir.join("corpus");
     let opts = Options {
