@@ -658,6 +658,9 @@ fn bench_bev20() {
     }
 }
 
+#[path = "bench/learned.rs"]
+mod learned;
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let want = |s: &str| args.is_empty() || args.iter().any(|a| a == s);
@@ -700,150 +703,10 @@ fn main() {
     }
     // Minutes on a 2-core machine with the paper's configuration: only when asked for.
     if args.iter().any(|a| a == "grounded") {
-        bench_grounded(&args);
+        learned::bench_grounded(&args);
     }
     if args.iter().any(|a| a == "train") {
-        bench_train(&args);
-    }
-}
-
-/// `bench train [paper] [--device cpu|wgpu|cuda]`: training seconds per step of the generator on a
-/// corpus compiled here (12 frames of the crowded junction), `cpu-small`, and `paper` when asked.
-fn bench_train(args: &[String]) {
-    use rocc::backend::grounded::GroundedConfig;
-    use rocc::compile::{OccBackend, Stage};
-    let kind: rocc::backend::grounded::DeviceKind =
-        match args.iter().position(|a| a == "--device").and_then(|i| args.get(i + 1)).map_or(Ok(Default::default()), |d| d.parse()) {
-            Ok(k) => k,
-            Err(e) => return println!("  {e}"),
-        };
-    let device = match kind.open() {
-        Ok(d) => d,
-        Err(e) => return println!("  {e}"),
-    };
-    println!("== train: generator seconds per step on {kind} (a corpus of 12 frames compiled here)");
-    let dir = std::env::temp_dir().join(format!("rocc-bench-train-{}", std::process::id()));
-    let corpus = dir.join("corpus");
-    let opts = Options {
-        stage: Stage::Occ,
-        frames: Some("0..12".into()),
-        previews: false,
-        backend: OccBackend::Procedural,
-        ..Options::default()
-    };
-    let r = batch::run(&[root().join("scenarios/ambulance_crowded_intersection.scn")], &corpus, &opts, true);
-    if !r.failures.is_empty() {
-        println!("  the corpus did not compile");
-        return;
-    }
-    let mut names = vec!["cpu-small"];
-    if args.iter().any(|a| a == "paper") {
-        names.push("paper");
-    }
-    for name in names {
-        let Ok(config) = std::fs::read_to_string(root().join(format!("configs/{name}.ron")))
-            .map_err(|e| e.to_string())
-            .and_then(|t| GroundedConfig::from_ron(&t))
-        else {
-            println!("  {name}: cannot read its config");
-            continue;
-        };
-        let topts = rocc::learn::TrainOptions {
-            stage: rocc::learn::Stage::Generator,
-            data: corpus.clone(),
-            val: None,
-            config: GroundedConfig {
-                train: rocc::backend::grounded::config::TrainConfig { val_fraction: 0.0, ..config.train.clone() },
-                ..config.clone()
-            },
-            out: dir.join(name),
-            resume: false,
-            init: None,
-            device: device.clone(),
-            quiet: true,
-            max_steps: Some(6),
-            epochs: Some(100),
-        };
-        match rocc::learn::train(&topts) {
-            Ok(rep) => println!(
-                "  {name:<10} batch {} crop {}: {}",
-                config.train.batch,
-                config.train.crop,
-                rocc::learn::step_summary(&rep.step_seconds).unwrap_or_default()
-            ),
-            Err(e) => println!("  {name}: {e}"),
-        }
-    }
-    let _ = std::fs::remove_dir_all(&dir);
-}
-
-/// `bench grounded [--device cpu|wgpu|cuda] [--batch N] [--configs a,b]`: inference time per
-/// frame of each config on one device, `batch` frames of the ambulance example per forward pass.
-fn bench_grounded(args: &[String]) {
-    use rocc::backend::grounded::{DeviceKind, FrameIn, GBox, Generator, Grounded, GroundedConfig, latents};
-    let opt = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).map(String::as_str);
-    let kind: DeviceKind = match opt("--device").unwrap_or("cpu").parse() {
-        Ok(k) => k,
-        Err(e) => return println!("  {e}"),
-    };
-    let batch: usize = opt("--batch").and_then(|b| b.parse().ok()).unwrap_or(kind.default_batch()).max(1);
-    let configs = opt("--configs").unwrap_or("cpu-small,paper");
-    println!(
-        "== grounded: inference per frame on {kind} (batch {batch}; random weights, the cost does not depend on them)"
-    );
-    let Some(f) = load(&root().join("scenarios/ambulance_crowded_intersection.scn")) else { return };
-    let ego = f.concrete.egos.first().copied().unwrap_or(0);
-    let mut raster = Rasterizer::new();
-    let frames: Vec<(Vec<GBox>, Bev)> = (0..batch)
-        .map(|n| {
-            let fr = (n * 5).min(f.tracks.frames.saturating_sub(1));
-            let boxes = frame_boxes(&f, ego, fr);
-            let mut bev = Bev::zeros();
-            raster.rasterize_into(&f.map, f.tracks.poses[ego][fr], &boxes, &mut bev);
-            (boxes.iter().map(GBox::from_ego).collect(), bev)
-        })
-        .collect();
-    let inputs: Vec<FrameIn> =
-        frames.iter().map(|(b, bev)| FrameIn { boxes: b.clone(), masks: &bev.masks, aux: &bev.aux }).collect();
-    for name in configs.split(',') {
-        let path = root().join(format!("configs/{name}.ron"));
-        let Ok(cfg) =
-            std::fs::read_to_string(&path).map_err(|e| e.to_string()).and_then(|t| GroundedConfig::from_ron(&t))
-        else {
-            println!("  {name}: cannot read {}", path.display());
-            continue;
-        };
-        let set = latents::build(&cfg, &inputs[0].boxes, inputs[0].masks);
-        let fg = set.iter().filter(|a| a.foreground).count();
-        let model = Generator::new(&cfg, &rocc::backend::grounded::cpu());
-        let on_cpu = Grounded::from_model(cfg.clone(), model.clone(), name);
-        let g = match Grounded::from_model(cfg.clone(), model, name).on(kind, batch) {
-            Ok(g) => g,
-            Err(d) => return println!("  {name}: {} {}", d.code, d.message),
-        };
-        let run = || g.predict_frames(&inputs).map(|l| std::hint::black_box(l.len()));
-        if let Err(d) = run() {
-            println!("  {name:<10} {} {}", d.code, d.message);
-            continue;
-        }
-        let reps = if name == "paper" && !kind.is_gpu() { 1 } else { 5 };
-        let t = median(reps, || {
-            let _ = run();
-        });
-        println!(
-            "  {name:<10} {:>5} latents ({fg} foreground), {:>8} parameters: {:>9.1} ms per frame",
-            set.len(),
-            burn::module::Module::num_params(&g.model),
-            t * 1e3 / batch as f64
-        );
-        if kind.is_gpu() {
-            // Float sums run in another order on a GPU: how many labels of the first frame match.
-            let here = on_cpu.predict(&inputs[0].boxes, inputs[0].masks, inputs[0].aux);
-            if let Ok(there) = g.predict_frames(&inputs[..1]) {
-                let same = here.iter().zip(there[0].iter()).filter(|(a, b)| a == b).count();
-                println!("  {name:<10} labels equal to the CPU's: {:.4} %", 100.0 * same as f64 / here.len() as f64);
-            }
-        }
+        learned::bench_train(&args);
     }
 }
 

@@ -25,7 +25,7 @@ pub fn weighted_cross_entropy(logits: Tensor<2>, target: &[u8], weights: &[f32; 
     let mut sum: Option<Tensor<1>> = None;
     for start in (0..n).step_by(CE_ROWS) {
         let end = (start + CE_ROWS).min(n);
-        let lp = log_softmax(logits.clone().slice([start..end]), 1);
+        let lp = log_softmax(logits.clone().narrow(0, start, end - start), 1);
         let picked = lp.gather(1, int_column(target[start..end].iter().map(|&t| t as i64).collect(), &device));
         let wt = Tensor::<2>::from_data(TensorData::new(w[start..end].to_vec(), [end - start, 1]), &device);
         let part = (picked * wt).sum();
