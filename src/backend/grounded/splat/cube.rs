@@ -192,16 +192,8 @@ fn zeros(like: &CubeTensor, rows: usize, cols: usize) -> CubeTensor {
 }
 
 impl SplatOps for CubeBackend {
-    fn splat_forward(
-        g: FloatTensor<Self>,
-        i0: u32,
-        j0: u32,
-        ni: u32,
-        nj: u32,
-        batch: u32,
-        window: u32,
-    ) -> FloatTensor<Self> {
-        let s = SplatShape { i0, j0, ni, nj, batch, window };
+    fn splat_forward(g: FloatTensor<Self>, s: SplatShape) -> FloatTensor<Self> {
+        let SplatShape { i0, j0, ni, nj, batch, window } = s;
         if !adds_floats(&g) || g.dtype != DType::F32 {
             return host_forward::<Self>(g, s);
         }
@@ -235,17 +227,8 @@ impl SplatOps for CubeBackend {
         out
     }
 
-    fn splat_backward(
-        g: FloatTensor<Self>,
-        grad: FloatTensor<Self>,
-        i0: u32,
-        j0: u32,
-        ni: u32,
-        nj: u32,
-        batch: u32,
-        window: u32,
-    ) -> FloatTensor<Self> {
-        let s = SplatShape { i0, j0, ni, nj, batch, window };
+    fn splat_backward(g: FloatTensor<Self>, grad: FloatTensor<Self>, s: SplatShape) -> FloatTensor<Self> {
+        let SplatShape { i0, j0, ni, nj, batch, window } = s;
         if !adds_floats(&g) || g.dtype != DType::F32 || grad.dtype != DType::F32 {
             return host_backward::<Self>(g, grad, s);
         }

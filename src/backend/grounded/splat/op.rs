@@ -16,32 +16,9 @@ use burn::prelude::*;
 #[backend_extension(Flex, Cube: cfg(any(feature = "wgpu", feature = "cuda")), Autodiff)]
 pub trait SplatOps: burn::backend::Backend {
     /// Packed Gaussians `[N, COLS]` -> logits `[batch * voxels, 9]`.
-    #[allow(clippy::too_many_arguments)]
-    fn splat_forward(
-        g: FloatTensor<Self>,
-        i0: u32,
-        j0: u32,
-        ni: u32,
-        nj: u32,
-        batch: u32,
-        window: u32,
-    ) -> FloatTensor<Self>;
+    fn splat_forward(g: FloatTensor<Self>, s: SplatShape) -> FloatTensor<Self>;
     /// Packed Gaussians and the logits' gradient -> the Gaussians' gradient `[N, COLS]`.
-    #[allow(clippy::too_many_arguments)]
-    fn splat_backward(
-        g: FloatTensor<Self>,
-        grad: FloatTensor<Self>,
-        i0: u32,
-        j0: u32,
-        ni: u32,
-        nj: u32,
-        batch: u32,
-        window: u32,
-    ) -> FloatTensor<Self>;
-}
-
-fn shape_of(i0: u32, j0: u32, ni: u32, nj: u32, batch: u32, window: u32) -> SplatShape {
-    SplatShape { i0, j0, ni, nj, batch, window }
+    fn splat_backward(g: FloatTensor<Self>, grad: FloatTensor<Self>, s: SplatShape) -> FloatTensor<Self>;
 }
 
 fn host_vec<B: Backend>(t: FloatTensor<B>) -> Vec<f32> {
@@ -68,29 +45,12 @@ pub fn host_backward<B: Backend>(g: FloatTensor<B>, grad: FloatTensor<B>, s: Spl
 }
 
 impl SplatOps for Flex {
-    fn splat_forward(
-        g: FloatTensor<Self>,
-        i0: u32,
-        j0: u32,
-        ni: u32,
-        nj: u32,
-        batch: u32,
-        window: u32,
-    ) -> FloatTensor<Self> {
-        host_forward::<Self>(g, shape_of(i0, j0, ni, nj, batch, window))
+    fn splat_forward(g: FloatTensor<Self>, s: SplatShape) -> FloatTensor<Self> {
+        host_forward::<Self>(g, s)
     }
 
-    fn splat_backward(
-        g: FloatTensor<Self>,
-        grad: FloatTensor<Self>,
-        i0: u32,
-        j0: u32,
-        ni: u32,
-        nj: u32,
-        batch: u32,
-        window: u32,
-    ) -> FloatTensor<Self> {
-        host_backward::<Self>(g, grad, shape_of(i0, j0, ni, nj, batch, window))
+    fn splat_backward(g: FloatTensor<Self>, grad: FloatTensor<Self>, s: SplatShape) -> FloatTensor<Self> {
+        host_backward::<Self>(g, grad, s)
     }
 }
 
@@ -102,52 +62,29 @@ impl<B: Backend + SplatOps> Backward<B, 1> for SplatBackward {
 
     fn backward(self, ops: Ops<Self::State, 1>, grads: &mut Gradients, _checkpointer: &mut Checkpointer) {
         let (g, s) = ops.state;
-        unary::<B, _>(ops.parents, ops.node, grads, |grad| {
-            B::splat_backward(g, grad, s.i0, s.j0, s.ni, s.nj, s.batch, s.window)
-        });
+        unary::<B, _>(ops.parents, ops.node, grads, |grad| B::splat_backward(g, grad, s));
     }
 }
 
 impl<B: Backend + SplatOps, C: CheckpointStrategy> SplatOps for Autodiff<B, C> {
-    fn splat_forward(
-        g: FloatTensor<Self>,
-        i0: u32,
-        j0: u32,
-        ni: u32,
-        nj: u32,
-        batch: u32,
-        window: u32,
-    ) -> FloatTensor<Self> {
-        let s = shape_of(i0, j0, ni, nj, batch, window);
+    fn splat_forward(g: FloatTensor<Self>, s: SplatShape) -> FloatTensor<Self> {
         match SplatBackward.prepare::<C>([g.node()]).compute_bound().stateful() {
             OpsKind::Tracked(prep) => {
                 let inner = g.primitive().clone();
-                let out = B::splat_forward(inner.clone(), i0, j0, ni, nj, batch, window);
+                let out = B::splat_forward(inner.clone(), s);
                 prep.finish((inner, s), out)
             }
-            OpsKind::UnTracked(prep) => {
-                prep.finish(B::splat_forward(g.into_primitive(), i0, j0, ni, nj, batch, window))
-            }
+            OpsKind::UnTracked(prep) => prep.finish(B::splat_forward(g.into_primitive(), s)),
         }
     }
 
-    fn splat_backward(
-        g: FloatTensor<Self>,
-        grad: FloatTensor<Self>,
-        i0: u32,
-        j0: u32,
-        ni: u32,
-        nj: u32,
-        batch: u32,
-        window: u32,
-    ) -> FloatTensor<Self> {
-        let out = B::splat_backward(Self::inner(g), Self::inner(grad), i0, j0, ni, nj, batch, window);
-        Self::from_inner(out)
+    fn splat_backward(g: FloatTensor<Self>, grad: FloatTensor<Self>, s: SplatShape) -> FloatTensor<Self> {
+        Self::from_inner(B::splat_backward(Self::inner(g), Self::inner(grad), s))
     }
 }
 
 /// Logits `[batch * voxels, 9]` of packed Gaussians `[N, COLS]` on whatever device they live on.
 pub fn splat_packed(g: Tensor<2>, s: SplatShape) -> Tensor<2> {
-    let out = <Dispatch as SplatOps>::splat_forward(g.into_dispatch(), s.i0, s.j0, s.ni, s.nj, s.batch, s.window);
+    let out = <Dispatch as SplatOps>::splat_forward(g.into_dispatch(), s);
     Tensor::from_dispatch(out)
 }
