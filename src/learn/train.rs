@@ -93,6 +93,9 @@ pub struct TrainReport {
     pub steps: usize,
     /// Wall time of each step of this run (data loading, forward, backward, optimiser), seconds.
     pub step_seconds: Vec<f64>,
+    /// Each step's parts, seconds: loading the frames and their labels, forward, loss, backward
+    /// and the optimiser (the device synchronised at the end of each).
+    pub step_phases: Vec<[f64; 4]>,
 }
 
 /// Where a run stands, for `--resume`.
@@ -382,21 +385,34 @@ pub fn train(opts: &TrainOptions) -> Result<TrainReport, Diagnostic> {
     }
 }
 
-/// "N steps: median X s per step" over the steps after the first (which compiles the device's
-/// kernels and warms its allocator), `None` before any step.
-pub fn step_summary(seconds: &[f64]) -> Option<String> {
+/// "N steps: median X s per step after the first (Y s): loading A, forward B, loss C, backward and
+/// update D" over the steps after the first (which compiles the device's kernels and warms
+/// its allocator), `None` before any step.
+pub fn step_summary(seconds: &[f64], phases: &[[f64; 4]]) -> Option<String> {
     let (first, rest) = seconds.split_first()?;
     if rest.is_empty() {
         return Some(format!("1 step in {first:.3} s"));
     }
-    let mut sorted = rest.to_vec();
-    sorted.sort_by(f64::total_cmp);
-    Some(format!(
-        "{} steps: median {:.3} s per step after the first ({:.3} s)",
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let mut line = format!(
+        "{} steps: median {:.3} s per step after the first ({first:.3} s)",
         seconds.len(),
-        sorted[sorted.len() / 2],
-        first
-    ))
+        median(&mut rest.to_vec())
+    );
+    if phases.len() == seconds.len() {
+        let part = |k: usize| median(&mut phases[1..].iter().map(|p| p[k]).collect());
+        line += &format!(
+            ": loading {:.3}, forward {:.3}, loss {:.3}, backward and update {:.3}",
+            part(0),
+            part(1),
+            part(2),
+            part(3)
+        );
+    }
+    Some(line)
 }
 
 /// Write a stage's trained `weights` (`.bpk`) again as `.safetensors` beside them; returns that
@@ -524,6 +540,7 @@ fn run<M: Net>(
     let mut reports = Vec::new();
     let (run_t0, first_step) = (Instant::now(), pos.step);
     let mut step_seconds = Vec::new();
+    let mut step_phases = Vec::new();
     let mut history_path = opts.out.join(format!("{stage}-history.json"));
     if opts.resume && history_path.is_file() {
         history_path = opts.out.join(format!("{stage}-history.json"));
@@ -544,16 +561,24 @@ fn run<M: Net>(
                 .collect::<Result<_, _>>()?;
             let region = pick_region(cfg, &frames, &mut rng);
             let target = region_labels(&frames, region);
+            let t_loaded = step_t0.elapsed().as_secs_f64();
             let out = model.step(cfg, &frames, region, &mut rng);
+            let _ = device.sync();
+            let t_forward = step_t0.elapsed().as_secs_f64();
             let (loss, parts) = step_loss(cfg, out, &target, &weights, &mut rng);
             let l = scalar(&loss);
+            let t_loss = step_t0.elapsed().as_secs_f64();
             if !l.is_finite() {
                 return Err(Diagnostic::error("E0907", format!("training diverged at step {} (loss {l})", pos.step))
                     .help("lower the stage's `lr` in the config, or resume from the last checkpoint with `--resume`"));
             }
             let grads = GradientsParams::from_grads(loss.backward(), &model);
             model = optim.step(cosine_lr(stage_cfg, pos.step, total), model, grads);
-            step_seconds.push(step_t0.elapsed().as_secs_f64());
+            // Only for the timings: the device would otherwise finish this step inside the next.
+            let _ = device.sync();
+            let t_done = step_t0.elapsed().as_secs_f64();
+            step_seconds.push(t_done);
+            step_phases.push([t_loaded, t_forward - t_loaded, t_loss - t_forward, t_done - t_loss]);
             pos.step += 1;
             pos.batch = bi + 1;
             sum += l;
@@ -616,7 +641,7 @@ fn run<M: Net>(
         reports.push(EpochReport { epoch: pos.epoch + 1, steps: 0, mean_loss: f64::NAN, seconds: 0.0, val: scores });
         save(&model, &optim, pos)?;
     }
-    if let Some(line) = step_summary(&step_seconds) {
+    if let Some(line) = step_summary(&step_seconds, &step_phases) {
         say(line);
     }
     let weights_path = opts.out.join(format!("{stage}.bpk"));
@@ -633,6 +658,7 @@ fn run<M: Net>(
         weights: weights_path,
         steps: pos.step,
         step_seconds,
+        step_phases,
     };
     write_text(&history_path, &serde_json::to_string_pretty(&report).unwrap_or_default())?;
     say(format!("wrote {} (+ .ron)", report.weights.display()));

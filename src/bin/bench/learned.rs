@@ -69,7 +69,7 @@ pub fn bench_train(args: &[String]) {
                 "  {name:<10} batch {} crop {}: {}",
                 config.train.batch,
                 config.train.crop,
-                rocc::learn::step_summary(&rep.step_seconds).unwrap_or_default()
+                rocc::learn::step_summary(&rep.step_seconds, &rep.step_phases).unwrap_or_default()
             ),
             Err(e) => println!("  {name}: {e}"),
         }
