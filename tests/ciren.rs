@@ -727,27 +727,42 @@ fn coded_events(xml: &str) -> Vec<(u32, u32, Part, u32, Part)> {
     coded_contacts(xml).into_iter().map(vehicle).collect()
 }
 
+/// One bundled record of `dir` imported, checked and rolled out.
+struct RolledOut {
+    xml: String,
+    id: String,
+    /// Each staged conflict's time, s.
+    at: Vec<f64>,
+    tracks: rocc::rollout::Tracks,
+}
+
+fn rolled_out_records(dir: &str) -> Vec<RolledOut> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir).expect("records").map(|e| e.expect("entry").path()).collect();
+    files.sort();
+    files
+        .into_iter()
+        .map(|p| {
+            let xml = std::fs::read_to_string(&p).expect("xml");
+            let mut sources = SourceMap::default();
+            let imp = ciren::import_case(&p, &mut sources).unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+            let scen = rocc::check::check_text(&imp.file_name(), &imp.staged.text, Path::new("."), &mut sources)
+                .unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
+            let at = scen.conflicts.iter().map(|c| c.at.expect("at")).collect();
+            let tracks = rocc::compile::front(scen, None).expect("front").tracks;
+            RolledOut { xml, id: imp.crash.id.clone(), at, tracks }
+        })
+        .collect()
+}
+
 /// Records with several contacts (tests/fixtures/ciren-chains/) import with one conflict per
 /// event, and on the rolled-out boxes each pair first touches in event order, within 1.5 s of
 /// its `at`, the struck box on its coded side and the striker with its front; every coded clock
 /// direction is met within one hour; no pair outside the events touches.
 #[test]
 fn every_event_of_a_chain_lands_on_its_coded_sides_in_order() {
-    let mut files: Vec<PathBuf> = std::fs::read_dir("tests/fixtures/ciren-chains")
-        .expect("chain records")
-        .map(|e| e.expect("entry").path())
-        .collect();
-    files.sort();
-    assert!(files.len() >= 2);
-    for p in files {
-        let xml = std::fs::read_to_string(&p).expect("xml");
-        let mut sources = SourceMap::default();
-        let imp = ciren::import_case(&p, &mut sources).unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
-        let scen = rocc::check::check_text(&imp.file_name(), &imp.staged.text, Path::new("."), &mut sources)
-            .unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
-        let at: Vec<f64> = scen.conflicts.iter().map(|c| c.at.expect("at")).collect();
-        let t = rocc::compile::front(scen, None).expect("front").tracks;
-        let id = imp.crash.id.clone();
+    let cases = rolled_out_records("tests/fixtures/ciren-chains");
+    assert!(cases.len() >= 2);
+    for RolledOut { xml, id, at, tracks: t } in cases {
         let events = coded_events(&xml);
         assert_eq!(at.len(), events.len(), "{id}: one conflict per event");
         let idx = |v: u32| t.agents.iter().position(|a| a.name == format!("v{v}")).expect("agent");
@@ -830,21 +845,9 @@ fn coded_contacts(xml: &str) -> Vec<CodedContact> {
 /// touches.
 #[test]
 fn strikes_on_a_slide_land_on_their_coded_sides() {
-    let mut files: Vec<PathBuf> = std::fs::read_dir("tests/fixtures/ciren-slides")
-        .expect("slide records")
-        .map(|e| e.expect("entry").path())
-        .collect();
-    files.sort();
-    assert!(!files.is_empty());
-    for p in files {
-        let xml = std::fs::read_to_string(&p).expect("xml");
-        let mut sources = SourceMap::default();
-        let imp = ciren::import_case(&p, &mut sources).unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
-        let scen = rocc::check::check_text(&imp.file_name(), &imp.staged.text, Path::new("."), &mut sources)
-            .unwrap_or_else(|d| panic!("{}", rendered(&d, &sources)));
-        let at: Vec<f64> = scen.conflicts.iter().map(|c| c.at.expect("at")).collect();
-        let t = rocc::compile::front(scen, None).expect("front").tracks;
-        let id = imp.crash.id.clone();
+    let cases = rolled_out_records("tests/fixtures/ciren-slides");
+    assert!(!cases.is_empty());
+    for RolledOut { xml, id, at, tracks: t } in cases {
         let events = coded_contacts(&xml);
         assert_eq!(at.len(), events.len(), "{id}: one conflict per event");
         // Some event's striker was in an earlier one: it strikes on its slide.
