@@ -91,10 +91,8 @@ pub struct TrainReport {
     pub epochs: Vec<EpochReport>,
     pub weights: PathBuf,
     pub steps: usize,
-    /// Wall time of each step of this run (data loading, forward, backward, optimiser), seconds.
-    pub step_seconds: Vec<f64>,
-    /// Each step's parts, seconds: loading the frames and their labels, forward, loss, backward
-    /// and the optimiser (the device synchronised at the end of each).
+    /// Each step of this run in parts, seconds: loading the frames and their labels, forward,
+    /// loss, backward and the optimiser (the device synchronised at the end of each).
     pub step_phases: Vec<[f64; 4]>,
 }
 
@@ -334,17 +332,22 @@ fn timed_score(
         times.push(t0.elapsed().as_secs_f64());
         p
     })?;
-    if let Some(rest) = times.get(1..).filter(|r| !r.is_empty()) {
-        let mut sorted = rest.to_vec();
-        sorted.sort_by(f64::total_cmp);
+    if times.len() > 1 {
         say(format!(
             "validation: {} frame(s), inference median {:.0} ms per frame after the first ({:.0} ms)",
             times.len(),
-            sorted[sorted.len() / 2] * 1e3,
+            median(times[1..].iter().copied()) * 1e3,
             times[0] * 1e3
         ));
     }
     Ok(scores)
+}
+
+/// The median of a non-empty sequence (the upper one of an even count).
+fn median(v: impl Iterator<Item = f64>) -> f64 {
+    let mut v: Vec<f64> = v.collect();
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
 /// `k` samples spread evenly over `v` (deterministic).
@@ -386,33 +389,26 @@ pub fn train(opts: &TrainOptions) -> Result<TrainReport, Diagnostic> {
 }
 
 /// "N steps: median X s per step after the first (Y s): loading A, forward B, loss C, backward and
-/// update D" over the steps after the first (which compiles the device's kernels and warms
-/// its allocator), `None` before any step.
-pub fn step_summary(seconds: &[f64], phases: &[[f64; 4]]) -> Option<String> {
-    let (first, rest) = seconds.split_first()?;
+/// update D" over the steps after the first (which compiles the device's kernels and warms its
+/// allocator), `None` before any step.
+pub fn step_summary(phases: &[[f64; 4]]) -> Option<String> {
+    let (first, rest) = phases.split_first()?;
+    let total = |p: &[f64; 4]| p.iter().sum::<f64>();
     if rest.is_empty() {
-        return Some(format!("1 step in {first:.3} s"));
+        return Some(format!("1 step in {:.3} s", total(first)));
     }
-    let median = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
-    let mut line = format!(
-        "{} steps: median {:.3} s per step after the first ({first:.3} s)",
-        seconds.len(),
-        median(&mut rest.to_vec())
-    );
-    if phases.len() == seconds.len() {
-        let part = |k: usize| median(&mut phases[1..].iter().map(|p| p[k]).collect());
-        line += &format!(
-            ": loading {:.3}, forward {:.3}, loss {:.3}, backward and update {:.3}",
-            part(0),
-            part(1),
-            part(2),
-            part(3)
-        );
-    }
-    Some(line)
+    let part = |k: usize| median(rest.iter().map(|p| p[k]));
+    Some(format!(
+        "{} steps: median {:.3} s per step after the first ({:.3} s): loading {:.3}, forward {:.3}, loss {:.3}, \
+         backward and update {:.3}",
+        phases.len(),
+        median(rest.iter().map(total)),
+        total(first),
+        part(0),
+        part(1),
+        part(2),
+        part(3)
+    ))
 }
 
 /// Write a stage's trained `weights` (`.bpk`) again as `.safetensors` beside them; returns that
@@ -539,7 +535,6 @@ fn run<M: Net>(
 
     let mut reports = Vec::new();
     let (run_t0, first_step) = (Instant::now(), pos.step);
-    let mut step_seconds = Vec::new();
     let mut step_phases = Vec::new();
     let mut history_path = opts.out.join(format!("{stage}-history.json"));
     if opts.resume && history_path.is_file() {
@@ -577,7 +572,6 @@ fn run<M: Net>(
             // Only for the timings: the device would otherwise finish this step inside the next.
             let _ = device.sync();
             let t_done = step_t0.elapsed().as_secs_f64();
-            step_seconds.push(t_done);
             step_phases.push([t_loaded, t_forward - t_loaded, t_loss - t_forward, t_done - t_loss]);
             pos.step += 1;
             pos.batch = bi + 1;
@@ -641,7 +635,7 @@ fn run<M: Net>(
         reports.push(EpochReport { epoch: pos.epoch + 1, steps: 0, mean_loss: f64::NAN, seconds: 0.0, val: scores });
         save(&model, &optim, pos)?;
     }
-    if let Some(line) = step_summary(&step_seconds, &step_phases) {
+    if let Some(line) = step_summary(&step_phases) {
         say(line);
     }
     let weights_path = opts.out.join(format!("{stage}.bpk"));
@@ -657,7 +651,6 @@ fn run<M: Net>(
         epochs: reports,
         weights: weights_path,
         steps: pos.step,
-        step_seconds,
         step_phases,
     };
     write_text(&history_path, &serde_json::to_string_pretty(&report).unwrap_or_default())?;

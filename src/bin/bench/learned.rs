@@ -2,18 +2,23 @@
 //! inference time per frame, on the CPU or a GPU.
 
 use super::*;
+use rocc::backend::grounded::{DeviceKind, GroundedConfig, load_config};
+
+/// The value after `name` in the arguments.
+fn opt<'a>(args: &'a [String], name: &str) -> Option<&'a str> {
+    args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).map(String::as_str)
+}
+
+/// `configs/NAME.ron` of the repository.
+fn config(name: &str) -> Result<GroundedConfig, String> {
+    load_config(&root().join(format!("configs/{name}.ron"))).map_err(|d| d.message)
+}
 
 /// `bench train [paper] [--device cpu|wgpu|cuda]`: training seconds per step of the generator on a
 /// corpus compiled here (12 frames of the crowded junction), `cpu-small`, and `paper` when asked.
 pub fn bench_train(args: &[String]) {
-    use rocc::backend::grounded::GroundedConfig;
     use rocc::compile::{OccBackend, Stage};
-    let kind: rocc::backend::grounded::DeviceKind = match args
-        .iter()
-        .position(|a| a == "--device")
-        .and_then(|i| args.get(i + 1))
-        .map_or(Ok(Default::default()), |d| d.parse())
-    {
+    let kind: DeviceKind = match opt(args, "--device").unwrap_or("cpu").parse() {
         Ok(k) => k,
         Err(e) => return println!("  {e}"),
     };
@@ -41,12 +46,12 @@ pub fn bench_train(args: &[String]) {
         names.push("paper");
     }
     for name in names {
-        let Ok(config) = std::fs::read_to_string(root().join(format!("configs/{name}.ron")))
-            .map_err(|e| e.to_string())
-            .and_then(|t| GroundedConfig::from_ron(&t))
-        else {
-            println!("  {name}: cannot read its config");
-            continue;
+        let config = match config(name) {
+            Ok(c) => c,
+            Err(e) => {
+                println!("  {name}: {e}");
+                continue;
+            }
         };
         let topts = rocc::learn::TrainOptions {
             stage: rocc::learn::Stage::Generator,
@@ -69,7 +74,7 @@ pub fn bench_train(args: &[String]) {
                 "  {name:<10} batch {} crop {}: {}",
                 config.train.batch,
                 config.train.crop,
-                rocc::learn::step_summary(&rep.step_seconds, &rep.step_phases).unwrap_or_default()
+                rocc::learn::step_summary(&rep.step_phases).unwrap_or_default()
             ),
             Err(e) => println!("  {name}: {e}"),
         }
@@ -80,8 +85,8 @@ pub fn bench_train(args: &[String]) {
 /// `bench grounded [--device cpu|wgpu|cuda] [--batch N] [--configs a,b]`: inference time per
 /// frame of each config on one device, `batch` frames of the ambulance example per forward pass.
 pub fn bench_grounded(args: &[String]) {
-    use rocc::backend::grounded::{DeviceKind, FrameIn, GBox, Generator, Grounded, GroundedConfig, latents};
-    let opt = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).map(String::as_str);
+    use rocc::backend::grounded::{FrameIn, GBox, Generator, Grounded, latents};
+    let opt = |name: &str| opt(args, name);
     let kind: DeviceKind = match opt("--device").unwrap_or("cpu").parse() {
         Ok(k) => k,
         Err(e) => return println!("  {e}"),
@@ -106,12 +111,12 @@ pub fn bench_grounded(args: &[String]) {
     let inputs: Vec<FrameIn> =
         frames.iter().map(|(b, bev)| FrameIn { boxes: b.clone(), masks: &bev.masks, aux: &bev.aux }).collect();
     for name in configs.split(',') {
-        let path = root().join(format!("configs/{name}.ron"));
-        let Ok(cfg) =
-            std::fs::read_to_string(&path).map_err(|e| e.to_string()).and_then(|t| GroundedConfig::from_ron(&t))
-        else {
-            println!("  {name}: cannot read {}", path.display());
-            continue;
+        let cfg = match config(name) {
+            Ok(c) => c,
+            Err(e) => {
+                println!("  {name}: {e}");
+                continue;
+            }
         };
         let set = latents::build(&cfg, &inputs[0].boxes, inputs[0].masks);
         let fg = set.iter().filter(|a| a.foreground).count();
