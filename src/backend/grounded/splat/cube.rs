@@ -17,7 +17,7 @@ use burn_cubecl::tensor::CubeTensor;
 use cubecl::features::AtomicUsage;
 use cubecl::ir::{ElemType, FloatKind, Type};
 use cubecl::prelude::*;
-use cubecl::{CubeDim, calculate_cube_count_elemwise};
+use cubecl::{CubeCount, CubeDim, calculate_cube_count_elemwise};
 
 const C: usize = COLS;
 const NZC: u32 = NZ as u32;
@@ -191,28 +191,39 @@ fn zeros(like: &CubeTensor, rows: usize, cols: usize) -> CubeTensor {
     zeros_client(like.client.clone(), like.device.clone(), [rows, cols].into(), DType::F32)
 }
 
+/// The kernels' shape arguments, in their order: i0, j0, ni, nj, batch, window.
+fn scalars(s: &SplatShape) -> [u32; 6] {
+    let r = &s.region;
+    [r.i0, r.j0, r.ni, r.nj, s.batch, s.window].map(|v| v as u32)
+}
+
+/// A launch of one unit per element of `units`.
+fn grid(t: &CubeTensor, units: usize) -> (CubeCount, CubeDim) {
+    let cube_dim = CubeDim::new(&t.client, units);
+    (calculate_cube_count_elemwise(&t.client, units, cube_dim), cube_dim)
+}
+
 impl SplatOps for CubeBackend {
     fn splat_forward(g: FloatTensor<Self>, s: SplatShape) -> FloatTensor<Self> {
-        let SplatShape { i0, j0, ni, nj, batch, window } = s;
         if !adds_floats(&g) || g.dtype != DType::F32 {
             return host_forward::<Self>(g, s);
         }
         let g = into_contiguous(g);
         let n = g.meta.shape()[0];
-        let out = zeros(&g, batch as usize * s.voxels(), N_LABELS);
-        let side = 2 * window as usize + 1;
+        let out = zeros(&g, s.batch * s.region.voxels(), N_LABELS);
+        let side = 2 * s.window + 1;
         let units = n * side * side * side;
         if units == 0 {
             return out;
         }
+        let (count, dim) = grid(&g, units);
+        let [i0, j0, ni, nj, batch, window] = scalars(&s);
         let client = g.client.clone();
-        let cube_dim = CubeDim::new(&client, units);
-        let cube_count = calculate_cube_count_elemwise(&client, units, cube_dim);
         unsafe {
             splat_forward_kernel::launch_unchecked(
                 &client,
-                cube_count,
-                cube_dim,
+                count,
+                dim,
                 g.into_tensor_arg(),
                 out.clone().into_tensor_arg(),
                 n as u32,
@@ -228,7 +239,6 @@ impl SplatOps for CubeBackend {
     }
 
     fn splat_backward(g: FloatTensor<Self>, grad: FloatTensor<Self>, s: SplatShape) -> FloatTensor<Self> {
-        let SplatShape { i0, j0, ni, nj, batch, window } = s;
         if !adds_floats(&g) || g.dtype != DType::F32 || grad.dtype != DType::F32 {
             return host_backward::<Self>(g, grad, s);
         }
@@ -239,14 +249,14 @@ impl SplatOps for CubeBackend {
         if n == 0 {
             return out;
         }
+        let (count, dim) = grid(&g, n);
+        let [i0, j0, ni, nj, batch, window] = scalars(&s);
         let client = g.client.clone();
-        let cube_dim = CubeDim::new(&client, n);
-        let cube_count = calculate_cube_count_elemwise(&client, n, cube_dim);
         unsafe {
             splat_backward_kernel::launch_unchecked(
                 &client,
-                cube_count,
-                cube_dim,
+                count,
+                dim,
                 g.into_tensor_arg(),
                 grad.into_tensor_arg(),
                 out.clone().into_tensor_arg(),

@@ -36,8 +36,8 @@ fn terms(row: &[f32], p: [f32; 3]) -> ([f32; 3], [f32; 3], f32) {
 /// Logits `[batch * region voxels, 9]`, row-major.
 pub fn forward(g: &[f32], s: &SplatShape) -> Vec<f32> {
     let n = g.len() / COLS;
-    let voxels = s.voxels();
-    let mut out = vec![0f32; s.batch as usize * voxels * N_LABELS];
+    let voxels = s.region.voxels();
+    let mut out = vec![0f32; s.batch * voxels * N_LABELS];
     if n == 0 || out.is_empty() {
         return out;
     }
@@ -45,17 +45,17 @@ pub fn forward(g: &[f32], s: &SplatShape) -> Vec<f32> {
     // Bands of BAND region rows (x) per batch element; each Gaussian is listed in every band its
     // window's rows touch, in index order.
     const BAND: usize = 4;
-    let (ni, nj) = (s.ni as usize, s.nj as usize);
+    let (ni, nj) = (s.region.ni, s.region.nj);
     let bands_per = ni.div_ceil(BAND);
-    let mut members: Vec<Vec<u32>> = vec![Vec::new(); s.batch as usize * bands_per];
+    let mut members: Vec<Vec<u32>> = vec![Vec::new(); s.batch * bands_per];
     for (idx, row) in g.chunks_exact(COLS).enumerate() {
         let Some(c) = centre(row) else { continue };
         let b = row[layout::BATCH] as usize;
-        if b >= s.batch as usize {
+        if b >= s.batch {
             continue;
         }
-        let lo = (c[0] - r - s.i0 as i64).max(0);
-        let hi = (c[0] + r - s.i0 as i64).min(ni as i64 - 1);
+        let lo = (c[0] - r - s.region.i0 as i64).max(0);
+        let hi = (c[0] + r - s.region.i0 as i64).min(ni as i64 - 1);
         if lo > hi {
             continue;
         }
@@ -83,15 +83,15 @@ pub fn forward(g: &[f32], s: &SplatShape) -> Vec<f32> {
 #[inline]
 fn splat_one(row: &[f32], s: &SplatShape, r: i64, li0: i64, li1: i64, o: &mut [f32]) {
     let Some(c) = centre(row) else { return };
-    let (nj, a) = (s.nj as i64, row[layout::OPACITY]);
+    let (nj, a) = (s.region.nj as i64, row[layout::OPACITY]);
     let feat = &row[layout::FEAT..layout::FEAT + N_LABELS];
     for vi in c[0] - r..=c[0] + r {
-        let li = vi - s.i0 as i64;
+        let li = vi - s.region.i0 as i64;
         if li < li0 || li >= li1 {
             continue;
         }
         for vj in c[1] - r..=c[1] + r {
-            let lj = vj - s.j0 as i64;
+            let lj = vj - s.region.j0 as i64;
             if lj < 0 || lj >= nj {
                 continue;
             }
@@ -114,10 +114,11 @@ pub fn backward(g: &[f32], grad: &[f32], s: &SplatShape) -> Vec<f32> {
     out.par_chunks_mut(COLS).zip(g.par_chunks(COLS)).for_each(|(go, row)| {
         let Some(c) = centre(row) else { return };
         let b = row[layout::BATCH] as usize;
-        if b >= s.batch as usize {
+        if b >= s.batch {
             return;
         }
-        backward_one(row, &grad[b * s.voxels() * N_LABELS..(b + 1) * s.voxels() * N_LABELS], s, c, r, go);
+        let per = s.region.voxels() * N_LABELS;
+        backward_one(row, &grad[b * per..(b + 1) * per], s, c, r, go);
     });
     out
 }
@@ -130,7 +131,7 @@ fn backward_one(row: &[f32], grad: &[f32], s: &SplatShape, c: [i64; 3], r: i64, 
     for vi in c[0] - r..=c[0] + r {
         for vj in c[1] - r..=c[1] + r {
             for vk in c[2] - r..=c[2] + r {
-                let Some(f) = s.flat(vi, vj, vk) else { continue };
+                let Some(f) = s.region.flat(vi, vj, vk) else { continue };
                 let gv = &grad[f * N_LABELS..(f + 1) * N_LABELS];
                 let (d, u, e) = terms(row, [vi as f32 + 0.5, vj as f32 + 0.5, vk as f32 + 0.5]);
                 let w = a * e;

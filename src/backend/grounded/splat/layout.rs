@@ -1,7 +1,8 @@
 //! The packed Gaussian table the splat operation takes: one row of `COLS` floats per Gaussian,
 //! and the plain shape of the region it writes.
 
-use crate::backend::layout::{N_LABELS, NZ};
+use super::Region;
+use crate::backend::layout::N_LABELS;
 
 /// Mean, continuous voxel coordinates (3).
 pub const MEAN: usize = 0;
@@ -21,26 +22,7 @@ pub const COLS: usize = BATCH + 1;
 /// radius `r` (a Gaussian reaches the (2 r + 1)^3 voxels around the one holding its mean).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SplatShape {
-    pub i0: u32,
-    pub j0: u32,
-    pub ni: u32,
-    pub nj: u32,
-    pub batch: u32,
-    pub window: u32,
-}
-
-impl SplatShape {
-    pub fn voxels(&self) -> usize {
-        self.ni as usize * self.nj as usize * NZ
-    }
-
-    /// Flat index of grid voxel (i, j, k) inside one batch element's region, `None` outside.
-    #[inline]
-    pub fn flat(&self, i: i64, j: i64, k: i64) -> Option<usize> {
-        let (li, lj) = (i - self.i0 as i64, j - self.j0 as i64);
-        if li < 0 || lj < 0 || k < 0 || li >= self.ni as i64 || lj >= self.nj as i64 || k >= NZ as i64 {
-            return None;
-        }
-        Some((li as usize * self.nj as usize + lj as usize) * NZ + k as usize)
-    }
+    pub region: Region,
+    pub batch: usize,
+    pub window: usize,
 }

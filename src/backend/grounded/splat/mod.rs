@@ -149,14 +149,7 @@ pub fn activate(
 pub fn splat(g: &Gaussians, region: Region, batch: usize, window: usize) -> Tensor<2> {
     let device = g.mean.device();
     let n = g.mean.dims()[0];
-    let shape = layout::SplatShape {
-        i0: region.i0 as u32,
-        j0: region.j0 as u32,
-        ni: region.ni as u32,
-        nj: region.nj as u32,
-        batch: batch as u32,
-        window: window as u32,
-    };
+    let shape = layout::SplatShape { region, batch, window };
     if n == 0 {
         return Tensor::<2>::zeros([batch * region.voxels(), N_LABELS], &device);
     }

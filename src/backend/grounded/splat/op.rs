@@ -32,7 +32,7 @@ fn host_vec<B: Backend>(t: FloatTensor<B>) -> Vec<f32> {
 pub fn host_forward<B: Backend>(g: FloatTensor<B>, s: SplatShape) -> FloatTensor<B> {
     let device = g.device();
     let out = host::forward(&host_vec::<B>(g), &s);
-    let rows = s.batch as usize * s.voxels();
+    let rows = s.batch * s.region.voxels();
     B::float_from_data(TensorData::new(out, [rows, N_LABELS]), &device)
 }
 
