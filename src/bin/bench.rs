@@ -660,6 +660,8 @@ fn bench_bev20() {
 
 #[path = "bench/learned.rs"]
 mod learned;
+#[path = "bench/splat.rs"]
+mod splat;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -707,6 +709,9 @@ fn main() {
     }
     if args.iter().any(|a| a == "train") {
         learned::bench_train(&args);
+    }
+    if args.iter().any(|a| a == "splat") {
+        splat::bench_splat(&args);
     }
 }
 

@@ -11,6 +11,7 @@
 //! CPU (`host`), a kernel on wgpu and CUDA (`cube`). `splat_tensor_ops` is the same sum written
 //! with ordinary tensor operations and autodiff: the reference both are tested against.
 
+pub mod check;
 #[cfg(any(feature = "wgpu", feature = "cuda"))]
 pub mod cube;
 pub mod host;
