@@ -105,6 +105,17 @@ pub struct RoadDesc {
     pub notes: Vec<String>,
 }
 
+/// Neither CIREN nor SAFE codes a lane width: the importers use a standard US lane, and a
+/// centre turn lane becomes a median of the same width (rocc has no centre lane).
+pub const LANE_WIDTH: f64 = 3.5;
+
+impl RoadDesc {
+    /// A road with standard lanes, no median and no shoulder.
+    pub fn new(template: Template, lanes: u32, speed_limit_kmh: f64, turns: i32, notes: Vec<String>) -> Self {
+        RoadDesc { template, lanes, lane_width: LANE_WIDTH, speed_limit_kmh, median: 0.0, shoulder: 0.0, turns, notes }
+    }
+}
+
 /// What a vehicle does before the crash.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Manoeuvre {

@@ -98,22 +98,22 @@ pub(super) fn single_vehicle(
         source: crate::ciren::crash::Source::Record,
         header,
         road: RoadDesc {
-            template,
-            lanes,
-            lane_width: 3.5,
-            speed_limit_kmh: limit,
-            median: 0.0,
             shoulder: 1.0,
-            turns: dir.turns_to(Compass::East),
-            notes: vec![
-                format!(
-                    "road {}: {rel}; {}",
-                    template.name(),
-                    al.map(|c| c.cite("Alignment")).unwrap_or("Alignment missing".into())
-                ),
-                format!("lanes {lanes} per direction: {lanes_cite}"),
-                format!("speed_limit: {limit_cite}"),
-            ],
+            ..RoadDesc::new(
+                template,
+                lanes,
+                limit,
+                dir.turns_to(Compass::East),
+                vec![
+                    format!(
+                        "road {}: {rel}; {}",
+                        template.name(),
+                        al.map(|c| c.cite("Alignment")).unwrap_or("Alignment missing".into())
+                    ),
+                    format!("lanes {lanes} per direction: {lanes_cite}"),
+                    format!("speed_limit: {limit_cite}"),
+                ],
+            )
         },
         vehicles: vec![v],
         objects: vec![obj],

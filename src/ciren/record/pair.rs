@@ -6,7 +6,7 @@ use super::fields::*;
 use crate::check::scenario::{Impact, Point};
 use crate::ciren::case::{CaseVehicle, Coded};
 use crate::ciren::crash::{
-    Compass, ConflictDesc, Crash, Face, Manoeuvre, RoadDesc, Template, VehicleDesc, approach_arm, man_word,
+    Compass, ConflictDesc, Crash, Face, LANE_WIDTH, Manoeuvre, RoadDesc, Template, VehicleDesc, approach_arm, man_word,
 };
 use crate::ciren::narrative::{Junction, Narrative};
 use crate::diag::Diagnostic;
@@ -225,7 +225,7 @@ pub(super) fn two_vehicles(
     road_notes.push(format!("lanes {lanes} per direction: {lanes_cite}"));
     let mut median = 0.0;
     if centre && template != Template::Merge {
-        median = 3.5;
+        median = LANE_WIDTH;
         road_notes.push("the centre (turn) lane is a 3.5 m median: rocc has no centre lane".into());
     } else if template != Template::Merge
         && vs.iter().any(|v| v.relation_to_flow.as_ref().is_some_and(|f| f.lower().starts_with("divided")))
@@ -328,16 +328,7 @@ pub(super) fn two_vehicles(
         id: cx.case.id.clone(),
         source: crate::ciren::crash::Source::Record,
         header,
-        road: RoadDesc {
-            template,
-            lanes,
-            lane_width: 3.5,
-            speed_limit_kmh: limit,
-            median,
-            shoulder: 0.0,
-            turns: q,
-            notes: road_notes,
-        },
+        road: RoadDesc { median, ..RoadDesc::new(template, lanes, limit, q, road_notes) },
         vehicles,
         objects: Vec::new(),
         conflicts: vec![conflict],

@@ -12,7 +12,7 @@
 
 use super::case::read_capped;
 use super::crash::{
-    Compass, Crash, Manoeuvre, RoadDesc, Template, VehicleDesc, approach_arm, man_word, t_junction_turn,
+    Compass, Crash, LANE_WIDTH, Manoeuvre, RoadDesc, Template, VehicleDesc, approach_arm, man_word, t_junction_turn,
 };
 use super::record::{TURN_KMH, kind_for};
 use crate::diag::Diagnostic;
@@ -509,14 +509,8 @@ fn map(cx: &mut Ctx, root: &Value, path: &Path) -> Result<Crash, Vec<Diagnostic>
         source: super::crash::Source::Safe,
         header,
         road: RoadDesc {
-            template,
-            lanes,
-            lane_width: 3.5,
-            speed_limit_kmh: limit,
-            median: if centre { 3.5 } else { 0.0 },
-            shoulder: 0.0,
-            turns: q,
-            notes: road_notes,
+            median: if centre { LANE_WIDTH } else { 0.0 },
+            ..RoadDesc::new(template, lanes, limit, q, road_notes)
         },
         vehicles,
         objects: Vec::new(),
