@@ -202,9 +202,12 @@ pub fn step_loss(
     let device = out.logits.device();
     let ce = weighted_cross_entropy(out.logits.clone(), target, weights);
     // Lovász over every voxel an agent class claims (truth or prediction) plus a uniform draw.
-    let pred: Vec<i64> = out.logits.clone().detach().argmax(1).to_data().iter::<i64>().collect();
+    // Only "is an agent class predicted" crosses from the device: one byte-sized flag per voxel,
+    // not an i64 class.
+    let pred: Vec<bool> =
+        out.logits.clone().detach().argmax(1).greater_equal_elem(2).to_data().iter::<bool>().collect();
     let n = target.len();
-    let mut idx: Vec<usize> = (0..n).filter(|&v| target[v] >= 2 || pred.get(v).is_some_and(|&p| p >= 2)).collect();
+    let mut idx: Vec<usize> = (0..n).filter(|&v| target[v] >= 2 || pred.get(v).copied().unwrap_or(false)).collect();
     idx.extend((0..t.lovasz_samples.min(n)).map(|_| rng.index(n)));
     idx.sort_unstable();
     idx.dedup();

@@ -13,11 +13,20 @@ use burn::backend::tensor::FloatTensor;
 use burn::backend::{Autodiff, AutodiffBackend, Backend, Dispatch, Flex, TensorMetadata, backend_extension};
 use burn::prelude::*;
 
-#[backend_extension(Flex, Cube: cfg(any(feature = "wgpu", feature = "cuda")), Autodiff)]
+// With the `fusion` feature burn queues a device's element-wise work lazily (`Fusion`): the splat
+// joins that queue as an opaque operation whose output shape is known up front.
+#[backend_extension(
+    Flex,
+    Cube: cfg(any(feature = "wgpu", feature = "cuda")),
+    Fusion: cfg(all(feature = "fusion", any(feature = "wgpu", feature = "cuda"))),
+    Autodiff
+)]
 pub trait SplatOps: burn::backend::Backend {
     /// Packed Gaussians `[N, COLS]` -> logits `[batch * voxels, 9]`.
+    #[fusion(dtype = g, shape = burn::tensor::Shape::new([s.batch * s.region.voxels(), N_LABELS]))]
     fn splat_forward(g: FloatTensor<Self>, s: SplatShape) -> FloatTensor<Self>;
     /// Packed Gaussians and the logits' gradient -> the Gaussians' gradient `[N, COLS]`.
+    #[fusion(dtype = g, shape = g)]
     fn splat_backward(g: FloatTensor<Self>, grad: FloatTensor<Self>, s: SplatShape) -> FloatTensor<Self>;
 }
 
