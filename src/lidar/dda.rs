@@ -154,7 +154,7 @@ impl SkipSummary {
         let mut cols = labels.chunks_exact(NZ);
         // Runs of B columns share a block (NY is a multiple of B): its entries are updated once
         // per run, not once per column.
-        while self.next % B == 0 && cols.len() >= B && self.next + B <= NX * NY {
+        while self.next.is_multiple_of(B) && cols.len() >= B && self.next + B <= NX * NY {
             let c0 = self.next;
             let (mut any, mut ground_only, mut same) = (0u32, true, true);
             let mut first = None;
