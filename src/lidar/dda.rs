@@ -66,6 +66,16 @@ fn nonzero_bytes(x: u64) -> u32 {
     ((high >> 7).wrapping_mul(0x0102_0408_1020_4080) >> 56) as u32
 }
 
+/// Bit k set when byte k of the column `col` (`NZ` bytes) is not free.
+#[inline]
+fn column_mask(col: &[u8]) -> u32 {
+    // The column as little-endian words, byte k of the column at bits 8 (k % 8) of word k / 8.
+    col.chunks_exact(8)
+        .enumerate()
+        .map(|(q, b)| nonzero_bytes(u64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]])) << (8 * q))
+        .fold(0, |m, q| m | q)
+}
+
 /// Per axis 1 / d: every boundary distance is a product with it (one division per axis and
 /// ray, not one per boundary).
 #[inline]
@@ -122,32 +132,95 @@ pub struct Skip {
     ground_label: Vec<u8>,
 }
 
+/// `Skip` made from the label grid's columns as they come (`Skip::summary`): a writer that
+/// passes over the labels anyway feeds them here while they are in the cache, so the scan does
+/// not read the 5 MB from memory a second time.
+pub struct SkipSummary {
+    cols: Vec<u32>,
+    /// Per block: the highest occupied layer + 1 (0: none), whether every column holds the
+    /// ground voxel and nothing else, and the ground label (u16::MAX: no column yet,
+    /// u16::MAX - 1: two labels differ).
+    top_k: Vec<u32>,
+    ground_only: Vec<bool>,
+    ground_label: Vec<u16>,
+    /// Columns added so far.
+    next: usize,
+}
+
+impl SkipSummary {
+    /// Add the grid's next columns: `labels` holds whole columns (a multiple of `NZ` bytes),
+    /// in the grid's order; bytes past the last whole column are ignored.
+    pub fn add(&mut self, labels: &[u8]) {
+        let mut cols = labels.chunks_exact(NZ);
+        // Runs of B columns share a block (NY is a multiple of B): its entries are updated once
+        // per run, not once per column.
+        while self.next.is_multiple_of(B) && cols.len() >= B && self.next + B <= NX * NY {
+            let c0 = self.next;
+            let (mut any, mut ground_only, mut same) = (0u32, true, true);
+            let mut first = None;
+            for (c, col) in (c0..c0 + B).zip(cols.by_ref()) {
+                let m = column_mask(col);
+                self.cols[c] = m;
+                any |= m;
+                ground_only &= m == 1 << K_GROUND;
+                let l = u16::from(col[K_GROUND]);
+                same &= *first.get_or_insert(l) == l;
+            }
+            self.next = c0 + B;
+            let block = (c0 / NY / B) * NBY + c0 % NY / B;
+            self.ground_only[block] &= ground_only;
+            self.top_k[block] = self.top_k[block].max(32 - any.leading_zeros());
+            // The run's labels folded in as `add_column` folds them one at a time.
+            let (g, l) = (&mut self.ground_label[block], first.unwrap_or(0));
+            *g = if same && (*g == u16::MAX || *g == l) { l } else { u16::MAX - 1 };
+        }
+        for col in cols {
+            self.add_column(col);
+        }
+    }
+
+    fn add_column(&mut self, col: &[u8]) {
+        let c = self.next;
+        if c >= NX * NY {
+            return;
+        }
+        self.next += 1;
+        let m = column_mask(col);
+        self.cols[c] = m;
+        let block = (c / NY / B) * NBY + c % NY / B;
+        self.ground_only[block] &= m == 1 << K_GROUND;
+        self.top_k[block] = self.top_k[block].max(32 - m.leading_zeros());
+        let g = &mut self.ground_label[block];
+        let l = u16::from(col[K_GROUND]);
+        *g = if *g == u16::MAX || *g == l { l } else { u16::MAX - 1 };
+    }
+
+    /// The `Skip` of the grid, once every column was added (None before).
+    pub fn finish(self) -> Option<Skip> {
+        (self.next == NX * NY).then(|| Skip::from_summary(self))
+    }
+}
+
 impl Skip {
     pub fn new(labels: &[u8]) -> Self {
-        let mut cols = vec![0u32; NX * NY];
-        // Per block: the highest occupied layer + 1 (0: none), whether every column holds the
-        // ground voxel and nothing else, and the ground label (u16::MAX: no column yet,
-        // u16::MAX - 1: two labels differ).
-        let mut top_k = vec![0u32; NBX * NBY];
-        let mut ground_only = vec![true; NBX * NBY];
-        let mut ground_label = vec![u16::MAX; NBX * NBY];
-        for (c, col) in labels.chunks_exact(NZ).enumerate() {
-            // The column as little-endian words, byte k of the column at bits 8 (k % 8) of word k / 8.
-            let m = col
-                .chunks_exact(8)
-                .enumerate()
-                .map(|(q, b)| {
-                    nonzero_bytes(u64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]])) << (8 * q)
-                })
-                .fold(0, |m, q| m | q);
-            cols[c] = m;
-            let block = (c / NY / B) * NBY + c % NY / B;
-            ground_only[block] &= m == 1 << K_GROUND;
-            top_k[block] = top_k[block].max(32 - m.leading_zeros());
-            let g = &mut ground_label[block];
-            let l = u16::from(col[K_GROUND]);
-            *g = if *g == u16::MAX || *g == l { l } else { u16::MAX - 1 };
+        let mut s = Skip::summary();
+        s.add(labels);
+        Skip::from_summary(s)
+    }
+
+    /// An empty summary to feed the grid's columns to.
+    pub fn summary() -> SkipSummary {
+        SkipSummary {
+            cols: vec![0u32; NX * NY],
+            top_k: vec![0u32; NBX * NBY],
+            ground_only: vec![true; NBX * NBY],
+            ground_label: vec![u16::MAX; NBX * NBY],
+            next: 0,
         }
+    }
+
+    fn from_summary(s: SkipSummary) -> Self {
+        let SkipSummary { cols, top_k, ground_only, ground_label, .. } = s;
         // The top face of the highest occupied voxel (m).
         let top: Vec<f64> =
             top_k.iter().map(|&k| if k == 0 { f64::NEG_INFINITY } else { ORIGIN[2] + VOXEL * f64::from(k) }).collect();
@@ -632,6 +705,17 @@ mod tests {
                 .fold(f64::NEG_INFINITY, f64::max);
             assert_eq!(skip.ahead[q][bi * NBY + bj], want, "block ({bi}, {bj}) quadrant {q}");
         }
+        // Fed in pieces that split the runs of B columns (as a writer's pieces might), the same.
+        let mut s = Skip::summary();
+        for piece in g.chunks(NZ * 13) {
+            s.add(piece);
+        }
+        let pieced = s.finish().expect("every column was added");
+        assert_eq!((&pieced.cols, &pieced.top, &pieced.ground_only), (&skip.cols, &skip.top, &skip.ground_only));
+        assert_eq!((&pieced.ground_label, pieced.ahead.clone()), (&skip.ground_label, skip.ahead.clone()));
+        let mut short = Skip::summary();
+        short.add(&g[..NZ * 100]);
+        assert!(short.finish().is_none());
     }
 
     #[test]

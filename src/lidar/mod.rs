@@ -67,6 +67,12 @@ fn beam_rng(seed: u64, frame: usize, sensor: u8, beam: usize) -> Rng {
 
 /// Fire every ray of `rig` through `occ`.
 pub fn scan(occ: &Occupancy, rig: &Rig, seed: u64, frame: usize) -> PointCloud {
+    scan_with(occ, None, rig, seed, frame)
+}
+
+/// `scan` with `occ`'s block summary already made (`dda::Skip::summary`, fed `occ`'s labels
+/// while a writer passed over them); `None` makes it here. The same cloud either way.
+pub fn scan_with(occ: &Occupancy, skip: Option<&dda::Skip>, rig: &Rig, seed: u64, frame: usize) -> PointCloud {
     let std_layout;
     let labels: &[u8] = match occ.labels.as_slice() {
         Some(s) if occ.labels.dim() == (NX, NY, NZ) => s,
@@ -82,25 +88,21 @@ pub fn scan(occ: &Occupancy, rig: &Rig, seed: u64, frame: usize) -> PointCloud {
         .enumerate()
         .flat_map(|(s, sen)| (0..sen.elevations_deg.len()).map(move |b| (s, b)))
         .collect();
-    let skip = dda::Skip::new(labels);
-    // Every beam of a sensor sweeps the same azimuths: their cosines and sines once per sensor,
-    // not once per ray (the same expressions, so the same bits).
-    let trig: Vec<Vec<(f64, f64)>> = rig
-        .sensors
-        .iter()
-        .map(|s| s.azimuths(rig.horizontal_resolution_deg).map(|az| (az.cos(), az.sin())).collect())
-        .collect();
-    let views: Vec<fan::SensorBlocks> = rig
-        .sensors
-        .iter()
-        .map(|s| fan::SensorBlocks::new(rig.sensor_origin(s), dda::NBX, dda::NBY, dda::BLOCK_M))
-        .collect();
+    let made;
+    let skip = match skip {
+        Some(s) => s,
+        None => {
+            made = dda::Skip::new(labels);
+            &made
+        }
+    };
+    let tables = RigTables::of(rig);
     let chunks: Vec<Vec<Point>> = units
         .par_iter()
         .map(|&(s, b)| {
-            let sensor = Beam { sensor: &rig.sensors[s], view: &views[s], trig: &trig[s], beam: b };
+            let sensor = Beam { sensor: &rig.sensors[s], view: &tables.views[s], trig: &tables.trig[s], beam: b };
             let mut out = take_buffer();
-            fire_beam(labels, &skip, rig, sensor, seed, frame, &mut out);
+            fire_beam(labels, skip, rig, sensor, seed, frame, &mut out);
             out
         })
         .collect();
@@ -110,6 +112,50 @@ pub fn scan(occ: &Occupancy, rig: &Rig, seed: u64, frame: usize) -> PointCloud {
         give_buffer(c);
     }
     PointCloud { points }
+}
+
+/// What `scan` derives from the rig alone, per sensor: the cosines and sines of its azimuths
+/// (every beam sweeps the same ones) and its view of the blocks (`fan::SensorBlocks`, 2,500
+/// blocks sorted by distance). The same every frame, so made once per rig: per frame they
+/// were about 1 % of a full frame's CPU time at 0.2 deg (docs/benchmarks.md, "Full frames").
+struct RigTables {
+    trig: Vec<Vec<(f64, f64)>>,
+    views: Vec<fan::SensorBlocks>,
+}
+
+/// The tables of the last few rigs scanned (a bench alternates two; a batch uses one).
+static TABLES: std::sync::Mutex<Vec<(Rig, std::sync::Arc<RigTables>)>> = std::sync::Mutex::new(Vec::new());
+const KEPT_TABLES: usize = 4;
+
+impl RigTables {
+    fn new(rig: &Rig) -> Self {
+        let trig = rig
+            .sensors
+            .iter()
+            .map(|s| s.azimuths(rig.horizontal_resolution_deg).map(|az| (az.cos(), az.sin())).collect())
+            .collect();
+        let views = rig
+            .sensors
+            .iter()
+            .map(|s| fan::SensorBlocks::new(rig.sensor_origin(s), dda::NBX, dda::NBY, dda::BLOCK_M))
+            .collect();
+        RigTables { trig, views }
+    }
+
+    /// The tables of `rig`, made now if no earlier scan kept them. The same values either way.
+    fn of(rig: &Rig) -> std::sync::Arc<RigTables> {
+        let kept = TABLES.lock().ok().and_then(|t| t.iter().find(|(r, _)| r == rig).map(|(_, x)| x.clone()));
+        kept.unwrap_or_else(|| {
+            let made = std::sync::Arc::new(RigTables::new(rig));
+            if let Ok(mut t) = TABLES.lock() {
+                if t.len() >= KEPT_TABLES {
+                    t.remove(0);
+                }
+                t.push((rig.clone(), made.clone()));
+            }
+            made
+        })
+    }
 }
 
 /// Per-beam point buffers kept between scans. Allocated and freed every frame, the 6 MB of
@@ -219,17 +265,47 @@ pub fn pcd_frame_path(dir: &Path, frame: usize) -> PathBuf {
     dir.join("lidar").join(format!("{frame:06}.pcd"))
 }
 
+/// Points coded per `write_all`: 256 kB of `.pcd` records, small enough that the kernel's copy
+/// into the page cache reads them from the cache the coder just wrote them to.
+const CHUNK_POINTS: usize = 1 << 14;
+
+/// Write `pc`'s points to `w` as fixed-size records, `CHUNK_POINTS` at a time, through a buffer
+/// kept per thread: one pass over the points, no per-field `Vec` growth, no fresh pages per frame.
+fn write_records<const N: usize>(
+    w: &mut impl Write,
+    pc: &PointCloud,
+    record: impl Fn(&Point, &mut [u8; N]),
+) -> io::Result<()> {
+    thread_local! {
+        static CHUNK: std::cell::RefCell<Vec<u8>> = const { std::cell::RefCell::new(Vec::new()) };
+    }
+    CHUNK.with_borrow_mut(|buf| {
+        for points in pc.points.chunks(CHUNK_POINTS) {
+            buf.clear();
+            buf.resize(points.len() * N, 0);
+            for (dst, p) in buf.chunks_exact_mut(N).zip(points) {
+                if let Ok(rec) = <&mut [u8; N]>::try_from(dst) {
+                    record(p, rec);
+                }
+            }
+            w.write_all(buf)?;
+        }
+        Ok(())
+    })
+}
+
+/// x, y, z and intensity as float32 little endian: the first 16 bytes of both formats' records.
+#[inline]
+fn xyzi(p: &Point, rec: &mut [u8]) {
+    rec[0..4].copy_from_slice(&p.x.to_le_bytes());
+    rec[4..8].copy_from_slice(&p.y.to_le_bytes());
+    rec[8..12].copy_from_slice(&p.z.to_le_bytes());
+    rec[12..16].copy_from_slice(&p.intensity.to_le_bytes());
+}
+
 /// KITTI-style `.bin`: float32 little-endian x, y, z, intensity per point, atomically.
 pub fn write_bin(path: &Path, pc: &PointCloud) -> io::Result<u64> {
-    crate::fsio::write_atomic(path, |w| {
-        let mut buf = Vec::with_capacity(pc.points.len() * 16);
-        for p in &pc.points {
-            for v in [p.x, p.y, p.z, p.intensity] {
-                buf.extend_from_slice(&v.to_le_bytes());
-            }
-        }
-        w.write_all(&buf)
-    })
+    crate::fsio::write_atomic(path, |w| write_records::<16>(w, pc, |p, rec| xyzi(p, rec)))
 }
 
 /// Binary PCD v0.7 with fields x y z intensity (float32), ring (uint16) and lidar (uint8),
@@ -243,14 +319,10 @@ pub fn write_pcd(path: &Path, pc: &PointCloud) -> io::Result<u64> {
              FIELDS x y z intensity ring lidar\nSIZE 4 4 4 4 2 1\nTYPE F F F F U U\nCOUNT 1 1 1 1 1 1\n\
              WIDTH {n}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA binary\n"
         )?;
-        let mut buf = Vec::with_capacity(n * 19);
-        for p in &pc.points {
-            for v in [p.x, p.y, p.z, p.intensity] {
-                buf.extend_from_slice(&v.to_le_bytes());
-            }
-            buf.extend_from_slice(&p.ring.to_le_bytes());
-            buf.push(p.lidar);
-        }
-        w.write_all(&buf)
+        write_records::<19>(w, pc, |p, rec| {
+            xyzi(p, rec);
+            rec[16..18].copy_from_slice(&p.ring.to_le_bytes());
+            rec[18] = p.lidar;
+        })
     })
 }
