@@ -17,8 +17,10 @@
 //! (`configs/*.ron`; by default the `.ron` next to the weights file, which `rocc train` writes).
 
 pub mod config;
+pub mod conv;
 pub mod device;
 pub mod guard;
+pub mod head;
 mod infer;
 pub mod latents;
 pub mod loss;
