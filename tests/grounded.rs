@@ -272,6 +272,38 @@ fn weighted_cross_entropy_and_class_weights() {
     assert_eq!(cw[5], 25.0, "unseen classes get the clip");
 }
 
+/// The CPU's fused cross-entropy (`weighted_cross_entropy` on the CPU) against the tensor
+/// formulation: value and the logits' gradient, over more rows than one block of the fused pass.
+#[test]
+fn fused_cross_entropy_matches_the_tensor_formulation() {
+    use rocc::backend::grounded::loss::weighted_cross_entropy_tensor_ops;
+    let device = cpu().autodiff();
+    let mut rng = Rng::new(4);
+    let n = 40_000;
+    let logits: Vec<f32> = (0..n * N_LABELS).map(|_| (rng.normal() * 3.0) as f32).collect();
+    let target: Vec<u8> = (0..n).map(|_| rng.index(N_LABELS) as u8).collect();
+    let mut w = [1f32; N_LABELS];
+    w[3] = 7.5;
+    w[8] = 0.25;
+    let run = |fused: bool| -> (f32, Vec<f32>) {
+        let l = Tensor::<2>::from_data(TensorData::new(logits.clone(), [n, N_LABELS]), &device).require_grad();
+        let ce = if fused {
+            weighted_cross_entropy(l.clone(), &target, &w)
+        } else {
+            weighted_cross_entropy_tensor_ops(l.clone(), &target, &w)
+        };
+        let v = ce.clone().into_scalar::<f32>();
+        let grads = (ce * 3.0).backward();
+        (v, l.grad(&grads).expect("the logits get a gradient").to_data().iter::<f32>().collect())
+    };
+    let ((v, g), (rv, rg)) = (run(true), run(false));
+    assert!((v - rv).abs() < 1e-5 * rv.abs(), "value {v} against {rv}");
+    let scale = rg.iter().fold(0f32, |m, x| m.max(x.abs()));
+    let err = g.iter().zip(&rg).fold(0f32, |m, (a, b)| m.max((a - b).abs())) / scale;
+    assert!(err < 1e-5, "gradient differs by {err} of its largest element");
+    assert!(scale > 0.0);
+}
+
 fn bev_with_road() -> (Array3<i8>, Array3<i32>) {
     let mut masks = Array3::<i8>::zeros((N_MASKS, GRID, GRID));
     // A 10 m wide road along x.

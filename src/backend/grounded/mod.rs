@@ -18,6 +18,7 @@
 
 pub mod config;
 pub mod conv;
+pub mod cross_entropy;
 pub mod device;
 pub mod guard;
 pub mod head;
