@@ -304,6 +304,50 @@ fn fused_cross_entropy_matches_the_tensor_formulation() {
     assert!(scale > 0.0);
 }
 
+/// The CPU's fused head (bias and gated background residual) against its tensor formulation
+/// under autodiff (whose softmax rounds differently from the CPU kernel the labels test pins):
+/// the logits and the gradients of splat, bias and residual.
+#[test]
+fn fused_head_matches_the_tensor_formulation() {
+    use rocc::backend::grounded::head::{head, head_tensor_ops};
+    let device = cpu().autodiff();
+    let mut rng = Rng::new(9);
+    let nv = 3 * 1100 * NZ;
+    let mut rand = |n: usize, s: f64| -> Vec<f32> { (0..n).map(|_| (rng.normal() * s) as f32).collect() };
+    let (splat, bias, r, w) =
+        (rand(nv * N_LABELS, 3.0), rand(NZ * N_LABELS, 1.0), rand(nv, 2.0), rand(nv * N_LABELS, 1.0));
+    let run = |fused: bool| -> [Vec<f32>; 4] {
+        let t = |v: &Vec<f32>, shape: [usize; 2]| Tensor::<2>::from_data(TensorData::new(v.clone(), shape), &device);
+        let (s, b, rr) = (
+            t(&splat, [nv, N_LABELS]).require_grad(),
+            t(&bias, [NZ, N_LABELS]).require_grad(),
+            t(&r, [nv, 1]).require_grad(),
+        );
+        let out = if fused {
+            head(s.clone(), b.clone(), rr.clone())
+        } else {
+            head_tensor_ops(s.clone(), b.clone(), rr.clone())
+        };
+        let grads = (out.clone() * t(&w, [nv, N_LABELS])).sum().backward();
+        let host = |x: Tensor<2>| x.to_data().iter::<f32>().collect::<Vec<_>>();
+        [host(out), host(s.grad(&grads).unwrap()), host(b.grad(&grads).unwrap()), host(rr.grad(&grads).unwrap())]
+    };
+    // Without autodiff (inference) the very same bits.
+    let plain = |fused: bool| -> Vec<f32> {
+        let t = |v: &Vec<f32>, shape: [usize; 2]| Tensor::<2>::from_data(TensorData::new(v.clone(), shape), &cpu());
+        let (s, b, rr) = (t(&splat, [nv, N_LABELS]), t(&bias, [NZ, N_LABELS]), t(&r, [nv, 1]));
+        let out = if fused { head(s, b, rr) } else { head_tensor_ops(s, b, rr) };
+        out.to_data().iter::<f32>().collect()
+    };
+    assert!(plain(true) == plain(false), "inference logits differ from the tensor formulation's");
+    let (ours, reference) = (run(true), run(false));
+    for (name, i) in [("logits", 0), ("splat", 1), ("bias", 2), ("residual", 3)] {
+        let scale = reference[i].iter().fold(1e-6f32, |m, x| m.max(x.abs()));
+        let err = ours[i].iter().zip(&reference[i]).fold(0f32, |m, (a, b)| m.max((a - b).abs())) / scale;
+        assert!(err < 1e-5, "the gradient of the {name} differs by {err} of its largest element");
+    }
+}
+
 fn bev_with_road() -> (Array3<i8>, Array3<i32>) {
     let mut masks = Array3::<i8>::zeros((N_MASKS, GRID, GRID));
     // A 10 m wide road along x.

@@ -123,11 +123,16 @@ pub fn backward(logits: &[f32], g: f32, t: &Targets) -> Vec<f32> {
         .zip(t.labels.par_chunks(ROWS))
         .for_each(|((o, rows), labels)| {
             for ((o, l), &y) in o.chunks_exact_mut(N_LABELS).zip(rows.chunks_exact(N_LABELS)).zip(labels) {
-                let (max, lse) = log_sum_exp(l);
+                let max = l.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+                let mut sum = 0f32;
+                for (o, &v) in o.iter_mut().zip(l) {
+                    *o = (v - max).exp();
+                    sum += *o;
+                }
                 let s = g * t.weights[class(y)];
-                for c in 0..N_LABELS {
-                    let p = (l[c] - max - lse).exp();
-                    o[c] = s * (p - (c == class(y)) as u8 as f32);
+                let inv = 1.0 / sum;
+                for (c, o) in o.iter_mut().enumerate() {
+                    *o = s * (*o * inv - (c == class(y)) as u8 as f32);
                 }
             }
         });

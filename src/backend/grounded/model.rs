@@ -20,7 +20,7 @@ use burn::nn::conv::{Conv2d, Conv2dConfig};
 use burn::nn::transformer::{TransformerEncoder, TransformerEncoderConfig, TransformerEncoderInput};
 use burn::nn::{Linear, LinearConfig, PaddingConfig2d};
 use burn::prelude::*;
-use burn::tensor::activation::{gelu, softmax};
+use burn::tensor::activation::gelu;
 use ndarray::Array3;
 
 /// Channels of the generator's input: 18 masks + 7 aux.
@@ -418,22 +418,21 @@ impl Generator {
     pub fn forward(&self, bev: Vec<f32>, hb: &HostBatch, region: Region) -> GenOut {
         let b = hb.b();
         let parts = self.parts(bev, hb, region);
-        let logits = parts.splatted + self.decoder.bias_grid(b * region.ni * region.nj);
         let Some(r) = parts.residual else {
+            let logits = parts.splatted + self.decoder.bias_grid(b * region.ni * region.nj);
             return GenOut { logits, background: None };
         };
-        let device = logits.device();
+        let device = parts.splatted.device();
         let cols = feature_columns(region, b, parts.feature_hw, self.stride);
         let nc = cols.len();
         let r = r.select(0, Tensor::<1, Int>::from_data(TensorData::new(cols, [nc]), &device)).reshape([nc * NZ, 1]);
-        // Gate: the residual only acts where free or background already dominate, and it moves
-        // mass from free to background, never touching the agent channels.
-        let nv = nc * NZ;
-        let p = softmax(logits.clone().detach(), 1);
-        let gate = p.slice([0..nv, 0..2]).sum_dim(1);
-        let rr = r.clone() * gate;
-        let delta = Tensor::cat(vec![rr.clone().neg(), rr, Tensor::zeros([nv, N_LABELS - 2], &device)], 1);
-        GenOut { logits: logits + delta, background: Some(r) }
+        let bias = self.decoder.layer_bias.val();
+        let logits = if device == Device::flex() {
+            head::head(parts.splatted, bias, r.clone())
+        } else {
+            head::head_tensor_ops(parts.splatted, bias, r.clone())
+        };
+        GenOut { logits, background: Some(r) }
     }
 
     /// Per-voxel labels of `region` (the argmax of `forward`'s logits, the same bits), computed
