@@ -47,8 +47,12 @@ pub fn labels(splat: &[f32], bias: &[f32], residual: Option<Residual>) -> Vec<u8
             let v = v0 + dv;
             let mut l = biased(splat, bias, v);
             if let Some(r) = &residual {
-                let pixel = r.columns[v / NZ] as usize;
-                let rr = r.values[pixel * NZ + v % NZ] * gate(&l);
+                let r = r.values[r.columns[v / NZ] as usize * NZ + v % NZ];
+                if let Some(known) = label_whatever_the_gate(&l, r) {
+                    *label = known;
+                    continue;
+                }
+                let rr = r * gate(&l);
                 l[0] += -rr;
                 l[1] += rr;
             }
@@ -56,6 +60,33 @@ pub fn labels(splat: &[f32], bias: &[f32], residual: Option<Residual>) -> Vec<u8
         }
     });
     out
+}
+
+/// The label when no gate in [0, 1] can change it (the residual moves at most |r| between free
+/// and background), so most voxels skip the softmax; `None` when it might, with a margin far
+/// above the rounding of `l[0] - r gate` and `l[1] + r gate`.
+#[inline]
+fn label_whatever_the_gate(l: &[f32; N_LABELS], r: f32) -> Option<u8> {
+    let (mut agent, mut best) = (2, l[2]);
+    for (c, &v) in l.iter().enumerate().skip(3) {
+        if v > best {
+            (agent, best) = (c, v);
+        }
+    }
+    if l.iter().any(|v| v.is_nan()) || r.is_nan() {
+        return None;
+    }
+    let reach = r.abs() * 1.001 + 1e-4 * (l[0].abs() + l[1].abs() + best.abs() + r.abs()) + 1e-30;
+    let (lo0, hi0, lo1, hi1) = (l[0] - reach, l[0] + reach, l[1] - reach, l[1] + reach);
+    if best > hi0 && best > hi1 {
+        Some(agent as u8)
+    } else if lo0 > hi1 && lo0 > best {
+        Some(0)
+    } else if lo1 > hi0 && lo1 > best {
+        Some(1)
+    } else {
+        None
+    }
 }
 
 /// Voxel `v`'s splat plus the bias of its layer.

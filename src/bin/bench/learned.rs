@@ -105,9 +105,7 @@ pub fn bench_grounded(args: &[String]) {
     };
     let batch: usize = opt("--batch").and_then(|b| b.parse().ok()).unwrap_or(kind.default_batch()).max(1);
     let configs = opt("--configs").unwrap_or("cpu-small,paper");
-    println!(
-        "== grounded: inference per frame on {kind} (batch {batch}; random weights, the cost does not depend on them)"
-    );
+    println!("== grounded: inference per frame on {kind} (batch {batch}; random weights)");
     let Some(f) = load(&root().join("scenarios/ambulance_crowded_intersection.scn")) else { return };
     let ego = f.concrete.egos.first().copied().unwrap_or(0);
     let mut raster = Rasterizer::new();
@@ -132,7 +130,14 @@ pub fn bench_grounded(args: &[String]) {
         };
         let set = latents::build(&cfg, &inputs[0].boxes, inputs[0].masks);
         let fg = set.iter().filter(|a| a.foreground).count();
-        let model = Generator::new(&cfg, &rocc::backend::grounded::cpu());
+        let mut model = Generator::new(&cfg, &rocc::backend::grounded::cpu());
+        if model.bg_out.is_some() {
+            // The background head starts at zero; random weights make it speak, so the CPU's
+            // labels take the gate's softmax where free and background are close, as trained
+            // weights do.
+            let shape = [cfg.bev_features(), rocc::backend::layout::NZ];
+            model.bg_out = Some(burn::nn::conv::Conv2dConfig::new(shape, [1, 1]).init(&rocc::backend::grounded::cpu()));
+        }
         let on_cpu = Grounded::from_model(cfg.clone(), model.clone(), name);
         let g = match Grounded::from_model(cfg.clone(), model, name).on(kind, batch) {
             Ok(g) => g,
