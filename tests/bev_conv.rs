@@ -24,7 +24,7 @@ impl Lcg {
 fn run(c: &Conv2d, x: &[f32], dims: [usize; 4], w_seed: u64, ours: bool) -> [Vec<f32>; 4] {
     let device = c.weight.val().device();
     let x = Tensor::<4>::from_data(TensorData::new(x.to_vec(), dims), &device).require_grad();
-    let out = if ours { conv::forward(&c, x.clone()) } else { c.forward(x.clone()) };
+    let out = if ours { conv::forward(c, x.clone()) } else { c.forward(x.clone()) };
     let n = out.dims().iter().product();
     let w = Tensor::<4>::from_data(TensorData::new(Lcg(w_seed).vec(n), out.dims()), &device);
     let grads = (out.clone() * w).sum().backward();
