@@ -272,6 +272,82 @@ fn weighted_cross_entropy_and_class_weights() {
     assert_eq!(cw[5], 25.0, "unseen classes get the clip");
 }
 
+/// The CPU's fused cross-entropy (`weighted_cross_entropy` on the CPU) against the tensor
+/// formulation: value and the logits' gradient, over more rows than one block of the fused pass.
+#[test]
+fn fused_cross_entropy_matches_the_tensor_formulation() {
+    use rocc::backend::grounded::loss::weighted_cross_entropy_tensor_ops;
+    let device = cpu().autodiff();
+    let mut rng = Rng::new(4);
+    let n = 40_000;
+    let logits: Vec<f32> = (0..n * N_LABELS).map(|_| (rng.normal() * 3.0) as f32).collect();
+    let target: Vec<u8> = (0..n).map(|_| rng.index(N_LABELS) as u8).collect();
+    let mut w = [1f32; N_LABELS];
+    w[3] = 7.5;
+    w[8] = 0.25;
+    let run = |fused: bool| -> (f32, Vec<f32>) {
+        let l = Tensor::<2>::from_data(TensorData::new(logits.clone(), [n, N_LABELS]), &device).require_grad();
+        let ce = if fused {
+            weighted_cross_entropy(l.clone(), &target, &w)
+        } else {
+            weighted_cross_entropy_tensor_ops(l.clone(), &target, &w)
+        };
+        let v = ce.clone().into_scalar::<f32>();
+        let grads = (ce * 3.0).backward();
+        (v, l.grad(&grads).expect("the logits get a gradient").to_data().iter::<f32>().collect())
+    };
+    let ((v, g), (rv, rg)) = (run(true), run(false));
+    assert!((v - rv).abs() < 1e-5 * rv.abs(), "value {v} against {rv}");
+    let scale = rg.iter().fold(0f32, |m, x| m.max(x.abs()));
+    let err = g.iter().zip(&rg).fold(0f32, |m, (a, b)| m.max((a - b).abs())) / scale;
+    assert!(err < 1e-5, "gradient differs by {err} of its largest element");
+    assert!(scale > 0.0);
+}
+
+/// The CPU's fused head (bias and gated background residual) against its tensor formulation
+/// under autodiff (whose softmax rounds differently from the CPU kernel the labels test pins):
+/// the logits and the gradients of splat, bias and residual.
+#[test]
+fn fused_head_matches_the_tensor_formulation() {
+    use rocc::backend::grounded::head::{head, head_tensor_ops};
+    let device = cpu().autodiff();
+    let mut rng = Rng::new(9);
+    let nv = 3 * 1100 * NZ;
+    let mut rand = |n: usize, s: f64| -> Vec<f32> { (0..n).map(|_| (rng.normal() * s) as f32).collect() };
+    let (splat, bias, r, w) =
+        (rand(nv * N_LABELS, 3.0), rand(NZ * N_LABELS, 1.0), rand(nv, 2.0), rand(nv * N_LABELS, 1.0));
+    let run = |fused: bool| -> [Vec<f32>; 4] {
+        let t = |v: &Vec<f32>, shape: [usize; 2]| Tensor::<2>::from_data(TensorData::new(v.clone(), shape), &device);
+        let (s, b, rr) = (
+            t(&splat, [nv, N_LABELS]).require_grad(),
+            t(&bias, [NZ, N_LABELS]).require_grad(),
+            t(&r, [nv, 1]).require_grad(),
+        );
+        let out = if fused {
+            head(s.clone(), b.clone(), rr.clone())
+        } else {
+            head_tensor_ops(s.clone(), b.clone(), rr.clone())
+        };
+        let grads = (out.clone() * t(&w, [nv, N_LABELS])).sum().backward();
+        let host = |x: Tensor<2>| x.to_data().iter::<f32>().collect::<Vec<_>>();
+        [host(out), host(s.grad(&grads).unwrap()), host(b.grad(&grads).unwrap()), host(rr.grad(&grads).unwrap())]
+    };
+    // Without autodiff (inference) the very same bits.
+    let plain = |fused: bool| -> Vec<f32> {
+        let t = |v: &Vec<f32>, shape: [usize; 2]| Tensor::<2>::from_data(TensorData::new(v.clone(), shape), &cpu());
+        let (s, b, rr) = (t(&splat, [nv, N_LABELS]), t(&bias, [NZ, N_LABELS]), t(&r, [nv, 1]));
+        let out = if fused { head(s, b, rr) } else { head_tensor_ops(s, b, rr) };
+        out.to_data().iter::<f32>().collect()
+    };
+    assert!(plain(true) == plain(false), "inference logits differ from the tensor formulation's");
+    let (ours, reference) = (run(true), run(false));
+    for (name, i) in [("logits", 0), ("splat", 1), ("bias", 2), ("residual", 3)] {
+        let scale = reference[i].iter().fold(1e-6f32, |m, x| m.max(x.abs()));
+        let err = ours[i].iter().zip(&reference[i]).fold(0f32, |m, (a, b)| m.max((a - b).abs())) / scale;
+        assert!(err < 1e-5, "the gradient of the {name} differs by {err} of its largest element");
+    }
+}
+
 fn bev_with_road() -> (Array3<i8>, Array3<i32>) {
     let mut masks = Array3::<i8>::zeros((N_MASKS, GRID, GRID));
     // A 10 m wide road along x.

@@ -66,6 +66,49 @@ fn a_batch_of_three_frames_gives_the_labels_of_three_single_frames() {
     assert_ne!(alone[0], alone[2], "the boxes changed nothing: the test would prove nothing");
 }
 
+/// The CPU's labels come from `head` on the host: they must be the argmax of the tensor path's
+/// logits, bit for bit, including the background head's gated residual (here not zero).
+#[test]
+fn host_labels_are_the_argmax_of_the_logits() {
+    use rocc::backend::grounded::model::bev_input;
+    use rocc::backend::grounded::splat::Region;
+    use rocc::backend::grounded::{HostBatch, latents};
+    let cfg = grounded_tiny::tiny();
+    let device = cpu();
+    device.seed(8);
+    let mut model = Generator::new(&cfg, &device);
+    let (m0, a0) = bev(150..250);
+    let (m1, a1) = bev(100..300);
+    let frames = [
+        (vec![gbox(VEHICLE, 5.0, 0.5, 4.5, 0.3), gbox(PEDESTRIAN, 3.0, 6.0, 0.6, 1.2)], &m0, &a0),
+        (vec![gbox(VEHICLE, -8.0, 1.0, 9.0, 0.0)], &m1, &a1),
+    ];
+    let hb = HostBatch::new(frames.iter().map(|(b, m, _)| latents::build(&cfg, b, m)).collect());
+    let mut bev = Vec::new();
+    for (_, m, a) in &frames {
+        bev_input(m, a, &mut bev);
+    }
+    let region = Region { i0: 150, j0: 170, ni: 60, nj: 50 };
+    let argmax = |m: &Generator| -> Vec<u8> {
+        let logits = m.forward(bev.clone(), &hb, region).logits;
+        logits.argmax(1).to_data().iter::<i64>().map(|l| l as u8).collect()
+    };
+    let differ = |a: &[u8], b: &[u8]| a.iter().zip(b).filter(|(x, y)| x != y).count();
+    let without = model.labels(bev.clone(), &hb, region);
+    assert_eq!(without.len(), 2 * region.voxels());
+    assert_eq!(differ(&without, &argmax(&model)), 0, "labels differ from the logits' argmax");
+    // A background head that speaks (its output layer is zero-initialised), loud enough to move
+    // voxels between free and background.
+    let f = cfg.bev_features();
+    let nz = rocc::backend::layout::NZ;
+    let loud = burn::module::Initializer::Uniform { min: -20.0, max: 20.0 };
+    model.bg_out = Some(burn::nn::conv::Conv2dConfig::new([f, nz], [1, 1]).with_initializer(loud).init(&device));
+    let with = model.labels(bev.clone(), &hb, region);
+    assert_eq!(differ(&with, &argmax(&model)), 0, "labels differ from the logits' argmax");
+    let moved = differ(&with, &without);
+    assert!(moved > 1000, "the residual moved {moved} labels: the test would prove little");
+}
+
 /// Weights of the tiny model in `dir` (`generator.bpk` with its `.ron`).
 fn weights(dir: &Path) -> PathBuf {
     let cfg = grounded_tiny::tiny();

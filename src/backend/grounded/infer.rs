@@ -71,9 +71,13 @@ impl Grounded {
         for f in frames {
             bev_input(f.masks, f.aux, &mut bev);
         }
-        let out = self.model.forward(bev, &hb, Region::full());
-        let labels: Vec<u8> =
-            out.logits.argmax(1).to_data().iter::<i64>().map(|l| l.clamp(0, N_LABELS as i64 - 1) as u8).collect();
+        let labels: Vec<u8> = if self.device().is_gpu() {
+            let out = self.model.forward(bev, &hb, Region::full());
+            out.logits.argmax(1).to_data().iter::<i64>().map(|l| l.clamp(0, N_LABELS as i64 - 1) as u8).collect()
+        } else {
+            // The same labels without the grid-sized tensors (`head`).
+            self.model.labels(bev, &hb, Region::full())
+        };
         labels
             .chunks(NX * NY * NZ)
             .map(|c| Array3::from_shape_vec((NX, NY, NZ), c.to_vec()).unwrap_or_else(|_| Array3::zeros((NX, NY, NZ))))

@@ -3,6 +3,7 @@
 //! "present classes" variant), the VAE's KL term and the background head's auxiliary
 //! cross-entropy.
 
+use super::cross_entropy;
 use crate::backend::layout::N_LABELS;
 use burn::prelude::*;
 use burn::tensor::activation::log_softmax;
@@ -16,8 +17,17 @@ fn int_column(v: Vec<i64>, device: &Device) -> Tensor<2, Int> {
 /// GPU buffer, however many voxels the batch holds (full grids at batch 6 are 30.7 M rows).
 const CE_ROWS: usize = 4 << 20;
 
-/// sum_v w[y_v] * -log softmax(logits_v)[y_v] / sum_v w[y_v].
+/// sum_v w[y_v] * -log softmax(logits_v)[y_v] / sum_v w[y_v]: on the CPU one fused operation
+/// (`cross_entropy`), elsewhere `weighted_cross_entropy_tensor_ops`.
 pub fn weighted_cross_entropy(logits: Tensor<2>, target: &[u8], weights: &[f32; N_LABELS]) -> Tensor<1> {
+    if logits.device() == Device::flex() {
+        return cross_entropy::cross_entropy(logits, cross_entropy::Targets::new(target, weights));
+    }
+    weighted_cross_entropy_tensor_ops(logits, target, weights)
+}
+
+/// `weighted_cross_entropy` written with tensor operations, in slices of `CE_ROWS` rows.
+pub fn weighted_cross_entropy_tensor_ops(logits: Tensor<2>, target: &[u8], weights: &[f32; N_LABELS]) -> Tensor<1> {
     let device = logits.device();
     let n = target.len();
     let w: Vec<f32> = target.iter().map(|&t| weights[(t as usize).min(N_LABELS - 1)]).collect();

@@ -17,8 +17,11 @@
 //! (`configs/*.ron`; by default the `.ron` next to the weights file, which `rocc train` writes).
 
 pub mod config;
+pub mod conv;
+pub mod cross_entropy;
 pub mod device;
 pub mod guard;
+pub mod head;
 mod infer;
 pub mod latents;
 pub mod loss;

@@ -12,6 +12,7 @@
 use super::config::GroundedConfig;
 use super::latents::{ANCHOR_FEATS, Anchor, budget, encoder_input};
 use super::splat::{ActiveAnchors, PARAMS, Region, activate, splat};
+use super::{conv, head};
 use crate::backend::layout::{N_LABELS, NZ, ORIGIN, VOXEL};
 use crate::raster::layout::{GRID, N_AUX, N_MASKS, RES};
 use burn::module::{Initializer, Param};
@@ -19,7 +20,7 @@ use burn::nn::conv::{Conv2d, Conv2dConfig};
 use burn::nn::transformer::{TransformerEncoder, TransformerEncoderConfig, TransformerEncoderInput};
 use burn::nn::{Linear, LinearConfig, PaddingConfig2d};
 use burn::prelude::*;
-use burn::tensor::activation::{gelu, softmax};
+use burn::tensor::activation::gelu;
 use ndarray::Array3;
 
 /// Channels of the generator's input: 18 masks + 7 aux.
@@ -213,11 +214,22 @@ impl Decoder {
 
     /// Latents -> logits of `region` [b * voxels, 9]: splatted Gaussians plus the layer bias.
     pub fn forward(&self, latents: Tensor<3>, hb: &HostBatch, region: Region) -> Tensor<2> {
+        let cols = hb.b() * region.ni * region.nj;
+        self.splatted(latents, hb, region) + self.bias_grid(cols)
+    }
+
+    /// The layer bias repeated over `cols` columns: `[cols * NZ, 9]`.
+    pub fn bias_grid(&self, cols: usize) -> Tensor<2> {
+        self.layer_bias.val().reshape([1, NZ, N_LABELS]).repeat_dim(0, cols).reshape([cols * NZ, N_LABELS])
+    }
+
+    /// Latents -> the splatted Gaussians of `region` [b * voxels, 9], without the layer bias.
+    pub fn splatted(&self, latents: Tensor<3>, hb: &HostBatch, region: Region) -> Tensor<2> {
         let device = latents.device();
         let raw = self.raw(latents, hb);
         let (rows, aa, labels) = self.active(hb, region);
         let b = hb.b();
-        let splatted = if rows.is_empty() {
+        if rows.is_empty() {
             Tensor::zeros([b * region.voxels(), N_LABELS], &device)
         } else {
             let n = rows.len();
@@ -227,10 +239,7 @@ impl Decoder {
             let sel = sel + Tensor::cat(vec![Tensor::zeros([n, PARAMS - N_LABELS], &device), prior], 1);
             let g = activate(sel, &aa, self.shape.offset_bound, self.shape.min_scale, self.shape.max_scale);
             splat(&g, region, b, self.shape.window)
-        };
-        let cols = b * region.ni * region.nj;
-        let bias = self.layer_bias.val().reshape([1, NZ, N_LABELS]).repeat_dim(0, cols).reshape([cols * NZ, N_LABELS]);
-        splatted + bias
+        }
     }
 }
 
@@ -400,13 +409,48 @@ impl Generator {
     fn features(&self, bev: Tensor<4>) -> Tensor<4> {
         let mut x = bev;
         for c in &self.bev.convs {
-            x = gelu(c.forward(x));
+            x = gelu(conv::forward(c, x));
         }
         x
     }
 
     /// `bev` is `bev_input` of each frame, concatenated.
     pub fn forward(&self, bev: Vec<f32>, hb: &HostBatch, region: Region) -> GenOut {
+        let b = hb.b();
+        let parts = self.parts(bev, hb, region);
+        let Some(r) = parts.residual else {
+            let logits = parts.splatted + self.decoder.bias_grid(b * region.ni * region.nj);
+            return GenOut { logits, background: None };
+        };
+        let device = parts.splatted.device();
+        let cols = feature_columns(region, b, parts.feature_hw, self.stride);
+        let nc = cols.len();
+        let r = r.select(0, Tensor::<1, Int>::from_data(TensorData::new(cols, [nc]), &device)).reshape([nc * NZ, 1]);
+        let bias = self.decoder.layer_bias.val();
+        let logits = if device == Device::flex() {
+            head::head(parts.splatted, bias, r.clone())
+        } else {
+            head::head_tensor_ops(parts.splatted, bias, r.clone())
+        };
+        GenOut { logits, background: Some(r) }
+    }
+
+    /// Per-voxel labels of `region` (the argmax of `forward`'s logits, the same bits), computed
+    /// on the host from the splat, the layer bias and the background head at feature resolution:
+    /// none of the grid-sized tensors of `forward` is built. For a model on the CPU.
+    pub fn labels(&self, bev: Vec<f32>, hb: &HostBatch, region: Region) -> Vec<u8> {
+        let b = hb.b();
+        let parts = self.parts(bev, hb, region);
+        let host = |t: Tensor<2>| t.into_data().try_into_vec::<f32>().unwrap_or_default();
+        let bias = host(self.decoder.layer_bias.val());
+        let residual = parts.residual.map(|r| (host(r), feature_columns(region, b, parts.feature_hw, self.stride)));
+        let residual = residual.as_ref().map(|(r, cols)| head::Residual { values: r, columns: cols });
+        head::labels(&host(parts.splatted), &bias, residual)
+    }
+
+    /// Everything `forward` computes before the grid: the splat (no bias) and the background
+    /// head's residual at feature resolution.
+    fn parts(&self, bev: Vec<f32>, hb: &HostBatch, region: Region) -> GenParts {
         let device = self.decoder.layer_bias.val().device();
         let b = hb.b();
         let x = Tensor::<4>::from_data(TensorData::new(bev, [b, BEV_CHANNELS, GRID, GRID]), &device);
@@ -445,32 +489,40 @@ impl Generator {
         let wts = Tensor::<3>::from_data(TensorData::new(wts, [n / 4, 4, 1]), &device);
         let sampled = (sampled.reshape([n / 4, 4, f]) * wts).sum_dim(1).reshape([b, hb.q, f]);
         let z = self.cond2.forward(gelu(self.cond1.forward(Tensor::cat(vec![sampled, hb.feats_tensor(&device)], 2))));
-        let logits = self.decoder.forward(z, hb, region);
-        let (Some(hid), Some(out)) = (&self.bg_hidden, &self.bg_out) else {
-            return GenOut { logits, background: None };
+        let splatted = self.decoder.splatted(z, hb, region);
+        // The background head at feature resolution.
+        let residual = match (&self.bg_hidden, &self.bg_out) {
+            (Some(hid), Some(out)) => {
+                Some(out.forward(gelu(conv::forward(hid, fmap))).permute([0, 2, 3, 1]).reshape([b * h * w, NZ]))
+            }
+            _ => None,
         };
-        // The background head at feature resolution, read by each column of the region (nearest).
-        let r = out.forward(gelu(hid.forward(fmap))).permute([0, 2, 3, 1]).reshape([b * h * w, NZ]);
-        let mut cols = Vec::with_capacity(b * region.ni * region.nj);
-        for bi in 0..b {
-            for li in 0..region.ni {
-                for lj in 0..region.nj {
-                    let (a, c) = ((region.i0 + li) / self.stride, (region.j0 + lj) / self.stride);
-                    cols.push(((bi * h + a.min(h - 1)) * w + c.min(w - 1)) as i64);
-                }
+        GenParts { splatted, residual, feature_hw: [h, w] }
+    }
+}
+
+/// What the generator computes before the grid (`Generator::parts`).
+struct GenParts {
+    /// [b * voxels, 9], no layer bias.
+    splatted: Tensor<2>,
+    /// [b * h * w, NZ], the background head's residual per feature pixel and layer.
+    residual: Option<Tensor<2>>,
+    feature_hw: [usize; 2],
+}
+
+/// The feature pixel each column of `region` reads (nearest), for each of `b` frames: indices
+/// into `[b * h * w]`, in the splat's column order.
+fn feature_columns(region: Region, b: usize, [h, w]: [usize; 2], stride: usize) -> Vec<i64> {
+    let mut cols = Vec::with_capacity(b * region.ni * region.nj);
+    for bi in 0..b {
+        for li in 0..region.ni {
+            for lj in 0..region.nj {
+                let (a, c) = ((region.i0 + li) / stride, (region.j0 + lj) / stride);
+                cols.push(((bi * h + a.min(h - 1)) * w + c.min(w - 1)) as i64);
             }
         }
-        let nc = cols.len();
-        let r = r.select(0, Tensor::<1, Int>::from_data(TensorData::new(cols, [nc]), &device)).reshape([nc * NZ, 1]);
-        // Gate: the residual only acts where free or background already dominate, and it moves
-        // mass from free to background, never touching the agent channels.
-        let nv = nc * NZ;
-        let p = softmax(logits.clone().detach(), 1);
-        let gate = p.slice([0..nv, 0..2]).sum_dim(1);
-        let rr = r.clone() * gate;
-        let delta = Tensor::cat(vec![rr.clone().neg(), rr, Tensor::zeros([nv, N_LABELS - 2], &device)], 1);
-        GenOut { logits: logits + delta, background: Some(r) }
     }
+    cols
 }
 
 /// Voxel (continuous) -> ego frame metres, for documentation and tests.

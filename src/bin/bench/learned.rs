@@ -9,6 +9,16 @@ fn opt<'a>(args: &'a [String], name: &str) -> Option<&'a str> {
     args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).map(String::as_str)
 }
 
+/// CPU seconds (user + system) of the whole process so far, every thread (Linux
+/// `/proc/self/stat`, in ticks of 10 ms), or NaN elsewhere: on a shared machine the steadier
+/// figure, as waiting for a core does not count.
+fn process_cpu() -> f64 {
+    let Ok(s) = std::fs::read_to_string("/proc/self/stat") else { return f64::NAN };
+    let fields: Vec<&str> = s.rsplit(')').next().unwrap_or("").split_whitespace().collect();
+    let tick = |i: usize| fields.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(f64::NAN);
+    (tick(11) + tick(12)) / 100.0
+}
+
 /// `configs/NAME.ron` of the repository.
 fn config(name: &str) -> Result<GroundedConfig, String> {
     load_config(&root().join(format!("configs/{name}.ron"))).map_err(|d| d.message)
@@ -69,12 +79,14 @@ pub fn bench_train(args: &[String]) {
             max_steps: Some(6),
             epochs: Some(100),
         };
+        let cpu0 = process_cpu();
         match rocc::learn::train(&topts) {
             Ok(rep) => println!(
-                "  {name:<10} batch {} crop {}: {}",
+                "  {name:<10} batch {} crop {}: {}; {:.3} CPU s per step (the whole run over its steps)",
                 config.train.batch,
                 config.train.crop,
-                rocc::learn::step_summary(&rep.step_phases).unwrap_or_default()
+                rocc::learn::step_summary(&rep.step_phases).unwrap_or_default(),
+                (process_cpu() - cpu0) / rep.step_phases.len().max(1) as f64
             ),
             Err(e) => println!("  {name}: {e}"),
         }
@@ -93,9 +105,7 @@ pub fn bench_grounded(args: &[String]) {
     };
     let batch: usize = opt("--batch").and_then(|b| b.parse().ok()).unwrap_or(kind.default_batch()).max(1);
     let configs = opt("--configs").unwrap_or("cpu-small,paper");
-    println!(
-        "== grounded: inference per frame on {kind} (batch {batch}; random weights, the cost does not depend on them)"
-    );
+    println!("== grounded: inference per frame on {kind} (batch {batch}; random weights)");
     let Some(f) = load(&root().join("scenarios/ambulance_crowded_intersection.scn")) else { return };
     let ego = f.concrete.egos.first().copied().unwrap_or(0);
     let mut raster = Rasterizer::new();
@@ -120,7 +130,14 @@ pub fn bench_grounded(args: &[String]) {
         };
         let set = latents::build(&cfg, &inputs[0].boxes, inputs[0].masks);
         let fg = set.iter().filter(|a| a.foreground).count();
-        let model = Generator::new(&cfg, &rocc::backend::grounded::cpu());
+        let mut model = Generator::new(&cfg, &rocc::backend::grounded::cpu());
+        if model.bg_out.is_some() {
+            // The background head starts at zero; random weights make it speak, so the CPU's
+            // labels take the gate's softmax where free and background are close, as trained
+            // weights do.
+            let shape = [cfg.bev_features(), rocc::backend::layout::NZ];
+            model.bg_out = Some(burn::nn::conv::Conv2dConfig::new(shape, [1, 1]).init(&rocc::backend::grounded::cpu()));
+        }
         let on_cpu = Grounded::from_model(cfg.clone(), model.clone(), name);
         let g = match Grounded::from_model(cfg.clone(), model, name).on(kind, batch) {
             Ok(g) => g,
@@ -132,14 +149,17 @@ pub fn bench_grounded(args: &[String]) {
             continue;
         }
         let reps = if name == "paper" && !kind.is_gpu() { 1 } else { 5 };
+        let cpu0 = process_cpu();
         let t = median(reps, || {
             let _ = run();
         });
+        let cpu = (process_cpu() - cpu0) / (reps * batch) as f64;
         println!(
-            "  {name:<10} {:>5} latents ({fg} foreground), {:>8} parameters: {:>9.1} ms per frame",
+            "  {name:<10} {:>5} latents ({fg} foreground), {:>8} parameters: {:>9.1} ms per frame, {:.1} CPU ms",
             set.len(),
             burn::module::Module::num_params(&g.model),
-            t * 1e3 / batch as f64
+            t * 1e3 / batch as f64,
+            cpu * 1e3
         );
         if kind.is_gpu() {
             // Float sums run in another order on a GPU: how many labels of the first frame match.

@@ -1,0 +1,182 @@
+//! The class-weighted cross-entropy as one backend operation with its own backward pass, for
+//! the CPU: forward is one pass over the logits that returns the scalar (no log-softmax, gather
+//! or weight tensor of the logits' size), backward writes the logits' gradient
+//! `w[y] / W * (softmax - onehot(y))` in one more pass. burn's tensor formulation
+//! (`loss::weighted_cross_entropy_tensor_ops`) builds about ten logits-sized temporaries between
+//! the two. A GPU keeps that formulation (`loss::weighted_cross_entropy` chooses); the host code
+//! here runs on any backend. tests/grounded.rs checks value and gradient against it.
+
+use crate::backend::layout::N_LABELS;
+use burn::backend::autodiff::checkpoint::{base::Checkpointer, strategy::CheckpointStrategy};
+use burn::backend::autodiff::grads::Gradients;
+use burn::backend::autodiff::ops::{Backward, Ops, OpsKind, unary};
+use burn::backend::flex::FlexTensor;
+use burn::backend::tensor::FloatTensor;
+use burn::backend::{Autodiff, AutodiffBackend, Backend, DType, Dispatch, Flex, TensorMetadata, backend_extension};
+use burn::prelude::*;
+use rayon::prelude::*;
+use std::sync::Arc;
+
+/// The labels of the logits' rows and the weight of each class, divided by the weights' sum
+/// over the rows (so the loss is a weighted mean).
+#[derive(Clone, Debug)]
+pub struct Targets {
+    pub labels: Arc<[u8]>,
+    pub weights: [f32; N_LABELS],
+}
+
+impl Targets {
+    pub fn new(labels: &[u8], weights: &[f32; N_LABELS]) -> Self {
+        let total: f64 = labels.iter().map(|&t| weights[class(t)] as f64).sum();
+        let inv = 1.0 / total.max(1e-12);
+        Targets { labels: labels.into(), weights: weights.map(|w| (w as f64 * inv) as f32) }
+    }
+}
+
+#[inline]
+fn class(t: u8) -> usize {
+    (t as usize).min(N_LABELS - 1)
+}
+
+#[backend_extension(Flex, Cube: cfg(any(feature = "wgpu", feature = "cuda")), Autodiff)]
+pub trait CrossEntropyOps: burn::backend::Backend {
+    /// Logits `[N, 9]` -> the weighted cross-entropy `[1]`.
+    fn cross_entropy(logits: FloatTensor<Self>, t: Targets) -> FloatTensor<Self> {
+        let device = logits.device();
+        let v = forward(&host_vec::<Self>(logits), &t);
+        Self::float_from_data(TensorData::new(vec![v], [1]), &device)
+    }
+
+    /// Logits and the loss's gradient `[1]` -> the logits' gradient `[N, 9]`.
+    fn cross_entropy_backward(logits: FloatTensor<Self>, grad: FloatTensor<Self>, t: Targets) -> FloatTensor<Self> {
+        let device = logits.device();
+        let g = host_vec::<Self>(grad).first().copied().unwrap_or(0.0);
+        let out = backward(&host_vec::<Self>(logits), g, &t);
+        let n = t.labels.len();
+        Self::float_from_data(TensorData::new(out, [n, N_LABELS]), &device)
+    }
+}
+
+fn host_vec<B: Backend>(t: FloatTensor<B>) -> Vec<f32> {
+    let data = burn::tensor::read_sync(B::float_into_data(t)).expect("reading a tensor back from its device");
+    data.convert::<f32>().try_into_vec::<f32>().unwrap_or_default()
+}
+
+/// The elements of a Flex tensor, contiguous (a copy only where it is not).
+fn flex_f32(t: &FlexTensor) -> Option<FlexTensor> {
+    (t.dtype() == DType::F32).then(|| t.to_contiguous())
+}
+
+fn flex_slice(t: &FlexTensor) -> &[f32] {
+    let start = t.layout().start_offset();
+    &t.storage::<f32>()[start..start + t.layout().num_elements()]
+}
+
+impl CrossEntropyOps for Flex {
+    fn cross_entropy(logits: FloatTensor<Self>, t: Targets) -> FloatTensor<Self> {
+        let Some(l) = flex_f32(&logits) else {
+            return FlexTensor::from_data(TensorData::new(vec![forward(&host_vec::<Self>(logits), &t)], [1]));
+        };
+        FlexTensor::from_data(TensorData::new(vec![forward(flex_slice(&l), &t)], [1]))
+    }
+
+    fn cross_entropy_backward(logits: FloatTensor<Self>, grad: FloatTensor<Self>, t: Targets) -> FloatTensor<Self> {
+        let g = host_vec::<Self>(grad).first().copied().unwrap_or(0.0);
+        let n = t.labels.len();
+        let out = match flex_f32(&logits) {
+            Some(l) => backward(flex_slice(&l), g, &t),
+            None => backward(&host_vec::<Self>(logits), g, &t),
+        };
+        FlexTensor::from_data(TensorData::new(out, [n, N_LABELS]))
+    }
+}
+
+#[cfg(any(feature = "wgpu", feature = "cuda"))]
+impl CrossEntropyOps for burn_cubecl::CubeBackend {}
+
+/// Rows per task: partial sums are taken per block and added in block order, so the value
+/// does not depend on the thread count.
+const ROWS: usize = 16384;
+
+/// -sum_v w[y_v] log softmax(l_v)[y_v] (weights already divided by their sum).
+pub fn forward(logits: &[f32], t: &Targets) -> f32 {
+    let parts: Vec<f64> = logits
+        .par_chunks(ROWS * N_LABELS)
+        .zip(t.labels.par_chunks(ROWS))
+        .map(|(rows, labels)| {
+            let mut sum = 0f64;
+            for (l, &y) in rows.chunks_exact(N_LABELS).zip(labels) {
+                let (max, lse) = log_sum_exp(l);
+                sum += (t.weights[class(y)] * (l[class(y)] - max - lse)) as f64;
+            }
+            sum
+        })
+        .collect();
+    -parts.iter().sum::<f64>() as f32
+}
+
+/// `g * w[y] * (softmax(l) - onehot(y))` per row.
+pub fn backward(logits: &[f32], g: f32, t: &Targets) -> Vec<f32> {
+    let mut out = vec![0f32; logits.len()];
+    out.par_chunks_mut(ROWS * N_LABELS)
+        .zip(logits.par_chunks(ROWS * N_LABELS))
+        .zip(t.labels.par_chunks(ROWS))
+        .for_each(|((o, rows), labels)| {
+            for ((o, l), &y) in o.chunks_exact_mut(N_LABELS).zip(rows.chunks_exact(N_LABELS)).zip(labels) {
+                let max = l.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+                let mut sum = 0f32;
+                for (o, &v) in o.iter_mut().zip(l) {
+                    *o = (v - max).exp();
+                    sum += *o;
+                }
+                let s = g * t.weights[class(y)];
+                let inv = 1.0 / sum;
+                for (c, o) in o.iter_mut().enumerate() {
+                    *o = s * (*o * inv - (c == class(y)) as u8 as f32);
+                }
+            }
+        });
+    out
+}
+
+/// The row's maximum and log sum exp(l - max).
+#[inline]
+fn log_sum_exp(l: &[f32]) -> (f32, f32) {
+    let max = l.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    let sum: f32 = l.iter().map(|&v| (v - max).exp()).sum();
+    (max, sum.ln())
+}
+
+#[derive(Debug)]
+struct CrossEntropyBackward;
+
+impl<B: Backend + CrossEntropyOps> Backward<B, 1> for CrossEntropyBackward {
+    type State = (FloatTensor<B>, Targets);
+
+    fn backward(self, ops: Ops<Self::State, 1>, grads: &mut Gradients, _checkpointer: &mut Checkpointer) {
+        let (logits, t) = ops.state;
+        unary::<B, _>(ops.parents, ops.node, grads, |grad| B::cross_entropy_backward(logits, grad, t));
+    }
+}
+
+impl<B: Backend + CrossEntropyOps, C: CheckpointStrategy> CrossEntropyOps for Autodiff<B, C> {
+    fn cross_entropy(logits: FloatTensor<Self>, t: Targets) -> FloatTensor<Self> {
+        match CrossEntropyBackward.prepare::<C>([logits.node()]).compute_bound().stateful() {
+            OpsKind::Tracked(prep) => {
+                let inner = logits.primitive().clone();
+                let out = B::cross_entropy(inner.clone(), t.clone());
+                prep.finish((inner, t), out)
+            }
+            OpsKind::UnTracked(prep) => prep.finish(B::cross_entropy(logits.into_primitive(), t)),
+        }
+    }
+
+    fn cross_entropy_backward(logits: FloatTensor<Self>, grad: FloatTensor<Self>, t: Targets) -> FloatTensor<Self> {
+        Self::from_inner(B::cross_entropy_backward(Self::inner(logits), Self::inner(grad), t))
+    }
+}
+
+/// The weighted cross-entropy of `logits` `[N, 9]` through `CrossEntropyOps`.
+pub fn cross_entropy(logits: Tensor<2>, t: Targets) -> Tensor<1> {
+    Tensor::from_dispatch(<Dispatch as CrossEntropyOps>::cross_entropy(logits.into_dispatch(), t))
+}

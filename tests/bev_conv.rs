@@ -1,0 +1,66 @@
+//! The BEV encoder's convolution operation (`conv::forward`: burn's forward, the CPU's own weight
+//! gradient) against burn's `Conv2d` with autodiff: the same values, and the same gradients of the
+//! input, the weight and the bias, for the shapes the encoder uses (stride 1 and 2, up to 16 and
+//! beyond 16 output channels, batch 1 and 2, odd sizes).
+
+use burn::nn::PaddingConfig2d;
+use burn::nn::conv::{Conv2d, Conv2dConfig};
+use burn::prelude::*;
+use rocc::backend::grounded::conv;
+
+struct Lcg(u64);
+
+impl Lcg {
+    fn next(&mut self) -> f32 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((self.0 >> 40) as f32) / (1u64 << 24) as f32 * 2.0 - 1.0
+    }
+    fn vec(&mut self, n: usize) -> Vec<f32> {
+        (0..n).map(|_| self.next()).collect()
+    }
+}
+
+/// Output values and the gradients of input, weight and bias of `sum(out * w)`.
+fn run(c: &Conv2d, x: &[f32], dims: [usize; 4], w_seed: u64, ours: bool) -> [Vec<f32>; 4] {
+    let device = c.weight.val().device();
+    let x = Tensor::<4>::from_data(TensorData::new(x.to_vec(), dims), &device).require_grad();
+    let out = if ours { conv::forward(c, x.clone()) } else { c.forward(x.clone()) };
+    let n = out.dims().iter().product();
+    let w = Tensor::<4>::from_data(TensorData::new(Lcg(w_seed).vec(n), out.dims()), &device);
+    let grads = (out.clone() * w).sum().backward();
+    let host = |t: Tensor<4>| t.to_data().iter::<f32>().collect::<Vec<_>>();
+    let gw = c.weight.val().grad(&grads).expect("the weight gets a gradient").to_data().iter::<f32>().collect();
+    let bias = c.bias.as_ref().expect("a bias").val();
+    let gb = bias.grad(&grads).expect("the bias gets a gradient").to_data().iter::<f32>().collect();
+    [host(out), host(x.grad(&grads).expect("the input gets a gradient")), gw, gb]
+}
+
+fn max_rel_err(a: &[f32], b: &[f32]) -> f32 {
+    assert_eq!(a.len(), b.len());
+    let scale = b.iter().fold(1e-3f32, |m, v| m.max(v.abs()));
+    a.iter().zip(b).fold(0f32, |m, (x, y)| m.max((x - y).abs())) / scale
+}
+
+#[test]
+fn the_bev_convolution_matches_burns_in_values_and_gradients() {
+    // (batch, in, out, stride, height, width)
+    let shapes = [(2, 25, 16, 2, 23, 19), (1, 16, 32, 2, 12, 15), (2, 32, 32, 1, 9, 11), (2, 3, 4, 1, 8, 8)];
+    for (seed, &(b, ci, co, s, h, w)) in shapes.iter().enumerate() {
+        let device = Device::flex().autodiff();
+        device.seed(seed as u64);
+        let c = Conv2dConfig::new([ci, co], [3, 3])
+            .with_stride([s, s])
+            .with_padding(PaddingConfig2d::Explicit(1, 1, 1, 1))
+            .init(&device);
+        let dims = [b, ci, h, w];
+        let x = Lcg(100 + seed as u64).vec(dims.iter().product());
+        let ours = run(&c, &x, dims, 7, true);
+        let burns = run(&c, &x, dims, 7, false);
+        assert_eq!(ours[0], burns[0], "case {seed}: the forward pass is burn's, bit for bit");
+        for (name, i) in [("input", 1), ("weight", 2), ("bias", 3)] {
+            let e = max_rel_err(&ours[i], &burns[i]);
+            assert!(e < 1e-5, "case {seed}: the gradient of the {name} differs by {e}");
+        }
+        assert!(ours[2].iter().any(|&v| v != 0.0), "case {seed}: a zero weight gradient proves nothing");
+    }
+}
