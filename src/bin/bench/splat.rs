@@ -39,18 +39,20 @@ pub fn bench_splat(args: &[String]) {
             if ok { "ok" } else { "DIFFERS" }
         );
     }
-    let g = spread(n, &device);
     let (mut fwd, mut bwd) = (Vec::new(), Vec::new());
-    for _ in 0..5 {
+    for rep in 0..5 {
+        // Fresh leaves each time: a backward pass consumes the graph it ran on.
+        let g = spread(n, rep, &device);
+        let _ = device.sync();
         let t0 = Instant::now();
         let logits = splat(&g, Region::full(), BATCH, WINDOW);
         let _ = device.sync();
         let t1 = Instant::now();
         let grads = logits.sum().backward();
         let _ = device.sync();
-        drop(grads);
         fwd.push((t1 - t0).as_secs_f64());
         bwd.push(t1.elapsed().as_secs_f64());
+        drop(grads);
     }
     let med = |v: &mut Vec<f64>| {
         v.sort_by(f64::total_cmp);
@@ -65,16 +67,22 @@ pub fn bench_splat(args: &[String]) {
 }
 
 /// N Gaussians at random over `BATCH` full grids, the scales the paper's window allows.
-fn spread(n: usize, device: &Device) -> Gaussians {
-    let mut r = Rng::new(5);
-    let mut col = |lo: f32, hi: f32, cols: usize| {
-        let v: Vec<f32> = (0..n * cols).map(|_| r.range(lo as f64, hi as f64) as f32).collect();
+fn spread(n: usize, seed: u64, device: &Device) -> Gaussians {
+    let mut r = Rng::new(5 + seed);
+    let mut leaf = |cols: usize, range: &dyn Fn(usize) -> (f32, f32)| {
+        let v: Vec<f32> = (0..n * cols)
+            .map(|i| {
+                let (lo, hi) = range(i % cols);
+                r.range(lo as f64, hi as f64) as f32
+            })
+            .collect();
         Tensor::<2>::from_data(TensorData::new(v, [n, cols]), device).require_grad()
     };
-    let mean = Tensor::cat(vec![col(0.0, NX as f32, 1), col(0.0, NY as f32, 1), col(0.0, NZ as f32, 1)], 1);
-    let scale = col(0.25, WINDOW as f32 / 3.0, 3);
-    let opacity = col(0.05, 0.95, 1);
-    let feat = col(-2.0, 2.0, N_LABELS);
+    let extent = [NX as f32, NY as f32, NZ as f32];
+    let mean = leaf(3, &|c| (0.0, extent[c]));
+    let scale = leaf(3, &|_| (0.25, WINDOW as f32 / 3.0));
+    let opacity = leaf(1, &|_| (0.05, 0.95));
+    let feat = leaf(N_LABELS, &|_| (-2.0, 2.0));
     let eye: Vec<f32> = (0..n).flat_map(|_| [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]).collect();
     let rot = Tensor::<2>::from_data(TensorData::new(eye, [n, 9]), device).require_grad();
     Gaussians { mean, scale, rot, opacity, feat, batch: (0..n).map(|i| i % BATCH).collect() }
