@@ -232,7 +232,12 @@ pub fn forward(conv: &Conv2d, x: Tensor<4>) -> Tensor<4> {
         burn::nn::PaddingConfig2d::Explicit(a, b, c, d) if a == b && b == c && c == d => Some(*a),
         _ => None,
     };
+    // A GPU runs burn's own convolution (with the `fusion` feature its queue has no place for
+    // this operation).
     let (Some(bias), Some(padding)) = (&conv.bias, padding) else { return conv.forward(x) };
+    if x.device() != Device::flex() {
+        return conv.forward(x);
+    }
     if conv.stride[1] != stride || conv.dilation != [1, 1] || conv.groups != 1 || kh == 0 || kw == 0 {
         return conv.forward(x);
     }
