@@ -375,7 +375,13 @@ fn bench_stages() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// User + system CPU seconds of this process so far (all threads), from /proc/self/stat.
+/// The value after `name` in the arguments.
+fn opt<'a>(args: &'a [String], name: &str) -> Option<&'a str> {
+    args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).map(String::as_str)
+}
+
+/// User + system CPU seconds of this process so far (all threads), from /proc/self/stat: on a
+/// shared machine the steadier figure, as waiting for a core does not count.
 fn cpu_secs() -> Option<f64> {
     let s = std::fs::read_to_string("/proc/self/stat").ok()?;
     // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
@@ -395,11 +401,7 @@ fn peak_rss_mb() -> Option<f64> {
 fn bench_e2e() {
     let inputs = library();
     let out = std::env::temp_dir().join(format!("rocc-bench-e2e-{}", std::process::id()));
-    let mut native = Rig::nuplan();
-    native.horizontal_resolution_deg = 0.2;
-    for s in &mut native.sensors {
-        s.horizontal_resolution_deg = None;
-    }
+    let native = Rig::load(None, Some(0.2)).expect("the bundled rig steps 0.2 degrees");
     let runs = [
         ("with previews", true, Rig::nuplan()),
         ("no previews", false, Rig::nuplan()),
@@ -440,11 +442,7 @@ fn bench_e2e() {
 fn bench_e2e_lean(frames: Option<usize>) {
     let inputs = library();
     let out = std::env::temp_dir().join(format!("rocc-bench-e2e-lean-{}", std::process::id()));
-    let mut rig = Rig::nuplan();
-    rig.horizontal_resolution_deg = 0.2;
-    for s in &mut rig.sensors {
-        s.horizontal_resolution_deg = None;
-    }
+    let rig = Rig::load(None, Some(0.2)).expect("the bundled rig steps 0.2 degrees");
     let opts =
         Options { previews: false, force: true, rig, frames: frames.map(|n| format!("0..{n}")), ..Options::default() };
     let (mut done, mut failed, mut secs) = (0, 0, 0.0);

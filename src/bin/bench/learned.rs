@@ -4,21 +4,6 @@
 use super::*;
 use rocc::backend::grounded::{DeviceKind, GroundedConfig, load_config};
 
-/// The value after `name` in the arguments.
-fn opt<'a>(args: &'a [String], name: &str) -> Option<&'a str> {
-    args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).map(String::as_str)
-}
-
-/// CPU seconds (user + system) of the whole process so far, every thread (Linux
-/// `/proc/self/stat`, in ticks of 10 ms), or NaN elsewhere: on a shared machine the steadier
-/// figure, as waiting for a core does not count.
-fn process_cpu() -> f64 {
-    let Ok(s) = std::fs::read_to_string("/proc/self/stat") else { return f64::NAN };
-    let fields: Vec<&str> = s.rsplit(')').next().unwrap_or("").split_whitespace().collect();
-    let tick = |i: usize| fields.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(f64::NAN);
-    (tick(11) + tick(12)) / 100.0
-}
-
 /// `configs/NAME.ron` of the repository.
 fn config(name: &str) -> Result<GroundedConfig, String> {
     load_config(&root().join(format!("configs/{name}.ron"))).map_err(|d| d.message)
@@ -79,14 +64,14 @@ pub fn bench_train(args: &[String]) {
             max_steps: Some(6),
             epochs: Some(100),
         };
-        let cpu0 = process_cpu();
+        let cpu0 = cpu_secs().unwrap_or(f64::NAN);
         match rocc::learn::train(&topts) {
             Ok(rep) => println!(
                 "  {name:<10} batch {} crop {}: {}; {:.3} CPU s per step (the whole run over its steps)",
                 config.train.batch,
                 config.train.crop,
                 rocc::learn::step_summary(&rep.step_phases).unwrap_or_default(),
-                (process_cpu() - cpu0) / rep.step_phases.len().max(1) as f64
+                (cpu_secs().unwrap_or(f64::NAN) - cpu0) / rep.step_phases.len().max(1) as f64
             ),
             Err(e) => println!("  {name}: {e}"),
         }
@@ -149,11 +134,11 @@ pub fn bench_grounded(args: &[String]) {
             continue;
         }
         let reps = if name == "paper" && !kind.is_gpu() { 1 } else { 5 };
-        let cpu0 = process_cpu();
+        let cpu0 = cpu_secs().unwrap_or(f64::NAN);
         let t = median(reps, || {
             let _ = run();
         });
-        let cpu = (process_cpu() - cpu0) / (reps * batch) as f64;
+        let cpu = (cpu_secs().unwrap_or(f64::NAN) - cpu0) / (reps * batch) as f64;
         println!(
             "  {name:<10} {:>5} latents ({fg} foreground), {:>8} parameters: {:>9.1} ms per frame, {:.1} CPU ms",
             set.len(),
