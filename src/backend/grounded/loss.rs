@@ -84,33 +84,26 @@ pub fn lovasz_softmax(probs: Tensor<2>, target: &[u8]) -> Tensor<1> {
     if present.is_empty() {
         return Tensor::zeros([1], &device);
     }
-    let weights: Vec<Vec<f32>> = present
-        .par_iter()
-        .map(|&c| {
-            let fg = |v: usize| target[v] as usize == c;
-            let mut keys: Vec<u64> = (0..n)
-                .map(|v| {
-                    let e = ((fg(v) as u8 as f32) - host.get(v * N_LABELS + c).copied().unwrap_or(0.0)).abs();
-                    (u64::from(!e.to_bits()) << 32) | v as u64
-                })
-                .collect();
-            keys.sort_unstable();
-            let row = |k: &u64| (k & 0xffff_ffff) as usize;
-            let grad = lovasz_grad(&keys.iter().map(|k| fg(row(k))).collect::<Vec<_>>());
-            let mut w = vec![0f32; n];
-            for (k, g) in keys.iter().zip(grad) {
-                w[row(k)] = g;
-            }
-            w
-        })
-        .collect();
+    // Row c of `fg` and `w`: class `present[c]`'s truth bits and each row's Lovász weight.
     let k = present.len();
-    let mut fg = Vec::with_capacity(n * k);
-    let mut w = Vec::with_capacity(n * k);
-    for (i, &c) in present.iter().enumerate() {
-        fg.extend(target.iter().map(|&t| (t as usize == c) as u8 as f32));
-        w.extend_from_slice(&weights[i]);
-    }
+    let (mut fg, mut w) = (vec![0f32; k * n], vec![0f32; k * n]);
+    fg.par_chunks_mut(n).zip(w.par_chunks_mut(n)).zip(&present).for_each(|((fg, w), &c)| {
+        for (f, &t) in fg.iter_mut().zip(target) {
+            *f = (t as usize == c) as u8 as f32;
+        }
+        let mut keys: Vec<u64> = (0..n)
+            .map(|v| {
+                let e = (fg[v] - host.get(v * N_LABELS + c).copied().unwrap_or(0.0)).abs();
+                (u64::from(!e.to_bits()) << 32) | v as u64
+            })
+            .collect();
+        keys.sort_unstable();
+        let row = |k: &u64| (k & 0xffff_ffff) as usize;
+        let grad = lovasz_grad(&keys.iter().map(|k| target[row(k)] as usize == c).collect::<Vec<_>>());
+        for (k, g) in keys.iter().zip(grad) {
+            w[row(k)] = g;
+        }
+    });
     let cols = Tensor::<1, Int>::from_data(
         TensorData::new(present.iter().map(|&c| c as i64).collect::<Vec<_>>(), [k]),
         &device,

@@ -12,6 +12,16 @@ use burn::prelude::*;
 /// The Gaussian parameters in the order `Case::errors` reports them.
 pub const NAMES: [&str; 5] = ["mean", "scale", "rotation", "opacity", "features"];
 
+/// The largest relative difference accepted for the logits (`errors[0]`) and for each
+/// parameter's gradient (the rest): float sums in another order, nothing more.
+pub const VALUE_TOLERANCE: f32 = 1e-5;
+pub const GRADIENT_TOLERANCE: f32 = 1e-4;
+
+/// Whether `Case::errors`' differences are all within the tolerances.
+pub fn within_tolerance(e: &[f32; 6]) -> bool {
+    e[0] < VALUE_TOLERANCE && e[1..].iter().all(|v| *v < GRADIENT_TOLERANCE)
+}
+
 /// Host values of one random case: N Gaussians around a small region (some straddling its
 /// edges, some in the other batch element), unit quaternions turned into rotations, and the
 /// weights of the scalar whose gradient is taken.
