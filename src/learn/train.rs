@@ -17,6 +17,7 @@ use crate::backend::grounded::loss::{
     bce_with_logits, class_weights, kl_divergence, lovasz_softmax, weighted_cross_entropy,
 };
 use crate::backend::grounded::model::{Autoencoder, Generator, HostBatch, bev_input};
+use crate::backend::grounded::rows::take_rows;
 use crate::backend::grounded::splat::Region;
 use crate::backend::grounded::{BEV_CHANNELS, load_weights, logits_to_labels};
 use crate::backend::layout::{N_LABELS, NX, NY, NZ};
@@ -199,7 +200,6 @@ pub fn step_loss(
     rng: &mut Rng,
 ) -> (Tensor<1>, [f64; 4]) {
     let t = &cfg.train;
-    let device = out.logits.device();
     let ce = weighted_cross_entropy(out.logits.clone(), target, weights);
     // Lovász over every voxel an agent class claims (truth or prediction) plus a uniform draw.
     // Only "is an agent class predicted" crosses from the device: one byte-sized flag per voxel,
@@ -212,11 +212,8 @@ pub fn step_loss(
     idx.sort_unstable();
     idx.dedup();
     let sel_t: Vec<u8> = idx.iter().map(|&v| target[v]).collect();
-    let sel = Tensor::<1, Int>::from_data(
-        TensorData::new(idx.iter().map(|&v| v as i64).collect::<Vec<_>>(), [idx.len()]),
-        &device,
-    );
-    let lov = lovasz_softmax(softmax(out.logits.select(0, sel.clone()), 1), &sel_t);
+    let sel: Vec<i64> = idx.iter().map(|&v| v as i64).collect();
+    let lov = lovasz_softmax(softmax(take_rows(out.logits, sel.clone()), 1), &sel_t);
     let mut total = ce.clone() * t.ce_weight + lov.clone() * t.lovasz_weight;
     let mut parts = [scalar(&ce), scalar(&lov), 0.0, 0.0];
     if let Some(kl) = out.kl {
@@ -225,7 +222,7 @@ pub fn step_loss(
     }
     if let Some(bg) = out.background {
         let m = idx.len();
-        let aux = bce_with_logits(bg.select(0, sel).reshape([m]), &sel_t.iter().map(|&l| l == 1).collect::<Vec<_>>());
+        let aux = bce_with_logits(take_rows(bg, sel).reshape([m]), &sel_t.iter().map(|&l| l == 1).collect::<Vec<_>>());
         parts[3] = scalar(&aux);
         total = total + aux * t.background_aux_weight;
     }
@@ -284,6 +281,19 @@ pub fn scenes(s: &[Sample]) -> Vec<String> {
 fn io_err(what: &str, path: &Path, e: impl std::fmt::Display) -> Diagnostic {
     Diagnostic::error("E0906", format!("cannot {what} `{}`: {e}", path.display()))
         .help("check that the output directory is writable and the disk not full")
+}
+
+/// A batch's frames loading on their own thread.
+struct Prefetch(std::thread::JoinHandle<Result<Vec<Frame>, String>>);
+
+impl Prefetch {
+    fn start(samples: Vec<Sample>) -> Self {
+        Prefetch(std::thread::spawn(move || samples.iter().map(data::load).collect()))
+    }
+
+    fn wait(self) -> Result<Vec<Frame>, String> {
+        self.0.join().unwrap_or_else(|_| Err("the thread loading a batch stopped".into()))
+    }
 }
 
 fn data_err(m: String) -> Diagnostic {
@@ -547,16 +557,21 @@ fn run<M: Net>(
         let order = shuffled(train.len(), tc.seed, epoch);
         let t0 = Instant::now();
         let (mut sum, mut steps) = (0.0f64, 0usize);
+        let batch = |bi: usize| -> Vec<Sample> {
+            order[bi * tc.batch..((bi + 1) * tc.batch).min(train.len())].iter().map(|&i| train[i].clone()).collect()
+        };
+        // The next batch's frames load on a thread of their own while this step runs.
+        let mut next: Option<Prefetch> = None;
         for bi in pos.batch..per_epoch {
             if pos.step >= limit {
                 break 'epochs;
             }
             let step_t0 = Instant::now();
             let mut rng = Rng::stream(tc.seed, &format!("step:{epoch}:{bi}"));
-            let frames: Vec<Frame> = order[bi * tc.batch..((bi + 1) * tc.batch).min(train.len())]
-                .iter()
-                .map(|&i| data::load(&train[i]).map_err(data_err))
-                .collect::<Result<_, _>>()?;
+            let frames = next.take().unwrap_or_else(|| Prefetch::start(batch(bi))).wait().map_err(data_err)?;
+            if bi + 1 < per_epoch && pos.step + 1 < limit {
+                next = Some(Prefetch::start(batch(bi + 1)));
+            }
             let region = pick_region(cfg, &frames, &mut rng);
             let target = region_labels(&frames, region);
             let t_loaded = step_t0.elapsed().as_secs_f64();

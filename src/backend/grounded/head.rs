@@ -276,7 +276,7 @@ pub fn head_tensor_ops(splat: Tensor<2>, bias: Tensor<2>, r: Tensor<2>) -> Tenso
     let device = splat.device();
     let nv = splat.dims()[0];
     let cols = nv / NZ;
-    let logits = splat + bias.reshape([1, NZ, N_LABELS]).repeat_dim(0, cols).reshape([nv, N_LABELS]);
+    let logits = splat + super::rows::repeat_rows(bias.reshape([1, NZ * N_LABELS]), cols).reshape([nv, N_LABELS]);
     // Gate: the residual only acts where free or background already dominate, and it moves
     // mass from free to background, never touching the agent channels.
     let p = burn::tensor::activation::softmax(logits.clone().detach(), 1);

@@ -112,7 +112,7 @@ pub fn lovasz_softmax(probs: Tensor<2>, target: &[u8]) -> Tensor<1> {
     let w_t = Tensor::<2>::from_data(TensorData::new(w, [k, n]), &device);
     let pc = probs.select(1, cols).transpose();
     // Per class first: one f32 sum over every class at once loses digits at a million rows.
-    ((fg_t - pc).abs() * w_t).sum_dim(1).sum() / k as f32
+    super::rows::sum_rows((fg_t - pc).abs() * w_t).sum() / k as f32
 }
 
 /// KL(N(mu, exp(logvar)) || N(0, 1)), summed over channels, averaged over the rows.

@@ -26,6 +26,7 @@ mod infer;
 pub mod latents;
 pub mod loss;
 pub mod model;
+pub mod rows;
 pub mod splat;
 
 pub use config::GroundedConfig;

@@ -11,6 +11,7 @@
 
 use super::config::GroundedConfig;
 use super::latents::{ANCHOR_FEATS, Anchor, budget, encoder_input};
+use super::rows::{repeat_rows, take_rows};
 use super::splat::{ActiveAnchors, PARAMS, Region, activate, splat};
 use super::{conv, head};
 use crate::backend::layout::{N_LABELS, NZ, ORIGIN, VOXEL};
@@ -220,7 +221,7 @@ impl Decoder {
 
     /// The layer bias repeated over `cols` columns: `[cols * NZ, 9]`.
     pub fn bias_grid(&self, cols: usize) -> Tensor<2> {
-        self.layer_bias.val().reshape([1, NZ, N_LABELS]).repeat_dim(0, cols).reshape([cols * NZ, N_LABELS])
+        repeat_rows(self.layer_bias.val().reshape([1, NZ * N_LABELS]), cols).reshape([cols * NZ, N_LABELS])
     }
 
     /// Latents -> the splatted Gaussians of `region` [b * voxels, 9], without the layer bias.
@@ -233,9 +234,8 @@ impl Decoder {
             Tensor::zeros([b * region.voxels(), N_LABELS], &device)
         } else {
             let n = rows.len();
-            let sel = raw.select(0, Tensor::<1, Int>::from_data(TensorData::new(rows, [n]), &device));
-            let prior =
-                self.class_feat.val().select(0, Tensor::<1, Int>::from_data(TensorData::new(labels, [n]), &device));
+            let sel = take_rows(raw, rows);
+            let prior = take_rows(self.class_feat.val(), labels);
             let sel = sel + Tensor::cat(vec![Tensor::zeros([n, PARAMS - N_LABELS], &device), prior], 1);
             let g = activate(sel, &aa, self.shape.offset_bound, self.shape.min_scale, self.shape.max_scale);
             splat(&g, region, b, self.shape.window)
@@ -425,7 +425,7 @@ impl Generator {
         let device = parts.splatted.device();
         let cols = feature_columns(region, b, parts.feature_hw, self.stride);
         let nc = cols.len();
-        let r = r.select(0, Tensor::<1, Int>::from_data(TensorData::new(cols, [nc]), &device)).reshape([nc * NZ, 1]);
+        let r = take_rows(r, cols).reshape([nc * NZ, 1]);
         let bias = self.decoder.layer_bias.val();
         let logits = if device == Device::flex() {
             head::head(parts.splatted, bias, r.clone())
@@ -485,7 +485,7 @@ impl Generator {
             }
         }
         let n = idx.len();
-        let sampled = rows.select(0, Tensor::<1, Int>::from_data(TensorData::new(idx, [n]), &device));
+        let sampled = take_rows(rows, idx);
         let wts = Tensor::<3>::from_data(TensorData::new(wts, [n / 4, 4, 1]), &device);
         let sampled = (sampled.reshape([n / 4, 4, f]) * wts).sum_dim(1).reshape([b, hb.q, f]);
         let z = self.cond2.forward(gelu(self.cond1.forward(Tensor::cat(vec![sampled, hb.feats_tensor(&device)], 2))));
