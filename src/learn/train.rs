@@ -181,10 +181,11 @@ fn region_labels(frames: &[Frame], region: Region) -> Vec<u8> {
     let mut t = Vec::with_capacity(frames.len() * region.voxels());
     for f in frames {
         for i in region.i0..region.i0 + region.ni {
-            for j in region.j0..region.j0 + region.nj {
-                for k in 0..NZ {
-                    t.push(f.labels[[i, j, k]]);
-                }
+            // A row of columns is contiguous in the (standard layout) labels.
+            let row = f.labels.slice(ndarray::s![i, region.j0..region.j0 + region.nj, ..]);
+            match row.as_slice() {
+                Some(r) => t.extend_from_slice(r),
+                None => t.extend(row.iter().copied()),
             }
         }
     }

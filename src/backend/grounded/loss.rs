@@ -8,11 +8,6 @@ use crate::backend::layout::N_LABELS;
 use burn::prelude::*;
 use burn::tensor::activation::log_softmax;
 
-fn int_column(v: Vec<i64>, device: &Device) -> Tensor<2, Int> {
-    let n = v.len();
-    Tensor::from_data(TensorData::new(v, [n, 1]), device)
-}
-
 /// Rows per slice of the cross-entropy: its [rows, 9] intermediates stay near 150 MB, inside a
 /// GPU buffer, however many voxels the batch holds (full grids at batch 6 are 30.7 M rows).
 const CE_ROWS: usize = 4 << 20;
@@ -26,19 +21,29 @@ pub fn weighted_cross_entropy(logits: Tensor<2>, target: &[u8], weights: &[f32; 
     weighted_cross_entropy_tensor_ops(logits, target, weights)
 }
 
-/// `weighted_cross_entropy` written with tensor operations, in slices of `CE_ROWS` rows.
+/// `weighted_cross_entropy` written with tensor operations, in slices of `CE_ROWS` rows. Only
+/// the targets cross to the device (as the device's own 32-bit integers, no conversion there);
+/// each voxel's weight is looked up on the device and their total comes from the class counts.
 pub fn weighted_cross_entropy_tensor_ops(logits: Tensor<2>, target: &[u8], weights: &[f32; N_LABELS]) -> Tensor<1> {
+    use rayon::prelude::*;
     let device = logits.device();
     let n = target.len();
-    let w: Vec<f32> = target.iter().map(|&t| weights[(t as usize).min(N_LABELS - 1)]).collect();
-    let total: f32 = w.iter().sum::<f32>().max(1e-12);
+    let class = |t: u8| (t as usize).min(N_LABELS - 1);
+    let mut counts = [0u64; N_LABELS];
+    for &t in target {
+        counts[class(t)] += 1;
+    }
+    let total = counts.iter().zip(weights).map(|(&c, &w)| c as f64 * w as f64).sum::<f64>().max(1e-12) as f32;
+    let per_class = Tensor::<1>::from_data(TensorData::new(weights.to_vec(), [N_LABELS]), &device);
     let mut sum: Option<Tensor<1>> = None;
     for start in (0..n).step_by(CE_ROWS) {
         let end = (start + CE_ROWS).min(n);
-        let lp = log_softmax(logits.clone().narrow(0, start, end - start), 1);
-        let picked = lp.gather(1, int_column(target[start..end].iter().map(|&t| t as i64).collect(), &device));
-        let wt = Tensor::<2>::from_data(TensorData::new(w[start..end].to_vec(), [end - start, 1]), &device);
-        let part = (picked * wt).sum();
+        let rows = end - start;
+        let t: Vec<i32> = target[start..end].par_iter().map(|&t| class(t) as i32).collect();
+        let t = Tensor::<1, Int>::from_data(TensorData::new(t, [rows]), &device);
+        let lp = log_softmax(logits.clone().narrow(0, start, rows), 1);
+        let picked = lp.gather(1, t.clone().reshape([rows, 1])).reshape([rows]);
+        let part = (picked * per_class.clone().select(0, t)).sum();
         sum = Some(match sum {
             Some(s) => s + part,
             None => part,
