@@ -57,6 +57,23 @@ pub trait CrossEntropyOps: burn::backend::Backend {
         let n = t.labels.len();
         Self::float_from_data(TensorData::new(out, [n, N_LABELS]), &device)
     }
+
+    /// Logits `[N, 9]` -> `[N]`: 1 where the row's argmax (its first largest value) is an agent
+    /// class (2 and up), else 0. No gradient.
+    fn agent_rows(logits: FloatTensor<Self>) -> FloatTensor<Self> {
+        let device = logits.device();
+        let out = agent_rows(&host_vec::<Self>(logits));
+        let n = out.len();
+        Self::float_from_data(TensorData::new(out, [n]), &device)
+    }
+}
+
+/// `CrossEntropyOps::agent_rows` on the host.
+pub fn agent_rows(logits: &[f32]) -> Vec<f32> {
+    logits
+        .par_chunks_exact(N_LABELS)
+        .map(|l| l.try_into().map_or(0.0, |l: &[f32; N_LABELS]| (super::head::argmax(l) >= 2) as u8 as f32))
+        .collect()
 }
 
 fn host_vec<B: Backend>(t: FloatTensor<B>) -> Vec<f32> {
@@ -90,6 +107,15 @@ impl CrossEntropyOps for Flex {
             None => backward(&host_vec::<Self>(logits), g, &t),
         };
         FlexTensor::from_data(TensorData::new(out, [n, N_LABELS]))
+    }
+
+    fn agent_rows(logits: FloatTensor<Self>) -> FloatTensor<Self> {
+        let out = match flex_f32(&logits) {
+            Some(l) => agent_rows(flex_slice(&l)),
+            None => agent_rows(&host_vec::<Self>(logits)),
+        };
+        let n = out.len();
+        FlexTensor::from_data(TensorData::new(out, [n]))
     }
 }
 
@@ -173,6 +199,10 @@ impl<B: Backend + CrossEntropyOps, C: CheckpointStrategy> CrossEntropyOps for Au
 
     fn cross_entropy_backward(logits: FloatTensor<Self>, grad: FloatTensor<Self>, t: Targets) -> FloatTensor<Self> {
         Self::from_inner(B::cross_entropy_backward(Self::inner(logits), Self::inner(grad), t))
+    }
+
+    fn agent_rows(logits: FloatTensor<Self>) -> FloatTensor<Self> {
+        Self::from_inner(B::agent_rows(Self::inner(logits)))
     }
 }
 

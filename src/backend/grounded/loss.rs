@@ -116,19 +116,18 @@ pub fn lovasz_softmax(probs: Tensor<2>, target: &[u8]) -> Tensor<1> {
 }
 
 /// Whether each row's argmax (the first largest value, as burn's) is an agent class (2 and
-/// up): the rows Lovász-softmax adds to its draw. The CPU reads the logits once on the host;
-/// elsewhere the argmax runs on the device and only one flag per row crosses.
+/// up): the rows Lovász-softmax adds to its draw. The CPU reads the logits in place
+/// (`CrossEntropyOps::agent_rows`); elsewhere the argmax runs on the device. Only one flag
+/// per row crosses.
 pub fn agent_predicted(logits: &Tensor<2>) -> Vec<bool> {
-    use rayon::prelude::*;
+    use burn::backend::Dispatch;
+    use cross_entropy::CrossEntropyOps;
     let logits = logits.clone().detach();
     if logits.device() != Device::flex() {
         return logits.argmax(1).greater_equal_elem(2).to_data().iter::<bool>().collect();
     }
-    let data = logits.into_data().convert::<f32>();
-    let Ok(v) = data.as_slice::<f32>() else { return Vec::new() };
-    v.par_chunks_exact(N_LABELS)
-        .map(|l| l.try_into().is_ok_and(|l: &[f32; N_LABELS]| super::head::argmax(l) >= 2))
-        .collect()
+    let rows: Tensor<1> = Tensor::from_dispatch(<Dispatch as CrossEntropyOps>::agent_rows(logits.into_dispatch()));
+    rows.to_data().iter::<f32>().map(|v| v != 0.0).collect()
 }
 
 /// KL(N(mu, exp(logvar)) || N(0, 1)), summed over channels, averaged over the rows.
