@@ -1,9 +1,9 @@
 //! Keeps freed memory in the process during training on the CPU. A `cpu-small` step allocates
 //! and frees tensors of tens of megabytes (the crop's logits, their gradients, the BEV); glibc
 //! serves blocks that large with a fresh `mmap` and returns them with `munmap`, so every step
-//! faulted in and zeroed hundreds of megabytes of new pages: about a third of its CPU time was
-//! the kernel's (`perf record` on `bench train`). Served from the heap and never trimmed, the
-//! pages are reused from the second step on. Values do not change (only where the bytes live).
+//! would fault in and zero hundreds of megabytes of pages, about a third of its CPU time in the
+//! kernel (`perf record` on `bench train`). Served from the heap and never trimmed, the pages
+//! are reused from the second step on. Values do not change (only where the bytes live).
 
 /// Serve every allocation from the heap and keep its top when freed. Process-wide, once; a
 /// no-op off glibc.
