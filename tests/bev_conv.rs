@@ -43,9 +43,17 @@ fn max_rel_err(a: &[f32], b: &[f32]) -> f32 {
 
 #[test]
 fn the_bev_convolution_matches_burns_in_values_and_gradients() {
-    // (batch, in, out, stride, height, width)
-    let shapes = [(2, 25, 16, 2, 23, 19), (1, 16, 32, 2, 12, 15), (2, 32, 32, 1, 9, 11), (2, 3, 4, 1, 8, 8)];
-    for (seed, &(b, ci, co, s, h, w)) in shapes.iter().enumerate() {
+    // (batch, in, out, stride, height, width, one element in `sparse` non-zero): the sparse
+    // inputs, like the BEV, take the weight gradient's path over non-zero elements.
+    let shapes = [
+        (2, 25, 16, 2, 23, 19, 1),
+        (1, 16, 32, 2, 12, 15, 1),
+        (2, 32, 32, 1, 9, 11, 1),
+        (2, 3, 4, 1, 8, 8, 1),
+        (2, 25, 16, 2, 23, 19, 10),
+        (1, 5, 4, 1, 13, 10, 6),
+    ];
+    for (seed, &(b, ci, co, s, h, w, sparse)) in shapes.iter().enumerate() {
         let device = Device::flex().autodiff();
         device.seed(seed as u64);
         let c = Conv2dConfig::new([ci, co], [3, 3])
@@ -53,7 +61,9 @@ fn the_bev_convolution_matches_burns_in_values_and_gradients() {
             .with_padding(PaddingConfig2d::Explicit(1, 1, 1, 1))
             .init(&device);
         let dims = [b, ci, h, w];
-        let x = Lcg(100 + seed as u64).vec(dims.iter().product());
+        let mut x = Lcg(100 + seed as u64).vec(dims.iter().product());
+        let mut keep = Lcg(200 + seed as u64);
+        x.iter_mut().filter(|_| keep.next().abs() * sparse as f32 > 1.0).for_each(|v| *v = 0.0);
         let ours = run(&c, &x, dims, 7, true);
         let burns = run(&c, &x, dims, 7, false);
         assert_eq!(ours[0], burns[0], "case {seed}: the forward pass is burn's, bit for bit");

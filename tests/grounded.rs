@@ -304,6 +304,27 @@ fn fused_cross_entropy_matches_the_tensor_formulation() {
     assert!(scale > 0.0);
 }
 
+/// The exponential of the CPU's training passes against f64's, over the range a softmax feeds
+/// it (and beyond), in units of the f32 result's last place.
+#[test]
+fn the_training_exponential_is_within_two_ulp() {
+    use rocc::backend::grounded::expf::{exp, exp_in_place};
+    let xs: Vec<f32> = (0..=400_000).map(|i| -87.0 + 97.0 * i as f32 / 400_000.0).collect();
+    let mut v = xs.clone();
+    exp_in_place(&mut v);
+    let mut worst = 0f64;
+    for (&x, &got) in xs.iter().zip(&v) {
+        let truth = (x as f64).exp();
+        let t = truth as f32;
+        let ulp = (f32::from_bits(t.to_bits() + 1) - t) as f64;
+        worst = worst.max((got as f64 - truth).abs() / ulp);
+        assert_eq!(got.to_bits(), exp(x).to_bits());
+    }
+    assert!(worst <= 2.0, "{worst} ulp");
+    assert!(exp(f32::NAN).is_nan());
+    assert_eq!(exp(0.0), 1.0);
+}
+
 /// The CPU's fused head (bias and gated background residual) against its tensor formulation
 /// under autodiff (whose softmax rounds differently from the CPU kernel the labels test pins):
 /// the logits and the gradients of splat, bias and residual.
@@ -432,6 +453,73 @@ fn model_shapes_and_padding_invariance() {
     let pred = Grounded::from_model(cfg.clone(), g, "t").predict(&[car(5.0, 0.0, 4.5)], &masks, &aux);
     assert_eq!(pred.dim(), (NX, NY, NZ));
     assert!(pred.iter().all(|&l| (l as usize) < N_LABELS));
+}
+
+/// A training crop's logits are the whole grid's logits of its columns, and every parameter's
+/// gradient agrees: the background head runs only over the crop's feature pixels (and its
+/// kernel's reach, or the map's own padding at an edge), the rest of the generator over the
+/// whole BEV. Two crops of odd sizes, one on the grid's first rows, one in its far corner.
+#[test]
+fn a_crop_gets_the_logits_and_gradients_of_the_whole_grid() {
+    let cfg = tiny();
+    let device = cpu().autodiff();
+    let (masks, mut aux) = bev_with_road();
+    aux.slice_mut(ndarray::s![0, 100..300, 150..250]).fill(7);
+    let mut g = Generator::new(&cfg, &device);
+    // The background head starts at zero: random weights make it speak.
+    let f = cfg.bev_features();
+    g.bg_out = Some(burn::nn::conv::Conv2dConfig::new([f, NZ], [1, 1]).init(&device));
+    let boxes = [car(5.0, 0.0, 4.5), car(-45.0, -45.0, 4.0), car(46.0, 47.0, 3.0)];
+    let hb = HostBatch::new(vec![latents::build(&cfg, &boxes, &masks)]);
+    let mut bev = Vec::new();
+    rocc::backend::grounded::model::bev_input(&masks, &aux, &mut bev);
+    let crops = [Region { i0: 0, j0: 201, ni: 45, nj: 39 }, Region { i0: 371, j0: 363, ni: 29, nj: 37 }];
+    let mut rng = Rng::new(4);
+    let weights: Vec<Vec<f32>> =
+        crops.iter().map(|r| (0..r.voxels() * N_LABELS).map(|_| rng.normal() as f32).collect()).collect();
+    let w = |v: &Vec<f32>| Tensor::<2>::from_data(TensorData::new(v.clone(), [v.len() / N_LABELS, N_LABELS]), &device);
+    let full = g.forward(bev.clone(), &hb, Region::full()).logits;
+    let (mut crop_loss, mut full_loss) = (Tensor::<1>::zeros([1], &device), Tensor::<1>::zeros([1], &device));
+    for (region, wt) in crops.iter().zip(&weights) {
+        let crop = g.forward(bev.clone(), &hb, *region).logits;
+        let rows: Vec<i64> = (region.i0..region.i0 + region.ni)
+            .flat_map(|i| {
+                (region.j0..region.j0 + region.nj)
+                    .flat_map(move |j| (0..NZ).map(move |k| ((i * NY + j) * NZ + k) as i64))
+            })
+            .collect();
+        let n = rows.len();
+        let of_full = full.clone().select(0, Tensor::<1, Int>::from_data(TensorData::new(rows, [n]), &device));
+        let (a, b): (Vec<f32>, Vec<f32>) =
+            (crop.to_data().iter::<f32>().collect(), of_full.to_data().iter::<f32>().collect());
+        assert!(a == b, "the crop's logits differ from the whole grid's");
+        crop_loss = crop_loss + (crop * w(wt)).sum();
+        full_loss = full_loss + (of_full * w(wt)).sum();
+    }
+    let (gc, gf) = (crop_loss.backward(), full_loss.backward());
+    let host = |v: Vec<f32>| v;
+    let g4 = |t: Tensor<4>| {
+        let h = |g: Option<Tensor<4>>| host(g.expect("a gradient").to_data().iter::<f32>().collect());
+        (h(t.grad(&gc)), h(t.grad(&gf)))
+    };
+    let g2 = |t: Tensor<2>| {
+        let h = |g: Option<Tensor<2>>| host(g.expect("a gradient").to_data().iter::<f32>().collect());
+        (h(t.grad(&gc)), h(t.grad(&gf)))
+    };
+    // Per parameter: its gradient from the crops, and from the whole grid.
+    type Pair = (Vec<f32>, Vec<f32>);
+    let mut pairs: Vec<(String, Pair)> =
+        g.bev.convs.iter().enumerate().map(|(i, c)| (format!("bev conv {i}"), g4(c.weight.val()))).collect();
+    pairs.push(("background hidden".into(), g4(g.bg_hidden.as_ref().unwrap().weight.val())));
+    pairs.push(("background out".into(), g4(g.bg_out.as_ref().unwrap().weight.val())));
+    pairs.push(("decoder head".into(), g2(g.decoder.head.weight.val())));
+    pairs.push(("cond1".into(), g2(g.cond1.weight.val())));
+    pairs.push(("layer bias".into(), g2(g.decoder.layer_bias.val())));
+    for (name, (a, b)) in pairs {
+        let scale = b.iter().fold(0f32, |m, x| m.max(x.abs()));
+        let err = a.iter().zip(&b).fold(0f32, |m, (x, y)| m.max((x - y).abs())) / scale;
+        assert!(scale > 0.0 && err < 1e-5, "{name}: gradients differ by {err} of the largest");
+    }
 }
 
 /// A probe of a model's parameters: the logits of a small scene depend on every one of them.

@@ -14,7 +14,7 @@ use super::data::{self, Frame, Sample};
 use crate::backend::grounded::config::{GroundedConfig, StageConfig};
 use crate::backend::grounded::latents::{self, GBox};
 use crate::backend::grounded::loss::{
-    bce_with_logits, class_weights, kl_divergence, lovasz_softmax, weighted_cross_entropy,
+    agent_predicted, bce_with_logits, class_weights, kl_divergence, lovasz_softmax, weighted_cross_entropy,
 };
 use crate::backend::grounded::model::{Autoencoder, Generator, HostBatch, bev_input};
 use crate::backend::grounded::rows::take_rows;
@@ -205,8 +205,7 @@ pub fn step_loss(
     // Lovász over every voxel an agent class claims (truth or prediction) plus a uniform draw.
     // Only "is an agent class predicted" crosses from the device: one byte-sized flag per voxel,
     // not an i64 class.
-    let pred: Vec<bool> =
-        out.logits.clone().detach().argmax(1).greater_equal_elem(2).to_data().iter::<bool>().collect();
+    let pred = agent_predicted(&out.logits);
     let n = target.len();
     let mut idx: Vec<usize> = (0..n).filter(|&v| target[v] >= 2 || pred.get(v).copied().unwrap_or(false)).collect();
     idx.extend((0..t.lovasz_samples.min(n)).map(|_| rng.index(n)));
@@ -500,6 +499,9 @@ fn run<M: Net>(
 
     let device = opts.device.clone().autodiff();
     device.seed(tc.seed);
+    if opts.device == crate::backend::grounded::cpu() {
+        crate::backend::grounded::heap::keep_freed_memory();
+    }
     let (mut model, warm) = init(M::build(cfg, &device), &device)?;
     if !warm {
         // The empty-scene prior starts at the training set's per-layer log frequencies: the

@@ -4,8 +4,10 @@
 //! `w[y] / W * (softmax - onehot(y))` in one more pass. burn's tensor formulation
 //! (`loss::weighted_cross_entropy_tensor_ops`) builds about ten logits-sized temporaries between
 //! the two. A GPU keeps that formulation (`loss::weighted_cross_entropy` chooses); the host code
-//! here runs on any backend. tests/grounded.rs checks value and gradient against it.
+//! here runs on any backend. Both passes take their exponentials from `expf`, several rows'
+//! at once. tests/grounded.rs checks value and gradient against the tensor formulation.
 
+use super::expf;
 use crate::backend::layout::N_LABELS;
 use burn::backend::autodiff::checkpoint::{base::Checkpointer, strategy::CheckpointStrategy};
 use burn::backend::autodiff::grads::Gradients;
@@ -55,6 +57,23 @@ pub trait CrossEntropyOps: burn::backend::Backend {
         let n = t.labels.len();
         Self::float_from_data(TensorData::new(out, [n, N_LABELS]), &device)
     }
+
+    /// Logits `[N, 9]` -> `[N]`: 1 where the row's argmax (its first largest value) is an agent
+    /// class (2 and up), else 0. No gradient.
+    fn agent_rows(logits: FloatTensor<Self>) -> FloatTensor<Self> {
+        let device = logits.device();
+        let out = agent_rows(&host_vec::<Self>(logits));
+        let n = out.len();
+        Self::float_from_data(TensorData::new(out, [n]), &device)
+    }
+}
+
+/// `CrossEntropyOps::agent_rows` on the host.
+pub fn agent_rows(logits: &[f32]) -> Vec<f32> {
+    logits
+        .par_chunks_exact(N_LABELS)
+        .map(|l| l.try_into().map_or(0.0, |l: &[f32; N_LABELS]| (super::head::argmax(l) >= 2) as u8 as f32))
+        .collect()
 }
 
 fn host_vec<B: Backend>(t: FloatTensor<B>) -> Vec<f32> {
@@ -89,6 +108,15 @@ impl CrossEntropyOps for Flex {
         };
         FlexTensor::from_data(TensorData::new(out, [n, N_LABELS]))
     }
+
+    fn agent_rows(logits: FloatTensor<Self>) -> FloatTensor<Self> {
+        let out = match flex_f32(&logits) {
+            Some(l) => agent_rows(flex_slice(&l)),
+            None => agent_rows(&host_vec::<Self>(logits)),
+        };
+        let n = out.len();
+        FlexTensor::from_data(TensorData::new(out, [n]))
+    }
 }
 
 #[cfg(any(feature = "wgpu", feature = "cuda"))]
@@ -105,9 +133,16 @@ pub fn forward(logits: &[f32], t: &Targets) -> f32 {
         .zip(t.labels.par_chunks(ROWS))
         .map(|(rows, labels)| {
             let mut sum = 0f64;
-            for (l, &y) in rows.chunks_exact(N_LABELS).zip(labels) {
-                let (max, lse) = log_sum_exp(l);
-                sum += (t.weights[class(y)] * (l[class(y)] - max - lse)) as f64;
+            let (mut e, mut maxes) = ([0f32; BLOCK * N_LABELS], Vec::with_capacity(BLOCK));
+            for (rows, labels) in rows.chunks(BLOCK * N_LABELS).zip(labels.chunks(BLOCK)) {
+                let e = &mut e[..rows.len()];
+                expf::shifted_exp(rows, N_LABELS, e, &mut maxes);
+                for ((e, l), (&y, &max)) in
+                    e.chunks_exact(N_LABELS).zip(rows.chunks_exact(N_LABELS)).zip(labels.iter().zip(&maxes))
+                {
+                    let lse = e.iter().sum::<f32>().ln();
+                    sum += (t.weights[class(y)] * (l[class(y)] - max - lse)) as f64;
+                }
             }
             sum
         })
@@ -122,13 +157,9 @@ pub fn backward(logits: &[f32], g: f32, t: &Targets) -> Vec<f32> {
         .zip(logits.par_chunks(ROWS * N_LABELS))
         .zip(t.labels.par_chunks(ROWS))
         .for_each(|((o, rows), labels)| {
-            for ((o, l), &y) in o.chunks_exact_mut(N_LABELS).zip(rows.chunks_exact(N_LABELS)).zip(labels) {
-                let max = l.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-                let mut sum = 0f32;
-                for (o, &v) in o.iter_mut().zip(l) {
-                    *o = (v - max).exp();
-                    sum += *o;
-                }
+            expf::shifted_exp(rows, N_LABELS, o, &mut Vec::with_capacity(ROWS));
+            for (o, &y) in o.chunks_exact_mut(N_LABELS).zip(labels) {
+                let sum: f32 = o.iter().sum();
                 let s = g * t.weights[class(y)];
                 let inv = 1.0 / sum;
                 for (c, o) in o.iter_mut().enumerate() {
@@ -139,13 +170,8 @@ pub fn backward(logits: &[f32], g: f32, t: &Targets) -> Vec<f32> {
     out
 }
 
-/// The row's maximum and log sum exp(l - max).
-#[inline]
-fn log_sum_exp(l: &[f32]) -> (f32, f32) {
-    let max = l.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-    let sum: f32 = l.iter().map(|&v| (v - max).exp()).sum();
-    (max, sum.ln())
-}
+/// Rows per block of the forward pass's exponentials (a buffer on the stack).
+const BLOCK: usize = 256;
 
 #[derive(Debug)]
 struct CrossEntropyBackward;
@@ -173,6 +199,10 @@ impl<B: Backend + CrossEntropyOps, C: CheckpointStrategy> CrossEntropyOps for Au
 
     fn cross_entropy_backward(logits: FloatTensor<Self>, grad: FloatTensor<Self>, t: Targets) -> FloatTensor<Self> {
         Self::from_inner(B::cross_entropy_backward(Self::inner(logits), Self::inner(grad), t))
+    }
+
+    fn agent_rows(logits: FloatTensor<Self>) -> FloatTensor<Self> {
+        Self::from_inner(B::agent_rows(Self::inner(logits)))
     }
 }
 

@@ -14,15 +14,18 @@
 //! logits are one backend operation with its own backward pass (`HeadOps`): the splat's
 //! gradient is the logits', the bias's a sum per layer, the residual's the gate times the
 //! difference of the background and free channels' gradients (the gate is computed from
-//! detached logits, as in the tensor formulation). Host code on the CPU; the model keeps the
-//! tensor formulation on a GPU.
+//! detached logits, as in the tensor formulation; the forward pass keeps it, with `expf`'s
+//! exponentials, so the backward pass takes no softmax). Host code on the CPU, reading the
+//! tensors in place; the model keeps the tensor formulation on a GPU.
 
+use super::expf;
 use crate::backend::layout::{N_LABELS, NZ};
 use burn::backend::autodiff::checkpoint::{base::Checkpointer, strategy::CheckpointStrategy};
 use burn::backend::autodiff::grads::Gradients;
 use burn::backend::autodiff::ops::{Backward, Ops, OpsKind};
+use burn::backend::flex::FlexTensor;
 use burn::backend::tensor::FloatTensor;
-use burn::backend::{Autodiff, AutodiffBackend, Backend, Dispatch, Flex, TensorMetadata, backend_extension};
+use burn::backend::{Autodiff, AutodiffBackend, Backend, DType, Dispatch, Flex, TensorMetadata, backend_extension};
 use burn::prelude::*;
 use rayon::prelude::*;
 
@@ -117,7 +120,7 @@ fn gate(l: &[f32; N_LABELS]) -> f32 {
 
 /// The first index of the largest value (of the first NaN, as burn's CPU argmax).
 #[inline]
-fn argmax(l: &[f32; N_LABELS]) -> u8 {
+pub(crate) fn argmax(l: &[f32; N_LABELS]) -> u8 {
     let mut best = 0;
     for (c, &v) in l.iter().enumerate() {
         if v.is_nan() {
@@ -147,12 +150,39 @@ pub fn logits(splat: &[f32], bias: &[f32], r: &[f32]) -> Vec<f32> {
     out
 }
 
-/// The gradients of the bias `[NZ, 9]` and of the residual `[voxels]` from the logits'
-/// gradient. The bias's is summed per block of columns and the blocks in order: the same bits
-/// on any thread count.
-pub fn backward(splat: &[f32], bias: &[f32], grad: &[f32]) -> (Vec<f32>, Vec<f32>) {
+/// `logits` for training, and each voxel's gate (what the backward pass needs: it then takes no
+/// softmax of its own). The gate's exponentials are `expf`'s, so these logits agree with
+/// `logits` to float rounding.
+pub fn logits_and_gate(splat: &[f32], bias: &[f32], r: &[f32]) -> (Vec<f32>, Vec<f32>) {
+    let mut out = vec![0f32; splat.len()];
+    let mut gates = vec![0f32; r.len()];
+    const BLOCK: usize = 256;
+    out.par_chunks_mut(BLOCK * N_LABELS).zip(gates.par_chunks_mut(BLOCK)).enumerate().for_each(|(task, (o, gates))| {
+        let v0 = task * BLOCK;
+        for (dv, o) in o.chunks_exact_mut(N_LABELS).enumerate() {
+            o.copy_from_slice(&biased(splat, bias, v0 + dv));
+        }
+        let (mut e, mut maxes) = ([0f32; BLOCK * N_LABELS], Vec::with_capacity(BLOCK));
+        let e = &mut e[..o.len()];
+        expf::shifted_exp(o, N_LABELS, e, &mut maxes);
+        for (dv, (o, e)) in o.chunks_exact_mut(N_LABELS).zip(e.chunks_exact(N_LABELS)).enumerate() {
+            let inv = 1.0 / e.iter().sum::<f32>();
+            let g = e[0] * inv + e[1] * inv;
+            gates[dv] = g;
+            let rr = r[v0 + dv] * g;
+            o[0] += -rr;
+            o[1] += rr;
+        }
+    });
+    (out, gates)
+}
+
+/// The gradients of the bias `[NZ, 9]` and of the residual `[voxels]` from each voxel's gate
+/// (`logits_and_gate`) and the logits' gradient. The bias's is summed per block of columns and
+/// the blocks in order: the same bits on any thread count.
+pub fn backward(gates: &[f32], grad: &[f32]) -> (Vec<f32>, Vec<f32>) {
     let per_task = COLUMNS_PER_TASK * NZ;
-    let mut gr = vec![0f32; splat.len() / N_LABELS];
+    let mut gr = vec![0f32; gates.len()];
     let parts: Vec<Vec<f32>> = gr
         .par_chunks_mut(per_task)
         .enumerate()
@@ -164,7 +194,7 @@ pub fn backward(splat: &[f32], bias: &[f32], grad: &[f32]) -> (Vec<f32>, Vec<f32
                 for (c, &g) in g.iter().enumerate() {
                     gb[(v % NZ) * N_LABELS + c] += g;
                 }
-                *gr = gate(&biased(splat, bias, v)) * (g[1] - g[0]);
+                *gr = gates[v] * (g[1] - g[0]);
             }
             gb
         })
@@ -193,14 +223,27 @@ pub trait HeadOps: burn::backend::Backend {
         Self::float_from_data(TensorData::new(out, shape), &device)
     }
 
-    /// The gradients of the bias `[NZ, 9]` and of the residual `[V, 1]`.
-    fn head_backward(
+    /// `head`, and each voxel's gate `[V]` for `head_backward`.
+    fn head_gated(
         splat: FloatTensor<Self>,
         bias: FloatTensor<Self>,
-        grad: FloatTensor<Self>,
+        r: FloatTensor<Self>,
     ) -> (FloatTensor<Self>, FloatTensor<Self>) {
         let device = splat.device();
-        let (gb, gr) = backward(&host_vec::<Self>(splat), &host_vec::<Self>(bias), &host_vec::<Self>(grad));
+        let shape = splat.shape();
+        let (out, gates) = logits_and_gate(&host_vec::<Self>(splat), &host_vec::<Self>(bias), &host_vec::<Self>(r));
+        let n = gates.len();
+        (
+            Self::float_from_data(TensorData::new(out, shape), &device),
+            Self::float_from_data(TensorData::new(gates, [n]), &device),
+        )
+    }
+
+    /// The gradients of the bias `[NZ, 9]` and of the residual `[V, 1]` from the gates and the
+    /// logits' gradient.
+    fn head_backward(gates: FloatTensor<Self>, grad: FloatTensor<Self>) -> (FloatTensor<Self>, FloatTensor<Self>) {
+        let device = gates.device();
+        let (gb, gr) = backward(&host_vec::<Self>(gates), &host_vec::<Self>(grad));
         let n = gr.len();
         (
             Self::float_from_data(TensorData::new(gb, [NZ, N_LABELS]), &device),
@@ -209,7 +252,48 @@ pub trait HeadOps: burn::backend::Backend {
     }
 }
 
-impl HeadOps for Flex {}
+/// The CPU reads its tensors in place (a copy only where one is not contiguous f32).
+impl HeadOps for Flex {
+    fn head(splat: FloatTensor<Self>, bias: FloatTensor<Self>, r: FloatTensor<Self>) -> FloatTensor<Self> {
+        let shape = splat.shape();
+        let [s, b, r] = [splat, bias, r].map(|t| flex_f32(&t));
+        let out = logits(flex_slice(&s), flex_slice(&b), flex_slice(&r));
+        FlexTensor::from_data(TensorData::new(out, shape))
+    }
+
+    fn head_gated(
+        splat: FloatTensor<Self>,
+        bias: FloatTensor<Self>,
+        r: FloatTensor<Self>,
+    ) -> (FloatTensor<Self>, FloatTensor<Self>) {
+        let shape = splat.shape();
+        let [s, b, r] = [splat, bias, r].map(|t| flex_f32(&t));
+        let (out, gates) = logits_and_gate(flex_slice(&s), flex_slice(&b), flex_slice(&r));
+        let n = gates.len();
+        (FlexTensor::from_data(TensorData::new(out, shape)), FlexTensor::from_data(TensorData::new(gates, [n])))
+    }
+
+    fn head_backward(gates: FloatTensor<Self>, grad: FloatTensor<Self>) -> (FloatTensor<Self>, FloatTensor<Self>) {
+        let [gates, grad] = [gates, grad].map(|t| flex_f32(&t));
+        let (gb, gr) = backward(flex_slice(&gates), flex_slice(&grad));
+        let n = gr.len();
+        (FlexTensor::from_data(TensorData::new(gb, [NZ, N_LABELS])), FlexTensor::from_data(TensorData::new(gr, [n, 1])))
+    }
+}
+
+/// A Flex tensor as contiguous f32 (converted or copied only where it is not).
+fn flex_f32(t: &FlexTensor) -> FlexTensor {
+    if t.dtype() == DType::F32 {
+        t.to_contiguous()
+    } else {
+        FlexTensor::from_data(t.clone().into_data().convert::<f32>())
+    }
+}
+
+fn flex_slice(t: &FlexTensor) -> &[f32] {
+    let start = t.layout().start_offset();
+    &t.storage::<f32>()[start..start + t.layout().num_elements()]
+}
 
 #[cfg(any(feature = "wgpu", feature = "cuda"))]
 impl HeadOps for burn_cubecl::CubeBackend {}
@@ -218,15 +302,14 @@ impl HeadOps for burn_cubecl::CubeBackend {}
 struct HeadBackward;
 
 impl<B: Backend + HeadOps> Backward<B, 3> for HeadBackward {
-    /// The splat and the bias.
-    type State = (FloatTensor<B>, FloatTensor<B>);
+    /// Each voxel's gate.
+    type State = FloatTensor<B>;
 
     fn backward(self, ops: Ops<Self::State, 3>, grads: &mut Gradients, _checkpointer: &mut Checkpointer) {
         let [node_splat, node_bias, node_r] = ops.parents;
         let grad = grads.consume::<B>(&ops.node);
-        let (splat, bias) = ops.state;
         if node_bias.is_some() || node_r.is_some() {
-            let (gb, gr) = B::head_backward(splat, bias, grad.clone());
+            let (gb, gr) = B::head_backward(ops.state, grad.clone());
             if let Some(node) = node_bias {
                 grads.register::<B>(node.id, gb);
             }
@@ -244,9 +327,9 @@ impl<B: Backend + HeadOps, C: CheckpointStrategy> HeadOps for Autodiff<B, C> {
     fn head(splat: FloatTensor<Self>, bias: FloatTensor<Self>, r: FloatTensor<Self>) -> FloatTensor<Self> {
         match HeadBackward.prepare::<C>([splat.node(), bias.node(), r.node()]).compute_bound().stateful() {
             OpsKind::Tracked(prep) => {
-                let (s, b) = (splat.primitive().clone(), bias.primitive().clone());
-                let out = B::head(s.clone(), b.clone(), r.into_primitive());
-                prep.finish((s, b), out)
+                let (s, b, r) = (splat.into_primitive(), bias.into_primitive(), r.into_primitive());
+                let (out, gates) = B::head_gated(s, b, r);
+                prep.finish(gates, out)
             }
             OpsKind::UnTracked(prep) => {
                 prep.finish(B::head(splat.into_primitive(), bias.into_primitive(), r.into_primitive()))
@@ -254,12 +337,17 @@ impl<B: Backend + HeadOps, C: CheckpointStrategy> HeadOps for Autodiff<B, C> {
         }
     }
 
-    fn head_backward(
+    fn head_gated(
         splat: FloatTensor<Self>,
         bias: FloatTensor<Self>,
-        grad: FloatTensor<Self>,
+        r: FloatTensor<Self>,
     ) -> (FloatTensor<Self>, FloatTensor<Self>) {
-        let (gb, gr) = B::head_backward(Self::inner(splat), Self::inner(bias), Self::inner(grad));
+        let (out, gates) = B::head_gated(Self::inner(splat), Self::inner(bias), Self::inner(r));
+        (Self::from_inner(out), Self::from_inner(gates))
+    }
+
+    fn head_backward(gates: FloatTensor<Self>, grad: FloatTensor<Self>) -> (FloatTensor<Self>, FloatTensor<Self>) {
+        let (gb, gr) = B::head_backward(Self::inner(gates), Self::inner(grad));
         (Self::from_inner(gb), Self::from_inner(gr))
     }
 }

@@ -120,6 +120,21 @@ pub fn lovasz_softmax(probs: Tensor<2>, target: &[u8]) -> Tensor<1> {
     super::rows::sum_rows((fg_t - pc).abs() * w_t).sum() / k as f32
 }
 
+/// Whether each row's argmax (the first largest value, as burn's) is an agent class (2 and
+/// up): the rows Lovász-softmax adds to its draw. The CPU reads the logits in place
+/// (`CrossEntropyOps::agent_rows`); elsewhere the argmax runs on the device. Only one flag
+/// per row crosses.
+pub fn agent_predicted(logits: &Tensor<2>) -> Vec<bool> {
+    use burn::backend::Dispatch;
+    use cross_entropy::CrossEntropyOps;
+    let logits = logits.clone().detach();
+    if logits.device() != Device::flex() {
+        return logits.argmax(1).greater_equal_elem(2).to_data().iter::<bool>().collect();
+    }
+    let rows: Tensor<1> = Tensor::from_dispatch(<Dispatch as CrossEntropyOps>::agent_rows(logits.into_dispatch()));
+    rows.to_data().iter::<f32>().map(|v| v != 0.0).collect()
+}
+
 /// KL(N(mu, exp(logvar)) || N(0, 1)), summed over channels, averaged over the rows.
 pub fn kl_divergence(mu: Tensor<2>, logvar: Tensor<2>) -> Tensor<1> {
     let rows = mu.dims()[0].max(1) as f32;

@@ -423,7 +423,7 @@ impl Generator {
             return GenOut { logits, background: None };
         };
         let device = parts.splatted.device();
-        let cols = feature_columns(region, b, parts.feature_hw, self.stride);
+        let cols = feature_columns(region, b, parts.residual_rect, self.stride);
         let nc = cols.len();
         let r = take_rows(r, cols).reshape([nc * NZ, 1]);
         let bias = self.decoder.layer_bias.val();
@@ -443,7 +443,7 @@ impl Generator {
         let parts = self.parts(bev, hb, region);
         let host = |t: Tensor<2>| t.into_data().try_into_vec::<f32>().unwrap_or_default();
         let bias = host(self.decoder.layer_bias.val());
-        let residual = parts.residual.map(|r| (host(r), feature_columns(region, b, parts.feature_hw, self.stride)));
+        let residual = parts.residual.map(|r| (host(r), feature_columns(region, b, parts.residual_rect, self.stride)));
         let residual = residual.as_ref().map(|(r, cols)| head::Residual { values: r, columns: cols });
         head::labels(&host(parts.splatted), &bias, residual)
     }
@@ -490,35 +490,102 @@ impl Generator {
         let sampled = (sampled.reshape([n / 4, 4, f]) * wts).sum_dim(1).reshape([b, hb.q, f]);
         let z = self.cond2.forward(gelu(self.cond1.forward(Tensor::cat(vec![sampled, hb.feats_tensor(&device)], 2))));
         let splatted = self.decoder.splatted(z, hb, region);
-        // The background head at feature resolution.
+        // The background head at feature resolution, on the CPU over the feature pixels the
+        // region's columns read (a GPU runs it over the whole map).
+        let rect = if device == Device::flex() {
+            FeatureRect::covering(region, [h, w], self.stride)
+        } else {
+            FeatureRect::covering(Region::full(), [h, w], self.stride)
+        };
         let residual = match (&self.bg_hidden, &self.bg_out) {
             (Some(hid), Some(out)) => {
-                Some(out.forward(gelu(conv::forward(hid, fmap))).permute([0, 2, 3, 1]).reshape([b * h * w, NZ]))
+                let [hh, ww] = rect.size;
+                let hidden = gelu(cropped_conv(hid, fmap, rect));
+                Some(out.forward(hidden).permute([0, 2, 3, 1]).reshape([b * hh * ww, NZ]))
             }
             _ => None,
         };
-        GenParts { splatted, residual, feature_hw: [h, w] }
+        GenParts { splatted, residual, residual_rect: rect }
     }
+}
+
+/// A rectangle of feature pixels: `origin` (row, column) and `size`, inside a map of `full`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FeatureRect {
+    pub origin: [usize; 2],
+    pub size: [usize; 2],
+    pub full: [usize; 2],
+}
+
+impl FeatureRect {
+    /// The feature pixels the columns of `region` read (`feature_columns`) in a map of `[h, w]`
+    /// at `stride`.
+    pub fn covering(region: Region, [h, w]: [usize; 2], stride: usize) -> Self {
+        let span = |lo: usize, n: usize, len: usize| {
+            let a = (lo / stride).min(len - 1);
+            let b = ((lo + n.max(1) - 1) / stride).min(len - 1);
+            (a, b + 1 - a)
+        };
+        let (a0, ha) = span(region.i0, region.ni, h);
+        let (b0, wb) = span(region.j0, region.nj, w);
+        FeatureRect { origin: [a0, b0], size: [ha, wb], full: [h, w] }
+    }
+
+    fn is_full(&self) -> bool {
+        self.origin == [0, 0] && self.size == self.full
+    }
+}
+
+/// `conv` over the whole map `x` `[b, c, h, w]`, kept only on `rect`: the convolution runs on
+/// `rect` plus the kernel's reach (the map's own zero padding where the rectangle meets its
+/// edge), so every kept pixel sees exactly the inputs it sees over the whole map: `cpu-small`'s
+/// 128-column training crop reads a ninth of the feature map.
+fn cropped_conv(conv: &Conv2d, x: Tensor<4>, rect: FeatureRect) -> Tensor<4> {
+    let [b, c, h, w] = x.dims();
+    let [kh, kw] = conv.kernel_size;
+    let m = kh / 2;
+    let same = kh == kw
+        && kh % 2 == 1
+        && conv.stride == [1, 1]
+        && conv.dilation == [1, 1]
+        && matches!(conv.padding, PaddingConfig2d::Explicit(t, l, bo, r) if [t, l, bo, r] == [m; 4]);
+    let ([r0, c0], [nr, nc]) = (rect.origin, rect.size);
+    if rect.is_full() {
+        return conv::forward(conv, x);
+    }
+    if !same {
+        let y = conv::forward(conv, x);
+        let o = y.dims()[1];
+        return y.slice([0..b, 0..o, r0..r0 + nr, c0..c0 + nc]);
+    }
+    let (s0, e0) = (r0.saturating_sub(m), (r0 + nr + m).min(h));
+    let (s1, e1) = (c0.saturating_sub(m), (c0 + nc + m).min(w));
+    let y = conv::forward(conv, x.slice([0..b, 0..c, s0..e0, s1..e1]));
+    let o = y.dims()[1];
+    y.slice([0..b, 0..o, r0 - s0..r0 - s0 + nr, c0 - s1..c0 - s1 + nc])
 }
 
 /// What the generator computes before the grid (`Generator::parts`).
 struct GenParts {
     /// [b * voxels, 9], no layer bias.
     splatted: Tensor<2>,
-    /// [b * h * w, NZ], the background head's residual per feature pixel and layer.
+    /// The background head's residual per feature pixel of `residual_rect` and layer, `[pixels, NZ]`.
     residual: Option<Tensor<2>>,
-    feature_hw: [usize; 2],
+    /// The feature pixels `residual` covers (`[b * rows * columns]` of them).
+    residual_rect: FeatureRect,
 }
 
 /// The feature pixel each column of `region` reads (nearest), for each of `b` frames: indices
-/// into `[b * h * w]`, in the splat's column order.
-fn feature_columns(region: Region, b: usize, [h, w]: [usize; 2], stride: usize) -> Vec<i64> {
+/// into `[b * rect rows * rect columns]`, in the splat's column order.
+fn feature_columns(region: Region, b: usize, rect: FeatureRect, stride: usize) -> Vec<i64> {
+    let ([h, w], [a0, c0], [hh, ww]) = (rect.full, rect.origin, rect.size);
     let mut cols = Vec::with_capacity(b * region.ni * region.nj);
     for bi in 0..b {
         for li in 0..region.ni {
             for lj in 0..region.nj {
                 let (a, c) = ((region.i0 + li) / stride, (region.j0 + lj) / stride);
-                cols.push(((bi * h + a.min(h - 1)) * w + c.min(w - 1)) as i64);
+                let (a, c) = (a.min(h - 1) - a0, c.min(w - 1) - c0);
+                cols.push(((bi * hh + a) * ww + c) as i64);
             }
         }
     }
