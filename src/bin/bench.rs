@@ -240,12 +240,21 @@ fn lidar_loop(secs: f64) {
         }
     });
     per.sort_by(f64::total_cmp);
+    // Every point's bytes, frame after frame: equal digests, equal clouds (for A/B runs of two builds).
+    let mut digest = rocc::fsio::Fnv1a::new();
+    for (i, o) in occs.iter().enumerate() {
+        for p in scan(o, &rig, 1, i).points {
+            digest.write(&p.x.to_le_bytes()).write(&p.y.to_le_bytes()).write(&p.z.to_le_bytes());
+            digest.write(&p.intensity.to_le_bytes()).write(&p.ring.to_le_bytes()).write(&[p.lidar]);
+        }
+    }
     println!(
-        "== lidar-loop: {} passes over {} frames at 0.2 deg, one core: {:.2} ms CPU per frame (median; min {:.2}), {points} points",
+        "== lidar-loop: {} passes over {} frames at 0.2 deg, one core: {:.2} ms CPU per frame (median; min {:.2}), {points} points, digest {:016x}",
         per.len(),
         occs.len(),
         per[per.len() / 2],
-        per[0]
+        per[0],
+        digest.finish()
     );
 }
 

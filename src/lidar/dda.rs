@@ -16,20 +16,9 @@
 //! starts the block walk part-way along the ray, where `super::fan` shows it has passed above
 //! every block before (a test there compares its hits with `cast`'s).
 
+pub use super::walk::Hit;
+use super::walk::{floor_i64, walk, walk_columns};
 use crate::backend::layout::{K_GROUND, K_GROUND_TOP, NX, NY, NZ, ORIGIN, UPPER, VOXEL, flat};
-
-/// The first occupied voxel along a ray.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hit {
-    /// Distance from the origin to where the ray enters the voxel (0 if it starts inside).
-    pub t: f64,
-    /// Distance to where it leaves it.
-    pub t_exit: f64,
-    pub voxel: [usize; 3],
-    pub label: u8,
-    /// Axis (0 x, 1 y, 2 z) of the entry face; 3 if the ray starts inside the voxel.
-    pub axis: usize,
-}
 
 /// Where a ray enters and leaves the grid's box, if it meets it at all before `t_max`.
 fn clip_to_grid(o: [f64; 3], d: [f64; 3], inv: [f64; 3], t_max: f64) -> Option<(f64, f64)> {
@@ -46,14 +35,6 @@ fn clip_to_grid(o: [f64; 3], d: [f64; 3], inv: [f64; 3], t_max: f64) -> Option<(
         }
     }
     (t0 <= t1).then_some((t0, t1))
-}
-
-/// `x.floor() as i64`, bit for bit (saturating at the ends, 0 for NaN), without the libm call
-/// that `f64::floor` compiles to on baseline x86-64: the walks take two or three per block.
-#[inline]
-fn floor_i64(x: f64) -> i64 {
-    let t = x as i64;
-    if (t as f64) > x { t.saturating_sub(1) } else { t }
 }
 
 /// Bit b set when byte b of `x` (little endian) is not zero.
@@ -264,6 +245,7 @@ impl Skip {
 
     /// `cast` for a ray that meets no block it could pass below before distance `t_start`
     /// (`fan`): the block walk starts there.
+    #[inline(always)]
     pub fn cast_from(&self, labels: &[u8], o: [f64; 3], d: [f64; 3], t_max: f64, t_start: f64) -> Option<Hit> {
         let inv = inverse(d);
         let (t_grid, t_out) = clip_to_grid(o, d, inv, t_max)?;
@@ -331,8 +313,7 @@ impl Skip {
                 } else {
                     let lo = [w.ix * B as i64, w.iy * B as i64, 0];
                     let hi = [lo[0] + B as i64, lo[1] + B as i64, NZ as i64];
-                    let occupied = |at: usize| self.cols[at / NZ] >> (at % NZ) & 1 != 0;
-                    if let Some(h) = walk(labels, occupied, o, d, inv, w.t, t_end, w.axis, lo, hi, |_| {}) {
+                    if let Some(h) = walk_columns(labels, &self.cols, o, d, inv, w.t, t_end, w.axis, lo, hi) {
                         return Some(h);
                     }
                 }
@@ -388,6 +369,7 @@ const GROUND_Z: f64 = ORIGIN[2] + VOXEL * K_GROUND_TOP as f64;
 
 /// The hit on the ground voxel a descending ray enters through its top face at distance `tg`.
 /// `label`: the label of every ground voxel there, or 0 to read it from `labels`.
+#[inline]
 fn ground_hit(labels: &[u8], label: u8, o: [f64; 3], d: [f64; 3], inv: [f64; 3], tg: f64, t_out: f64) -> Option<Hit> {
     let n = [NX, NY];
     let mut voxel = [0usize, 0, K_GROUND];
@@ -404,103 +386,6 @@ fn ground_hit(labels: &[u8], label: u8, o: [f64; 3], d: [f64; 3], inv: [f64; 3],
     }
     let label = if label != 0 { label } else { labels[flat(voxel[0], voxel[1], voxel[2])] };
     Some(Hit { t: tg, t_exit: t_exit.min(t_out.max(tg)), voxel, label, axis: 2 })
-}
-
-/// The voxel walk from distance `t_in` to `t_out` inside voxel index box [lo, hi); `axis` is
-/// the face the ray entered through at `t_in`; `seen` gets each free voxel passed (the LiDAR
-/// passes a no-op, which compiles away).
-#[allow(clippy::too_many_arguments)]
-fn walk(
-    labels: &[u8],
-    occupied: impl Fn(usize) -> bool,
-    o: [f64; 3],
-    d: [f64; 3],
-    inv: [f64; 3],
-    t_in: f64,
-    t_out: f64,
-    axis: usize,
-    lo: [i64; 3],
-    hi: [i64; 3],
-    mut seen: impl FnMut(usize),
-) -> Option<Hit> {
-    let n = hi;
-    let mut idx = [0i64; 3];
-    let mut step = [0i64; 3];
-    let mut t_next = [f64::INFINITY; 3];
-    let mut t_delta = [f64::INFINITY; 3];
-    for a in 0..3 {
-        // The voxel holding the entry point; clamped because the entry lies on the box's face.
-        let p = o[a] + t_in * d[a];
-        idx[a] = floor_i64((p - ORIGIN[a]) / VOXEL).clamp(lo[a], hi[a] - 1);
-        if d[a] > 0.0 {
-            step[a] = 1;
-            t_next[a] = (ORIGIN[a] + (idx[a] + 1) as f64 * VOXEL - o[a]) * inv[a];
-            t_delta[a] = VOXEL * inv[a];
-        } else if d[a] < 0.0 {
-            step[a] = -1;
-            t_next[a] = (ORIGIN[a] + idx[a] as f64 * VOXEL - o[a]) * inv[a];
-            t_delta[a] = -VOXEL * inv[a];
-        }
-    }
-    // The same additions and comparisons as one loop over [f64; 3] would make, on scalars the
-    // compiler keeps in registers (an array indexed by the stepping axis lives on the stack).
-    let (mut tx, mut ty, mut tz) = (t_next[0], t_next[1], t_next[2]);
-    let (mut i, mut j, mut k) = (idx[0], idx[1], idx[2]);
-    let mut t = t_in;
-    let mut axis = axis;
-    loop {
-        let a = if tx <= ty && tx <= tz {
-            0
-        } else if ty <= tz {
-            1
-        } else {
-            2
-        };
-        let at = flat(i as usize, j as usize, k as usize);
-        if occupied(at) {
-            let label = labels[at];
-            let tn = [tx, ty, tz][a];
-            let voxel = [i as usize, j as usize, k as usize];
-            return Some(Hit { t, t_exit: tn.min(t_out.max(t)), voxel, label, axis });
-        }
-        seen(at);
-        match a {
-            0 => {
-                t = tx;
-                if t > t_out {
-                    return None;
-                }
-                i += step[0];
-                if i < lo[0] || i >= n[0] {
-                    return None;
-                }
-                tx += t_delta[0];
-            }
-            1 => {
-                t = ty;
-                if t > t_out {
-                    return None;
-                }
-                j += step[1];
-                if j < lo[1] || j >= n[1] {
-                    return None;
-                }
-                ty += t_delta[1];
-            }
-            _ => {
-                t = tz;
-                if t > t_out {
-                    return None;
-                }
-                k += step[2];
-                if k < lo[2] || k >= n[2] {
-                    return None;
-                }
-                tz += t_delta[2];
-            }
-        }
-        axis = a;
-    }
 }
 
 /// Entering from outside the grid: the entry face is the axis whose slab bound set t_in.
