@@ -203,8 +203,6 @@ pub fn step_loss(
     let t = &cfg.train;
     let ce = weighted_cross_entropy(out.logits.clone(), target, weights);
     // Lovász over every voxel an agent class claims (truth or prediction) plus a uniform draw.
-    // Only "is an agent class predicted" crosses from the device: one byte-sized flag per voxel,
-    // not an i64 class.
     let pred = agent_predicted(&out.logits);
     let n = target.len();
     let mut idx: Vec<usize> = (0..n).filter(|&v| target[v] >= 2 || pred.get(v).copied().unwrap_or(false)).collect();

@@ -4,9 +4,13 @@
 //! (`conv2d`, `conv2d_x_backward`): the logits do not change. burn's CPU weight gradient is a
 //! convolution of the input with the output's gradient as the kernel, which at batch 1-4 and up
 //! to 16 output channels takes its direct small-channel path: a third of a `cpu-small` training
-//! step on the 400 x 400 BEV. Every other backend runs burn's `conv2d_weight_backward`.
-//! tests/bev_conv.rs checks the CPU's weight gradient against burn's, on dense and sparse inputs.
+//! step on the 400 x 400 BEV. A GPU without `fusion` computes the weight gradient as one batched
+//! matrix product over the input's patches (`weight_grad_by_patches`) and the bias gradient per
+//! plane; with `fusion` it runs burn's own convolution throughout.
+//! tests/bev_conv.rs checks the CPU's weight gradient against burn's, on dense and sparse inputs;
+//! the GPU formulations are checked against burn's on the CPU (this file's tests).
 
+use super::host_read::flex_slice;
 use burn::backend::autodiff::checkpoint::{base::Checkpointer, strategy::CheckpointStrategy};
 use burn::backend::autodiff::grads::Gradients;
 use burn::backend::autodiff::ops::{Backward, Ops, OpsKind};
@@ -71,8 +75,8 @@ impl BevConvOps for Flex {
         let xdims: [usize; 4] = x.shape().dims();
         let gdims: [usize; 4] = grad.shape().dims();
         let cols = Im2col { x: xdims, out: [gdims[2], gdims[3]], kernel: [wshape[2], wshape[3]], stride, padding };
-        let gt = transposed_grad(contiguous(&grad), gdims);
-        let xs = contiguous(&x);
+        let gt = transposed_grad(flex_slice(&grad), gdims);
+        let xs = flex_slice(&x);
         if xs.iter().filter(|&&v| v != 0.0).count() * SPARSE < xs.len() {
             return FlexTensor::from_data(TensorData::new(cols.sparse_weight_grad(xs, &gt, gdims[1]), wshape));
         }
@@ -84,7 +88,7 @@ impl BevConvOps for Flex {
             FlexTensor::from_data(TensorData::new(gt, [bp, o])),
         );
         let prod = prod.to_contiguous();
-        let prod = contiguous(&prod);
+        let prod = flex_slice(&prod);
         let mut out = vec![0f32; o * k];
         for (r, row) in prod.chunks_exact(o).enumerate() {
             for (oi, &v) in row.iter().enumerate() {
@@ -162,12 +166,6 @@ pub fn weight_grad_by_patches<B: Backend>(
     // [B, S, P, C, kh kw] -> [B S, P, C kh kw]: the weight's own (c, ky, kx) order.
     let patches = B::float_reshape(B::float_cat(patches, 4), [b * groups, p, c * kh * kw].into());
     B::float_reshape(B::float_sum_dim(B::float_matmul(g, patches), 0), [o, c, kh, kw].into())
-}
-
-/// A contiguous f32 tensor's elements.
-fn contiguous(t: &FlexTensor) -> &[f32] {
-    let start = t.layout().start_offset();
-    &t.storage::<f32>()[start..start + t.layout().num_elements()]
 }
 
 /// The output's gradient `[B, O, P]` as `[B P, O]`.
@@ -394,7 +392,7 @@ mod tests {
     }
 
     fn host(t: FlexTensor) -> Vec<f32> {
-        contiguous(&t.to_contiguous()).to_vec()
+        flex_slice(&t.to_contiguous()).to_vec()
     }
 
     fn values(n: usize, salt: u32) -> Vec<f32> {

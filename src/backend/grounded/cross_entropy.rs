@@ -8,13 +8,14 @@
 //! at once. tests/grounded.rs checks value and gradient against the tensor formulation.
 
 use super::expf;
+use super::host_read::{flex_f32, flex_slice, host_vec};
 use crate::backend::layout::N_LABELS;
 use burn::backend::autodiff::checkpoint::{base::Checkpointer, strategy::CheckpointStrategy};
 use burn::backend::autodiff::grads::Gradients;
 use burn::backend::autodiff::ops::{Backward, Ops, OpsKind, unary};
 use burn::backend::flex::FlexTensor;
 use burn::backend::tensor::FloatTensor;
-use burn::backend::{Autodiff, AutodiffBackend, Backend, DType, Dispatch, Flex, TensorMetadata, backend_extension};
+use burn::backend::{Autodiff, AutodiffBackend, Backend, Dispatch, Flex, TensorMetadata, backend_extension};
 use burn::prelude::*;
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -35,8 +36,9 @@ impl Targets {
     }
 }
 
+/// A target's class (labels past the last class count as the last).
 #[inline]
-fn class(t: u8) -> usize {
+pub(super) fn class(t: u8) -> usize {
     (t as usize).min(N_LABELS - 1)
 }
 
@@ -76,44 +78,21 @@ pub fn agent_rows(logits: &[f32]) -> Vec<f32> {
         .collect()
 }
 
-fn host_vec<B: Backend>(t: FloatTensor<B>) -> Vec<f32> {
-    let data = burn::tensor::read_sync(B::float_into_data(t)).expect("reading a tensor back from its device");
-    data.convert::<f32>().try_into_vec::<f32>().unwrap_or_default()
-}
-
-/// The elements of a Flex tensor, contiguous (a copy only where it is not).
-fn flex_f32(t: &FlexTensor) -> Option<FlexTensor> {
-    (t.dtype() == DType::F32).then(|| t.to_contiguous())
-}
-
-fn flex_slice(t: &FlexTensor) -> &[f32] {
-    let start = t.layout().start_offset();
-    &t.storage::<f32>()[start..start + t.layout().num_elements()]
-}
-
 impl CrossEntropyOps for Flex {
     fn cross_entropy(logits: FloatTensor<Self>, t: Targets) -> FloatTensor<Self> {
-        let Some(l) = flex_f32(&logits) else {
-            return FlexTensor::from_data(TensorData::new(vec![forward(&host_vec::<Self>(logits), &t)], [1]));
-        };
+        let l = flex_f32(&logits);
         FlexTensor::from_data(TensorData::new(vec![forward(flex_slice(&l), &t)], [1]))
     }
 
     fn cross_entropy_backward(logits: FloatTensor<Self>, grad: FloatTensor<Self>, t: Targets) -> FloatTensor<Self> {
         let g = host_vec::<Self>(grad).first().copied().unwrap_or(0.0);
         let n = t.labels.len();
-        let out = match flex_f32(&logits) {
-            Some(l) => backward(flex_slice(&l), g, &t),
-            None => backward(&host_vec::<Self>(logits), g, &t),
-        };
+        let out = backward(flex_slice(&flex_f32(&logits)), g, &t);
         FlexTensor::from_data(TensorData::new(out, [n, N_LABELS]))
     }
 
     fn agent_rows(logits: FloatTensor<Self>) -> FloatTensor<Self> {
-        let out = match flex_f32(&logits) {
-            Some(l) => agent_rows(flex_slice(&l)),
-            None => agent_rows(&host_vec::<Self>(logits)),
-        };
+        let out = agent_rows(flex_slice(&flex_f32(&logits)));
         let n = out.len();
         FlexTensor::from_data(TensorData::new(out, [n]))
     }

@@ -19,13 +19,14 @@
 //! tensors in place; the model keeps the tensor formulation on a GPU.
 
 use super::expf;
+use super::host_read::{flex_f32, flex_slice, host_vec};
 use crate::backend::layout::{N_LABELS, NZ};
 use burn::backend::autodiff::checkpoint::{base::Checkpointer, strategy::CheckpointStrategy};
 use burn::backend::autodiff::grads::Gradients;
 use burn::backend::autodiff::ops::{Backward, Ops, OpsKind};
 use burn::backend::flex::FlexTensor;
 use burn::backend::tensor::FloatTensor;
-use burn::backend::{Autodiff, AutodiffBackend, Backend, DType, Dispatch, Flex, TensorMetadata, backend_extension};
+use burn::backend::{Autodiff, AutodiffBackend, Backend, Dispatch, Flex, TensorMetadata, backend_extension};
 use burn::prelude::*;
 use rayon::prelude::*;
 
@@ -208,11 +209,6 @@ pub fn backward(gates: &[f32], grad: &[f32]) -> (Vec<f32>, Vec<f32>) {
     (gb, gr)
 }
 
-fn host_vec<B: Backend>(t: FloatTensor<B>) -> Vec<f32> {
-    let data = burn::tensor::read_sync(B::float_into_data(t)).expect("reading a tensor back from its device");
-    data.convert::<f32>().try_into_vec::<f32>().unwrap_or_default()
-}
-
 #[backend_extension(Flex, Cube: cfg(any(feature = "wgpu", feature = "cuda")), Autodiff)]
 pub trait HeadOps: burn::backend::Backend {
     /// Splat `[V, 9]`, bias `[NZ, 9]`, residual `[V, 1]` -> logits `[V, 9]`.
@@ -279,20 +275,6 @@ impl HeadOps for Flex {
         let n = gr.len();
         (FlexTensor::from_data(TensorData::new(gb, [NZ, N_LABELS])), FlexTensor::from_data(TensorData::new(gr, [n, 1])))
     }
-}
-
-/// A Flex tensor as contiguous f32 (converted or copied only where it is not).
-fn flex_f32(t: &FlexTensor) -> FlexTensor {
-    if t.dtype() == DType::F32 {
-        t.to_contiguous()
-    } else {
-        FlexTensor::from_data(t.clone().into_data().convert::<f32>())
-    }
-}
-
-fn flex_slice(t: &FlexTensor) -> &[f32] {
-    let start = t.layout().start_offset();
-    &t.storage::<f32>()[start..start + t.layout().num_elements()]
 }
 
 #[cfg(any(feature = "wgpu", feature = "cuda"))]

@@ -28,7 +28,7 @@ pub fn weighted_cross_entropy_tensor_ops(logits: Tensor<2>, target: &[u8], weigh
     use rayon::prelude::*;
     let device = logits.device();
     let n = target.len();
-    let class = |t: u8| (t as usize).min(N_LABELS - 1);
+    let class = cross_entropy::class;
     let mut counts = [0u64; N_LABELS];
     for &t in target {
         counts[class(t)] += 1;

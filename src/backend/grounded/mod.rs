@@ -24,6 +24,7 @@ pub mod expf;
 pub mod guard;
 pub mod head;
 pub mod heap;
+mod host_read;
 mod infer;
 pub mod latents;
 pub mod loss;

@@ -3,6 +3,7 @@
 //! autodiff that calls the backward operation of whichever backend runs it. Nothing of window
 //! size is ever materialised and no tensor makes a round trip through the host on a device.
 
+use super::super::host_read::host_vec;
 use super::host;
 use super::layout::{COLS, SplatShape};
 use crate::backend::layout::N_LABELS;
@@ -28,12 +29,6 @@ pub trait SplatOps: burn::backend::Backend {
     /// Packed Gaussians and the logits' gradient -> the Gaussians' gradient `[N, COLS]`.
     #[fusion(dtype = g, shape = g)]
     fn splat_backward(g: FloatTensor<Self>, grad: FloatTensor<Self>, s: SplatShape) -> FloatTensor<Self>;
-}
-
-fn host_vec<B: Backend>(t: FloatTensor<B>) -> Vec<f32> {
-    // A host backend reads synchronously; a device read only happens on the fallback path.
-    let data = burn::tensor::read_sync(B::float_into_data(t)).expect("reading a tensor back from its device");
-    data.convert::<f32>().try_into_vec::<f32>().unwrap_or_default()
 }
 
 /// The host implementation on any backend: read, compute, upload (the `flex` path, and the
