@@ -17,7 +17,7 @@
 //! every block before (a test there compares its hits with `cast`'s).
 
 pub use super::walk::Hit;
-use super::walk::{floor_i64, walk, walk_columns};
+use super::walk::{WalkStart, floor_i64, walk, walk_columns};
 use crate::backend::layout::{K_GROUND, K_GROUND_TOP, NX, NY, NZ, ORIGIN, UPPER, VOXEL, flat};
 
 /// Where a ray enters and leaves the grid's box, if it meets it at all before `t_max`.
@@ -257,25 +257,8 @@ impl Skip {
         if d[2] >= 0.0 && o[2] + t_in * d[2] >= self.max_top {
             return None;
         }
-        let bs = VOXEL * B as f64;
-        let nb = [NBX as i64, NBY as i64];
-        let mut idx = [0i64; 2];
-        let mut step = [0i64; 2];
-        let mut t_next = [f64::INFINITY; 2];
-        let mut t_delta = [f64::INFINITY; 2];
-        for a in 0..2 {
-            let p = o[a] + t_in * d[a];
-            idx[a] = floor_i64((p - ORIGIN[a]) / bs).clamp(0, nb[a] - 1);
-            if d[a] > 0.0 {
-                step[a] = 1;
-                t_next[a] = (ORIGIN[a] + (idx[a] + 1) as f64 * bs - o[a]) * inv[a];
-                t_delta[a] = bs * inv[a];
-            } else if d[a] < 0.0 {
-                step[a] = -1;
-                t_next[a] = (ORIGIN[a] + idx[a] as f64 * bs - o[a]) * inv[a];
-                t_delta[a] = -bs * inv[a];
-            }
-        }
+        let WalkStart { idx, step, t_next, t_delta } =
+            WalkStart::new(o, d, inv, t_in, VOXEL * B as f64, [0, 0], [NBX as i64, NBY as i64]);
         let ray = BlockRay {
             t_out,
             step,

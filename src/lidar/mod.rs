@@ -130,11 +130,7 @@ const KEPT_TABLES: usize = 4;
 
 impl RigTables {
     fn new(rig: &Rig) -> Self {
-        let trig = rig
-            .sensors
-            .iter()
-            .map(|s| s.azimuths(rig.horizontal_resolution_deg).map(|az| (az.cos(), az.sin())).collect())
-            .collect();
+        let trig = rig.azimuth_trig();
         let views = rig
             .sensors
             .iter()

@@ -154,6 +154,14 @@ impl Rig {
         [f.0 + sensor.origin.0, f.1 + sensor.origin.1, f.2 + sensor.origin.2]
     }
 
+    /// Per sensor, the cosine and sine of each azimuth it sweeps (every beam sweeps the same).
+    pub fn azimuth_trig(&self) -> Vec<Vec<(f64, f64)>> {
+        self.sensors
+            .iter()
+            .map(|s| s.azimuths(self.horizontal_resolution_deg).map(|az| (az.cos(), az.sin())).collect())
+            .collect()
+    }
+
     pub fn to_ron(&self) -> String {
         // Plain data with no maps keyed by non-strings: serialisation cannot fail.
         ron::ser::to_string_pretty(self, ron::ser::PrettyConfig::default()).expect("a rig serialises")

@@ -45,7 +45,7 @@ pub(super) fn walk(
     mut seen: impl FnMut(usize),
 ) -> Option<Hit> {
     let n = hi;
-    let WalkStart { idx, step, t_next, t_delta } = WalkStart::new(o, d, inv, t_in, lo, hi);
+    let WalkStart { idx, step, t_next, t_delta } = WalkStart::new(o, d, inv, t_in, VOXEL, lo, hi);
     // The same additions and comparisons as one loop over [f64; 3] would make, on scalars the
     // compiler keeps in registers (an array indexed by the stepping axis lives on the stack).
     let (mut tx, mut ty, mut tz) = (t_next[0], t_next[1], t_next[2]);
@@ -107,34 +107,36 @@ pub(super) fn walk(
     }
 }
 
-/// Where a voxel walk starts: the voxel holding the entry point, per axis the step, the
-/// distance to the first boundary and between boundaries.
-struct WalkStart {
-    idx: [i64; 3],
-    step: [i64; 3],
-    t_next: [f64; 3],
-    t_delta: [f64; 3],
+/// Where a grid walk starts: the cell holding the entry point, per axis the step, the distance
+/// to the first boundary and between boundaries. The cells are `cell` metres on a side, from
+/// `ORIGIN`, over the first `N` axes: voxels (`walk`, `walk_columns`) or `Skip`'s blocks.
+pub(super) struct WalkStart<const N: usize> {
+    pub idx: [i64; N],
+    pub step: [i64; N],
+    pub t_next: [f64; N],
+    pub t_delta: [f64; N],
 }
 
-impl WalkStart {
+impl<const N: usize> WalkStart<N> {
+    /// Cells inside the index box [lo, hi).
     #[inline(always)]
-    fn new(o: [f64; 3], d: [f64; 3], inv: [f64; 3], t_in: f64, lo: [i64; 3], hi: [i64; 3]) -> WalkStart {
-        let mut idx = [0i64; 3];
-        let mut step = [0i64; 3];
-        let mut t_next = [f64::INFINITY; 3];
-        let mut t_delta = [f64::INFINITY; 3];
-        for a in 0..3 {
-            // The voxel holding the entry point; clamped because the entry lies on the box's face.
+    pub fn new(o: [f64; 3], d: [f64; 3], inv: [f64; 3], t_in: f64, cell: f64, lo: [i64; N], hi: [i64; N]) -> Self {
+        let mut idx = [0i64; N];
+        let mut step = [0i64; N];
+        let mut t_next = [f64::INFINITY; N];
+        let mut t_delta = [f64::INFINITY; N];
+        for a in 0..N {
+            // The cell holding the entry point; clamped because the entry lies on the box's face.
             let p = o[a] + t_in * d[a];
-            idx[a] = floor_i64((p - ORIGIN[a]) / VOXEL).clamp(lo[a], hi[a] - 1);
+            idx[a] = floor_i64((p - ORIGIN[a]) / cell).clamp(lo[a], hi[a] - 1);
             if d[a] > 0.0 {
                 step[a] = 1;
-                t_next[a] = (ORIGIN[a] + (idx[a] + 1) as f64 * VOXEL - o[a]) * inv[a];
-                t_delta[a] = VOXEL * inv[a];
+                t_next[a] = (ORIGIN[a] + (idx[a] + 1) as f64 * cell - o[a]) * inv[a];
+                t_delta[a] = cell * inv[a];
             } else if d[a] < 0.0 {
                 step[a] = -1;
-                t_next[a] = (ORIGIN[a] + idx[a] as f64 * VOXEL - o[a]) * inv[a];
-                t_delta[a] = -VOXEL * inv[a];
+                t_next[a] = (ORIGIN[a] + idx[a] as f64 * cell - o[a]) * inv[a];
+                t_delta[a] = -cell * inv[a];
             }
         }
         WalkStart { idx, step, t_next, t_delta }
@@ -160,7 +162,7 @@ pub(super) fn walk_columns(
     lo: [i64; 3],
     hi: [i64; 3],
 ) -> Option<Hit> {
-    let WalkStart { idx, step, t_next, t_delta } = WalkStart::new(o, d, inv, t_in, lo, hi);
+    let WalkStart { idx, step, t_next, t_delta } = WalkStart::new(o, d, inv, t_in, VOXEL, lo, hi);
     let (mut tx, mut ty, mut tz) = (t_next[0], t_next[1], t_next[2]);
     let (mut i, mut j, mut k) = (idx[0], idx[1], idx[2]);
     let mut t = t_in;

@@ -51,11 +51,7 @@ pub fn masks_into(occ: &Occupancy, lidar: &Rig, cameras: &CameraRig, m: &mut Mas
         v.resize(N, 0);
     }
     let Some(labels) = occ.labels.as_slice().filter(|_| occ.labels.dim() == (NX, NY, NZ)) else { return };
-    let trig: Vec<Vec<(f64, f64)>> = lidar
-        .sensors
-        .iter()
-        .map(|s| s.azimuths(lidar.horizontal_resolution_deg).map(|az| (az.cos(), az.sin())).collect())
-        .collect();
+    let trig = lidar.azimuth_trig();
     let beams = lidar
         .sensors
         .iter()
