@@ -508,8 +508,8 @@ fn occupancy_and_lidar_are_deterministic_across_runs_and_thread_counts() {
     assert_eq!(one, again);
     let dir = tmp_dir("det");
     let (p1, p2) = (dir.join("a.bin"), dir.join("b.bin"));
-    lidar::write_bin(&p1, &one).expect("bin");
-    lidar::write_bin(&p2, &two).expect("bin");
+    lidar::write_bin(rocc::fsio::To::Now, &p1, &one).expect("bin");
+    lidar::write_bin(rocc::fsio::To::Now, &p2, &two).expect("bin");
     assert_eq!(std::fs::read(&p1).expect("read"), std::fs::read(&p2).expect("read"));
     // Another frame or seed gives another draw.
     assert_ne!(lidar::scan(&a, &rig, 7, 4), one);
@@ -546,8 +546,8 @@ fn files_round_trip_and_load_in_numpy() {
     let n = backend::write_npy(&npy, &occ).expect("npy");
     assert_eq!(n, std::fs::metadata(&npy).expect("meta").len());
     assert_eq!(backend::read_npy(&npy).expect("read back"), occ);
-    assert_eq!(lidar::write_bin(&bin, &pc).expect("bin"), 16 * pc.points.len() as u64);
-    lidar::write_pcd(&pcd, &pc).expect("pcd");
+    assert_eq!(lidar::write_bin(rocc::fsio::To::Now, &bin, &pc).expect("bin"), 16 * pc.points.len() as u64);
+    lidar::write_pcd(rocc::fsio::To::Now, &pcd, &pc).expect("pcd");
     // Atomic writes leave no temporaries behind.
     for sub in ["occ", "lidar"] {
         for e in std::fs::read_dir(dir.join(sub)).expect("dir") {

@@ -10,6 +10,7 @@ use super::world::{ClipWorld, ground_velocity};
 use super::{Front, Options, Stage};
 use crate::backend::flow::{Flow, flow_into, to_ego_axes};
 use crate::backend::{Background, OccInput, Occupancy, occ_frame_path, write_npy};
+use crate::fsio::To;
 use crate::lidar::dda::Skip;
 use crate::lidar::{bin_frame_path, pcd_frame_path, scan_with, write_bin, write_pcd};
 use crate::output::{
@@ -476,6 +477,8 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
     let seed = r.seed;
     let (gif_picks, sheet_picks) = if opts.previews { preview_picks(r.frames.len()) } else { (vec![], vec![]) };
     let clock = Clock::default();
+    // The frames' occupancy and LiDAR files reach the disk while later frames compute.
+    let behind = crate::fsio::Behind::new();
     let rate = r.rate;
     // GIF frames play at the clip's real speed.
     let stride = gif_picks.get(1).copied().unwrap_or(1);
@@ -519,7 +522,7 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
             }
             let t4 = Clock::add(&clock.occ, t3);
             let path = occ_frame_path(dir, f);
-            let (bytes, made) = write_occ(&path, &s.occ, opts.stage >= Stage::Lidar)?;
+            let (bytes, made) = write_occ(To::Behind(&behind), &path, &s.occ, opts.stage >= Stage::Lidar)?;
             skip = made;
             files.push(OutputFile { path: rel(dir, &path), bytes });
             if opts.flow
@@ -550,8 +553,8 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
             let pc = scan_with(&s.occ, skip.as_ref(), &opts.rig, seed, f);
             let t5 = Clock::add(&clock.lidar, t3);
             let (bin, pcd) = (bin_frame_path(dir, f), pcd_frame_path(dir, f));
-            files.push(OutputFile { path: rel(dir, &bin), bytes: write_bin(&bin, &pc)? });
-            files.push(OutputFile { path: rel(dir, &pcd), bytes: write_pcd(&pcd, &pc)? });
+            files.push(OutputFile { path: rel(dir, &bin), bytes: write_bin(To::Behind(&behind), &bin, &pc)? });
+            files.push(OutputFile { path: rel(dir, &pcd), bytes: write_pcd(To::Behind(&behind), &pcd, &pc)? });
             t3 = Clock::add(&clock.write, t5);
             if preview {
                 let mut img = vec![0u8; PREVIEW_SIDE * PREVIEW_SIDE];
@@ -641,21 +644,24 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
     manifest.timings =
         timings.into_iter().map(|(n, a)| StageTiming { stage: n.to_string(), seconds: secs(a) }).collect();
     manifest.files = files;
+    let t2 = Instant::now();
+    behind.finish()?;
+    Clock::add(&clock.write, t2);
     write_manifest(dir, &manifest)?;
     Ok(ClipReport::new(dir, r.frames.len(), false, manifest))
 }
 
 /// Write the occupancy's `.npy`; with `summarise`, also the LiDAR's block summary of it, fed each
 /// piece of the labels as it is written: one read of the 5 MB from memory instead of two (the
-/// kernel's copy then finds the piece in the cache). Returns the file's size.
-fn write_occ(path: &Path, occ: &Occupancy, summarise: bool) -> io::Result<(u64, Option<Skip>)> {
+/// copy into the file's buffer then finds the piece in the cache). Returns the file's size.
+fn write_occ(to: To, path: &Path, occ: &Occupancy, summarise: bool) -> io::Result<(u64, Option<Skip>)> {
     use crate::backend::layout::{NX, NY, NZ};
     if !occ.labels.is_standard_layout() {
         return Ok((write_npy(path, occ)?, None));
     }
     // The summary covers the grid's shape only.
     let mut summary = (summarise && occ.labels.dim() == (NX, NY, NZ)).then(Skip::summary);
-    let bytes = write_npy_u8(path, &occ.labels, |piece| {
+    let bytes = write_npy_u8(to, path, &occ.labels, |piece| {
         if let Some(s) = &mut summary {
             s.add(piece);
         }

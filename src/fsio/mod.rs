@@ -5,16 +5,51 @@
 //! not of the machine). Also here: the sweep of the temporaries a killed run leaves, and the
 //! content hash that manifests record (FNV-1a, also rocc's one hash for seeds and digests).
 
-use std::fs::{self, File};
-use std::io::{self, BufWriter};
+mod behind;
+mod sink;
+
+pub use behind::Behind;
+pub use sink::Sink;
+
+use std::fs;
+use std::io;
 use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 static TMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 
+/// Where a writer sends its file: through `write_atomic` now, or through a `Behind`.
+#[derive(Clone, Copy, Default)]
+pub enum To<'a> {
+    #[default]
+    Now,
+    Behind(&'a Behind),
+}
+
+impl To<'_> {
+    /// `write_atomic` or `Behind::write_atomic`.
+    pub fn write_atomic(self, path: &Path, fill: impl FnOnce(&mut Sink) -> io::Result<()>) -> io::Result<u64> {
+        match self {
+            To::Now => write_atomic(path, fill),
+            To::Behind(b) => b.write_atomic(path, fill),
+        }
+    }
+}
+
 /// Write `path` through `fill` under a temporary sibling name, then rename it into place; returns
 /// the final size. Parent directories are created. The temporary file is removed on error.
-pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>) -> io::Result<u64> {
+pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut Sink) -> io::Result<()>) -> io::Result<u64> {
+    let (tmp, mut w) = start(path)?;
+    if let Err(e) = fill(&mut w) {
+        drop(w);
+        let _ = fs::remove_file(&tmp);
+        return Err(e);
+    }
+    settle(w, &tmp, path)
+}
+
+/// The temporary name for `path` (its directory created) and a sink for it.
+fn start(path: &Path) -> io::Result<(std::path::PathBuf, Sink)> {
     let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     fs::create_dir_all(dir)?;
     let name = path
@@ -23,17 +58,15 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut BufWriter<File>) -> io::
     // Unique per process and call, so parallel writers never share a temporary.
     let n = TMP_COUNTER.fetch_add(1, Ordering::Relaxed);
     let tmp = dir.join(format!(".{}.tmp-{}-{n}", name.to_string_lossy(), std::process::id()));
-    let result = (|| {
-        let mut w = BufWriter::new(File::create(&tmp)?);
-        fill(&mut w)?;
-        let f = w.into_inner().map_err(|e| e.into_error())?;
-        let bytes = f.metadata()?.len();
-        drop(f);
-        fs::rename(&tmp, path)?;
-        Ok(bytes)
-    })();
+    let sink = Sink::new(&tmp);
+    Ok((tmp, sink))
+}
+
+/// Write out what `sink` holds and rename `tmp` to `path`; the temporary is removed on error.
+fn settle(sink: Sink, tmp: &Path, path: &Path) -> io::Result<u64> {
+    let result = sink.finish().and_then(|bytes| fs::rename(tmp, path).map(|_| bytes));
     if result.is_err() {
-        let _ = fs::remove_file(&tmp);
+        let _ = fs::remove_file(tmp);
     }
     result
 }
@@ -118,6 +151,109 @@ impl Fnv1a {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::io::Write;
+
+    /// A scratch directory of this test's own.
+    fn scratch(name: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("rocc-fsio-{name}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&d);
+        d
+    }
+
+    /// Bytes that differ from position to position (a shifted or repeated chunk shows).
+    fn pattern(n: usize, salt: u64) -> Vec<u8> {
+        (0..n as u64).map(|i| (fnv1a(&(i ^ salt).to_le_bytes()) >> 7) as u8).collect()
+    }
+
+    /// Sizes around the block and chunk edges, fed in uneven pieces: the file holds exactly the
+    /// bytes written (direct, buffered and streamed routes alike) and no temporary is left.
+    #[test]
+    fn write_atomic_keeps_every_byte_at_every_size() {
+        every_size("sizes");
+    }
+
+    /// The same where the file system refuses direct I/O (tmpfs on older kernels).
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    #[test]
+    fn write_atomic_without_direct_io_keeps_every_byte() {
+        sink::REFUSE_DIRECT.store(true, Ordering::Relaxed);
+        every_size("buffered");
+        sink::REFUSE_DIRECT.store(false, Ordering::Relaxed);
+    }
+
+    fn every_size(name: &str) {
+        let dir = scratch(name);
+        let (b, c) = (4096, 1 << 20);
+        for (k, n) in [0, 1, b - 1, b, b + 1, c - 1, c, c + 1, 3 * c + 17, 33 * c + 5, 32 * c].into_iter().enumerate() {
+            let want = pattern(n, k as u64);
+            let path = dir.join(format!("f{k}.bin"));
+            let size = write_atomic(&path, |w| {
+                for piece in want.chunks(1 + (k * 7919) % 300_001) {
+                    w.write_all(piece)?;
+                }
+                Ok(())
+            })
+            .expect("write");
+            assert_eq!(size, n as u64);
+            assert_eq!(fs::read(&path).expect("read"), want, "{n} bytes");
+        }
+        let left: Vec<_> = fs::read_dir(&dir).expect("dir").filter_map(|e| e.ok()).map(|e| e.file_name()).collect();
+        assert_eq!(left.len(), 11, "{left:?}");
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    /// A failing `fill` leaves neither the file nor its temporary, on both routes.
+    #[test]
+    fn a_failed_fill_leaves_nothing() {
+        let dir = scratch("fail");
+        let big = pattern(3 << 20, 1);
+        let fill = |w: &mut Sink| -> io::Result<()> {
+            std::io::Write::write_all(w, &big)?;
+            Err(io::Error::other("no"))
+        };
+        assert!(write_atomic(&dir.join("a"), fill).is_err());
+        let behind = Behind::new();
+        assert!(behind.write_atomic(&dir.join("b"), fill).is_err());
+        behind.finish().expect("nothing queued");
+        assert_eq!(fs::read_dir(&dir).expect("dir").count(), 0);
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    /// Files written behind the caller are all in place after `finish` (or a drop), with their
+    /// bytes; a failure on the writer's side comes back from `finish` with the file's path.
+    #[test]
+    fn behind_writes_every_file_and_reports_failures() {
+        let dir = scratch("behind");
+        let sizes = [5_120_128, 2_456_272, 2_917_054, 18_592, 0, 1 << 20];
+        let behind = Behind::new();
+        for (k, &n) in sizes.iter().cycle().take(24).enumerate() {
+            let bytes = pattern(n, k as u64);
+            let got = To::Behind(&behind).write_atomic(&dir.join(format!("{k}")), |w| w.write_all(&bytes));
+            assert_eq!(got.expect("queued"), n as u64);
+        }
+        behind.finish().expect("written");
+        for (k, &n) in sizes.iter().cycle().take(24).enumerate() {
+            assert_eq!(fs::read(dir.join(format!("{k}"))).expect("read"), pattern(n, k as u64));
+        }
+        // A drop waits too.
+        {
+            let behind = Behind::new();
+            behind.write_atomic(&dir.join("dropped"), |w| w.write_all(&pattern(3 << 20, 9))).expect("queued");
+        }
+        assert_eq!(fs::read(dir.join("dropped")).expect("read"), pattern(3 << 20, 9));
+        // The final name is a directory that is not empty: the rename fails on the writer.
+        fs::create_dir_all(dir.join("taken").join("x")).expect("dir");
+        let behind = Behind::new();
+        behind.write_atomic(&dir.join("taken"), |w| w.write_all(&pattern(2 << 20, 3))).expect("queued");
+        let err = behind.finish().expect_err("rename onto a directory");
+        assert!(err.to_string().contains("taken"), "{err}");
+        let tmps = fs::read_dir(&dir)
+            .expect("dir")
+            .filter_map(|e| e.ok())
+            .filter(|e| is_atomic_tmp(&e.file_name().to_string_lossy()));
+        assert_eq!(tmps.count(), 0);
+        let _ = fs::remove_dir_all(&dir);
+    }
 
     /// The published FNV-1a 64 test vectors, whole and fed in pieces.
     #[test]

@@ -34,6 +34,7 @@ pub use rig::{Rig, RigError, Sensor};
 
 use crate::backend::Occupancy;
 use crate::backend::layout::{NX, NY, NZ};
+use crate::fsio::To;
 use crate::sample::Rng;
 use rayon::prelude::*;
 use std::io::{self, Write};
@@ -328,14 +329,14 @@ fn xyzi(p: &Point, rec: &mut [u8]) {
 }
 
 /// KITTI-style `.bin`: float32 little-endian x, y, z, intensity per point, atomically.
-pub fn write_bin(path: &Path, pc: &PointCloud) -> io::Result<u64> {
-    crate::fsio::write_atomic(path, |w| write_records::<16>(w, pc, |p, rec| xyzi(p, rec)))
+pub fn write_bin(to: To, path: &Path, pc: &PointCloud) -> io::Result<u64> {
+    to.write_atomic(path, |w| write_records::<16>(w, pc, |p, rec| xyzi(p, rec)))
 }
 
 /// Binary PCD v0.7 with fields x y z intensity (float32), ring (uint16) and lidar (uint8),
 /// little endian, atomically. Open3D's tensor reader and numpy (see tests/python) load it.
-pub fn write_pcd(path: &Path, pc: &PointCloud) -> io::Result<u64> {
-    crate::fsio::write_atomic(path, |w| {
+pub fn write_pcd(to: To, path: &Path, pc: &PointCloud) -> io::Result<u64> {
+    to.write_atomic(path, |w| {
         let n = pc.points.len();
         write!(
             w,

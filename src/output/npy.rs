@@ -2,26 +2,28 @@
 //! a function that sees each piece before it is written. Out: the file, byte for byte what
 //! `ndarray-npy` writes for the array (its own header).
 
+use crate::fsio::To;
 use ndarray::{ArrayBase, Data, Dimension};
 use ndarray_npy::WriteNpyExt;
 use std::io::{self, Write};
 use std::path::Path;
 
-/// Bytes per `write_all`: small enough that the kernel's copy into the page cache reads a piece
-/// from the cache `visit` just read it into; a multiple of 4,096.
+/// Bytes per `write_all`: small enough that the copy into the file's buffer reads a piece from
+/// the cache `visit` just read it into; a multiple of 4,096.
 pub const NPY_PIECE: usize = 1 << 18;
 
 /// Write `a` (standard layout) as `path`, atomically, calling `visit` with each piece of its
 /// elements in order (`NPY_PIECE` bytes, the last one shorter) just before it is written.
 /// Returns the file's size.
 pub fn write_npy_u8<S: Data<Elem = u8>, D: Dimension>(
+    to: To,
     path: &Path,
     a: &ArrayBase<S, D>,
     mut visit: impl FnMut(&[u8]),
 ) -> io::Result<u64> {
     let data = a.as_slice().ok_or_else(|| io::Error::other("npy: array not in standard layout"))?;
     let header = npy_header(a, data.len())?;
-    crate::fsio::write_atomic(path, |w| {
+    to.write_atomic(path, |w| {
         w.write_all(&header)?;
         for piece in data.chunks(NPY_PIECE) {
             visit(piece);
@@ -68,7 +70,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("rocc-npy-pieces-{}", std::process::id()));
         let (ours, theirs) = (dir.join("ours.npy"), dir.join("theirs.npy"));
         let mut seen = Vec::new();
-        let bytes = write_npy_u8(&ours, &a, |p| seen.extend_from_slice(p)).expect("write");
+        let bytes = write_npy_u8(To::Now, &ours, &a, |p| seen.extend_from_slice(p)).expect("write");
         std::fs::create_dir_all(&dir).expect("dir");
         a.write_npy(std::fs::File::create(&theirs).expect("create")).expect("write_npy");
         let (x, y) = (std::fs::read(&ours).expect("read"), std::fs::read(&theirs).expect("read"));
