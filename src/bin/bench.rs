@@ -444,7 +444,7 @@ fn bench_e2e() {
     }
 }
 
-/// `bench e2e`'s 0.2 deg run (all stages, no previews) without keeping its 14 GB: one library
+/// `bench e2e`'s 0.2 deg run (all stages, no previews) without keeping its 28 GB: one library
 /// file at a time, each file's outputs deleted before the next (a clip's frames still run on
 /// every core), optionally only the first `frames` frames of each clip. Frames/s and process
 /// CPU ms per frame, the writes included.

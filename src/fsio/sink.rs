@@ -1,7 +1,7 @@
 //! The writer behind `write_atomic` and `Behind`. It gathers a file in aligned 1 MiB chunks; a
 //! file that ends inside the first chunk is written the usual way, a larger one goes to the disk
-//! with `O_DIRECT`, the chunks handed to the kernel in one vectored write, never through the page
-//! cache. Why: on the machines measured (docs/benchmarks.md, `bench e2e`) the kernel's copy into
+//! with `O_DIRECT`, its chunks handed to the kernel in vectored writes, never through the page
+//! cache. Why: on the machines measured (docs/benchmarks.md, "Writes") the kernel's copy into
 //! freshly allocated page-cache pages costs about 1.7 ms of CPU per 10 MB, a quarter of a
 //! 0.2 deg frame's CPU time, against a tenth of that for a direct write; a corpus is written once
 //! and read later, so caching it only evicts what the user had in memory. Where the file system

@@ -290,8 +290,8 @@ pub fn pcd_frame_path(dir: &Path, frame: usize) -> PathBuf {
     dir.join("lidar").join(format!("{frame:06}.pcd"))
 }
 
-/// Points coded per `write_all`: 256 kB of `.pcd` records, small enough that the kernel's copy
-/// into the page cache reads them from the cache the coder just wrote them to.
+/// Points coded per `write_all`: 256 kB of `.pcd` records, small enough that the copy
+/// into the file's buffer reads them from the cache the coder just wrote them to.
 const CHUNK_POINTS: usize = 1 << 14;
 
 /// Write `pc`'s points to `w` as fixed-size records, `CHUNK_POINTS` at a time, through a buffer
