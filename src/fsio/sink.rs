@@ -130,9 +130,10 @@ impl Sink {
         let mut all = slices();
         let total: usize = all.iter().map(|s| s.len()).sum();
         match write_all_vectored(f, &mut all) {
-            // A file system that opened with O_DIRECT but refuses this write: write these chunks
-            // again, buffered, from where the file stood.
-            Err(e) if self.direct && e.raw_os_error() == Some(EINVAL) => {
+            // A file system that opened with O_DIRECT but refuses the write (EINVAL, mostly):
+            // write these chunks again, buffered, from where the file stood. A failure for
+            // another reason (a full disk) fails again there.
+            Err(_) if self.direct => {
                 self.direct = false;
                 buffered(f)?;
                 f.set_len(self.written)?;
@@ -188,11 +189,6 @@ impl Write for Sink {
     }
 }
 
-#[cfg(all(target_os = "linux", target_env = "gnu"))]
-const EINVAL: i32 = libc::EINVAL;
-#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
-const EINVAL: i32 = 22;
-
 /// Create `path` for direct writes where the file system allows it; `true` when it does.
 #[cfg(all(target_os = "linux", target_env = "gnu"))]
 fn open(path: &Path) -> io::Result<(File, bool)> {
@@ -203,10 +199,11 @@ fn open(path: &Path) -> io::Result<(File, bool)> {
     if REFUSE_DIRECT.load(std::sync::atomic::Ordering::Relaxed) {
         return Ok((o.open(path)?, false));
     }
+    // A refusal is EINVAL on most file systems; whatever it is, the plain open says whether the
+    // file can be made at all.
     match o.clone().custom_flags(libc::O_DIRECT).open(path) {
         Ok(f) => Ok((f, true)),
-        Err(e) if e.raw_os_error() == Some(libc::EINVAL) => Ok((o.open(path)?, false)),
-        Err(e) => Err(e),
+        Err(_) => Ok((o.open(path)?, false)),
     }
 }
 
