@@ -543,7 +543,7 @@ fn files_round_trip_and_load_in_numpy() {
     let dir = tmp_dir("py");
     let npy = backend::occ_frame_path(&dir, 0);
     let (bin, pcd) = (lidar::bin_frame_path(&dir, 0), lidar::pcd_frame_path(&dir, 0));
-    let n = backend::write_npy(&npy, &occ).expect("npy");
+    let n = rocc::output::write_occ_npy(rocc::fsio::To::Now, &npy, &occ, |_| {}).expect("npy");
     assert_eq!(n, std::fs::metadata(&npy).expect("meta").len());
     assert_eq!(backend::read_npy(&npy).expect("read back"), occ);
     assert_eq!(lidar::write_bin(rocc::fsio::To::Now, &bin, &pc).expect("bin"), 16 * pc.points.len() as u64);

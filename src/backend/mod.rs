@@ -49,7 +49,6 @@ use crate::raster::layout::{CH_CARPARKS, CH_CROSSWALKS, CH_DRIVABLE, CH_INTERSEC
 use crate::view::EgoBox;
 use layout::*;
 use ndarray::Array3;
-use ndarray_npy::WriteNpyExt;
 use shape::{Prim, ShapeKind, prims, shape_kind};
 use std::cell::RefCell;
 use std::io;
@@ -303,11 +302,6 @@ pub fn box_coverage(occ: &Occupancy, b: &EgoBox, label: u8) -> Option<f64> {
 /// `dir/occ/NNNNNN.npy` for frame `frame` (SPEC output layout).
 pub fn occ_frame_path(dir: &Path, frame: usize) -> PathBuf {
     dir.join("occ").join(format!("{frame:06}.npy"))
-}
-
-/// Write labels as an uncompressed `.npy` (uint8, C order, (400, 400, 32)), atomically.
-pub fn write_npy(path: &Path, occ: &Occupancy) -> io::Result<u64> {
-    crate::fsio::write_atomic(path, |w| occ.labels.write_npy(w).map_err(|e| io::Error::other(format!("npy: {e}"))))
 }
 
 /// Read an occupancy `.npy` back (any uint8 (400, 400, 32) array, e.g. nuPlan-Occ's dense form).

@@ -24,7 +24,7 @@
 //!   (default 1 on the CPU, 4 on a GPU) and `--configs cpu-small,paper`.
 
 use rayon::prelude::*;
-use rocc::backend::{Background, OccInput, Occupancy, OccupancyBackend, Procedural, write_npy};
+use rocc::backend::{Background, OccInput, Occupancy, OccupancyBackend, Procedural};
 use rocc::compile::{Front, Options, batch, frame_boxes, front};
 use rocc::fsio::Fnv1a;
 use rocc::lidar::{Rig, scan, write_bin, write_pcd};
@@ -370,7 +370,7 @@ fn bench_stages() {
     };
     report("write bev .npz (deflate)", &npz, &|_| String::new());
     let npy = |i: usize| {
-        let _ = write_npy(&dir.join(format!("o{i}.npy")), &occs[i]);
+        let _ = rocc::output::write_occ_npy(rocc::fsio::To::Now, &dir.join(format!("o{i}.npy")), &occs[i], |_| {});
     };
     report("write occ .npy", &npy, &|_| String::new());
     let clouds: Vec<_> = frames.iter().take(8).map(|&i| scan(&occs[i], &rig, 1, i)).collect();

@@ -9,14 +9,14 @@
 use super::world::{ClipWorld, ground_velocity};
 use super::{Front, Options, Stage};
 use crate::backend::flow::{Flow, flow_into, to_ego_axes};
-use crate::backend::{Background, OccInput, Occupancy, occ_frame_path, write_npy};
+use crate::backend::{Background, OccInput, Occupancy, occ_frame_path};
 use crate::fsio::To;
 use crate::lidar::dda::Skip;
 use crate::lidar::{bin_frame_path, pcd_frame_path, scan_with, write_bin, write_pcd};
 use crate::output::{
     FrameBoxes, FrameWorld, GifFrame, Manifest, OutputFile, PREVIEW_SIDE, StageTiming, flow_frame_path, gif_frame,
     labels_frame_path, paint_bev, paint_lidar, paint_occ, write_bev_frame, write_boxes_json, write_boxes_json_with,
-    write_flow, write_gif, write_labels, write_manifest, write_npy_u8, write_preview_png, write_scene_json,
+    write_flow, write_gif, write_labels, write_manifest, write_occ_npy, write_preview_png, write_scene_json,
     write_sheet,
 };
 use crate::place::Pose;
@@ -656,12 +656,9 @@ pub fn render_clip(r: &Render, opts: &Options, dir: &Path, on_frame: &(dyn Fn() 
 /// copy into the file's buffer then finds the piece in the cache). Returns the file's size.
 fn write_occ(to: To, path: &Path, occ: &Occupancy, summarise: bool) -> io::Result<(u64, Option<Skip>)> {
     use crate::backend::layout::{NX, NY, NZ};
-    if !occ.labels.is_standard_layout() {
-        return Ok((write_npy(path, occ)?, None));
-    }
     // The summary covers the grid's shape only.
     let mut summary = (summarise && occ.labels.dim() == (NX, NY, NZ)).then(Skip::summary);
-    let bytes = write_npy_u8(to, path, &occ.labels, |piece| {
+    let bytes = write_occ_npy(to, path, occ, |piece| {
         if let Some(s) = &mut summary {
             s.add(piece);
         }

@@ -18,7 +18,7 @@ mod vector_map;
 pub use anim::{GifFrame, gif_frame, write_gif, write_sheet};
 pub use flow::{FLOW_KEY, flow_frame_path, write_flow};
 pub use labels::{MASK_CAMERA_KEY, MASK_LIDAR_KEY, SEMANTICS_KEY, labels_frame_path, write_labels};
-pub use npy::write_npy_u8;
+pub use npy::{write_npy_u8, write_occ_npy};
 pub use npz::{DEFLATE, Deflate, NpyElem, Npz};
 pub use paint::{CHANNEL_COLOURS, SIDE as PREVIEW_SIDE, STRUCTURE_COLOUR, paint_bev, paint_lidar, paint_occ, palette};
 pub use preview::{render_preview, write_preview_png};
