@@ -392,13 +392,18 @@ fn opt<'a>(args: &'a [String], name: &str) -> Option<&'a str> {
 /// User + system CPU seconds of this process so far (all threads), from /proc/self/stat: on a
 /// shared machine the steadier figure, as waiting for a core does not count.
 fn cpu_secs() -> Option<f64> {
+    cpu_split().map(|(user, system)| user + system)
+}
+
+/// Process CPU seconds so far: (user, system).
+fn cpu_split() -> Option<(f64, f64)> {
     let s = std::fs::read_to_string("/proc/self/stat").ok()?;
     // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
     let rest = &s[s.rfind(')')? + 2..];
     let f: Vec<&str> = rest.split_whitespace().collect();
-    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    let ticks = |i: usize| f.get(i)?.parse::<f64>().ok();
     // USER_HZ: 100 on every Linux this runs on (`getconf CLK_TCK`).
-    Some(ticks / 100.0)
+    Some((ticks(11)? / 100.0, ticks(12)? / 100.0))
 }
 
 fn peak_rss_mb() -> Option<f64> {
@@ -419,12 +424,18 @@ fn bench_e2e() {
     for (label, previews, rig) in runs {
         let _ = std::fs::remove_dir_all(&out);
         let opts = Options { previews, force: true, rig, ..Options::default() };
-        let (t0, c0) = (Instant::now(), cpu_secs());
+        let (t0, c0) = (Instant::now(), cpu_split());
         let r = batch::run(&inputs, &out, &opts, true);
         let secs = t0.elapsed().as_secs_f64();
         let frames: usize = r.clips.iter().map(|c| c.frames).sum();
-        if let Some((c1, c0)) = cpu_secs().zip(c0) {
-            println!("  CPU time: {:.1} ms per frame", 1e3 * (c1 - c0) / frames.max(1) as f64);
+        if let Some(((u1, s1), (u0, s0))) = cpu_split().zip(c0) {
+            let per = |x: f64| 1e3 * x / frames.max(1) as f64;
+            println!(
+                "  CPU time: {:.1} ms per frame (user {:.1}, system {:.1})",
+                per(u1 - u0 + s1 - s0),
+                per(u1 - u0),
+                per(s1 - s0)
+            );
         }
         println!(
             "== e2e ({label}): {} clips, {frames} frames of BEV + occupancy + LiDAR + writes in {secs:.1} s on {} cores: {:.1} frames/s ({} failed)",
