@@ -104,7 +104,7 @@ mod tests {
             let rows: Vec<f32> = (0..width * 300)
                 .map(|i: usize| {
                     let h = (i as u32).wrapping_mul(2_654_435_761) >> 8;
-                    if h % 5 == 0 {
+                    if h.is_multiple_of(5) {
                         special[(h as usize / 5) % special.len()]
                     } else {
                         (h % 4000) as f32 / 100.0 - 20.0
