@@ -1,13 +1,16 @@
 //! The BEV encoder's convolutions as one backend operation whose weight gradient the CPU computes
 //! as im2col and one matrix product, or, from an input mostly of zeros (the BEV itself, under
-//! the first convolution), from its non-zero elements alone. Forward and the input's gradient are burn's own
-//! (`conv2d`, `conv2d_x_backward`): the logits do not change. burn's CPU weight gradient is a
+//! the first convolution), from its non-zero elements alone; a training step's forward pass over
+//! such an input also sums its non-zero elements alone (the same values to float rounding).
+//! Inference's forward and the input's gradient are burn's own (`conv2d`, `conv2d_x_backward`):
+//! inference logits do not change. burn's CPU weight gradient is a
 //! convolution of the input with the output's gradient as the kernel, which at batch 1-4 and up
 //! to 16 output channels takes its direct small-channel path: a third of a `cpu-small` training
 //! step on the 400 x 400 BEV. A GPU without `fusion` computes the weight gradient as one batched
 //! matrix product over the input's patches (`weight_grad_by_patches`) and the bias gradient per
 //! plane; with `fusion` it runs burn's own convolution throughout.
-//! tests/bev_conv.rs checks the CPU's weight gradient against burn's, on dense and sparse inputs;
+//! tests/bev_conv.rs checks the CPU's forward pass and weight gradient against burn's, on dense
+//! and sparse inputs;
 //! the GPU formulations are checked against burn's on the CPU (this file's tests).
 
 use super::host_read::flex_slice;
@@ -40,6 +43,18 @@ pub trait BevConvOps: burn::backend::Backend {
         Self::conv2d(x, weight, Some(bias), options(stride, padding))
     }
 
+    /// `bev_conv` for a training step (the autodiff graph tracks it): the same values to float
+    /// rounding, where `bev_conv` keeps burn's bits for inference.
+    fn bev_conv_train(
+        x: FloatTensor<Self>,
+        weight: FloatTensor<Self>,
+        bias: FloatTensor<Self>,
+        stride: usize,
+        padding: usize,
+    ) -> FloatTensor<Self> {
+        Self::bev_conv(x, weight, bias, stride, padding)
+    }
+
     /// The weight's gradient `[O, C, kh, kw]` from the input and the output's gradient.
     fn bev_conv_weight_grad(
         x: FloatTensor<Self>,
@@ -60,6 +75,33 @@ pub trait BevConvOps: burn::backend::Backend {
 }
 
 impl BevConvOps for Flex {
+    /// An input mostly of zeros (the BEV under the first convolution) sums its non-zero
+    /// elements alone (`Im2col::sparse_forward`); anything else runs burn's convolution.
+    fn bev_conv_train(
+        x: FloatTensor<Self>,
+        weight: FloatTensor<Self>,
+        bias: FloatTensor<Self>,
+        stride: usize,
+        padding: usize,
+    ) -> FloatTensor<Self> {
+        if x.dtype() != DType::F32 || weight.dtype() != DType::F32 || bias.dtype() != DType::F32 {
+            return Self::bev_conv(x, weight, bias, stride, padding);
+        }
+        let x = x.to_contiguous();
+        let xs = flex_slice(&x);
+        if xs.iter().filter(|&&v| v != 0.0).count() * SPARSE >= xs.len() {
+            return Self::bev_conv(x, weight, bias, stride, padding);
+        }
+        let (weight, bias) = (weight.to_contiguous(), bias.to_contiguous());
+        let wshape: [usize; 4] = weight.shape().dims();
+        let xdims: [usize; 4] = x.shape().dims();
+        let along = |n: usize, k: usize| (n + 2 * padding).saturating_sub(k) / stride + 1;
+        let out = [along(xdims[2], wshape[2]), along(xdims[3], wshape[3])];
+        let cols = Im2col { x: xdims, out, kernel: [wshape[2], wshape[3]], stride, padding };
+        let y = cols.sparse_forward(xs, flex_slice(&weight), flex_slice(&bias));
+        FlexTensor::from_data(TensorData::new(y, [xdims[0], wshape[0], out[0], out[1]]))
+    }
+
     fn bev_conv_weight_grad(
         x: FloatTensor<Self>,
         weight: FloatTensor<Self>,
@@ -252,6 +294,77 @@ impl Im2col {
         out
     }
 
+    /// The convolution's output `[B, O, H', W']` from the input's non-zero elements only: the
+    /// bias, plus each element's value times the weights of every output pixel its kernel
+    /// positions reach. One task per frame and band of output rows, each summing its pixels'
+    /// terms in (channel, row, column, ky, kx) order: the same sums on any thread count.
+    fn sparse_forward(&self, x: &[f32], weight: &[f32], bias: &[f32]) -> Vec<f32> {
+        let [b, c, h, w] = self.x;
+        let [ho, wo] = self.out;
+        let [kh, kw] = self.kernel;
+        let (s, pad, o) = (self.stride, self.padding, bias.len());
+        let reach = |i: usize, k: usize, n: usize| {
+            let t = (i + pad).checked_sub(k)?;
+            (t % s == 0 && t / s < n).then_some(t / s)
+        };
+        // The weights as [C, kh, kw, O]: one element's terms for an output pixel are contiguous.
+        let mut wt = vec![0f32; c * kh * kw * o];
+        for (oi, wo_) in weight.chunks_exact(c * kh * kw).enumerate() {
+            for (k, &v) in wo_.iter().enumerate() {
+                wt[k * o + oi] = v;
+            }
+        }
+        const BAND: usize = 8;
+        let bands = ho.div_ceil(BAND);
+        // Per task: its rows of output pixels, channels last.
+        let parts: Vec<Vec<f32>> = (0..b * bands)
+            .into_par_iter()
+            .map(|task| {
+                let (bi, y0) = (task / bands, task % bands * BAND);
+                let y1 = (y0 + BAND).min(ho);
+                let mut acc = vec![0f32; (y1 - y0) * wo * o];
+                for px in acc.chunks_exact_mut(o) {
+                    px.copy_from_slice(bias);
+                }
+                // Input rows whose kernel positions reach output rows y0..y1.
+                let (r0, r1) = ((y0 * s).saturating_sub(pad), ((y1 - 1) * s + kh).saturating_sub(pad).min(h));
+                for ci in 0..c {
+                    let plane = &x[(bi * c + ci) * h * w..(bi * c + ci + 1) * h * w];
+                    for iy in r0..r1 {
+                        for (ix, &v) in plane[iy * w..(iy + 1) * w].iter().enumerate() {
+                            if v == 0.0 {
+                                continue;
+                            }
+                            for ky in 0..kh {
+                                let Some(y) = reach(iy, ky, ho).filter(|y| (y0..y1).contains(y)) else { continue };
+                                for kx in 0..kw {
+                                    let Some(xo) = reach(ix, kx, wo) else { continue };
+                                    let wk = &wt[((ci * kh + ky) * kw + kx) * o..][..o];
+                                    let a = &mut acc[((y - y0) * wo + xo) * o..][..o];
+                                    for (a, &wv) in a.iter_mut().zip(wk) {
+                                        *a += v * wv;
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+                acc
+            })
+            .collect();
+        let mut out = vec![0f32; b * o * ho * wo];
+        for (task, acc) in parts.iter().enumerate() {
+            let (bi, y0) = (task / bands, task % bands * BAND);
+            for (p, px) in acc.chunks_exact(o).enumerate() {
+                let (y, xo) = (y0 + p / wo, p % wo);
+                for (oi, &v) in px.iter().enumerate() {
+                    out[((bi * o + oi) * ho + y) * wo + xo] = v;
+                }
+            }
+        }
+        out
+    }
+
     fn rows(&self) -> usize {
         self.x[1] * self.kernel[0] * self.kernel[1]
     }
@@ -325,7 +438,7 @@ impl<B: Backend + BevConvOps, C: CheckpointStrategy> BevConvOps for Autodiff<B, 
         match ConvBackward.prepare::<C>([x.node(), weight.node(), bias.node()]).compute_bound().stateful() {
             OpsKind::Tracked(prep) => {
                 let (xi, wi) = (x.primitive().clone(), weight.primitive().clone());
-                let out = B::bev_conv(xi.clone(), wi.clone(), bias.into_primitive(), stride, padding);
+                let out = B::bev_conv_train(xi.clone(), wi.clone(), bias.into_primitive(), stride, padding);
                 prep.finish((xi, wi, stride, padding), out)
             }
             OpsKind::UnTracked(prep) => prep.finish(B::bev_conv(
