@@ -89,7 +89,7 @@ impl BevConvOps for Flex {
         }
         let x = x.to_contiguous();
         let xs = flex_slice(&x);
-        if xs.iter().filter(|&&v| v != 0.0).count() * SPARSE >= xs.len() {
+        if !mostly_zero(xs) {
             return Self::bev_conv(x, weight, bias, stride, padding);
         }
         let (weight, bias) = (weight.to_contiguous(), bias.to_contiguous());
@@ -119,7 +119,7 @@ impl BevConvOps for Flex {
         let cols = Im2col { x: xdims, out: [gdims[2], gdims[3]], kernel: [wshape[2], wshape[3]], stride, padding };
         let gt = transposed_grad(flex_slice(&grad), gdims);
         let xs = flex_slice(&x);
-        if xs.iter().filter(|&&v| v != 0.0).count() * SPARSE < xs.len() {
+        if mostly_zero(xs) {
             return FlexTensor::from_data(TensorData::new(cols.sparse_weight_grad(xs, &gt, gdims[1]), wshape));
         }
         let xcol = cols.build(xs);
@@ -238,6 +238,11 @@ struct Im2col {
 /// An input with fewer than one non-zero in `SPARSE` elements (the BEV: 0/1 masks and aux
 /// channels that are zero outside boxes) takes `Im2col::sparse_weight_grad`.
 const SPARSE: usize = 4;
+
+/// Whether fewer than one element of `xs` in `SPARSE` is non-zero.
+fn mostly_zero(xs: &[f32]) -> bool {
+    xs.iter().filter(|&&v| v != 0.0).count() * SPARSE < xs.len()
+}
 
 impl Im2col {
     /// The weight's gradient `[O, C, kh, kw]` from the input's non-zero elements only: each adds
