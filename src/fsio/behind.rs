@@ -54,7 +54,9 @@ fn writer() -> Option<&'static Mutex<Sender<Job>>> {
 
 fn run(job: Job) {
     let Job { sink, tmp, path, size, tally } = job;
-    let result = sink.finish().and_then(|_| std::fs::rename(&tmp, &path));
+    // A panic here would leave `finish` waiting forever: it becomes this file's error.
+    let write = std::panic::AssertUnwindSafe(|| sink.finish().and_then(|_| std::fs::rename(&tmp, &path)));
+    let result = std::panic::catch_unwind(write).unwrap_or_else(|_| Err(io::Error::other("the writer thread failed")));
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
