@@ -44,8 +44,8 @@ pub(super) fn walk(
     hi: [i64; 3],
     mut seen: impl FnMut(usize),
 ) -> Option<Hit> {
-    let n = hi;
     let WalkStart { idx, step, t_next, t_delta } = WalkStart::new(o, d, inv, t_in, VOXEL, lo, hi);
+    let axes = Axis::three(step, t_delta, lo, hi);
     // The same additions and comparisons as one loop over [f64; 3] would make, on scalars the
     // compiler keeps in registers (an array indexed by the stepping axis lives on the stack).
     let (mut tx, mut ty, mut tz) = (t_next[0], t_next[1], t_next[2]);
@@ -68,40 +68,13 @@ pub(super) fn walk(
             return Some(Hit { t, t_exit: tn.min(t_out.max(t)), voxel, label, axis });
         }
         seen(at);
-        match a {
-            0 => {
-                t = tx;
-                if t > t_out {
-                    return None;
-                }
-                i += step[0];
-                if i < lo[0] || i >= n[0] {
-                    return None;
-                }
-                tx += t_delta[0];
-            }
-            1 => {
-                t = ty;
-                if t > t_out {
-                    return None;
-                }
-                j += step[1];
-                if j < lo[1] || j >= n[1] {
-                    return None;
-                }
-                ty += t_delta[1];
-            }
-            _ => {
-                t = tz;
-                if t > t_out {
-                    return None;
-                }
-                k += step[2];
-                if k < lo[2] || k >= n[2] {
-                    return None;
-                }
-                tz += t_delta[2];
-            }
+        let stepped = match a {
+            0 => axes[0].advance(&mut t, &mut tx, &mut i, t_out),
+            1 => axes[1].advance(&mut t, &mut ty, &mut j, t_out),
+            _ => axes[2].advance(&mut t, &mut tz, &mut k, t_out),
+        };
+        if !stepped {
+            return None;
         }
         axis = a;
     }
@@ -143,6 +116,39 @@ impl<const N: usize> WalkStart<N> {
     }
 }
 
+/// One axis of a voxel walk: its step, the distance between its boundaries and its index range.
+#[derive(Clone, Copy)]
+struct Axis {
+    step: i64,
+    delta: f64,
+    lo: i64,
+    hi: i64,
+}
+
+impl Axis {
+    #[inline(always)]
+    fn three(step: [i64; 3], delta: [f64; 3], lo: [i64; 3], hi: [i64; 3]) -> [Axis; 3] {
+        std::array::from_fn(|a| Axis { step: step[a], delta: delta[a], lo: lo[a], hi: hi[a] })
+    }
+
+    /// Step across this axis' next boundary (`*boundary`, which moves on by `delta`) into the
+    /// next cell: `false` when the boundary lies beyond `t_out` or the cell outside the range.
+    /// The walks keep `t`, the boundaries and the indices as scalars (registers, once inlined).
+    #[inline(always)]
+    fn advance(&self, t: &mut f64, boundary: &mut f64, index: &mut i64, t_out: f64) -> bool {
+        *t = *boundary;
+        if *t > t_out {
+            return false;
+        }
+        *index += self.step;
+        if *index < self.lo || *index >= self.hi {
+            return false;
+        }
+        *boundary += self.delta;
+        true
+    }
+}
+
 /// `walk` for `Skip`, with `cols` (`Skip::cols`) for the occupancy: the same voxels in the same
 /// order, the same comparisons and sums, so the same hit. A column's mask is read once when the
 /// walk enters it, and the steps along z inside it form their own loop: z is stepped exactly
@@ -163,6 +169,7 @@ pub(super) fn walk_columns(
     hi: [i64; 3],
 ) -> Option<Hit> {
     let WalkStart { idx, step, t_next, t_delta } = WalkStart::new(o, d, inv, t_in, VOXEL, lo, hi);
+    let axes = Axis::three(step, t_delta, lo, hi);
     let (mut tx, mut ty, mut tz) = (t_next[0], t_next[1], t_next[2]);
     let (mut i, mut j, mut k) = (idx[0], idx[1], idx[2]);
     let mut t = t_in;
@@ -180,38 +187,20 @@ pub(super) fn walk_columns(
             if !(tz < tx && tz < ty) {
                 break;
             }
-            t = tz;
-            if t > t_out {
+            if !axes[2].advance(&mut t, &mut tz, &mut k, t_out) {
                 return None;
             }
-            k += step[2];
-            if k < lo[2] || k >= hi[2] {
-                return None;
-            }
-            tz += t_delta[2];
             axis = 2;
         }
         if tx <= ty {
-            t = tx;
-            if t > t_out {
+            if !axes[0].advance(&mut t, &mut tx, &mut i, t_out) {
                 return None;
             }
-            i += step[0];
-            if i < lo[0] || i >= hi[0] {
-                return None;
-            }
-            tx += t_delta[0];
             axis = 0;
         } else {
-            t = ty;
-            if t > t_out {
+            if !axes[1].advance(&mut t, &mut ty, &mut j, t_out) {
                 return None;
             }
-            j += step[1];
-            if j < lo[1] || j >= hi[1] {
-                return None;
-            }
-            ty += t_delta[1];
             axis = 1;
         }
     }
