@@ -17,9 +17,7 @@ const MAX_QUEUED: u64 = 48 << 20;
 
 struct Job {
     sink: Sink,
-    tmp: PathBuf,
     path: PathBuf,
-    size: u64,
     tally: Arc<Tally>,
 }
 
@@ -53,13 +51,14 @@ fn writer() -> Option<&'static Mutex<Sender<Job>>> {
 }
 
 fn run(job: Job) {
-    let Job { sink, tmp, path, size, tally } = job;
+    let Job { sink, path, tally } = job;
+    let (size, tmp) = (sink.len(), sink.tmp().to_path_buf());
     // A panic here would leave `finish` waiting forever: it becomes this file's error.
-    let write = std::panic::AssertUnwindSafe(|| sink.finish().and_then(|_| std::fs::rename(&tmp, &path)));
-    let result = std::panic::catch_unwind(write).unwrap_or_else(|_| Err(io::Error::other("the writer thread failed")));
-    if result.is_err() {
+    let write = std::panic::AssertUnwindSafe(|| super::settle(sink, &path));
+    let result = std::panic::catch_unwind(write).unwrap_or_else(|_| {
         let _ = std::fs::remove_file(&tmp);
-    }
+        Err(io::Error::other("the writer thread failed"))
+    });
     {
         let (lock, cv) = &QUEUED;
         if let Ok(mut q) = lock.lock() {
@@ -92,16 +91,11 @@ impl Behind {
     /// `write_atomic`, except that the file reaches its final name later (by `finish`). Returns
     /// the file's size. Errors of `fill` come back here; errors of the disk from `finish`.
     pub fn write_atomic(&self, path: &Path, fill: impl FnOnce(&mut Sink) -> io::Result<()>) -> io::Result<u64> {
-        let (tmp, mut sink) = super::start(path)?;
-        if let Err(e) = fill(&mut sink) {
-            drop(sink);
-            let _ = std::fs::remove_file(&tmp);
-            return Err(e);
-        }
+        let sink = super::filled(path, fill)?;
         let size = sink.len();
         let Some(tx) = writer() else {
             // No thread to be had: write it here.
-            return super::settle(sink, &tmp, path);
+            return super::settle(sink, path);
         };
         {
             let (lock, cv) = &QUEUED;
@@ -114,7 +108,7 @@ impl Behind {
         if let Ok(mut s) = self.tally.state.lock() {
             s.pending += 1;
         }
-        let job = Job { sink, tmp, path: path.to_path_buf(), size, tally: self.tally.clone() };
+        let job = Job { sink, path: path.to_path_buf(), tally: self.tally.clone() };
         let sent = tx.lock().map_err(|_| io::Error::other("write queue poisoned"))?.send(job);
         if let Err(back) = sent {
             // The writer thread is gone (it never is while the process runs): write it here.

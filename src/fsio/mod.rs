@@ -39,17 +39,12 @@ impl To<'_> {
 /// Write `path` through `fill` under a temporary sibling name, then rename it into place; returns
 /// the final size. Parent directories are created. The temporary file is removed on error.
 pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut Sink) -> io::Result<()>) -> io::Result<u64> {
-    let (tmp, mut w) = start(path)?;
-    if let Err(e) = fill(&mut w) {
-        drop(w);
-        let _ = fs::remove_file(&tmp);
-        return Err(e);
-    }
-    settle(w, &tmp, path)
+    settle(filled(path, fill)?, path)
 }
 
-/// The temporary name for `path` (its directory created) and a sink for it.
-fn start(path: &Path) -> io::Result<(std::path::PathBuf, Sink)> {
+/// A sink for `path` under its temporary name (the directory created), filled by `fill`; on
+/// error the temporary is removed.
+fn filled(path: &Path, fill: impl FnOnce(&mut Sink) -> io::Result<()>) -> io::Result<Sink> {
     let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     fs::create_dir_all(dir)?;
     let name = path
@@ -58,15 +53,22 @@ fn start(path: &Path) -> io::Result<(std::path::PathBuf, Sink)> {
     // Unique per process and call, so parallel writers never share a temporary.
     let n = TMP_COUNTER.fetch_add(1, Ordering::Relaxed);
     let tmp = dir.join(format!(".{}.tmp-{}-{n}", name.to_string_lossy(), std::process::id()));
-    let sink = Sink::new(&tmp);
-    Ok((tmp, sink))
+    let mut sink = Sink::new(&tmp);
+    if let Err(e) = fill(&mut sink) {
+        drop(sink);
+        let _ = fs::remove_file(&tmp);
+        return Err(e);
+    }
+    Ok(sink)
 }
 
-/// Write out what `sink` holds and rename `tmp` to `path`; the temporary is removed on error.
-fn settle(sink: Sink, tmp: &Path, path: &Path) -> io::Result<u64> {
-    let result = sink.finish().and_then(|bytes| fs::rename(tmp, path).map(|_| bytes));
+/// Write out what `sink` holds and rename its temporary to `path`; the temporary is removed on
+/// error.
+fn settle(sink: Sink, path: &Path) -> io::Result<u64> {
+    let tmp = sink.tmp().to_path_buf();
+    let result = sink.finish().and_then(|bytes| fs::rename(&tmp, path).map(|_| bytes));
     if result.is_err() {
-        let _ = fs::remove_file(tmp);
+        let _ = fs::remove_file(&tmp);
     }
     result
 }

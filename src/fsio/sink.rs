@@ -81,6 +81,11 @@ impl Sink {
         Sink { path: path.to_path_buf(), chunks: Vec::new(), last: CHUNK, file: None, direct: false, written: 0 }
     }
 
+    /// The temporary name the sink writes.
+    pub(super) fn tmp(&self) -> &Path {
+        &self.path
+    }
+
     /// The file's size so far.
     pub(super) fn len(&self) -> u64 {
         self.written + (self.chunks.len().saturating_sub(1) * CHUNK + self.held_last()) as u64
