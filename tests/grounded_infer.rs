@@ -1,6 +1,7 @@
 //! Inference of the learned backend: frames batched per forward pass give the labels of single
 //! frames, byte for byte, through the library and through `rocc compile`; device selection and
-//! GPU failures are diagnostics (E0908, E0910-E0913), never a panic.
+//! GPU failures are diagnostics (E0908, E0910-E0913), never a panic; mixed precision is refused
+//! where it cannot run (E0914).
 
 #[path = "support/grounded_tiny.rs"]
 mod grounded_tiny;
@@ -183,6 +184,8 @@ fn device_options_are_checked() {
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("E0908"));
     let o = rocc(&[&base[..], &["--grounded-batch", "2"]].concat());
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("E0908"));
+    let o = rocc(&[&base[..], &["--precision", "mixed"]].concat());
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("E0908"));
     let o = rocc(&[&base[..], &["--device", "tpu"]].concat());
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("expected cpu, wgpu or cuda"));
     assert!(!out.exists(), "nothing is written on a bad option");
@@ -235,9 +238,55 @@ fn a_panic_inside_device_work_is_a_diagnostic() {
     assert!(std::panic::catch_unwind(|| panic!("plain")).is_err());
 }
 
+/// Mixed precision is for GPUs: `rocc compile` and `rocc train` refuse it on the CPU before any
+/// work, with E0914 and the way back.
+#[test]
+fn mixed_precision_is_refused_on_the_cpu() {
+    let dir = tempdir("mixed");
+    let bpk = weights(&dir);
+    let scn = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/replayed_cut_in.scn");
+    let out = dir.join("out");
+    let o = rocc(&[
+        "compile",
+        scn.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--frames",
+        "0",
+        "-q",
+        "--backend",
+        "grounded",
+        "--weights",
+        bpk.to_str().unwrap(),
+        "--precision",
+        "mixed",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("E0914") && err.contains("--precision full"), "{err}");
+    assert!(!out.join("replayed_cut_in").exists(), "nothing is compiled");
+    let cfg = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/cpu-small.ron");
+    let o = rocc(&[
+        "train",
+        "generator",
+        "--data",
+        dir.to_str().unwrap(),
+        "--config",
+        cfg.to_str().unwrap(),
+        "-o",
+        dir.join("model").to_str().unwrap(),
+        "--precision",
+        "mixed",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("E0914"), "{err}");
+    let o = rocc(&["train", "generator", "--data", ".", "--config", "x", "-o", "y", "--precision", "half"]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("expected full or mixed"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn the_device_codes_are_explained() {
-    for code in ["E0910", "E0911", "E0912", "E0913"] {
+    for code in ["E0910", "E0911", "E0912", "E0913", "E0914"] {
         let o = rocc(&["explain", code]);
         assert!(o.status.success(), "{code}");
         let text = String::from_utf8_lossy(&o.stdout);

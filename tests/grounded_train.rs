@@ -50,6 +50,7 @@ fn a_small_model_trained_on_the_cpu_beats_the_layer_majority_baseline() {
         quiet: true,
         max_steps: Some(30),
         epochs: Some(100),
+        precision: Default::default(),
     };
     let report = train(&opts).unwrap();
     assert_eq!(report.steps, 30);
@@ -111,5 +112,50 @@ fn a_small_model_trained_on_the_cpu_beats_the_layer_majority_baseline() {
     let c = occ.counts();
     assert!(c[2] > 0, "vehicles in the learned occupancy: {c:?}");
     assert!(std::fs::metadata(clip.join("lidar/000000.bin")).unwrap().len() > 0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Mixed precision through the training loop (the CPU computes f16 too, slowly): steps train,
+/// and a gradient scale far beyond half precision's range makes every step overflow, so each is
+/// skipped and the weights stay as they started.
+#[test]
+fn mixed_precision_trains_and_skips_steps_whose_gradient_overflows() {
+    use rocc::backend::grounded::attention::{GradScale, Precision};
+    use rocc::backend::grounded::{Generator, load_weights};
+    let dir = std::env::temp_dir().join(format!("rocc-grounded-mixed-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let data = dir.join("data");
+    compile(&["pedestrian_midblock.scn"], &data, "0,10,20,30", OccBackend::Procedural, Stage::Occ);
+    let mut config = GroundedConfig::from_ron(include_str!("../configs/cpu-small.ron")).unwrap();
+    config.train.crop = 64;
+    config.train.val_fraction = 0.0;
+    let opts = |out: &str, steps: usize, precision: Precision| TrainOptions {
+        stage: TrainStage::Generator,
+        data: data.clone(),
+        val: None,
+        config: config.clone(),
+        out: dir.join(out),
+        resume: false,
+        init: None,
+        device: cpu(),
+        quiet: true,
+        max_steps: Some(steps),
+        epochs: Some(100),
+        precision,
+    };
+    let mixed = train(&opts("mixed", 2, Precision::Mixed(GradScale::default()))).unwrap();
+    assert_eq!((mixed.precision, mixed.steps, mixed.skipped_steps), ("mixed", 2, 0));
+
+    let scale = GradScale::starting_at(50);
+    let over = train(&opts("overflow", 2, Precision::Mixed(scale.clone()))).unwrap();
+    assert_eq!((over.steps, over.skipped_steps), (2, 2));
+    assert_eq!(scale.value(), (1u64 << 48) as f32);
+    let start = train(&opts("start", 0, Precision::Full)).unwrap();
+    let weights = |p: &Path| {
+        let g = load_weights(Generator::new(&config, &cpu()), p).unwrap();
+        g.decoder.transformer.layers[0].mha.key.weight.val().into_data().try_to_vec::<f32>().unwrap()
+    };
+    assert_eq!(weights(&over.weights), weights(&start.weights));
+    assert_ne!(weights(&mixed.weights), weights(&start.weights));
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -72,6 +72,10 @@ pub struct Args {
     /// `--backend grounded`: frames per forward pass (default 1 on the cpu, 4 on a GPU).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=256))]
     grounded_batch: Option<u64>,
+    /// `--backend grounded`: full (f32 throughout) or mixed (the decoder's attention products
+    /// in f16, for GPUs with tensor cores; docs/learned-backend.md).
+    #[arg(long, value_enum, default_value = "full")]
+    precision: PrecisionArg,
     /// Also write `flow/NNNNNN.npz`: each moving agent's velocity on its voxels (docs/output.md).
     #[arg(long)]
     flow: bool,
@@ -144,7 +148,11 @@ pub fn run(a: Args) -> Result<(), Failure> {
             a.backend == BackendArg::Grounded,
             a.weights.as_deref(),
             a.grounded_config.as_deref(),
-            &GroundedRun { device: a.device, batch: a.grounded_batch.map(|b| b as usize) },
+            &GroundedRun {
+                device: a.device,
+                batch: a.grounded_batch.map(|b| b as usize),
+                mixed: a.precision == PrecisionArg::Mixed,
+            },
         )?,
         flow: a.flow,
         visibility,
@@ -177,4 +185,10 @@ pub fn run(a: Args) -> Result<(), Failure> {
         );
     }
     if report.failures.is_empty() { Ok(()) } else { Err(Failure::shown()) }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum PrecisionArg {
+    Full,
+    Mixed,
 }

@@ -3,6 +3,7 @@
 use super::Failure;
 use clap::ValueEnum;
 use rocc::backend::grounded::DeviceKind;
+use rocc::backend::grounded::attention::{Precision, check, parse_precision};
 use rocc::backend::grounded::guard::guarded;
 use rocc::diag::Diagnostic;
 use rocc::learn::{Stage, TrainOptions};
@@ -34,6 +35,10 @@ pub struct Args {
     /// cpu (every build), wgpu (Vulkan/Metal/DX12; `--features wgpu`) or cuda (`--features cuda`).
     #[arg(long, default_value = "cpu", value_parser = DeviceKind::from_str)]
     device: DeviceKind,
+    /// full (f32 throughout) or mixed (the attention's products in f16, for GPUs with tensor
+    /// cores; docs/learned-backend.md).
+    #[arg(long, default_value = "full", value_parser = parse_precision)]
+    precision: Precision,
     /// Override the stage's epoch count.
     #[arg(long)]
     epochs: Option<usize>,
@@ -68,6 +73,8 @@ pub fn run(a: Args) -> Result<(), Failure> {
             .help("pass the autoencoder weights `rocc train autoencoder` wrote (OUT/autoencoder.bpk)")
             .into());
     }
+    let device = a.device.open()?;
+    check(&a.precision, &device)?;
     let opts = TrainOptions {
         stage,
         data: a.data,
@@ -76,10 +83,11 @@ pub fn run(a: Args) -> Result<(), Failure> {
         out: a.out,
         resume: a.resume,
         init: a.init,
-        device: a.device.open()?,
+        device,
         quiet: a.quiet,
         max_steps: a.max_steps,
         epochs: a.epochs,
+        precision: a.precision,
     };
     // On a GPU, a device failure (memory, a buffer limit) is a diagnostic; checkpoints
     // already written stay, so `--resume` continues after the cause is fixed.

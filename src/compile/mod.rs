@@ -103,7 +103,7 @@ impl OccBackend {
         if !grounded && *run != GroundedRun::default() {
             return Err(Diagnostic::error(
                 "E0908",
-                "`--device` and `--grounded-batch` apply to `--backend grounded` only",
+                "`--device`, `--grounded-batch` and `--precision` apply to `--backend grounded` only",
             )
             .help("add `--backend grounded --weights FILE`, or drop them for the procedural backend"));
         }
@@ -116,10 +116,14 @@ impl OccBackend {
             .help("add `--backend grounded`, or drop the weights options for the procedural backend")),
             (true, None) => Err(Diagnostic::error("E0901", "`--backend grounded` needs `--weights FILE`")
                 .help("train weights with `rocc train generator ...` (docs/learned-backend.md, \"Training\")")),
-            (true, Some(w)) => {
-                crate::backend::grounded::Grounded::load_on(w, config, run.device.unwrap_or_default(), run.batch)
-                    .map(|g| OccBackend::Grounded(std::sync::Arc::new(g)))
-            }
+            (true, Some(w)) => crate::backend::grounded::Grounded::load_on(
+                w,
+                config,
+                run.device.unwrap_or_default(),
+                run.batch,
+                run.mixed,
+            )
+            .map(|g| OccBackend::Grounded(std::sync::Arc::new(g))),
         }
     }
 }
@@ -131,6 +135,8 @@ pub struct GroundedRun {
     /// `None`: the CPU.
     pub device: Option<crate::backend::grounded::DeviceKind>,
     pub batch: Option<usize>,
+    /// `--precision mixed`: the decoder's attention products in f16.
+    pub mixed: bool,
 }
 
 impl std::fmt::Debug for OccBackend {

@@ -16,6 +16,7 @@
 //! module paths, e.g. `decoder.head.weight`), plus the RON config the model was built from
 //! (`configs/*.ron`; by default the `.ron` next to the weights file, which `rocc train` writes).
 
+pub mod attention;
 pub mod config;
 pub mod conv;
 pub mod cross_entropy;
@@ -41,6 +42,7 @@ pub use model::{Autoencoder, BEV_CHANNELS, Generator, HostBatch};
 use super::layout::{N_LABELS, NX, NY, NZ, class_label};
 use crate::diag::Diagnostic;
 use crate::view::EgoBox;
+use attention::Precision;
 use burn::module::Module;
 use burn::prelude::*;
 use ndarray::Array3;
@@ -155,7 +157,7 @@ pub struct Grounded {
 impl Grounded {
     /// Load `weights` with its config (`config` or the `.ron` beside the weights), on the CPU.
     pub fn load(weights: &Path, config: Option<&Path>) -> Result<Self, Diagnostic> {
-        Self::load_on(weights, config, DeviceKind::Cpu, None)
+        Self::load_on(weights, config, DeviceKind::Cpu, None, false)
     }
 
     /// Load onto `kind` (probed first: E0908, E0910), running `batch` frames per forward pass
@@ -165,6 +167,7 @@ impl Grounded {
         config: Option<&Path>,
         kind: DeviceKind,
         batch: Option<usize>,
+        mixed: bool,
     ) -> Result<Self, Diagnostic> {
         if !weights.is_file() {
             return Err(missing_weights(weights));
@@ -172,7 +175,10 @@ impl Grounded {
         let cfg_path = config_path(weights, config);
         let cfg = load_config(&cfg_path)?;
         let device = kind.open()?;
-        let model = guard::guarded(|| load_weights(Generator::new(&cfg, &device), weights))??;
+        let precision = if mixed { Precision::Mixed(Default::default()) } else { Precision::Full };
+        attention::check(&precision, &device)?;
+        let mut model = guard::guarded(|| load_weights(Generator::new(&cfg, &device), weights))??;
+        model.decoder.shape.precision = precision;
         let bytes = std::fs::read(weights).map_err(|e| {
             Diagnostic::error("E0901", format!("cannot read weights `{}`: {e}", weights.display()))
                 .help("check the path and its permissions")
@@ -180,7 +186,13 @@ impl Grounded {
         let hash = crate::fsio::input_hash(&bytes);
         let short = hash.rsplit(':').next().unwrap_or(&hash);
         Ok(Grounded {
-            name: format!("grounded-{}-{}", cfg.name, &short[..short.len().min(12)]),
+            // Mixed precision changes the labels' last bits: it is another backend for a manifest.
+            name: format!(
+                "grounded-{}-{}{}",
+                cfg.name,
+                &short[..short.len().min(12)],
+                if mixed { "-mixed" } else { "" }
+            ),
             config: cfg,
             model,
             files: Some((weights.to_path_buf(), cfg_path)),

@@ -9,6 +9,7 @@
 //! - `Generator`: BEV (18 + 7 channels) -> 2D CNN -> each latent samples its feature bilinearly
 //!   at its anchor -> latent -> decoder; plus the gated background residual head.
 
+use super::attention::{Precision, encode};
 use super::config::GroundedConfig;
 use super::latents::{ANCHOR_FEATS, Anchor, budget, encoder_input};
 use super::rows::{repeat_rows, take_rows};
@@ -18,7 +19,7 @@ use crate::backend::layout::{N_LABELS, NZ, ORIGIN, VOXEL};
 use crate::raster::layout::{GRID, N_AUX, N_MASKS, RES};
 use burn::module::{Initializer, Param};
 use burn::nn::conv::{Conv2d, Conv2dConfig};
-use burn::nn::transformer::{TransformerEncoder, TransformerEncoderConfig, TransformerEncoderInput};
+use burn::nn::transformer::{TransformerEncoder, TransformerEncoderConfig};
 use burn::nn::{Linear, LinearConfig, PaddingConfig2d};
 use burn::prelude::*;
 use burn::tensor::activation::gelu;
@@ -43,6 +44,8 @@ pub struct DecoderShape {
     pub window: usize,
     pub budgets: [usize; N_LABELS],
     pub heads: usize,
+    /// Where the transformer's attention products run (`--precision`).
+    pub precision: Precision,
 }
 
 /// The largest attention-score tensor (bytes) the decoder builds at once: beyond it the batch's
@@ -61,6 +64,7 @@ impl DecoderShape {
             window: cfg.gaussians.window,
             budgets: std::array::from_fn(|l| budget(cfg, l as u8)),
             heads: cfg.decoder.heads,
+            precision: Precision::Full,
         }
     }
 }
@@ -171,12 +175,12 @@ impl Decoder {
                 let len = if hb.set_by_set { hb.anchors[i].len().max(1) } else { q };
                 let xi = x.clone().slice([i..i + 1, 0..len]);
                 let pi = pad.clone().slice([i..i + 1, 0..len]);
-                let y = self.transformer.forward(TransformerEncoderInput::new(xi).mask_pad(pi));
+                let y = encode(&self.transformer, xi, pi, &self.shape.precision);
                 if len < q { Tensor::cat(vec![y, Tensor::zeros([1, q - len, width], &device)], 1) } else { y }
             });
             Tensor::cat(per_set.collect(), 0)
         } else {
-            self.transformer.forward(TransformerEncoderInput::new(x).mask_pad(pad))
+            encode(&self.transformer, x, pad, &self.shape.precision)
         };
         let out = self.head.forward(x);
         out.reshape([hb.b() * hb.q * self.shape.gaussians, PARAMS])

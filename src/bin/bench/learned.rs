@@ -9,7 +9,12 @@ fn config(name: &str) -> Result<GroundedConfig, String> {
     load_config(&root().join(format!("configs/{name}.ron"))).map_err(|d| d.message)
 }
 
-/// `bench train [paper] [--device cpu|wgpu|cuda]`: training seconds per step of the generator on a
+/// The `--precision full|mixed` of a bench command.
+fn precision(args: &[String]) -> Result<rocc::backend::grounded::attention::Precision, String> {
+    rocc::backend::grounded::attention::parse_precision(opt(args, "--precision").unwrap_or("full"))
+}
+
+/// `bench train [paper] [--device cpu|wgpu|cuda] [--precision full|mixed]`: training seconds per step of the generator on a
 /// corpus compiled here (12 frames of the crowded junction), `cpu-small`, and `paper` when asked.
 pub fn bench_train(args: &[String]) {
     use rocc::compile::{OccBackend, Stage};
@@ -21,7 +26,17 @@ pub fn bench_train(args: &[String]) {
         Ok(d) => d,
         Err(e) => return println!("  {e}"),
     };
-    println!("== train: generator seconds per step on {kind} (a corpus of 12 frames compiled here)");
+    let precision = match precision(args) {
+        Ok(p) => p,
+        Err(e) => return println!("  {e}"),
+    };
+    if let Err(d) = rocc::backend::grounded::attention::check(&precision, &device) {
+        return println!("  {} {}", d.code, d.message);
+    }
+    println!(
+        "== train: generator seconds per step on {kind}, {} precision (a corpus of 12 frames compiled here)",
+        precision.name()
+    );
     let dir = std::env::temp_dir().join(format!("rocc-bench-train-{}", std::process::id()));
     let corpus = dir.join("corpus");
     let opts = Options {
@@ -63,6 +78,7 @@ pub fn bench_train(args: &[String]) {
             quiet: true,
             max_steps: Some(6),
             epochs: Some(100),
+            precision: precision.clone(),
         };
         let cpu0 = cpu_secs().unwrap_or(f64::NAN);
         match rocc::learn::train(&topts) {
@@ -79,8 +95,9 @@ pub fn bench_train(args: &[String]) {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `bench grounded [--device cpu|wgpu|cuda] [--batch N] [--configs a,b]`: inference time per
-/// frame of each config on one device, `batch` frames of the ambulance example per forward pass.
+/// `bench grounded [--device cpu|wgpu|cuda] [--batch N] [--configs a,b] [--precision full|mixed]`:
+/// inference time per frame of each config on one device, `batch` frames of the ambulance example
+/// per forward pass.
 pub fn bench_grounded(args: &[String]) {
     use rocc::backend::grounded::{FrameIn, GBox, Generator, Grounded, latents};
     let opt = |name: &str| opt(args, name);
@@ -90,7 +107,14 @@ pub fn bench_grounded(args: &[String]) {
     };
     let batch: usize = opt("--batch").and_then(|b| b.parse().ok()).unwrap_or(kind.default_batch()).max(1);
     let configs = opt("--configs").unwrap_or("cpu-small,paper");
-    println!("== grounded: inference per frame on {kind} (batch {batch}; random weights)");
+    let precision = match precision(args) {
+        Ok(p) => p,
+        Err(e) => return println!("  {e}"),
+    };
+    println!(
+        "== grounded: inference per frame on {kind}, {} precision (batch {batch}; random weights)",
+        precision.name()
+    );
     let Some(f) = load(&root().join("scenarios/ambulance_crowded_intersection.scn")) else { return };
     let ego = f.concrete.egos.first().copied().unwrap_or(0);
     let mut raster = Rasterizer::new();
@@ -124,10 +148,14 @@ pub fn bench_grounded(args: &[String]) {
             model.bg_out = Some(burn::nn::conv::Conv2dConfig::new(shape, [1, 1]).init(&rocc::backend::grounded::cpu()));
         }
         let on_cpu = Grounded::from_model(cfg.clone(), model.clone(), name);
-        let g = match Grounded::from_model(cfg.clone(), model, name).on(kind, batch) {
+        let mut g = match Grounded::from_model(cfg.clone(), model, name).on(kind, batch) {
             Ok(g) => g,
             Err(d) => return println!("  {name}: {} {}", d.code, d.message),
         };
+        if let Err(d) = kind.open().and_then(|device| rocc::backend::grounded::attention::check(&precision, &device)) {
+            return println!("  {name}: {} {}", d.code, d.message);
+        }
+        g.model.decoder.shape.precision = precision.clone();
         let run = || g.predict_frames(&inputs).map(|l| std::hint::black_box(l.len()));
         if let Err(d) = run() {
             println!("  {name:<10} {} {}", d.code, d.message);

@@ -144,4 +144,16 @@ words. Nothing of the failed clip is kept as complete: a re-run starts it again.
     rocc compile scene.scn -o out --backend grounded --weights model/generator.bpk --device wgpu
     // error: the device failed: `...` (the driver's message)",
     },
+    Code {
+        code: "E0914",
+        title: "mixed precision on a device that cannot run it",
+        explanation: "`--precision mixed` runs the decoder's attention products on half-precision (f16)\n\
+operands, for GPUs with tensor cores. It is refused on the CPU (which has no fast half-precision\n\
+products: it would only be slower) and on a GPU whose driver cannot compute in f16 (a first\n\
+f16 product is tried before any work). Use `--precision full` (the default), which computes\n\
+everything in f32 on any device.
+
+    rocc train generator --data occ --config configs/paper.ron --out paper --device cpu --precision mixed
+    // error: mixed precision is for GPUs",
+    },
 ];

@@ -1,0 +1,338 @@
+//! The decoder's transformer, in full or mixed precision. Full precision is burn's own
+//! `TransformerEncoder::forward`. Mixed precision (`--precision mixed`, meant for GPUs with
+//! tensor cores) runs every matrix product of the transformer — the projections, the attention's
+//! scores and weighted sums, the feed-forward — on half-precision (f16) operands with f32
+//! accumulation; the norms, the softmax, the activation and the residual sums stay in f32 (what
+//! PyTorch's autocast does).
+//!
+//! Half precision cannot hold the small gradients that reach the transformer (its smallest
+//! normal number is 6.1e-5), so the gradient is scaled up by `GradScale` where it enters each
+//! half-precision region and back down where it leaves it (into the f32 activations and
+//! weights). An overflow (a non-finite gradient) skips the step and halves the scale; a run of
+//! clean steps doubles it again: PyTorch's `GradScaler` policy, applied to these regions.
+
+use burn::nn::Linear;
+use burn::nn::attention::MultiHeadAttention;
+use burn::nn::transformer::{TransformerEncoder, TransformerEncoderInput, TransformerEncoderLayer};
+use burn::prelude::*;
+use burn::tensor::FloatDType;
+use burn::tensor::activation::{quiet_softmax, softmax};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+
+/// Where the decoder's attention products run.
+#[derive(Clone, Debug, Default)]
+pub enum Precision {
+    /// Everything in f32: burn's transformer, bit for bit.
+    #[default]
+    Full,
+    /// The attention's products on f16 operands, with the gradient scale they share.
+    Mixed(GradScale),
+}
+
+impl Precision {
+    /// `full` or `mixed` (the command line's words).
+    pub fn parse(word: &str) -> Option<Precision> {
+        match word {
+            "full" | "f32" => Some(Precision::Full),
+            "mixed" | "f16" => Some(Precision::Mixed(GradScale::default())),
+            _ => None,
+        }
+    }
+
+    pub fn name(&self) -> &'static str {
+        match self {
+            Precision::Full => "full",
+            Precision::Mixed(_) => "mixed",
+        }
+    }
+}
+
+/// clap's parser for `--precision`.
+pub fn parse_precision(word: &str) -> Result<Precision, String> {
+    Precision::parse(word).ok_or_else(|| format!("unknown precision `{word}` (expected full or mixed)"))
+}
+
+/// Whether `precision` can run on `device` (the device already probed): E0914 for mixed precision
+/// on the CPU, or on a GPU that fails a first half-precision product.
+pub fn check(precision: &Precision, device: &Device) -> Result<(), crate::diag::Diagnostic> {
+    use crate::diag::Diagnostic;
+    if matches!(precision, Precision::Full) {
+        return Ok(());
+    }
+    let refuse = |why: String| {
+        Diagnostic::error("E0914", why).help("use `--precision full` (the default): everything in f32, on any device")
+    };
+    if *device == Device::flex() {
+        return Err(refuse("mixed precision is for GPUs: the CPU has no fast half-precision products".into()));
+    }
+    super::guard::guarded(|| {
+        let t =
+            Tensor::<2>::from_data(TensorData::new(vec![1.0f32, 2.0, 3.0, 4.0], [2, 2]), device).cast(FloatDType::F16);
+        t.clone().matmul(t).cast(FloatDType::F32).to_data()
+    })
+    .map(|_| ())
+    .map_err(|d| refuse(format!("this device cannot compute in half precision: {}", d.message)))
+}
+
+/// The gradient scale of the half-precision region (a power of two, so scaling is exact), shared
+/// by every clone of the model the training loop makes.
+#[derive(Clone, Debug)]
+pub struct GradScale(Arc<ScaleState>);
+
+#[derive(Debug)]
+struct ScaleState {
+    log2: AtomicU32,
+    clean: AtomicU64,
+    skipped: AtomicU64,
+}
+
+/// Starting scale 2^16 (PyTorch's), kept within 2^0..2^24; doubled after this many clean steps.
+const START_LOG2: u32 = 16;
+const MAX_LOG2: u32 = 24;
+const GROWTH_STEPS: u64 = 1000;
+
+impl Default for GradScale {
+    fn default() -> Self {
+        GradScale(Arc::new(ScaleState {
+            log2: AtomicU32::new(START_LOG2),
+            clean: AtomicU64::new(0),
+            skipped: AtomicU64::new(0),
+        }))
+    }
+}
+
+impl GradScale {
+    /// A scale starting at 2^`log2` instead of 2^16 (tests, and runs resumed after overflows).
+    pub fn starting_at(log2: u32) -> Self {
+        let s = GradScale::default();
+        s.0.log2.store(log2.min(60), Ordering::Relaxed);
+        s
+    }
+
+    /// The current scale.
+    pub fn value(&self) -> f32 {
+        (1u64 << self.0.log2.load(Ordering::Relaxed)) as f32
+    }
+
+    /// Steps skipped so far for a non-finite gradient.
+    pub fn skipped(&self) -> u64 {
+        self.0.skipped.load(Ordering::Relaxed)
+    }
+
+    /// After a step's backward pass: whether its gradient is finite (take the step) or not (skip
+    /// it; the scale halves).
+    pub fn after_backward(&self, finite: bool) -> bool {
+        let s = &self.0;
+        if finite {
+            if s.clean.fetch_add(1, Ordering::Relaxed) + 1 >= GROWTH_STEPS {
+                s.clean.store(0, Ordering::Relaxed);
+                let l = s.log2.load(Ordering::Relaxed);
+                s.log2.store((l + 1).min(MAX_LOG2), Ordering::Relaxed);
+            }
+        } else {
+            s.clean.store(0, Ordering::Relaxed);
+            s.skipped.fetch_add(1, Ordering::Relaxed);
+            let l = s.log2.load(Ordering::Relaxed);
+            s.log2.store(l.saturating_sub(1), Ordering::Relaxed);
+        }
+        finite
+    }
+}
+
+/// `t` unchanged, with its gradient multiplied by `k` (a power of two) on the way back: the
+/// forward adds `t * k - t * k`, which is exactly zero.
+fn grad_times<const D: usize>(t: Tensor<D>, k: f32) -> Tensor<D> {
+    if !t.is_tracked() {
+        return t;
+    }
+    let scaled = t.clone() * k;
+    t.detach() + (scaled.clone() - scaled.detach())
+}
+
+/// The transformer over `x` `[b, n, width]` with padded latents `pad` `[b, n]` masked out.
+pub fn encode(t: &TransformerEncoder, x: Tensor<3>, pad: Tensor<2, Bool>, precision: &Precision) -> Tensor<3> {
+    match precision {
+        Precision::Full => t.forward(TransformerEncoderInput::new(x).mask_pad(pad)),
+        Precision::Mixed(scale) => {
+            let half = Some(scale.value());
+            t.layers.iter().fold(x, |x, l| layer(l, x, &pad, half))
+        }
+    }
+}
+
+/// One encoder layer, laid out as burn's `TransformerEncoderLayer::forward` (so the two share
+/// parameters and checkpoints); `half` = the gradient scale of the half-precision region, `None`
+/// for f32.
+fn layer(l: &TransformerEncoderLayer, x: Tensor<3>, pad: &Tensor<2, Bool>, half: Option<f32>) -> Tensor<3> {
+    let r = if l.norm_first { l.norm_2.forward(x.clone()) } else { x.clone() };
+    let mut x = x + l.dropout.forward(self_attention(&l.mha, r, pad, half));
+    let r = if l.norm_first {
+        l.norm_1.forward(x.clone())
+    } else {
+        x = l.norm_1.forward(x);
+        x.clone()
+    };
+    let ff = match half {
+        None => l.pwff.forward(r),
+        Some(scale) => {
+            let h = Half(scale);
+            let p = &l.pwff;
+            // The activation in f32 between the two f16 products (inside the region: plain casts).
+            let inner = h.linear(&p.linear_inner, h.into(r)).cast(FloatDType::F32);
+            let inner = p.dropout.forward(p.activation.forward(inner)).cast(FloatDType::F16);
+            h.out(h.linear(&p.linear_outer, inner))
+        }
+    };
+    let x = x + l.dropout.forward(ff);
+    if l.norm_first { x } else { l.norm_2.forward(x) }
+}
+
+/// The half-precision region with gradient scale `.0`: what enters it (activations, weights)
+/// is cast to f16 with its gradient scaled back down on the way out; what leaves it is cast to
+/// f32 with the gradient scaled up on the way in.
+#[derive(Clone, Copy)]
+struct Half(f32);
+
+impl Half {
+    fn into<const D: usize>(self, t: Tensor<D>) -> Tensor<D> {
+        grad_times(t, 1.0 / self.0).cast(FloatDType::F16)
+    }
+
+    fn out<const D: usize>(self, t: Tensor<D>) -> Tensor<D> {
+        grad_times(t.cast(FloatDType::F32), self.0)
+    }
+
+    /// `lin` on an f16 input, its weight and bias brought in.
+    fn linear<const D: usize>(self, lin: &Linear, x: Tensor<D>) -> Tensor<D> {
+        burn::tensor::module::linear(x, self.into(lin.weight.val()), lin.bias.as_ref().map(|b| self.into(b.val())))
+    }
+}
+
+fn self_attention(m: &MultiHeadAttention, x: Tensor<3>, pad: &Tensor<2, Bool>, half: Option<f32>) -> Tensor<3> {
+    let [b, n, width] = x.dims();
+    let pad = pad.clone().reshape([b, 1, 1, n]);
+    // The softmax (and the mask before it) in f32 in both precisions.
+    let weights = |scores: Tensor<4>| {
+        let s = scores.mask_fill(pad, m.min_float);
+        m.dropout.forward(if m.quiet_softmax { quiet_softmax(s, 3) } else { softmax(s, 3) })
+    };
+    let split = |t: Tensor<3>| t.reshape([b, n, m.n_heads, m.d_k]).swap_dims(1, 2);
+    let merge = |t: Tensor<4>| t.swap_dims(1, 2).reshape([b, n, width]);
+    let scale = (m.d_k as f32).sqrt();
+    match half {
+        None => {
+            let heads = |lin: &Linear| split(lin.forward(x.clone()));
+            let (q, k, v) = (heads(&m.query), heads(&m.key), heads(&m.value));
+            let context = weights(q.matmul(k.transpose()).div_scalar(scale)).matmul(v);
+            m.output.forward(merge(context))
+        }
+        Some(s) => {
+            let h = Half(s);
+            let x = h.into(x);
+            let heads = |lin: &Linear| split(h.linear(lin, x.clone()));
+            let (q, k, v) = (heads(&m.query), heads(&m.key), heads(&m.value));
+            let scores = q.div_scalar(scale).matmul(k.transpose()).cast(FloatDType::F32);
+            let p = weights(scores).cast(FloatDType::F16);
+            h.out(h.linear(&m.output, merge(p.matmul(v))))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use burn::nn::transformer::TransformerEncoderConfig;
+
+    fn input(device: &Device, b: usize, n: usize, w: usize) -> (Tensor<3>, Tensor<2, Bool>) {
+        let x: Vec<f32> =
+            (0..b * n * w).map(|i| ((i as u32).wrapping_mul(2654435761) % 2000) as f32 / 1000.0 - 1.0).collect();
+        let pad: Vec<bool> = (0..b * n).map(|i| i % n >= n - 1 - (i / n)).collect();
+        (
+            Tensor::from_data(TensorData::new(x, [b, n, w]), device),
+            Tensor::from_data(TensorData::new(pad, [b, n]), device),
+        )
+    }
+
+    fn vec<const D: usize>(t: Tensor<D>) -> Vec<f32> {
+        t.into_data().convert::<f32>().try_to_vec().unwrap()
+    }
+
+    #[test]
+    fn the_layer_here_is_burns_layer_bit_for_bit() {
+        let device = super::super::cpu();
+        for norm_first in [true, false] {
+            let t =
+                TransformerEncoderConfig::new(16, 32, 4, 2).with_dropout(0.0).with_norm_first(norm_first).init(&device);
+            let (x, pad) = input(&device, 2, 7, 16);
+            let burn = t.forward(TransformerEncoderInput::new(x.clone()).mask_pad(pad.clone()));
+            let here = t.layers.iter().fold(x, |x, l| layer(l, x, &pad, None));
+            assert_eq!(vec(burn), vec(here), "norm_first {norm_first}");
+        }
+    }
+
+    /// Values and gradients of `encode` in `precision`, for an upstream gradient as small as a
+    /// training step's (1e-6 per element).
+    fn run(t: &TransformerEncoder, precision: &Precision) -> (Vec<f32>, Vec<f32>, Vec<f32>, Vec<f32>) {
+        let device = super::super::cpu().autodiff();
+        let (x, pad) = input(&device, 2, 9, 32);
+        let x = x.require_grad();
+        let y = encode(t, x.clone(), pad, precision);
+        let w = y.clone().detach().cos() * 1e-6;
+        let grads = (y.clone() * w).sum().backward();
+        let gx = x.grad(&grads).unwrap();
+        let gw = t.layers[0].mha.key.weight.val().grad(&grads).unwrap();
+        let gf = t.layers[0].pwff.linear_inner.weight.val().grad(&grads).unwrap();
+        (vec(y), vec(gx), vec(gw), vec(gf))
+    }
+
+    fn rel(a: &[f32], b: &[f32]) -> f32 {
+        let scale = b.iter().fold(0f32, |m, v| m.max(v.abs()));
+        a.iter().zip(b).fold(0f32, |m, (x, y)| m.max((x - y).abs())) / scale
+    }
+
+    #[test]
+    fn mixed_precision_follows_full_precision_in_values_and_gradients() {
+        let device = super::super::cpu().autodiff();
+        device.seed(7);
+        let t = TransformerEncoderConfig::new(32, 64, 4, 2).with_dropout(0.0).with_norm_first(true).init(&device);
+        let (y, gx, gw, gf) = run(&t, &Precision::Full);
+        let (ym, gxm, gwm, gfm) = run(&t, &Precision::Mixed(GradScale::default()));
+        // f16 operands carry 11 bits: values and gradients within about 1e-3 of the largest
+        // (4e-4 and 8e-4 with this seed).
+        assert!(rel(&ym, &y) < 2e-3, "values {}", rel(&ym, &y));
+        assert!(rel(&gxm, &gx) < 5e-3, "input gradient {}", rel(&gxm, &gx));
+        assert!(rel(&gwm, &gw) < 5e-3, "key weight gradient {}", rel(&gwm, &gw));
+        assert!(rel(&gfm, &gf) < 5e-3, "feed-forward weight gradient {}", rel(&gfm, &gf));
+        assert!(gw.iter().any(|g| g.abs() > 1e-8));
+        // Without the scale the gradients drown in f16's subnormals: the scale is what keeps them.
+        let (_, _, gw1, _) = run(&t, &Precision::Mixed(GradScale::starting_at(0)));
+        assert!(rel(&gw1, &gw) > 10.0 * rel(&gwm, &gw), "{} vs {}", rel(&gw1, &gw), rel(&gwm, &gw));
+    }
+
+    #[test]
+    fn the_gradient_scale_halves_on_overflow_and_grows_back() {
+        let s = GradScale::default();
+        assert_eq!(s.value(), 65536.0);
+        assert!(!s.after_backward(false));
+        assert_eq!((s.value(), s.skipped()), (32768.0, 1));
+        for _ in 0..GROWTH_STEPS {
+            assert!(s.after_backward(true));
+        }
+        assert_eq!(s.value(), 65536.0);
+        // Clones share the scale (the training loop's model is rebuilt every step).
+        let c = s.clone();
+        c.after_backward(false);
+        assert_eq!(s.value(), 32768.0);
+    }
+
+    #[test]
+    fn grad_times_keeps_values_and_scales_the_gradient() {
+        let device = super::super::cpu().autodiff();
+        let x = Tensor::<1>::from_data(TensorData::new(vec![0.3f32, -1e-7, 5.0, 0.0], [4]), &device).require_grad();
+        let y = grad_times(x.clone(), 1024.0);
+        assert_eq!(vec(y.clone()), vec(x.clone()));
+        let g = x.grad(&(y * 2.0).sum().backward()).unwrap();
+        assert_eq!(vec(g), vec![2048.0; 4]);
+    }
+}
