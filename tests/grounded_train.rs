@@ -115,26 +115,33 @@ fn a_small_model_trained_on_the_cpu_beats_the_layer_majority_baseline() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Mixed precision through the training loop (the CPU computes f16 too, slowly): steps train,
-/// and a gradient scale far beyond half precision's range makes every step overflow, so each is
-/// skipped and the weights stay as they started.
-#[test]
-fn mixed_precision_trains_and_skips_steps_whose_gradient_overflows() {
-    use rocc::backend::grounded::attention::{GradScale, Precision};
-    use rocc::backend::grounded::{Generator, load_weights};
-    let dir = std::env::temp_dir().join(format!("rocc-grounded-mixed-{}", std::process::id()));
+/// A small corpus (four frames of one scene) and a `cpu-small` config on `crop`-column crops with
+/// nothing held out, in a fresh directory.
+fn small_run(name: &str, crop: usize) -> (PathBuf, PathBuf, GroundedConfig) {
+    let dir = std::env::temp_dir().join(format!("rocc-grounded-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let data = dir.join("data");
     compile(&["pedestrian_midblock.scn"], &data, "0,10,20,30", OccBackend::Procedural, Stage::Occ);
     let mut config = GroundedConfig::from_ron(include_str!("../configs/cpu-small.ron")).unwrap();
-    config.train.crop = 64;
+    config.train.crop = crop;
     config.train.val_fraction = 0.0;
-    let opts = |out: &str, steps: usize, precision: Precision| TrainOptions {
+    (dir, data, config)
+}
+
+/// Options for `steps` generator steps from scratch on the CPU.
+fn small_opts(
+    data: &Path,
+    config: &GroundedConfig,
+    out: PathBuf,
+    steps: usize,
+    precision: rocc::backend::grounded::attention::Precision,
+) -> TrainOptions {
+    TrainOptions {
         stage: TrainStage::Generator,
-        data: data.clone(),
+        data: data.to_path_buf(),
         val: None,
         config: config.clone(),
-        out: dir.join(out),
+        out,
         resume: false,
         init: None,
         device: cpu(),
@@ -142,7 +149,19 @@ fn mixed_precision_trains_and_skips_steps_whose_gradient_overflows() {
         max_steps: Some(steps),
         epochs: Some(100),
         precision,
-    };
+    }
+}
+
+/// Mixed precision through the training loop (the CPU computes f16 too, slowly): steps train,
+/// and a gradient scale far beyond half precision's range makes every step overflow, so each is
+/// skipped and the weights stay as they started.
+#[test]
+fn mixed_precision_trains_and_skips_steps_whose_gradient_overflows() {
+    use rocc::backend::grounded::attention::{GradScale, Precision};
+    use rocc::backend::grounded::{Generator, load_weights};
+    let (dir, data, config) = small_run("mixed", 64);
+    let opts =
+        |out: &str, steps: usize, precision: Precision| small_opts(&data, &config, dir.join(out), steps, precision);
     let mixed = train(&opts("mixed", 2, Precision::Mixed(GradScale::default()))).unwrap();
     assert_eq!((mixed.precision, mixed.steps, mixed.skipped_steps), ("mixed", 2, 0));
 
@@ -157,5 +176,37 @@ fn mixed_precision_trains_and_skips_steps_whose_gradient_overflows() {
     };
     assert_eq!(weights(&over.weights), weights(&start.weights));
     assert_ne!(weights(&mixed.weights), weights(&start.weights));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Training is deterministic on any thread count: burn's CPU operations (on all cores through
+/// rayon) and rocc's own split their work without changing any sum's order.
+#[test]
+fn training_gives_the_same_weights_on_any_thread_count() {
+    use rocc::backend::grounded::{Generator, load_weights};
+    let (dir, data, config) = small_run("threads", 96);
+    let run = |threads: usize| {
+        let opts = small_opts(&data, &config, dir.join(format!("t{threads}")), 2, Default::default());
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let report = pool.install(|| train(&opts)).unwrap();
+        let g = load_weights(Generator::new(&config, &cpu()), &report.weights).unwrap();
+        // Parameters of every part, in a fixed order.
+        let mut all = Vec::new();
+        for t in [
+            g.decoder.input.weight.val(),
+            g.decoder.head.weight.val(),
+            g.decoder.transformer.layers[0].pwff.linear_inner.weight.val(),
+            g.decoder.layer_bias.val(),
+        ] {
+            all.extend(t.into_data().try_to_vec::<f32>().unwrap());
+        }
+        for c in &g.bev.convs {
+            all.extend(c.weight.val().into_data().try_to_vec::<f32>().unwrap());
+        }
+        all
+    };
+    let one = run(1);
+    assert_eq!(one, run(3), "3 threads");
+    assert_eq!(one, run(2), "2 threads");
     let _ = std::fs::remove_dir_all(&dir);
 }

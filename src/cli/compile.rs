@@ -72,7 +72,7 @@ pub struct Args {
     /// `--backend grounded`: frames per forward pass (default 1 on the cpu, 4 on a GPU).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=256))]
     grounded_batch: Option<u64>,
-    /// `--backend grounded`: full (f32 throughout) or mixed (the decoder's attention products
+    /// `--backend grounded`: full (f32 throughout) or mixed (the decoder transformer's products
     /// in f16, for GPUs with tensor cores; docs/learned-backend.md).
     #[arg(long, value_enum, default_value = "full")]
     precision: PrecisionArg,

@@ -35,7 +35,7 @@ pub struct Args {
     /// cpu (every build), wgpu (Vulkan/Metal/DX12; `--features wgpu`) or cuda (`--features cuda`).
     #[arg(long, default_value = "cpu", value_parser = DeviceKind::from_str)]
     device: DeviceKind,
-    /// full (f32 throughout) or mixed (the attention's products in f16, for GPUs with tensor
+    /// full (f32 throughout) or mixed (the transformer's products in f16, for GPUs with tensor
     /// cores; docs/learned-backend.md).
     #[arg(long, default_value = "full", value_parser = parse_precision)]
     precision: Precision,

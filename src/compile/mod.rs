@@ -135,7 +135,7 @@ pub struct GroundedRun {
     /// `None`: the CPU.
     pub device: Option<crate::backend::grounded::DeviceKind>,
     pub batch: Option<usize>,
-    /// `--precision mixed`: the decoder's attention products in f16.
+    /// `--precision mixed`: the decoder transformer's matrix products in f16.
     pub mixed: bool,
 }
 

@@ -70,7 +70,7 @@ pub struct TrainOptions {
     pub max_steps: Option<usize>,
     /// Override the stage's epoch count.
     pub epochs: Option<usize>,
-    /// Where the decoder's attention products run (`--precision`).
+    /// Where the decoder's transformer computes its matrix products (`--precision`).
     pub precision: Precision,
 }
 

@@ -20,13 +20,13 @@ use burn::tensor::activation::{quiet_softmax, softmax};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
-/// Where the decoder's attention products run.
+/// Where the decoder's transformer computes its matrix products.
 #[derive(Clone, Debug, Default)]
 pub enum Precision {
     /// Everything in f32: burn's transformer, bit for bit.
     #[default]
     Full,
-    /// The attention's products on f16 operands, with the gradient scale they share.
+    /// The transformer's products on f16 operands, with the gradient scale they share.
     Mixed(GradScale),
 }
 
@@ -75,8 +75,8 @@ pub fn check(precision: &Precision, device: &Device) -> Result<(), crate::diag::
     .map_err(|d| refuse(format!("this device cannot compute in half precision: {}", d.message)))
 }
 
-/// The gradient scale of the half-precision region (a power of two, so scaling is exact), shared
-/// by every clone of the model the training loop makes.
+/// The gradient scale of the half-precision regions (a power of two, so scaling is exact),
+/// shared by every clone of the model the training loop makes.
 #[derive(Clone, Debug)]
 pub struct GradScale(Arc<ScaleState>);
 
@@ -103,7 +103,7 @@ impl Default for GradScale {
 }
 
 impl GradScale {
-    /// A scale starting at 2^`log2` instead of 2^16 (tests, and runs resumed after overflows).
+    /// A scale starting at 2^`log2` instead of 2^16 (tests).
     pub fn starting_at(log2: u32) -> Self {
         let s = GradScale::default();
         s.0.log2.store(log2.min(60), Ordering::Relaxed);

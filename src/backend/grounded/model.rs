@@ -44,7 +44,7 @@ pub struct DecoderShape {
     pub window: usize,
     pub budgets: [usize; N_LABELS],
     pub heads: usize,
-    /// Where the transformer's attention products run (`--precision`).
+    /// Where the transformer computes its matrix products (`--precision`).
     pub precision: Precision,
 }
 

@@ -14,8 +14,9 @@ fn precision(args: &[String]) -> Result<rocc::backend::grounded::attention::Prec
     rocc::backend::grounded::attention::parse_precision(opt(args, "--precision").unwrap_or("full"))
 }
 
-/// `bench train [paper] [--device cpu|wgpu|cuda] [--precision full|mixed]`: training seconds per step of the generator on a
-/// corpus compiled here (12 frames of the crowded junction), `cpu-small`, and `paper` when asked.
+/// `bench train [paper] [--device cpu|wgpu|cuda] [--precision full|mixed] [--steps N]`: training
+/// seconds per step of the generator on a corpus compiled here (12 frames of the crowded
+/// junction), `cpu-small`, and `paper` when asked.
 pub fn bench_train(args: &[String]) {
     use rocc::compile::{OccBackend, Stage};
     let kind: DeviceKind = match opt(args, "--device").unwrap_or("cpu").parse() {
@@ -30,6 +31,9 @@ pub fn bench_train(args: &[String]) {
         Ok(p) => p,
         Err(e) => return println!("  {e}"),
     };
+    // A GPU compiles kernels for new tensor sizes over its first tens of steps: its steady state
+    // needs `--steps 30` or more.
+    let steps: usize = opt(args, "--steps").and_then(|s| s.parse().ok()).unwrap_or(6).max(2);
     if let Err(d) = rocc::backend::grounded::attention::check(&precision, &device) {
         return println!("  {} {}", d.code, d.message);
     }
@@ -76,7 +80,7 @@ pub fn bench_train(args: &[String]) {
             init: None,
             device: device.clone(),
             quiet: true,
-            max_steps: Some(6),
+            max_steps: Some(steps),
             epochs: Some(100),
             precision: precision.clone(),
         };

@@ -147,7 +147,7 @@ words. Nothing of the failed clip is kept as complete: a re-run starts it again.
     Code {
         code: "E0914",
         title: "mixed precision on a device that cannot run it",
-        explanation: "`--precision mixed` runs the decoder's attention products on half-precision (f16)\n\
+        explanation: "`--precision mixed` runs the decoder transformer's matrix products on f16\n\
 operands, for GPUs with tensor cores. It is refused on the CPU (which has no fast half-precision\n\
 products: it would only be slower) and on a GPU whose driver cannot compute in f16 (a first\n\
 f16 product is tried before any work). Use `--precision full` (the default), which computes\n\
