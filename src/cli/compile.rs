@@ -4,6 +4,7 @@
 use super::{Failure, show};
 use clap::ValueEnum;
 use rocc::backend::grounded::DeviceKind;
+use rocc::backend::grounded::attention::Precision;
 use rocc::compile::{GroundedRun, OccBackend, Options, Stage, StaticBev, batch};
 use rocc::diag::Diagnostic;
 use rocc::lidar::Rig;
@@ -74,8 +75,8 @@ pub struct Args {
     grounded_batch: Option<u64>,
     /// `--backend grounded`: full (f32 throughout) or mixed (the decoder transformer's products
     /// in f16, for GPUs with tensor cores; docs/learned-backend.md).
-    #[arg(long, value_enum, default_value = "full")]
-    precision: PrecisionArg,
+    #[arg(long, default_value = "full", value_parser = Precision::from_str)]
+    precision: Precision,
     /// Also write `flow/NNNNNN.npz`: each moving agent's velocity on its voxels (docs/output.md).
     #[arg(long)]
     flow: bool,
@@ -151,7 +152,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
             &GroundedRun {
                 device: a.device,
                 batch: a.grounded_batch.map(|b| b as usize),
-                mixed: a.precision == PrecisionArg::Mixed,
+                mixed: matches!(a.precision, Precision::Mixed(_)),
             },
         )?,
         flow: a.flow,
@@ -185,10 +186,4 @@ pub fn run(a: Args) -> Result<(), Failure> {
         );
     }
     if report.failures.is_empty() { Ok(()) } else { Err(Failure::shown()) }
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-enum PrecisionArg {
-    Full,
-    Mixed,
 }

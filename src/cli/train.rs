@@ -3,7 +3,7 @@
 use super::Failure;
 use clap::ValueEnum;
 use rocc::backend::grounded::DeviceKind;
-use rocc::backend::grounded::attention::{Precision, check, parse_precision};
+use rocc::backend::grounded::attention::{Precision, check};
 use rocc::backend::grounded::guard::guarded;
 use rocc::diag::Diagnostic;
 use rocc::learn::{Stage, TrainOptions};
@@ -37,7 +37,7 @@ pub struct Args {
     device: DeviceKind,
     /// full (f32 throughout) or mixed (the transformer's products in f16, for GPUs with tensor
     /// cores; docs/learned-backend.md).
-    #[arg(long, default_value = "full", value_parser = parse_precision)]
+    #[arg(long, default_value = "full", value_parser = Precision::from_str)]
     precision: Precision,
     /// Override the stage's epoch count.
     #[arg(long)]

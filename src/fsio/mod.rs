@@ -2,8 +2,9 @@
 //! or no file at all. Every file rocc writes goes through `write_atomic` (or `Behind`, which
 //! finishes the same work on a writer thread): to a temporary name in the same directory, then
 //! renamed, so an interrupted run never leaves a truncated file under a final name and a re-run
-//! can resume (no fsync: that protects against a crash of the process, not of the machine). Also here: the sweep of the temporaries a killed run leaves, and the
-//! content hash that manifests record (FNV-1a, also rocc's one hash for seeds and digests).
+//! can resume (no fsync: that protects against a crash of the process, not of the machine).
+//! Also here: the sweep of the temporaries a killed run leaves, and the content hash that
+//! manifests record (FNV-1a, also rocc's one hash for seeds and digests).
 
 mod behind;
 mod sink;

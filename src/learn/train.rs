@@ -599,8 +599,9 @@ fn run<M: Net>(
                     .help("lower the stage's `lr` in the config, or resume from the last checkpoint with `--resume`"));
             }
             let grads = loss.backward();
-            // Mixed precision: an overflow anywhere in the half-precision attention reaches every
-            // gradient below it, the decoder's input layer's included; such a step is skipped.
+            // Mixed precision: an overflow anywhere in the transformer's half-precision regions
+            // reaches every gradient below it, the decoder's input layer's included; such a step
+            // is skipped.
             let take = match &opts.precision {
                 Precision::Full => true,
                 Precision::Mixed(scale) => {

@@ -30,27 +30,26 @@ pub enum Precision {
     Mixed(GradScale),
 }
 
-impl Precision {
+impl std::str::FromStr for Precision {
+    type Err = String;
+
     /// `full` or `mixed` (the command line's words).
-    pub fn parse(word: &str) -> Option<Precision> {
+    fn from_str(word: &str) -> Result<Self, String> {
         match word {
-            "full" | "f32" => Some(Precision::Full),
-            "mixed" | "f16" => Some(Precision::Mixed(GradScale::default())),
-            _ => None,
+            "full" | "f32" => Ok(Precision::Full),
+            "mixed" | "f16" => Ok(Precision::Mixed(GradScale::default())),
+            _ => Err(format!("unknown precision `{word}` (expected full or mixed)")),
         }
     }
+}
 
+impl Precision {
     pub fn name(&self) -> &'static str {
         match self {
             Precision::Full => "full",
             Precision::Mixed(_) => "mixed",
         }
     }
-}
-
-/// clap's parser for `--precision`.
-pub fn parse_precision(word: &str) -> Result<Precision, String> {
-    Precision::parse(word).ok_or_else(|| format!("unknown precision `{word}` (expected full or mixed)"))
 }
 
 /// Whether `precision` can run on `device` (the device already probed): E0914 for mixed precision

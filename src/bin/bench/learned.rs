@@ -11,7 +11,7 @@ fn config(name: &str) -> Result<GroundedConfig, String> {
 
 /// The `--precision full|mixed` of a bench command.
 fn precision(args: &[String]) -> Result<rocc::backend::grounded::attention::Precision, String> {
-    rocc::backend::grounded::attention::parse_precision(opt(args, "--precision").unwrap_or("full"))
+    opt(args, "--precision").unwrap_or("full").parse()
 }
 
 /// `bench train [paper] [--device cpu|wgpu|cuda] [--precision full|mixed] [--steps N]`: training
@@ -115,6 +115,9 @@ pub fn bench_grounded(args: &[String]) {
         Ok(p) => p,
         Err(e) => return println!("  {e}"),
     };
+    if let Err(d) = kind.open().and_then(|device| rocc::backend::grounded::attention::check(&precision, &device)) {
+        return println!("  {} {}", d.code, d.message);
+    }
     println!(
         "== grounded: inference per frame on {kind}, {} precision (batch {batch}; random weights)",
         precision.name()
@@ -156,9 +159,6 @@ pub fn bench_grounded(args: &[String]) {
             Ok(g) => g,
             Err(d) => return println!("  {name}: {} {}", d.code, d.message),
         };
-        if let Err(d) = kind.open().and_then(|device| rocc::backend::grounded::attention::check(&precision, &device)) {
-            return println!("  {name}: {} {}", d.code, d.message);
-        }
         g.model.decoder.shape.precision = precision.clone();
         let run = || g.predict_frames(&inputs).map(|l| std::hint::black_box(l.len()));
         if let Err(d) = run() {
