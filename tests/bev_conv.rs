@@ -3,12 +3,13 @@
 //! autodiff: the same values (bit for bit, except a sparse input's training forward: to float
 //! rounding), and the same gradients of the input, the weight and the bias, for the shapes the
 //! encoder uses (stride 1 and 2, up to 16 and beyond 16 output channels, batch 1 and 2, odd
-//! sizes).
+//! sizes). Its activation (`gelu::gelu`) likewise: burn's bits for inference, burn's values and
+//! gradient to float rounding for a training step.
 
 use burn::nn::PaddingConfig2d;
 use burn::nn::conv::{Conv2d, Conv2dConfig};
 use burn::prelude::*;
-use rocc::backend::grounded::conv;
+use rocc::backend::grounded::{conv, gelu};
 
 struct Lcg(u64);
 
@@ -85,4 +86,28 @@ fn the_bev_convolution_matches_burns_in_values_and_gradients() {
         }
         assert!(ours[2].iter().any(|&v| v != 0.0), "case {seed}: a zero weight gradient proves nothing");
     }
+}
+
+#[test]
+fn the_training_gelu_matches_burns_in_values_and_gradients() {
+    // Beyond the BEV encoder's range on both sides, and a 5 x 7 x 300 block (several tasks).
+    let mut x = Lcg(5).vec(5 * 7 * 300);
+    x.iter_mut().enumerate().for_each(|(i, v)| *v *= 1.0 + (i % 13) as f32);
+    let run = |ours: bool| {
+        let device = Device::flex().autodiff();
+        let t = Tensor::<3>::from_data(TensorData::new(x.clone(), [5, 7, 300]), &device).require_grad();
+        let y = if ours { gelu::gelu(t.clone()) } else { burn::tensor::activation::gelu(t.clone()) };
+        let w = Tensor::<3>::from_data(TensorData::new(Lcg(9).vec(x.len()), [5, 7, 300]), &device);
+        let grads = (y.clone() * w).sum().backward();
+        let g = t.grad(&grads).expect("the input gets a gradient");
+        (y.to_data().iter::<f32>().collect::<Vec<_>>(), g.to_data().iter::<f32>().collect::<Vec<_>>())
+    };
+    let ((y, g), (by, bg)) = (run(true), run(false));
+    let (ey, eg) = (max_rel_err(&y, &by), max_rel_err(&g, &bg));
+    assert!(ey < 2e-6 && eg < 2e-6, "values differ by {ey}, gradients by {eg}");
+    assert!(y != by, "a training step takes its own GELU");
+    // Inference (no autodiff) keeps burn's bits.
+    let t = Tensor::<3>::from_data(TensorData::new(x.clone(), [5, 7, 300]), &Device::flex());
+    let host = |t: Tensor<3>| t.to_data().iter::<f32>().collect::<Vec<_>>();
+    assert_eq!(host(gelu::gelu(t.clone())), host(burn::tensor::activation::gelu(t)));
 }

@@ -22,6 +22,7 @@ pub mod conv;
 pub mod cross_entropy;
 pub mod device;
 pub mod expf;
+pub mod gelu;
 pub mod guard;
 pub mod head;
 pub mod heap;
@@ -30,6 +31,7 @@ mod infer;
 pub mod latents;
 pub mod loss;
 pub mod model;
+mod par;
 pub mod rows;
 pub mod splat;
 

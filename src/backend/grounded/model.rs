@@ -14,7 +14,7 @@ use super::config::GroundedConfig;
 use super::latents::{ANCHOR_FEATS, Anchor, budget, encoder_input};
 use super::rows::{repeat_rows, take_rows};
 use super::splat::{ActiveAnchors, PARAMS, Region, activate, splat};
-use super::{conv, head};
+use super::{conv, gelu, head};
 use crate::backend::layout::{N_LABELS, NZ, ORIGIN, VOXEL};
 use crate::raster::layout::{GRID, N_AUX, N_MASKS, RES};
 use burn::module::{Initializer, Param};
@@ -413,7 +413,7 @@ impl Generator {
     fn features(&self, bev: Tensor<4>) -> Tensor<4> {
         let mut x = bev;
         for c in &self.bev.convs {
-            x = gelu(conv::forward(c, x));
+            x = gelu::gelu(conv::forward(c, x));
         }
         x
     }
@@ -504,7 +504,7 @@ impl Generator {
         let residual = match (&self.bg_hidden, &self.bg_out) {
             (Some(hid), Some(out)) => {
                 let [hh, ww] = rect.size;
-                let hidden = gelu(cropped_conv(hid, fmap, rect));
+                let hidden = gelu::gelu(cropped_conv(hid, fmap, rect));
                 Some(out.forward(hidden).permute([0, 2, 3, 1]).reshape([b * hh * ww, NZ]))
             }
             _ => None,
