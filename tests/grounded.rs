@@ -304,6 +304,46 @@ fn fused_cross_entropy_matches_the_tensor_formulation() {
     assert!(scale > 0.0);
 }
 
+/// The CPU's cross-entropy with the Lovász rows' softmax in one operation against the tensor
+/// formulation (the cross-entropy, and `softmax` of the rows taken with `take_rows`): both
+/// values, and the logits' gradient through a loss that uses both.
+#[test]
+fn cross_entropy_and_rows_match_the_tensor_formulation() {
+    use burn::tensor::activation::softmax;
+    use rocc::backend::grounded::cross_entropy::{Targets, cross_entropy_and_rows};
+    use rocc::backend::grounded::loss::weighted_cross_entropy_tensor_ops;
+    use rocc::backend::grounded::rows::take_rows;
+    let device = cpu().autodiff();
+    let mut rng = Rng::new(6);
+    let n = 30_000;
+    let logits: Vec<f32> = (0..n * N_LABELS).map(|_| (rng.normal() * 3.0) as f32).collect();
+    let target: Vec<u8> = (0..n).map(|_| rng.index(N_LABELS) as u8).collect();
+    let rows: Vec<usize> = (0..n).filter(|v| v % 7 == 3 || v % 11 == 0).collect();
+    let m = rows.len();
+    let weights_of_probs: Vec<f32> = (0..m * N_LABELS).map(|_| rng.normal() as f32).collect();
+    let w = [1.0, 0.5, 3.0, 1.0, 1.0, 9.0, 1.0, 1.0, 2.0];
+    let run = |fused: bool| -> (f32, Vec<f32>, Vec<f32>) {
+        let l = Tensor::<2>::from_data(TensorData::new(logits.clone(), [n, N_LABELS]), &device).require_grad();
+        let (ce, probs) = if fused {
+            cross_entropy_and_rows(l.clone(), Targets::new(&target, &w), rows.clone().into())
+        } else {
+            let sel = rows.iter().map(|&r| r as i64).collect();
+            (weighted_cross_entropy_tensor_ops(l.clone(), &target, &w), softmax(take_rows(l.clone(), sel), 1))
+        };
+        let pw = Tensor::<2>::from_data(TensorData::new(weights_of_probs.clone(), [m, N_LABELS]), &device);
+        let p: Vec<f32> = probs.to_data().iter::<f32>().collect();
+        let v = ce.clone().into_scalar::<f32>();
+        let grads = (ce * 3.0 + (probs * pw).sum()).backward();
+        (v, p, l.grad(&grads).expect("the logits get a gradient").to_data().iter::<f32>().collect())
+    };
+    let ((v, p, g), (rv, rp, rg)) = (run(true), run(false));
+    assert!((v - rv).abs() < 1e-5 * rv.abs(), "value {v} against {rv}");
+    let max_diff = |a: &[f32], b: &[f32]| a.iter().zip(b).fold(0f32, |m, (x, y)| m.max((x - y).abs()));
+    assert!(p.len() == m * N_LABELS && max_diff(&p, &rp) < 1e-6, "probabilities differ by {}", max_diff(&p, &rp));
+    let scale = rg.iter().fold(0f32, |m, x| m.max(x.abs()));
+    assert!(max_diff(&g, &rg) < 1e-5 * scale && scale > 0.0, "gradient differs by {}", max_diff(&g, &rg) / scale);
+}
+
 /// The exponential of the CPU's training passes against f64's, over the range a softmax feeds
 /// it (and beyond), in units of the f32 result's last place.
 #[test]
@@ -429,8 +469,7 @@ fn model_shapes_and_padding_invariance() {
     assert_eq!(hb.q, a.len().max(b.len()));
     assert_eq!(hb.pad.iter().filter(|&&p| !p).count(), a.len() + b.len());
     let g = Generator::new(&cfg, &device);
-    let mut bev = Vec::new();
-    rocc::backend::grounded::model::bev_input(&masks, &aux, &mut bev);
+    let bev = rocc::backend::grounded::model::bev_batch(&[(&masks, &aux)]);
     let bev2 = [bev.clone(), bev.clone()].concat();
     let out = g.forward(bev2, &hb, region);
     assert_eq!(out.logits.dims(), [2 * region.voxels(), N_LABELS]);
@@ -455,6 +494,35 @@ fn model_shapes_and_padding_invariance() {
     assert!(pred.iter().all(|&l| (l as usize) < N_LABELS));
 }
 
+/// The generator's input: masks 0/1, aux scaled per channel, frame after frame; a frame whose
+/// arrays are short of channels or of another size reads zeros there.
+#[test]
+fn bev_batch_scales_each_channel_and_zeroes_what_a_frame_lacks() {
+    use rocc::backend::grounded::model::{BEV_CHANNELS, bev_batch};
+    let (masks, mut aux) = bev_with_road();
+    aux.slice_mut(ndarray::s![6, 10..20, 30..40]).fill(-3);
+    aux.slice_mut(ndarray::s![0, 0..5, 0..400]).fill(40);
+    let short = masks.slice(ndarray::s![0..3, .., ..]).to_owned();
+    let small = Array3::<i32>::from_elem((N_AUX, 10, 10), 5);
+    let bev = bev_batch(&[(&masks, &aux), (&short, &small)]);
+    let px = GRID * GRID;
+    assert_eq!(bev.len(), 2 * BEV_CHANNELS * px);
+    let at = |f: usize, c: usize, i: usize, j: usize| bev[(f * BEV_CHANNELS + c) * px + i * GRID + j];
+    let road = masks.indexed_iter().find(|(_, v)| **v != 0).map(|(ix, _)| ix).expect("a road pixel");
+    assert_eq!(at(0, road.0, road.1, road.2), 1.0);
+    assert_eq!(at(1, road.0, road.1, road.2), if road.0 < 3 { 1.0 } else { 0.0 });
+    assert_eq!(at(0, N_MASKS, 2, 399), 2.0, "offsets are scaled by 1/20");
+    assert_eq!(at(0, N_MASKS + 6, 15, 35), -1.5, "heights by 1/2");
+    assert_eq!(at(0, N_MASKS + 6, 25, 35), 0.0);
+    let ones = |f: usize, c: usize| bev[(f * BEV_CHANNELS + c) * px..][..px].iter().filter(|&&v| v != 0.0).count();
+    for c in 0..N_MASKS {
+        let want = masks.index_axis(ndarray::Axis(0), c).iter().filter(|&&v| v != 0).count();
+        assert_eq!(ones(0, c), want, "mask {c}");
+        assert_eq!(ones(1, c), if c < 3 { want } else { 0 }, "frame 2, mask {c}");
+    }
+    assert!((N_MASKS..BEV_CHANNELS).all(|c| ones(1, c) == 0), "aux of another size reads zeros");
+}
+
 /// A training crop's logits are the whole grid's logits of its columns, and every parameter's
 /// gradient agrees: the background head runs only over the crop's feature pixels (and its
 /// kernel's reach, or the map's own padding at an edge), the rest of the generator over the
@@ -471,8 +539,7 @@ fn a_crop_gets_the_logits_and_gradients_of_the_whole_grid() {
     g.bg_out = Some(burn::nn::conv::Conv2dConfig::new([f, NZ], [1, 1]).init(&device));
     let boxes = [car(5.0, 0.0, 4.5), car(-45.0, -45.0, 4.0), car(46.0, 47.0, 3.0)];
     let hb = HostBatch::new(vec![latents::build(&cfg, &boxes, &masks)]);
-    let mut bev = Vec::new();
-    rocc::backend::grounded::model::bev_input(&masks, &aux, &mut bev);
+    let bev = rocc::backend::grounded::model::bev_batch(&[(&masks, &aux)]);
     let crops = [Region { i0: 0, j0: 201, ni: 45, nj: 39 }, Region { i0: 371, j0: 363, ni: 29, nj: 37 }];
     let mut rng = Rng::new(4);
     let weights: Vec<Vec<f32>> =
@@ -527,8 +594,7 @@ fn params(g: &Generator) -> Vec<f32> {
     let (masks, aux) = bev_with_road();
     let cfg = tiny();
     let hb = HostBatch::new(vec![latents::build(&cfg, &[car(5.0, 0.0, 4.5)], &masks)]);
-    let mut bev = Vec::new();
-    rocc::backend::grounded::model::bev_input(&masks, &aux, &mut bev);
+    let bev = rocc::backend::grounded::model::bev_batch(&[(&masks, &aux)]);
     g.forward(bev, &hb, Region { i0: 200, j0: 190, ni: 30, nj: 20 }).logits.to_data().iter::<f32>().collect()
 }
 

@@ -71,7 +71,7 @@ fn a_batch_of_three_frames_gives_the_labels_of_three_single_frames() {
 /// logits, bit for bit, including the background head's gated residual (here not zero).
 #[test]
 fn host_labels_are_the_argmax_of_the_logits() {
-    use rocc::backend::grounded::model::bev_input;
+    use rocc::backend::grounded::model::bev_batch;
     use rocc::backend::grounded::splat::Region;
     use rocc::backend::grounded::{HostBatch, latents};
     let cfg = grounded_tiny::tiny();
@@ -85,10 +85,7 @@ fn host_labels_are_the_argmax_of_the_logits() {
         (vec![gbox(VEHICLE, -8.0, 1.0, 9.0, 0.0)], &m1, &a1),
     ];
     let hb = HostBatch::new(frames.iter().map(|(b, m, _)| latents::build(&cfg, b, m)).collect());
-    let mut bev = Vec::new();
-    for (_, m, a) in &frames {
-        bev_input(m, a, &mut bev);
-    }
+    let bev = bev_batch(&frames.iter().map(|(_, m, a)| (*m, *a)).collect::<Vec<_>>());
     let region = Region { i0: 150, j0: 170, ni: 60, nj: 50 };
     let argmax = |m: &Generator| -> Vec<u8> {
         let logits = m.forward(bev.clone(), &hb, region).logits;

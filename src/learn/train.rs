@@ -13,14 +13,15 @@
 use super::data::{self, Frame, Sample};
 use crate::backend::grounded::attention::Precision;
 use crate::backend::grounded::config::{GroundedConfig, StageConfig};
+use crate::backend::grounded::cross_entropy::{Targets, cross_entropy_and_rows};
 use crate::backend::grounded::latents::{self, GBox};
 use crate::backend::grounded::loss::{
     agent_predicted, bce_with_logits, class_weights, kl_divergence, lovasz_softmax, weighted_cross_entropy,
 };
-use crate::backend::grounded::model::{Autoencoder, Generator, HostBatch, bev_input};
+use crate::backend::grounded::model::{Autoencoder, Generator, HostBatch, bev_batch};
 use crate::backend::grounded::rows::take_rows;
 use crate::backend::grounded::splat::Region;
-use crate::backend::grounded::{BEV_CHANNELS, load_weights, logits_to_labels};
+use crate::backend::grounded::{load_weights, logits_to_labels};
 use crate::backend::layout::{N_LABELS, NX, NY, NZ};
 use crate::diag::Diagnostic;
 use crate::eval::occ::{OccScorer, OccScores};
@@ -170,10 +171,7 @@ impl Net for Generator {
 
     fn step(&self, cfg: &GroundedConfig, frames: &[Frame], region: Region, _rng: &mut Rng) -> StepOut {
         let hb = HostBatch::new(frames.iter().map(|f| anchors(cfg, f)).collect());
-        let mut bev = Vec::with_capacity(frames.len() * BEV_CHANNELS * NX * NY);
-        for f in frames {
-            bev_input(&f.masks, &f.aux, &mut bev);
-        }
+        let bev = bev_batch(&frames.iter().map(|f| (&f.masks, &f.aux)).collect::<Vec<_>>());
         let out = self.forward(bev, &hb, region);
         StepOut { logits: out.logits, kl: None, background: out.background }
     }
@@ -210,7 +208,6 @@ pub fn step_loss(
 ) -> (Tensor<1>, [f64; 4]) {
     use rayon::prelude::*;
     let t = &cfg.train;
-    let ce = weighted_cross_entropy(out.logits.clone(), target, weights);
     // Lovász over every voxel an agent class claims (truth or prediction) plus a uniform draw.
     let pred = agent_predicted(&out.logits);
     let n = target.len();
@@ -222,7 +219,13 @@ pub fn step_loss(
     idx.dedup();
     let sel_t: Vec<u8> = idx.iter().map(|&v| target[v]).collect();
     let sel: Vec<i64> = idx.iter().map(|&v| v as i64).collect();
-    let lov = lovasz_softmax(softmax(take_rows(out.logits, sel.clone()), 1), &sel_t);
+    let (ce, probs) = if out.logits.device() == Device::flex() {
+        // One operation, one gradient of the logits (`cross_entropy_and_rows`).
+        cross_entropy_and_rows(out.logits, Targets::new(target, weights), idx.into())
+    } else {
+        (weighted_cross_entropy(out.logits.clone(), target, weights), softmax(take_rows(out.logits, sel.clone()), 1))
+    };
+    let lov = lovasz_softmax(probs, &sel_t);
     let mut total = ce.clone() * t.ce_weight + lov.clone() * t.lovasz_weight;
     let mut parts = [scalar(&ce), scalar(&lov), 0.0, 0.0];
     if let Some(kl) = out.kl {
@@ -230,7 +233,7 @@ pub fn step_loss(
         total = total + kl * t.kl_weight;
     }
     if let Some(bg) = out.background {
-        let m = idx.len();
+        let m = sel.len();
         let aux = bce_with_logits(take_rows(bg, sel).reshape([m]), &sel_t.iter().map(|&l| l == 1).collect::<Vec<_>>());
         parts[3] = scalar(&aux);
         total = total + aux * t.background_aux_weight;

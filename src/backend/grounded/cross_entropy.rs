@@ -9,6 +9,7 @@
 
 use super::expf;
 use super::host_read::{flex_f32, flex_slice, host_vec};
+use super::par::{CHUNK, par_vec};
 use crate::backend::layout::N_LABELS;
 use burn::backend::autodiff::checkpoint::{base::Checkpointer, strategy::CheckpointStrategy};
 use burn::backend::autodiff::grads::Gradients;
@@ -60,6 +61,30 @@ pub trait CrossEntropyOps: burn::backend::Backend {
         Self::float_from_data(TensorData::new(out, [n, N_LABELS]), &device)
     }
 
+    /// Logits `[N, 9]` -> `[1 + m * 9]`: the weighted cross-entropy, then the softmax of the
+    /// `m` distinct rows `rows` (the Lovász term's probabilities). One operation, so that its
+    /// backward pass writes the logits' one gradient: a row selection's backward builds a second
+    /// logits-sized gradient (38 MB for a `cpu-small` crop) to be added to the first.
+    fn cross_entropy_and_rows(logits: FloatTensor<Self>, t: Targets, rows: Arc<[usize]>) -> FloatTensor<Self> {
+        let device = logits.device();
+        let out = forward_rows(&host_vec::<Self>(logits), &t, &rows);
+        let n = out.len();
+        Self::float_from_data(TensorData::new(out, [n]), &device)
+    }
+
+    /// Logits and the gradient of `cross_entropy_and_rows`'s output -> the logits' gradient.
+    fn cross_entropy_and_rows_backward(
+        logits: FloatTensor<Self>,
+        grad: FloatTensor<Self>,
+        t: Targets,
+        rows: Arc<[usize]>,
+    ) -> FloatTensor<Self> {
+        let device = logits.device();
+        let out = backward_rows(&host_vec::<Self>(logits), &host_vec::<Self>(grad), &t, &rows);
+        let n = t.labels.len();
+        Self::float_from_data(TensorData::new(out, [n, N_LABELS]), &device)
+    }
+
     /// Logits `[N, 9]` -> `[N]`: 1 where the row's argmax (its first largest value) is an agent
     /// class (2 and up), else 0. No gradient.
     fn agent_rows(logits: FloatTensor<Self>) -> FloatTensor<Self> {
@@ -88,6 +113,23 @@ impl CrossEntropyOps for Flex {
         let g = host_vec::<Self>(grad).first().copied().unwrap_or(0.0);
         let n = t.labels.len();
         let out = backward(flex_slice(&flex_f32(&logits)), g, &t);
+        FlexTensor::from_data(TensorData::new(out, [n, N_LABELS]))
+    }
+
+    fn cross_entropy_and_rows(logits: FloatTensor<Self>, t: Targets, rows: Arc<[usize]>) -> FloatTensor<Self> {
+        let out = forward_rows(flex_slice(&flex_f32(&logits)), &t, &rows);
+        let n = out.len();
+        FlexTensor::from_data(TensorData::new(out, [n]))
+    }
+
+    fn cross_entropy_and_rows_backward(
+        logits: FloatTensor<Self>,
+        grad: FloatTensor<Self>,
+        t: Targets,
+        rows: Arc<[usize]>,
+    ) -> FloatTensor<Self> {
+        let n = t.labels.len();
+        let out = backward_rows(flex_slice(&flex_f32(&logits)), flex_slice(&flex_f32(&grad)), &t, &rows);
         FlexTensor::from_data(TensorData::new(out, [n, N_LABELS]))
     }
 
@@ -131,21 +173,52 @@ pub fn forward(logits: &[f32], t: &Targets) -> f32 {
 
 /// `g * w[y] * (softmax(l) - onehot(y))` per row.
 pub fn backward(logits: &[f32], g: f32, t: &Targets) -> Vec<f32> {
-    let mut out = vec![0f32; logits.len()];
-    out.par_chunks_mut(ROWS * N_LABELS)
-        .zip(logits.par_chunks(ROWS * N_LABELS))
-        .zip(t.labels.par_chunks(ROWS))
-        .for_each(|((o, rows), labels)| {
-            expf::shifted_exp(rows, N_LABELS, o, &mut Vec::with_capacity(ROWS));
-            for (o, &y) in o.chunks_exact_mut(N_LABELS).zip(labels) {
-                let sum: f32 = o.iter().sum();
-                let s = g * t.weights[class(y)];
-                let inv = 1.0 / sum;
-                for (c, o) in o.iter_mut().enumerate() {
-                    *o = s * (*o * inv - (c == class(y)) as u8 as f32);
-                }
+    par_vec(logits.len(), |start, o| {
+        let labels = &t.labels[start / N_LABELS..(start + o.len()) / N_LABELS];
+        expf::shifted_exp(&logits[start..start + o.len()], N_LABELS, o, &mut Vec::with_capacity(CHUNK / N_LABELS));
+        for (o, &y) in o.chunks_exact_mut(N_LABELS).zip(labels) {
+            let sum: f32 = o.iter().sum();
+            let s = g * t.weights[class(y)];
+            let inv = 1.0 / sum;
+            for (c, o) in o.iter_mut().enumerate() {
+                *o = s * (*o * inv - (c == class(y)) as u8 as f32);
             }
-        });
+        }
+    })
+}
+
+/// The softmax of each of `rows`, `[m * 9]`.
+fn row_softmax(logits: &[f32], rows: &[usize]) -> Vec<f32> {
+    let mut out = Vec::with_capacity(rows.len() * N_LABELS);
+    for &r in rows {
+        let l = &logits[r * N_LABELS..(r + 1) * N_LABELS];
+        let max = l.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        let e: [f32; N_LABELS] = std::array::from_fn(|c| expf::exp(l[c] - max));
+        let inv = 1.0 / e.iter().sum::<f32>();
+        out.extend(e.iter().map(|&e| e * inv));
+    }
+    out
+}
+
+/// `cross_entropy_and_rows` on the host.
+pub fn forward_rows(logits: &[f32], t: &Targets, rows: &[usize]) -> Vec<f32> {
+    let mut out = vec![forward(logits, t)];
+    out.extend(row_softmax(logits, rows));
+    out
+}
+
+/// `cross_entropy_and_rows_backward` on the host: the cross-entropy's gradient times `grad[0]`,
+/// plus on each selected row the softmax's backward of its part of `grad`.
+pub fn backward_rows(logits: &[f32], grad: &[f32], t: &Targets, rows: &[usize]) -> Vec<f32> {
+    let mut out = backward(logits, grad.first().copied().unwrap_or(0.0), t);
+    let probs = row_softmax(logits, rows);
+    let parts = rows.iter().zip(probs.chunks_exact(N_LABELS)).zip(grad.get(1..).unwrap_or(&[]).chunks_exact(N_LABELS));
+    for ((&r, p), g) in parts {
+        let dot: f32 = p.iter().zip(g).map(|(p, g)| p * g).sum();
+        for ((o, &p), &g) in out[r * N_LABELS..(r + 1) * N_LABELS].iter_mut().zip(p).zip(g) {
+            *o += p * (g - dot);
+        }
+    }
     out
 }
 
@@ -154,6 +227,18 @@ const BLOCK: usize = 256;
 
 #[derive(Debug)]
 struct CrossEntropyBackward;
+
+#[derive(Debug)]
+struct CrossEntropyRowsBackward;
+
+impl<B: Backend + CrossEntropyOps> Backward<B, 1> for CrossEntropyRowsBackward {
+    type State = (FloatTensor<B>, Targets, Arc<[usize]>);
+
+    fn backward(self, ops: Ops<Self::State, 1>, grads: &mut Gradients, _checkpointer: &mut Checkpointer) {
+        let (logits, t, rows) = ops.state;
+        unary::<B, _>(ops.parents, ops.node, grads, |grad| B::cross_entropy_and_rows_backward(logits, grad, t, rows));
+    }
+}
 
 impl<B: Backend + CrossEntropyOps> Backward<B, 1> for CrossEntropyBackward {
     type State = (FloatTensor<B>, Targets);
@@ -180,6 +265,26 @@ impl<B: Backend + CrossEntropyOps, C: CheckpointStrategy> CrossEntropyOps for Au
         Self::from_inner(B::cross_entropy_backward(Self::inner(logits), Self::inner(grad), t))
     }
 
+    fn cross_entropy_and_rows(logits: FloatTensor<Self>, t: Targets, rows: Arc<[usize]>) -> FloatTensor<Self> {
+        match CrossEntropyRowsBackward.prepare::<C>([logits.node()]).compute_bound().stateful() {
+            OpsKind::Tracked(prep) => {
+                let inner = logits.primitive().clone();
+                let out = B::cross_entropy_and_rows(inner.clone(), t.clone(), rows.clone());
+                prep.finish((inner, t, rows), out)
+            }
+            OpsKind::UnTracked(prep) => prep.finish(B::cross_entropy_and_rows(logits.into_primitive(), t, rows)),
+        }
+    }
+
+    fn cross_entropy_and_rows_backward(
+        logits: FloatTensor<Self>,
+        grad: FloatTensor<Self>,
+        t: Targets,
+        rows: Arc<[usize]>,
+    ) -> FloatTensor<Self> {
+        Self::from_inner(B::cross_entropy_and_rows_backward(Self::inner(logits), Self::inner(grad), t, rows))
+    }
+
     fn agent_rows(logits: FloatTensor<Self>) -> FloatTensor<Self> {
         Self::from_inner(B::agent_rows(Self::inner(logits)))
     }
@@ -188,4 +293,13 @@ impl<B: Backend + CrossEntropyOps, C: CheckpointStrategy> CrossEntropyOps for Au
 /// The weighted cross-entropy of `logits` `[N, 9]` through `CrossEntropyOps`.
 pub fn cross_entropy(logits: Tensor<2>, t: Targets) -> Tensor<1> {
     Tensor::from_dispatch(<Dispatch as CrossEntropyOps>::cross_entropy(logits.into_dispatch(), t))
+}
+
+/// The weighted cross-entropy of `logits` `[N, 9]` and the softmax of its distinct rows `rows`
+/// (`[m, 9]`), through `CrossEntropyOps::cross_entropy_and_rows`.
+pub fn cross_entropy_and_rows(logits: Tensor<2>, t: Targets, rows: Arc<[usize]>) -> (Tensor<1>, Tensor<2>) {
+    let m = rows.len();
+    let out: Tensor<1> =
+        Tensor::from_dispatch(<Dispatch as CrossEntropyOps>::cross_entropy_and_rows(logits.into_dispatch(), t, rows));
+    (out.clone().slice([0..1]), out.slice([1..1 + m * N_LABELS]).reshape([m, N_LABELS]))
 }

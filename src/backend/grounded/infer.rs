@@ -7,7 +7,7 @@
 //! device work runs under `guard::guarded`, so a device failure is a diagnostic.
 
 use super::guard::guarded;
-use super::model::{BEV_CHANNELS, HostBatch, bev_input};
+use super::model::{HostBatch, bev_batch};
 use super::splat::Region;
 use super::{GBox, Grounded, latents};
 use crate::backend::layout::{N_LABELS, NX, NY, NZ};
@@ -67,10 +67,7 @@ impl Grounded {
         let sets: Vec<_> = frames.iter().map(|f| latents::build(&self.config, &f.boxes, f.masks)).collect();
         let mut hb = HostBatch::new(sets);
         hb.set_by_set = true;
-        let mut bev = Vec::with_capacity(frames.len() * BEV_CHANNELS * NX * NY);
-        for f in frames {
-            bev_input(f.masks, f.aux, &mut bev);
-        }
+        let bev = bev_batch(&frames.iter().map(|f| (f.masks, f.aux)).collect::<Vec<_>>());
         let labels: Vec<u8> = if self.device().is_gpu() {
             let out = self.model.forward(bev, &hb, Region::full());
             out.logits.argmax(1).to_data().iter::<i64>().map(|l| l.clamp(0, N_LABELS as i64 - 1) as u8).collect()
