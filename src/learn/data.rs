@@ -272,12 +272,12 @@ pub fn load(s: &Sample) -> Result<Frame, String> {
         .filter(|m| m.dim() == (N_AUX, GRID, GRID))
         .ok_or_else(|| format!("{}: `{KEY_AUX}` is not ({N_AUX}, {GRID}, {GRID})", s.bev.display()))?;
     let labels = read_labels(&s.occ)?;
-    Ok(Frame {
-        masks: masks.as_standard_layout().into_owned(),
-        aux: aux.as_standard_layout().into_owned(),
-        labels: labels.as_standard_layout().into_owned(),
-        boxes: s.boxes.clone(),
-    })
+    Ok(Frame { masks: standard(masks), aux: standard(aux), labels: standard(labels), boxes: s.boxes.clone() })
+}
+
+/// `a` in standard layout: itself when it is (what `.npy` files hold), else a copy.
+fn standard<T: Clone>(a: Array3<T>) -> Array3<T> {
+    if a.is_standard_layout() { a } else { a.as_standard_layout().into_owned() }
 }
 
 /// Occupancy labels: rocc's own uint8 `.npy` directly, anything else through the scorer's reader

@@ -14,6 +14,7 @@
 //! the GPU formulations are checked against burn's on the CPU (this file's tests).
 
 use super::host_read::flex_slice;
+use super::par::{par_vec, par_zeros};
 use burn::backend::autodiff::checkpoint::{base::Checkpointer, strategy::CheckpointStrategy};
 use burn::backend::autodiff::grads::Gradients;
 use burn::backend::autodiff::ops::{Backward, Ops, OpsKind};
@@ -213,7 +214,7 @@ pub fn weight_grad_by_patches<B: Backend>(
 /// The output's gradient `[B, O, P]` as `[B P, O]`.
 fn transposed_grad(g: &[f32], [b, o, ho, wo]: [usize; 4]) -> Vec<f32> {
     let p = ho * wo;
-    let mut out = vec![0f32; b * p * o];
+    let mut out = par_zeros(b * p * o);
     out.par_chunks_mut(p * o).enumerate().for_each(|(bi, dst)| {
         for oi in 0..o {
             let src = &g[(bi * o + oi) * p..(bi * o + oi + 1) * p];
@@ -359,17 +360,14 @@ impl Im2col {
                 acc
             })
             .collect();
-        let mut out = vec![0f32; b * o * ho * wo];
-        for (task, acc) in parts.iter().enumerate() {
-            let (bi, y0) = (task / bands, task % bands * BAND);
-            for (p, px) in acc.chunks_exact(o).enumerate() {
-                let (y, xo) = (y0 + p / wo, p % wo);
-                for (oi, &v) in px.iter().enumerate() {
-                    out[((bi * o + oi) * ho + y) * wo + xo] = v;
-                }
+        // [B, O, H', W'] from the tasks' rows, channels last.
+        par_vec(b * o * ho * wo, |start, part| {
+            for (e, v) in part.iter_mut().enumerate() {
+                let e = start + e;
+                let (xo, y, oi, bi) = (e % wo, e / wo % ho, e / (wo * ho) % o, e / (wo * ho * o));
+                *v = parts[bi * bands + y / BAND][((y % BAND) * wo + xo) * o + oi];
             }
-        }
-        out
+        })
     }
 
     fn rows(&self) -> usize {
@@ -385,7 +383,7 @@ impl Im2col {
         let [ho, wo] = self.out;
         let [kh, kw] = self.kernel;
         let (s, pad) = (self.stride as i64, self.padding as i64);
-        let mut out = vec![0f32; self.rows() * self.columns()];
+        let mut out = par_zeros(self.rows() * self.columns());
         out.par_chunks_mut(self.columns()).enumerate().for_each(|(row, dst)| {
             let (ci, ky, kx) = (row / (kh * kw), (row / kw) % kh, row % kw);
             for bi in 0..b {

@@ -20,6 +20,7 @@
 
 use super::expf;
 use super::host_read::{flex_f32, flex_slice, host_vec};
+use super::par::par_zeros;
 use crate::backend::layout::{N_LABELS, NZ};
 use burn::backend::autodiff::checkpoint::{base::Checkpointer, strategy::CheckpointStrategy};
 use burn::backend::autodiff::grads::Gradients;
@@ -136,7 +137,7 @@ pub(crate) fn argmax(l: &[f32; N_LABELS]) -> u8 {
 
 /// Logits `[voxels, 9]`: splat + bias, free -> background by `r[v] * gate`.
 pub fn logits(splat: &[f32], bias: &[f32], r: &[f32]) -> Vec<f32> {
-    let mut out = vec![0f32; splat.len()];
+    let mut out = par_zeros(splat.len());
     out.par_chunks_mut(COLUMNS_PER_TASK * NZ * N_LABELS).enumerate().for_each(|(task, o)| {
         let v0 = task * COLUMNS_PER_TASK * NZ;
         for (dv, o) in o.chunks_exact_mut(N_LABELS).enumerate() {
@@ -155,8 +156,7 @@ pub fn logits(splat: &[f32], bias: &[f32], r: &[f32]) -> Vec<f32> {
 /// softmax of its own). The gate's exponentials are `expf`'s, so these logits agree with
 /// `logits` to float rounding.
 pub fn logits_and_gate(splat: &[f32], bias: &[f32], r: &[f32]) -> (Vec<f32>, Vec<f32>) {
-    let mut out = vec![0f32; splat.len()];
-    let mut gates = vec![0f32; r.len()];
+    let (mut out, mut gates) = (par_zeros(splat.len()), par_zeros(r.len()));
     const BLOCK: usize = 256;
     out.par_chunks_mut(BLOCK * N_LABELS).zip(gates.par_chunks_mut(BLOCK)).enumerate().for_each(|(task, (o, gates))| {
         let v0 = task * BLOCK;
@@ -183,7 +183,7 @@ pub fn logits_and_gate(splat: &[f32], bias: &[f32], r: &[f32]) -> (Vec<f32>, Vec
 /// the blocks in order: the same bits on any thread count.
 pub fn backward(gates: &[f32], grad: &[f32]) -> (Vec<f32>, Vec<f32>) {
     let per_task = COLUMNS_PER_TASK * NZ;
-    let mut gr = vec![0f32; gates.len()];
+    let mut gr = par_zeros(gates.len());
     let parts: Vec<Vec<f32>> = gr
         .par_chunks_mut(per_task)
         .enumerate()

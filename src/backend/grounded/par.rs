@@ -24,6 +24,11 @@ pub fn par_vec(n: usize, fill: impl Fn(usize, &mut [f32]) + Sync) -> Vec<f32> {
     out
 }
 
+/// `n` zeros, written on all cores.
+pub fn par_zeros(n: usize) -> Vec<f32> {
+    par_vec(n, |_, _| {})
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -6,6 +6,7 @@
 //! order on any thread count: the bytes do not depend on the machine. Backward is one Gaussian
 //! per task, each reading the voxels of its window and writing its own gradient row.
 
+use super::super::par::par_zeros;
 use super::layout::{self, COLS, SplatShape};
 use crate::backend::layout::{N_LABELS, NZ};
 use rayon::prelude::*;
@@ -37,7 +38,7 @@ fn terms(row: &[f32], p: [f32; 3]) -> ([f32; 3], [f32; 3], f32) {
 pub fn forward(g: &[f32], s: &SplatShape) -> Vec<f32> {
     let n = g.len() / COLS;
     let voxels = s.region.voxels();
-    let mut out = vec![0f32; s.batch * voxels * N_LABELS];
+    let mut out = par_zeros(s.batch * voxels * N_LABELS);
     if n == 0 || out.is_empty() {
         return out;
     }
@@ -109,7 +110,7 @@ fn splat_one(row: &[f32], s: &SplatShape, r: i64, li0: i64, li1: i64, o: &mut [f
 
 /// Gradient of sum(grad * forward(g)) with respect to `g`, `[N, COLS]` (the batch column's is 0).
 pub fn backward(g: &[f32], grad: &[f32], s: &SplatShape) -> Vec<f32> {
-    let mut out = vec![0f32; g.len()];
+    let mut out = par_zeros(g.len());
     let r = s.window as i64;
     out.par_chunks_mut(COLS).zip(g.par_chunks(COLS)).for_each(|(go, row)| {
         let Some(c) = centre(row) else { return };
