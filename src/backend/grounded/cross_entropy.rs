@@ -62,9 +62,9 @@ pub trait CrossEntropyOps: burn::backend::Backend {
     }
 
     /// Logits `[N, 9]` -> `[1 + m * 9]`: the weighted cross-entropy, then the softmax of the
-    /// `m` distinct rows `rows` (the Lovász term's probabilities). One operation, so that its
-    /// backward pass writes the logits' one gradient: a row selection's backward builds a second
-    /// logits-sized gradient (38 MB for a `cpu-small` crop) to be added to the first.
+    /// `m` rows `rows`, ascending and distinct (the Lovász term's probabilities). One operation,
+    /// so that its backward pass writes the logits' one gradient: a row selection's backward
+    /// builds a second logits-sized gradient (38 MB for a `cpu-small` crop) to add to the first.
     fn cross_entropy_and_rows(logits: FloatTensor<Self>, t: Targets, rows: Arc<[usize]>) -> FloatTensor<Self> {
         let device = logits.device();
         let out = forward_rows(&host_vec::<Self>(logits), &t, &rows);
@@ -97,10 +97,25 @@ pub trait CrossEntropyOps: burn::backend::Backend {
 
 /// `CrossEntropyOps::agent_rows` on the host.
 pub fn agent_rows(logits: &[f32]) -> Vec<f32> {
-    logits
-        .par_chunks_exact(N_LABELS)
-        .map(|l| l.try_into().map_or(0.0, |l: &[f32; N_LABELS]| (super::head::argmax(l) >= 2) as u8 as f32))
-        .collect()
+    par_vec(logits.len() / N_LABELS, |start, part| {
+        let rows = logits[start * N_LABELS..(start + part.len()) * N_LABELS].as_chunks::<N_LABELS>().0;
+        for (o, l) in part.iter_mut().zip(rows) {
+            *o = is_agent(l) as u8 as f32;
+        }
+    })
+}
+
+/// Whether the argmax of `l` (the first largest value, or the first NaN) is an agent class:
+/// the largest agent logit above both free and background, as trees of compares (no branch
+/// per element); a row holding NaN takes the argmax itself.
+#[inline]
+fn is_agent(l: &[f32; N_LABELS]) -> bool {
+    let m = |a: f32, b: f32| if a > b { a } else { b };
+    let agents = m(m(m(l[2], l[3]), m(l[4], l[5])), m(m(l[6], l[7]), l[8]));
+    if l.iter().sum::<f32>().is_nan() {
+        return super::head::argmax(l) >= 2;
+    }
+    agents > m(l[0], l[1])
 }
 
 impl CrossEntropyOps for Flex {
@@ -173,53 +188,66 @@ pub fn forward(logits: &[f32], t: &Targets) -> f32 {
 
 /// `g * w[y] * (softmax(l) - onehot(y))` per row.
 pub fn backward(logits: &[f32], g: f32, t: &Targets) -> Vec<f32> {
-    par_vec(logits.len(), |start, o| {
-        let labels = &t.labels[start / N_LABELS..(start + o.len()) / N_LABELS];
-        expf::shifted_exp(&logits[start..start + o.len()], N_LABELS, o, &mut Vec::with_capacity(CHUNK / N_LABELS));
-        for (o, &y) in o.chunks_exact_mut(N_LABELS).zip(labels) {
-            let sum: f32 = o.iter().sum();
-            let s = g * t.weights[class(y)];
-            let inv = 1.0 / sum;
-            for (c, o) in o.iter_mut().enumerate() {
-                *o = s * (*o * inv - (c == class(y)) as u8 as f32);
-            }
+    par_vec(logits.len(), |start, o| ce_backward_part(logits, g, t, start, o))
+}
+
+/// `backward`'s elements `start..start + o.len()` (whole rows).
+#[inline]
+fn ce_backward_part(logits: &[f32], g: f32, t: &Targets, start: usize, o: &mut [f32]) {
+    let labels = &t.labels[start / N_LABELS..(start + o.len()) / N_LABELS];
+    expf::shifted_exp(&logits[start..start + o.len()], N_LABELS, o, &mut Vec::with_capacity(CHUNK / N_LABELS));
+    for (o, &y) in o.chunks_exact_mut(N_LABELS).zip(labels) {
+        let sum: f32 = o.iter().sum();
+        let s = g * t.weights[class(y)];
+        let inv = 1.0 / sum;
+        for (c, o) in o.iter_mut().enumerate() {
+            *o = s * (*o * inv - (c == class(y)) as u8 as f32);
         }
-    })
-}
-
-/// The softmax of each of `rows`, `[m * 9]`.
-fn row_softmax(logits: &[f32], rows: &[usize]) -> Vec<f32> {
-    let mut out = Vec::with_capacity(rows.len() * N_LABELS);
-    for &r in rows {
-        let l = &logits[r * N_LABELS..(r + 1) * N_LABELS];
-        let max = l.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-        let e: [f32; N_LABELS] = std::array::from_fn(|c| expf::exp(l[c] - max));
-        let inv = 1.0 / e.iter().sum::<f32>();
-        out.extend(e.iter().map(|&e| e * inv));
     }
-    out
 }
 
-/// `cross_entropy_and_rows` on the host.
+/// The softmax of row `l`.
+#[inline]
+fn softmax_row(l: &[f32]) -> [f32; N_LABELS] {
+    let max = l.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    let e: [f32; N_LABELS] = std::array::from_fn(|c| expf::exp(l[c] - max));
+    let inv = 1.0 / e.iter().sum::<f32>();
+    e.map(|e| e * inv)
+}
+
+/// `cross_entropy_and_rows` on the host (`rows` ascending and distinct).
 pub fn forward_rows(logits: &[f32], t: &Targets, rows: &[usize]) -> Vec<f32> {
-    let mut out = vec![forward(logits, t)];
-    out.extend(row_softmax(logits, rows));
+    debug_assert!(rows.is_sorted() && rows.windows(2).all(|w| w[0] < w[1]));
+    let probs = par_vec(rows.len() * N_LABELS, |start, part| {
+        for (p, &r) in part.chunks_exact_mut(N_LABELS).zip(&rows[start / N_LABELS..]) {
+            p.copy_from_slice(&softmax_row(&logits[r * N_LABELS..(r + 1) * N_LABELS]));
+        }
+    });
+    let mut out = Vec::with_capacity(1 + probs.len());
+    out.push(forward(logits, t));
+    out.extend_from_slice(&probs);
     out
 }
 
 /// `cross_entropy_and_rows_backward` on the host: the cross-entropy's gradient times `grad[0]`,
-/// plus on each selected row the softmax's backward of its part of `grad`.
+/// plus on each selected row the softmax's backward of its part of `grad`, in the same pass
+/// (each task finds its rows among the ascending `rows`).
 pub fn backward_rows(logits: &[f32], grad: &[f32], t: &Targets, rows: &[usize]) -> Vec<f32> {
-    let mut out = backward(logits, grad.first().copied().unwrap_or(0.0), t);
-    let probs = row_softmax(logits, rows);
-    let parts = rows.iter().zip(probs.chunks_exact(N_LABELS)).zip(grad.get(1..).unwrap_or(&[]).chunks_exact(N_LABELS));
-    for ((&r, p), g) in parts {
-        let dot: f32 = p.iter().zip(g).map(|(p, g)| p * g).sum();
-        for ((o, &p), &g) in out[r * N_LABELS..(r + 1) * N_LABELS].iter_mut().zip(p).zip(g) {
-            *o += p * (g - dot);
+    let g0 = grad.first().copied().unwrap_or(0.0);
+    let gp = grad.get(1..).unwrap_or(&[]);
+    par_vec(logits.len(), |start, o| {
+        ce_backward_part(logits, g0, t, start, o);
+        let (r0, r1) = (start / N_LABELS, (start + o.len()) / N_LABELS);
+        let (a, b) = (rows.partition_point(|&r| r < r0), rows.partition_point(|&r| r < r1));
+        for (k, &r) in rows[a..b].iter().enumerate().map(|(i, r)| (a + i, r)) {
+            let p = softmax_row(&logits[r * N_LABELS..(r + 1) * N_LABELS]);
+            let Some(g) = gp.get(k * N_LABELS..(k + 1) * N_LABELS) else { continue };
+            let dot: f32 = p.iter().zip(g).map(|(p, g)| p * g).sum();
+            for ((o, &p), &g) in o[(r - r0) * N_LABELS..(r - r0 + 1) * N_LABELS].iter_mut().zip(&p).zip(g) {
+                *o += p * (g - dot);
+            }
         }
-    }
-    out
+    })
 }
 
 /// Rows per block of the forward pass's exponentials (a buffer on the stack).
@@ -295,11 +323,35 @@ pub fn cross_entropy(logits: Tensor<2>, t: Targets) -> Tensor<1> {
     Tensor::from_dispatch(<Dispatch as CrossEntropyOps>::cross_entropy(logits.into_dispatch(), t))
 }
 
-/// The weighted cross-entropy of `logits` `[N, 9]` and the softmax of its distinct rows `rows`
+/// The weighted cross-entropy of `logits` `[N, 9]` and the softmax of its rows `rows` (ascending, distinct)
 /// (`[m, 9]`), through `CrossEntropyOps::cross_entropy_and_rows`.
 pub fn cross_entropy_and_rows(logits: Tensor<2>, t: Targets, rows: Arc<[usize]>) -> (Tensor<1>, Tensor<2>) {
     let m = rows.len();
     let out: Tensor<1> =
         Tensor::from_dispatch(<Dispatch as CrossEntropyOps>::cross_entropy_and_rows(logits.into_dispatch(), t, rows));
     (out.clone().slice([0..1]), out.slice([1..1 + m * N_LABELS]).reshape([m, N_LABELS]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The compare trees give the argmax's answer on ties, signed zeros, infinities and NaN.
+    #[test]
+    fn agent_rows_follow_the_argmax() {
+        let special = [0.0, -0.0, 1.0, 1.0, f32::INFINITY, f32::NEG_INFINITY, f32::NAN, -2.5];
+        let mut rows = Vec::new();
+        let mut h = 1u32;
+        for _ in 0..20_000 {
+            for _ in 0..N_LABELS {
+                h = h.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                rows.push(special[(h >> 24) as usize % special.len()]);
+            }
+        }
+        let flags = agent_rows(&rows);
+        for (l, &f) in rows.as_chunks::<N_LABELS>().0.iter().zip(&flags) {
+            assert_eq!(f == 1.0, super::super::head::argmax(l) >= 2, "{l:?}");
+        }
+        assert!(flags.contains(&1.0) && flags.contains(&0.0));
+    }
 }

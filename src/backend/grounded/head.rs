@@ -20,7 +20,7 @@
 
 use super::expf;
 use super::host_read::{flex_f32, flex_slice, host_vec};
-use super::par::par_zeros;
+use super::par::{CHUNK, par_vec2, par_zeros};
 use crate::backend::layout::{N_LABELS, NZ};
 use burn::backend::autodiff::checkpoint::{base::Checkpointer, strategy::CheckpointStrategy};
 use burn::backend::autodiff::grads::Gradients;
@@ -156,14 +156,15 @@ pub fn logits(splat: &[f32], bias: &[f32], r: &[f32]) -> Vec<f32> {
 /// softmax of its own). The gate's exponentials are `expf`'s, so these logits agree with
 /// `logits` to float rounding.
 pub fn logits_and_gate(splat: &[f32], bias: &[f32], r: &[f32]) -> (Vec<f32>, Vec<f32>) {
-    let (mut out, mut gates) = (par_zeros(splat.len()), par_zeros(r.len()));
-    const BLOCK: usize = 256;
-    out.par_chunks_mut(BLOCK * N_LABELS).zip(gates.par_chunks_mut(BLOCK)).enumerate().for_each(|(task, (o, gates))| {
-        let v0 = task * BLOCK;
-        for (dv, o) in o.chunks_exact_mut(N_LABELS).enumerate() {
-            o.copy_from_slice(&biased(splat, bias, v0 + dv));
+    par_vec2(r.len(), [N_LABELS, 1], |v0, o, gates| {
+        // A task starts on a column (`CHUNK / 9` voxels, a multiple of NZ): the bias adds
+        // column by column, several lanes at once.
+        for (o, s) in o.chunks_mut(NZ * N_LABELS).zip(splat[v0 * N_LABELS..].chunks(NZ * N_LABELS)) {
+            for ((o, &s), &b) in o.iter_mut().zip(s).zip(bias) {
+                *o = s + b;
+            }
         }
-        let (mut e, mut maxes) = ([0f32; BLOCK * N_LABELS], Vec::with_capacity(BLOCK));
+        let (mut e, mut maxes) = ([0f32; CHUNK], Vec::with_capacity(CHUNK / N_LABELS));
         let e = &mut e[..o.len()];
         expf::shifted_exp(o, N_LABELS, e, &mut maxes);
         for (dv, (o, e)) in o.chunks_exact_mut(N_LABELS).zip(e.chunks_exact(N_LABELS)).enumerate() {
@@ -174,8 +175,7 @@ pub fn logits_and_gate(splat: &[f32], bias: &[f32], r: &[f32]) -> (Vec<f32>, Vec
             o[0] += -rr;
             o[1] += rr;
         }
-    });
-    (out, gates)
+    })
 }
 
 /// The gradients of the bias `[NZ, 9]` and of the residual `[voxels]` from each voxel's gate
@@ -188,14 +188,18 @@ pub fn backward(gates: &[f32], grad: &[f32]) -> (Vec<f32>, Vec<f32>) {
         .par_chunks_mut(per_task)
         .enumerate()
         .map(|(task, gr)| {
+            let v0 = task * per_task;
+            let grad = &grad[v0 * N_LABELS..(v0 + gr.len()) * N_LABELS];
+            // Column after column (a task starts on one): each element of the bias's gradient
+            // sums its voxels in the same order as one voxel at a time would.
             let mut gb = vec![0f32; NZ * N_LABELS];
-            for (dv, gr) in gr.iter_mut().enumerate() {
-                let v = task * per_task + dv;
-                let g = &grad[v * N_LABELS..(v + 1) * N_LABELS];
-                for (c, &g) in g.iter().enumerate() {
-                    gb[(v % NZ) * N_LABELS + c] += g;
+            for col in grad.chunks_exact(NZ * N_LABELS) {
+                for (a, &g) in gb.iter_mut().zip(col) {
+                    *a += g;
                 }
-                *gr = gates[v] * (g[1] - g[0]);
+            }
+            for (dv, (gr, g)) in gr.iter_mut().zip(grad.chunks_exact(N_LABELS)).enumerate() {
+                *gr = gates[v0 + dv] * (g[1] - g[0]);
             }
             gb
         })

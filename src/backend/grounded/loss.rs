@@ -127,12 +127,17 @@ pub fn lovasz_softmax(probs: Tensor<2>, target: &[u8]) -> Tensor<1> {
 pub fn agent_predicted(logits: &Tensor<2>) -> Vec<bool> {
     use burn::backend::Dispatch;
     use cross_entropy::CrossEntropyOps;
+    use rayon::prelude::*;
     let logits = logits.clone().detach();
     if logits.device() != Device::flex() {
         return logits.argmax(1).greater_equal_elem(2).to_data().iter::<bool>().collect();
     }
     let rows: Tensor<1> = Tensor::from_dispatch(<Dispatch as CrossEntropyOps>::agent_rows(logits.into_dispatch()));
-    rows.to_data().iter::<f32>().map(|v| v != 0.0).collect()
+    let rows = rows.into_data();
+    match rows.as_slice::<f32>() {
+        Ok(r) => r.par_iter().map(|&v| v != 0.0).collect(),
+        Err(_) => rows.iter::<f32>().map(|v| v != 0.0).collect(),
+    }
 }
 
 /// KL(N(mu, exp(logvar)) || N(0, 1)), summed over channels, averaged over the rows.

@@ -24,6 +24,35 @@ pub fn par_vec(n: usize, fill: impl Fn(usize, &mut [f32]) + Sync) -> Vec<f32> {
     out
 }
 
+/// Two vectors of `rows` rows, `wa` and `wb` values wide (each 1 to 9), filled together:
+/// `fill(first_row, a_part, b_part)` writes a task's rows (at most `CHUNK / 9` of them, starting
+/// at a multiple of that), as `par_vec` does.
+pub fn par_vec2(
+    rows: usize,
+    [wa, wb]: [usize; 2],
+    fill: impl Fn(usize, &mut [f32], &mut [f32]) + Sync,
+) -> (Vec<f32>, Vec<f32>) {
+    assert!((1..=9).contains(&wa) && (1..=9).contains(&wb), "widths {wa} and {wb}");
+    const ROWS: usize = CHUNK / 9;
+    let (mut a, mut b) = (Vec::with_capacity(rows * wa), Vec::with_capacity(rows * wb));
+    let parts_a = a.spare_capacity_mut()[..rows * wa].par_chunks_mut(ROWS * wa);
+    let parts_b = b.spare_capacity_mut()[..rows * wb].par_chunks_mut(ROWS * wb);
+    parts_a.zip(parts_b).enumerate().for_each(|(task, (pa, pb))| {
+        let (mut ba, mut bb) = ([0f32; CHUNK], [0f32; CHUNK]);
+        let (ba, bb) = (&mut ba[..pa.len()], &mut bb[..pb.len()]);
+        fill(task * ROWS, ba, bb);
+        pa.write_copy_of_slice(ba);
+        pb.write_copy_of_slice(bb);
+    });
+    // SAFETY: both vectors' parts cover their first `rows * width` elements (the same number of
+    // tasks, ROWS rows each), each written whole just above.
+    unsafe {
+        a.set_len(rows * wa);
+        b.set_len(rows * wb);
+    }
+    (a, b)
+}
+
 /// `n` zeros, written on all cores.
 pub fn par_zeros(n: usize) -> Vec<f32> {
     par_vec(n, |_, _| {})
@@ -43,6 +72,19 @@ mod tests {
             });
             assert_eq!(v.len(), n);
             assert!(v.iter().enumerate().all(|(i, &x)| x == i as f32), "n = {n}");
+        }
+        for rows in [0, 5, 512, 513, 3000] {
+            let (a, b) = par_vec2(rows, [9, 1], |r0, a, b| {
+                for (i, x) in a.iter_mut().enumerate() {
+                    *x = (r0 * 9 + i) as f32;
+                }
+                for (i, x) in b.iter_mut().enumerate() {
+                    *x = -((r0 + i) as f32);
+                }
+            });
+            assert_eq!((a.len(), b.len()), (9 * rows, rows));
+            assert!(a.iter().enumerate().all(|(i, &x)| x == i as f32), "rows = {rows}");
+            assert!(b.iter().enumerate().all(|(i, &x)| x == -(i as f32)), "rows = {rows}");
         }
     }
 }
