@@ -55,7 +55,13 @@ pub fn par_vec2(
 
 /// `n` zeros, written on all cores.
 pub fn par_zeros(n: usize) -> Vec<f32> {
-    par_vec(n, |_, _| {})
+    let mut out = Vec::with_capacity(n);
+    out.spare_capacity_mut()[..n].par_chunks_mut(CHUNK).for_each(|part| {
+        part.fill(std::mem::MaybeUninit::new(0.0));
+    });
+    // SAFETY: the parts cover 0..n, each filled just above.
+    unsafe { out.set_len(n) };
+    out
 }
 
 #[cfg(test)]
@@ -73,6 +79,7 @@ mod tests {
             assert_eq!(v.len(), n);
             assert!(v.iter().enumerate().all(|(i, &x)| x == i as f32), "n = {n}");
         }
+        assert!(par_zeros(3 * CHUNK + 5).iter().all(|&x| x == 0.0));
         for rows in [0, 5, 512, 513, 3000] {
             let (a, b) = par_vec2(rows, [9, 1], |r0, a, b| {
                 for (i, x) in a.iter_mut().enumerate() {
