@@ -266,6 +266,17 @@ fn count_nonzero(xs: &[f32]) -> usize {
     body(xs)
 }
 
+/// The non-zero elements of `row` and their indices, in order; a block of eight zeros is
+/// passed over with one test (the BEV's rows are mostly zeros).
+fn nonzeros(row: &[f32]) -> impl Iterator<Item = (usize, f32)> + '_ {
+    let (blocks, tail) = row.as_chunks::<8>();
+    let whole = blocks.len() * 8;
+    // Shifting out the sign bit: -0.0 is a zero too.
+    let busy = blocks.iter().enumerate().filter(|(_, b)| b.iter().fold(0u32, |a, v| a | v.to_bits() << 1) != 0);
+    let busy = busy.flat_map(|(i, b)| b.iter().enumerate().map(move |(j, &v)| (i * 8 + j, v)));
+    busy.chain(tail.iter().enumerate().map(move |(j, &v)| (whole + j, v))).filter(|&(_, v)| v != 0.0)
+}
+
 impl Im2col {
     /// The weight's gradient `[O, C, kh, kw]` from the input's non-zero elements only: each adds
     /// its value times the output gradient `gt` (`[B P, O]`) of every output pixel its kernel
@@ -288,10 +299,7 @@ impl Im2col {
                 for bi in 0..b {
                     let plane = &x[(bi * c + ci) * h * w..(bi * c + ci + 1) * h * w];
                     for (iy, row) in plane.chunks_exact(w).enumerate() {
-                        for (ix, &v) in row.iter().enumerate() {
-                            if v == 0.0 {
-                                continue;
-                            }
+                        for (ix, v) in nonzeros(row) {
                             for ky in 0..kh {
                                 let Some(y) = reach(iy, ky, ho) else { continue };
                                 for kx in 0..kw {
@@ -358,10 +366,7 @@ impl Im2col {
                 for ci in 0..c {
                     let plane = &x[(bi * c + ci) * h * w..(bi * c + ci + 1) * h * w];
                     for iy in r0..r1 {
-                        for (ix, &v) in plane[iy * w..(iy + 1) * w].iter().enumerate() {
-                            if v == 0.0 {
-                                continue;
-                            }
+                        for (ix, v) in nonzeros(&plane[iy * w..(iy + 1) * w]) {
                             for ky in 0..kh {
                                 let Some(y) = reach(iy, ky, ho).filter(|y| (y0..y1).contains(y)) else { continue };
                                 for kx in 0..kw {
