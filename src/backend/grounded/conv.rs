@@ -14,7 +14,7 @@
 //! the GPU formulations are checked against burn's on the CPU (this file's tests).
 
 use super::host_read::flex_slice;
-use super::par::{par_vec, par_zeros};
+use super::par::{par_vec, par_zeroed_parts, par_zeros};
 use burn::backend::autodiff::checkpoint::{base::Checkpointer, strategy::CheckpointStrategy};
 use burn::backend::autodiff::grads::Gradients;
 use burn::backend::autodiff::ops::{Backward, Ops, OpsKind};
@@ -414,8 +414,7 @@ impl Im2col {
         let [ho, wo] = self.out;
         let [kh, kw] = self.kernel;
         let (s, pad) = (self.stride as i64, self.padding as i64);
-        let mut out = par_zeros(self.rows() * self.columns());
-        out.par_chunks_mut(self.columns()).enumerate().for_each(|(row, dst)| {
+        par_zeroed_parts(&vec![self.columns(); self.rows()], |row, dst| {
             let (ci, ky, kx) = (row / (kh * kw), (row / kw) % kh, row % kw);
             for bi in 0..b {
                 let plane = &x[(bi * c + ci) * h * w..(bi * c + ci + 1) * h * w];
@@ -434,8 +433,7 @@ impl Im2col {
                     }
                 }
             }
-        });
-        out
+        })
     }
 }
 

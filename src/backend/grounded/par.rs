@@ -53,6 +53,30 @@ pub fn par_vec2(
     (a, b)
 }
 
+/// Parts of the lengths `lens`, one after another in one vector: each task zeroes its part in
+/// place and hands it to `f(part_index, part)`, so the zeros and `f`'s sums meet in cache
+/// rather than in a zero fill of the whole vector first.
+pub fn par_zeroed_parts(lens: &[usize], f: impl Fn(usize, &mut [f32]) + Sync) -> Vec<f32> {
+    let n = lens.iter().sum();
+    let mut out = Vec::with_capacity(n);
+    let mut rest = &mut out.spare_capacity_mut()[..n];
+    let mut parts = Vec::with_capacity(lens.len());
+    for &len in lens {
+        let (part, tail) = std::mem::take(&mut rest).split_at_mut(len);
+        parts.push(part);
+        rest = tail;
+    }
+    parts.into_par_iter().enumerate().for_each(|(i, part)| {
+        part.fill(std::mem::MaybeUninit::new(0.0));
+        // SAFETY: every element of `part` was initialised just above.
+        let part = unsafe { &mut *(part as *mut [std::mem::MaybeUninit<f32>] as *mut [f32]) };
+        f(i, part);
+    });
+    // SAFETY: the parts cover 0..n, each initialised above.
+    unsafe { out.set_len(n) };
+    out
+}
+
 /// `n` zeros, written on all cores.
 pub fn par_zeros(n: usize) -> Vec<f32> {
     let mut out = Vec::with_capacity(n);
@@ -80,6 +104,11 @@ mod tests {
             assert!(v.iter().enumerate().all(|(i, &x)| x == i as f32), "n = {n}");
         }
         assert!(par_zeros(3 * CHUNK + 5).iter().all(|&x| x == 0.0));
+        let v = par_zeroed_parts(&[3, 0, 5, 1], |i, part| {
+            assert!(part.iter().all(|&x| x == 0.0));
+            part.fill(i as f32);
+        });
+        assert_eq!(v, [0.0, 0.0, 0.0, 2.0, 2.0, 2.0, 2.0, 2.0, 3.0]);
         for rows in [0, 5, 512, 513, 3000] {
             let (a, b) = par_vec2(rows, [9, 1], |r0, a, b| {
                 for (i, x) in a.iter_mut().enumerate() {

@@ -6,7 +6,7 @@
 //! order on any thread count: the bytes do not depend on the machine. Backward is one Gaussian
 //! per task, each reading the voxels of its window and writing its own gradient row.
 
-use super::super::par::par_zeros;
+use super::super::par::{par_zeroed_parts, par_zeros};
 use super::layout::{self, COLS, SplatShape};
 use crate::backend::layout::{N_LABELS, NZ};
 use rayon::prelude::*;
@@ -38,9 +38,8 @@ fn terms(row: &[f32], p: [f32; 3]) -> ([f32; 3], [f32; 3], f32) {
 pub fn forward(g: &[f32], s: &SplatShape) -> Vec<f32> {
     let n = g.len() / COLS;
     let voxels = s.region.voxels();
-    let mut out = par_zeros(s.batch * voxels * N_LABELS);
-    if n == 0 || out.is_empty() {
-        return out;
+    if n == 0 || s.batch * voxels == 0 {
+        return par_zeros(s.batch * voxels * N_LABELS);
     }
     let r = s.window as i64;
     // Bands of BAND region rows (x) per batch element; each Gaussian is listed in every band its
@@ -64,20 +63,16 @@ pub fn forward(g: &[f32], s: &SplatShape) -> Vec<f32> {
             members[b * bands_per + band].push(idx as u32);
         }
     }
-    let band_len = BAND * nj * NZ * N_LABELS;
-    let per_batch = voxels * N_LABELS;
-    out.par_chunks_mut(per_batch)
-        .enumerate()
-        .flat_map(|(b, chunk)| chunk.par_chunks_mut(band_len).enumerate().map(move |(band, o)| (b, band, o)))
-        .for_each(|(b, band, o)| {
-            let li0 = (band * BAND) as i64;
-            let li1 = li0 + (o.len() / (nj * NZ * N_LABELS)) as i64;
-            for &idx in &members[b * bands_per + band] {
-                let row = &g[idx as usize * COLS..(idx as usize + 1) * COLS];
-                splat_one(row, s, r, li0, li1, o);
-            }
-        });
-    out
+    let row_len = nj * NZ * N_LABELS;
+    let lens: Vec<usize> = (0..s.batch * bands_per).map(|i| BAND.min(ni - i % bands_per * BAND) * row_len).collect();
+    par_zeroed_parts(&lens, |i, o| {
+        let li0 = (i % bands_per * BAND) as i64;
+        let li1 = li0 + (o.len() / row_len) as i64;
+        for &idx in &members[i] {
+            let row = &g[idx as usize * COLS..(idx as usize + 1) * COLS];
+            splat_one(row, s, r, li0, li1, o);
+        }
+    })
 }
 
 /// Adds one Gaussian's contributions to the rows `li0..li1` of a band (`o` starts at row li0).
