@@ -329,7 +329,7 @@ pub fn cross_entropy_and_rows(logits: Tensor<2>, t: Targets, rows: Arc<[usize]>)
     let m = rows.len();
     let out: Tensor<1> =
         Tensor::from_dispatch(<Dispatch as CrossEntropyOps>::cross_entropy_and_rows(logits.into_dispatch(), t, rows));
-    (out.clone().slice([0..1]), out.slice([1..1 + m * N_LABELS]).reshape([m, N_LABELS]))
+    (out.clone().narrow(0, 0, 1), out.narrow(0, 1, m * N_LABELS).reshape([m, N_LABELS]))
 }
 
 #[cfg(test)]
