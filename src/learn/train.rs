@@ -13,10 +13,9 @@
 use super::data::{self, Frame, Sample};
 use crate::backend::grounded::attention::Precision;
 use crate::backend::grounded::config::{GroundedConfig, StageConfig};
-use crate::backend::grounded::cross_entropy::{Targets, cross_entropy_and_rows};
 use crate::backend::grounded::latents::{self, GBox};
 use crate::backend::grounded::loss::{
-    agent_predicted, bce_with_logits, class_weights, kl_divergence, lovasz_softmax, weighted_cross_entropy,
+    agent_predicted, bce_with_logits, class_weights, cross_entropy_and_probs, kl_divergence, lovasz_softmax,
 };
 use crate::backend::grounded::model::{Autoencoder, Generator, HostBatch, bev_batch};
 use crate::backend::grounded::rows::take_rows;
@@ -30,7 +29,6 @@ use burn::module::Module;
 use burn::optim::{AdamConfig, GradientsParams};
 use burn::prelude::*;
 use burn::store::ModuleSnapshot;
-use burn::tensor::activation::softmax;
 use ndarray::Array3;
 use serde::{Deserialize, Serialize};
 use std::io::Write;
@@ -219,12 +217,7 @@ pub fn step_loss(
     idx.dedup();
     let sel_t: Vec<u8> = idx.iter().map(|&v| target[v]).collect();
     let sel: Vec<i64> = idx.iter().map(|&v| v as i64).collect();
-    let (ce, probs) = if out.logits.device() == Device::flex() {
-        // One operation, one gradient of the logits (`cross_entropy_and_rows`).
-        cross_entropy_and_rows(out.logits, Targets::new(target, weights), idx.into())
-    } else {
-        (weighted_cross_entropy(out.logits.clone(), target, weights), softmax(take_rows(out.logits, sel.clone()), 1))
-    };
+    let (ce, probs) = cross_entropy_and_probs(out.logits, target, weights, idx);
     let lov = lovasz_softmax(probs, &sel_t);
     let mut total = ce.clone() * t.ce_weight + lov.clone() * t.lovasz_weight;
     let mut parts = [scalar(&ce), scalar(&lov), 0.0, 0.0];

@@ -6,7 +6,7 @@
 use super::cross_entropy;
 use crate::backend::layout::N_LABELS;
 use burn::prelude::*;
-use burn::tensor::activation::log_softmax;
+use burn::tensor::activation::{log_softmax, softmax};
 
 /// Rows per slice of the cross-entropy: its [rows, 9] intermediates stay near 150 MB, inside a
 /// GPU buffer, however many voxels the batch holds (full grids at batch 6 are 30.7 M rows).
@@ -19,6 +19,26 @@ pub fn weighted_cross_entropy(logits: Tensor<2>, target: &[u8], weights: &[f32; 
         return cross_entropy::cross_entropy(logits, cross_entropy::Targets::new(target, weights));
     }
     weighted_cross_entropy_tensor_ops(logits, target, weights)
+}
+
+/// `weighted_cross_entropy` and the softmax of the rows `rows` (ascending, distinct) of the
+/// logits, `[m, 9]` (the Lovász term's probabilities): on the CPU one operation with one
+/// gradient of the logits (`cross_entropy::cross_entropy_and_rows`), elsewhere the two apart.
+pub fn cross_entropy_and_probs(
+    logits: Tensor<2>,
+    target: &[u8],
+    weights: &[f32; N_LABELS],
+    rows: Vec<usize>,
+) -> (Tensor<1>, Tensor<2>) {
+    if logits.device() == Device::flex() {
+        return cross_entropy::cross_entropy_and_rows(
+            logits,
+            cross_entropy::Targets::new(target, weights),
+            rows.into(),
+        );
+    }
+    let idx = rows.into_iter().map(|r| r as i64).collect();
+    (weighted_cross_entropy(logits.clone(), target, weights), softmax(super::rows::take_rows(logits, idx), 1))
 }
 
 /// `weighted_cross_entropy` written with tensor operations, in slices of `CE_ROWS` rows. Only

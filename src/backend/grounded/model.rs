@@ -361,7 +361,6 @@ pub struct GenOut {
 /// Written on all cores (16 M values at batch 2).
 pub fn bev_batch(frames: &[(&Array3<i8>, &Array3<i32>)]) -> Vec<f32> {
     let px = GRID * GRID;
-    let plane = |a: (usize, usize, usize), c: usize| c < a.0 && a.1 == GRID && a.2 == GRID;
     // Each frame's channels as contiguous slices (a copy only for a non-standard layout).
     let masks: Vec<_> = frames.iter().map(|(m, _)| m.as_standard_layout()).collect();
     let aux: Vec<_> = frames.iter().map(|(_, a)| a.as_standard_layout()).collect();
@@ -373,29 +372,31 @@ pub fn bev_batch(frames: &[(&Array3<i8>, &Array3<i32>)]) -> Vec<f32> {
             let n = rest.len().min(px - p0);
             let (out, tail) = rest.split_at_mut(n);
             if c < N_MASKS {
-                let m = &masks[f];
-                match m.as_slice().filter(|_| plane(m.dim(), c)) {
-                    Some(m) => {
-                        for (o, &v) in out.iter_mut().zip(&m[c * px + p0..]) {
-                            *o = (v != 0) as u8 as f32;
-                        }
-                    }
-                    None => out.fill(0.0),
-                }
+                copy_channel(&masks[f], c, p0, out, |v| (v != 0) as u8 as f32);
             } else {
-                let (a, c, scale) = (&aux[f], c - N_MASKS, AUX_SCALE[c - N_MASKS]);
-                match a.as_slice().filter(|_| plane(a.dim(), c)) {
-                    Some(a) => {
-                        for (o, &v) in out.iter_mut().zip(&a[c * px + p0..]) {
-                            *o = v as f32 * scale;
-                        }
-                    }
-                    None => out.fill(0.0),
-                }
+                let scale = AUX_SCALE[c - N_MASKS];
+                copy_channel(&aux[f], c - N_MASKS, p0, out, |v| v as f32 * scale);
             }
             (rest, pos) = (tail, pos + n);
         }
     })
+}
+
+/// Channel `c` of `a` from pixel `p0` on into `out`, through `f`; nothing where `a` lacks the
+/// channel or has another size (`bev_batch`'s parts arrive zeroed).
+fn copy_channel<T: Copy>(
+    a: &ndarray::CowArray<T, ndarray::Ix3>,
+    c: usize,
+    p0: usize,
+    out: &mut [f32],
+    f: impl Fn(T) -> f32,
+) {
+    let whole = c < a.dim().0 && a.dim().1 == GRID && a.dim().2 == GRID;
+    if let Some(a) = a.as_slice().filter(|_| whole) {
+        for (o, &v) in out.iter_mut().zip(&a[c * GRID * GRID + p0..]) {
+            *o = f(v);
+        }
+    }
 }
 
 impl Generator {

@@ -1,27 +1,27 @@
 //! Vectors written on all cores with no zero fill first: the CPU operations' outputs are tens of
 //! megabytes (a `cpu-small` crop's logits are 38 MB), and `vec![0.0; n]` fills them on the
 //! calling thread while the other cores wait, before the operation writes every element again.
+//! Here each task zeroes its own part and fills it at once, while the part is in cache.
 
 use rayon::prelude::*;
+use std::mem::MaybeUninit;
 
 /// Elements per task. A multiple of 9 (a row of labels) and of 32 (a column of voxels), so a
 /// task's part starts on a row and on a column.
 pub const CHUNK: usize = 4608;
 
+/// A task's part of a vector being built, zeroed: the one place its memory becomes `f32`s.
+fn zeroed(part: &mut [MaybeUninit<f32>]) -> &mut [f32] {
+    part.fill(MaybeUninit::new(0.0));
+    // SAFETY: every element was initialised just above, and `f32` has no invalid bit pattern.
+    unsafe { &mut *(part as *mut [MaybeUninit<f32>] as *mut [f32]) }
+}
+
 /// `n` values; `fill(start, part)` writes elements `start..start + part.len()` (a task's part,
-/// at most `CHUNK` long, starting at a multiple of `CHUNK`). Each part is filled in a buffer on
-/// the task's stack (zeroed, in cache) and copied into the vector once.
+/// at most `CHUNK` long, starting at a multiple of `CHUNK`; zeroed when handed over).
 pub fn par_vec(n: usize, fill: impl Fn(usize, &mut [f32]) + Sync) -> Vec<f32> {
-    let mut out = Vec::with_capacity(n);
-    out.spare_capacity_mut()[..n].par_chunks_mut(CHUNK).enumerate().for_each(|(task, part)| {
-        let mut buf = [0f32; CHUNK];
-        let buf = &mut buf[..part.len()];
-        fill(task * CHUNK, buf);
-        part.write_copy_of_slice(buf);
-    });
-    // SAFETY: the tasks' parts cover 0..n, and each wrote its whole part just above.
-    unsafe { out.set_len(n) };
-    out
+    let lens: Vec<usize> = (0..n).step_by(CHUNK).map(|start| CHUNK.min(n - start)).collect();
+    par_zeroed_parts(&lens, |task, part| fill(task * CHUNK, part))
 }
 
 /// Two vectors of `rows` rows, `wa` and `wb` values wide (each 1 to 9), filled together:
@@ -37,15 +37,9 @@ pub fn par_vec2(
     let (mut a, mut b) = (Vec::with_capacity(rows * wa), Vec::with_capacity(rows * wb));
     let parts_a = a.spare_capacity_mut()[..rows * wa].par_chunks_mut(ROWS * wa);
     let parts_b = b.spare_capacity_mut()[..rows * wb].par_chunks_mut(ROWS * wb);
-    parts_a.zip(parts_b).enumerate().for_each(|(task, (pa, pb))| {
-        let (mut ba, mut bb) = ([0f32; CHUNK], [0f32; CHUNK]);
-        let (ba, bb) = (&mut ba[..pa.len()], &mut bb[..pb.len()]);
-        fill(task * ROWS, ba, bb);
-        pa.write_copy_of_slice(ba);
-        pb.write_copy_of_slice(bb);
-    });
+    parts_a.zip(parts_b).enumerate().for_each(|(task, (pa, pb))| fill(task * ROWS, zeroed(pa), zeroed(pb)));
     // SAFETY: both vectors' parts cover their first `rows * width` elements (the same number of
-    // tasks, ROWS rows each), each written whole just above.
+    // tasks, ROWS rows each), each initialised by `zeroed` above.
     unsafe {
         a.set_len(rows * wa);
         b.set_len(rows * wb);
@@ -54,7 +48,7 @@ pub fn par_vec2(
 }
 
 /// Parts of the lengths `lens`, one after another in one vector: each task zeroes its part in
-/// place and hands it to `f(part_index, part)`, so the zeros and `f`'s sums meet in cache
+/// place and hands it to `f(part_index, part)`, so the zeros and `f`'s writes meet in cache
 /// rather than in a zero fill of the whole vector first.
 pub fn par_zeroed_parts(lens: &[usize], f: impl Fn(usize, &mut [f32]) + Sync) -> Vec<f32> {
     let n = lens.iter().sum();
@@ -66,26 +60,15 @@ pub fn par_zeroed_parts(lens: &[usize], f: impl Fn(usize, &mut [f32]) + Sync) ->
         parts.push(part);
         rest = tail;
     }
-    parts.into_par_iter().enumerate().for_each(|(i, part)| {
-        part.fill(std::mem::MaybeUninit::new(0.0));
-        // SAFETY: every element of `part` was initialised just above.
-        let part = unsafe { &mut *(part as *mut [std::mem::MaybeUninit<f32>] as *mut [f32]) };
-        f(i, part);
-    });
-    // SAFETY: the parts cover 0..n, each initialised above.
+    parts.into_par_iter().enumerate().for_each(|(i, part)| f(i, zeroed(part)));
+    // SAFETY: the parts cover 0..n, each initialised by `zeroed` above.
     unsafe { out.set_len(n) };
     out
 }
 
 /// `n` zeros, written on all cores.
 pub fn par_zeros(n: usize) -> Vec<f32> {
-    let mut out = Vec::with_capacity(n);
-    out.spare_capacity_mut()[..n].par_chunks_mut(CHUNK).for_each(|part| {
-        part.fill(std::mem::MaybeUninit::new(0.0));
-    });
-    // SAFETY: the parts cover 0..n, each filled just above.
-    unsafe { out.set_len(n) };
-    out
+    par_vec(n, |_, _| {})
 }
 
 #[cfg(test)]
