@@ -12,7 +12,9 @@
 //! clean steps doubles it again: PyTorch's `GradScaler` policy, applied to these regions.
 
 use burn::nn::Linear;
+use burn::nn::activation::Activation;
 use burn::nn::attention::MultiHeadAttention;
+use burn::nn::transformer::PositionWiseFeedForward;
 use burn::nn::transformer::{TransformerEncoder, TransformerEncoderInput, TransformerEncoderLayer};
 use burn::prelude::*;
 use burn::tensor::FloatDType;
@@ -152,6 +154,10 @@ fn grad_times<const D: usize>(t: Tensor<D>, k: f32) -> Tensor<D> {
 /// The transformer over `x` `[b, n, width]` with padded latents `pad` `[b, n]` masked out.
 pub fn encode(t: &TransformerEncoder, x: Tensor<3>, pad: Tensor<2, Bool>, precision: &Precision) -> Tensor<3> {
     match precision {
+        // A training step on the CPU runs the layers here, for their fused attention weights.
+        Precision::Full if x.is_tracked() && x.device() == Device::flex() => {
+            t.layers.iter().fold(x, |x, l| layer(l, x, &pad, None))
+        }
         Precision::Full => t.forward(TransformerEncoderInput::new(x).mask_pad(pad)),
         Precision::Mixed(scale) => {
             let half = Some(scale.value());
@@ -173,7 +179,7 @@ fn layer(l: &TransformerEncoderLayer, x: Tensor<3>, pad: &Tensor<2, Bool>, half:
         x.clone()
     };
     let ff = match half {
-        None => l.pwff.forward(r),
+        None => feed_forward(&l.pwff, r),
         Some(scale) => {
             let h = Half(scale);
             let p = &l.pwff;
@@ -185,6 +191,17 @@ fn layer(l: &TransformerEncoderLayer, x: Tensor<3>, pad: &Tensor<2, Bool>, half:
     };
     let x = x + l.dropout.forward(ff);
     if l.norm_first { x } else { l.norm_2.forward(x) }
+}
+
+/// burn's `PositionWiseFeedForward::forward`, its exact GELU through `gelu::gelu` (the same bits
+/// untracked; on all cores in a CPU training step).
+fn feed_forward(p: &PositionWiseFeedForward, x: Tensor<3>) -> Tensor<3> {
+    match &p.activation {
+        Activation::Gelu(g) if !g.approximate => {
+            p.linear_outer.forward(p.dropout.forward(super::gelu::gelu(p.linear_inner.forward(x))))
+        }
+        _ => p.forward(x),
+    }
 }
 
 /// The half-precision region with gradient scale `.0`: what enters it (activations, weights)
@@ -210,11 +227,21 @@ impl Half {
 
 fn self_attention(m: &MultiHeadAttention, x: Tensor<3>, pad: &Tensor<2, Bool>, half: Option<f32>) -> Tensor<3> {
     let [b, n, width] = x.dims();
-    let pad = pad.clone().reshape([b, 1, 1, n]);
-    // The softmax (and the mask before it) in f32 in both precisions.
-    let weights = |scores: Tensor<4>| {
-        let s = scores.mask_fill(pad, m.min_float);
-        m.dropout.forward(if m.quiet_softmax { quiet_softmax(s, 3) } else { softmax(s, 3) })
+    // The softmax (and the mask before it) in f32 in both precisions; `scale` divides the
+    // scores first.
+    let weights = |scores: Tensor<4>, scale: Option<f32>| {
+        let fused = (!m.quiet_softmax)
+            .then(|| super::softmax::attention_weights(&scores, pad, scale.unwrap_or(1.0), m.min_float as f32))
+            .flatten();
+        let w = fused.unwrap_or_else(|| {
+            let s = match scale {
+                Some(k) => scores.div_scalar(k),
+                None => scores,
+            };
+            let s = s.mask_fill(pad.clone().reshape([b, 1, 1, n]), m.min_float);
+            if m.quiet_softmax { quiet_softmax(s, 3) } else { softmax(s, 3) }
+        });
+        m.dropout.forward(w)
     };
     let split = |t: Tensor<3>| t.reshape([b, n, m.n_heads, m.d_k]).swap_dims(1, 2);
     let merge = |t: Tensor<4>| t.swap_dims(1, 2).reshape([b, n, width]);
@@ -223,7 +250,7 @@ fn self_attention(m: &MultiHeadAttention, x: Tensor<3>, pad: &Tensor<2, Bool>, h
         None => {
             let heads = |lin: &Linear| split(lin.forward(x.clone()));
             let (q, k, v) = (heads(&m.query), heads(&m.key), heads(&m.value));
-            let context = weights(q.matmul(k.transpose()).div_scalar(scale)).matmul(v);
+            let context = weights(q.matmul(k.transpose()), Some(scale)).matmul(v);
             m.output.forward(merge(context))
         }
         Some(s) => {
@@ -232,7 +259,7 @@ fn self_attention(m: &MultiHeadAttention, x: Tensor<3>, pad: &Tensor<2, Bool>, h
             let heads = |lin: &Linear| split(h.linear(lin, x.clone()));
             let (q, k, v) = (heads(&m.query), heads(&m.key), heads(&m.value));
             let scores = q.div_scalar(scale).matmul(k.transpose()).cast(FloatDType::F32);
-            let p = weights(scores).cast(FloatDType::F16);
+            let p = weights(scores, None).cast(FloatDType::F16);
             h.out(h.linear(&m.output, merge(p.matmul(v))))
         }
     }
@@ -288,6 +315,26 @@ mod tests {
     fn rel(a: &[f32], b: &[f32]) -> f32 {
         let scale = b.iter().fold(0f32, |m, v| m.max(v.abs()));
         a.iter().zip(b).fold(0f32, |m, (x, y)| m.max((x - y).abs())) / scale
+    }
+
+    /// A training step on the CPU (the layers here, with `softmax::attention_weights`) follows
+    /// burn's transformer in values and gradients, to float rounding.
+    #[test]
+    fn full_precision_training_follows_burns_transformer() {
+        let device = super::super::cpu().autodiff();
+        device.seed(3);
+        let t = TransformerEncoderConfig::new(32, 64, 4, 2).with_dropout(0.0).with_norm_first(true).init(&device);
+        let (y, gx, gw, gf) = run(&t, &Precision::Full);
+        let (x, pad) = input(&device, 2, 9, 32);
+        let x = x.require_grad();
+        let yb = t.forward(TransformerEncoderInput::new(x.clone()).mask_pad(pad));
+        let grads = (yb.clone() * (yb.clone().detach().cos() * 1e-6)).sum().backward();
+        let gxb = vec(x.grad(&grads).unwrap());
+        let gwb = vec(t.layers[0].mha.key.weight.val().grad(&grads).unwrap());
+        let gfb = vec(t.layers[0].pwff.linear_inner.weight.val().grad(&grads).unwrap());
+        assert!(rel(&y, &vec(yb)) < 1e-5);
+        assert!(rel(&gx, &gxb) < 1e-4 && rel(&gw, &gwb) < 1e-4 && rel(&gf, &gfb) < 1e-4);
+        assert!(gw != gwb || gx != gxb, "the fused path ran (its rounding differs from burn's somewhere)");
     }
 
     #[test]

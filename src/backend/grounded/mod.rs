@@ -33,6 +33,7 @@ pub mod loss;
 pub mod model;
 mod par;
 pub mod rows;
+pub mod softmax;
 pub mod splat;
 
 pub use config::GroundedConfig;
