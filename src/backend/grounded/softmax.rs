@@ -144,7 +144,7 @@ fn rows_per_set(len: usize, n: usize, keys: &Keys) -> usize {
 
 /// The padding of the keys of flat row `r` (rows of `n` values; `n` rows per head, `heads`
 /// heads per set).
-fn row_pad<'a>(keys: &'a Keys, r: usize, n: usize, rows_per_set: usize) -> &'a [bool] {
+fn row_pad(keys: &Keys, r: usize, n: usize, rows_per_set: usize) -> &[bool] {
     let b = r / rows_per_set;
     &keys.pad[b * n..(b + 1) * n]
 }
