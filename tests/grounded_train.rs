@@ -8,7 +8,15 @@ use rocc::backend::grounded::{GroundedConfig, cpu};
 use rocc::compile::{OccBackend, Options, Stage, batch};
 use rocc::learn::{Stage as TrainStage, TrainOptions, train};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, MutexGuard};
+
+/// burn's CPU random generator is one per process, and every training run seeds it before
+/// drawing its initial weights: two runs at once (tests run on parallel threads) would draw
+/// from one stream. The tests here train one at a time.
+fn one_run_at_a_time() -> MutexGuard<'static, ()> {
+    static RUNS: Mutex<()> = Mutex::new(());
+    RUNS.lock().unwrap_or_else(|e| e.into_inner())
+}
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -23,6 +31,7 @@ fn compile(files: &[&str], out: &Path, frames: &str, backend: OccBackend, stage:
 
 #[test]
 fn a_small_model_trained_on_the_cpu_beats_the_layer_majority_baseline() {
+    let _serial = one_run_at_a_time();
     let dir = std::env::temp_dir().join(format!("rocc-grounded-train-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let (data, val, out) = (dir.join("train"), dir.join("val"), dir.join("model"));
@@ -157,6 +166,7 @@ fn small_opts(
 /// skipped and the weights stay as they started.
 #[test]
 fn mixed_precision_trains_and_skips_steps_whose_gradient_overflows() {
+    let _serial = one_run_at_a_time();
     use rocc::backend::grounded::attention::{GradScale, Precision};
     use rocc::backend::grounded::{Generator, load_weights};
     let (dir, data, config) = small_run("mixed", 64);
@@ -183,6 +193,7 @@ fn mixed_precision_trains_and_skips_steps_whose_gradient_overflows() {
 /// rayon) and rocc's own split their work without changing any sum's order.
 #[test]
 fn training_gives_the_same_weights_on_any_thread_count() {
+    let _serial = one_run_at_a_time();
     use rocc::backend::grounded::{Generator, load_weights};
     let (dir, data, config) = small_run("threads", 96);
     let run = |threads: usize| {

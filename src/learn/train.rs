@@ -196,14 +196,16 @@ fn region_labels(frames: &[Frame], region: Region) -> Vec<u8> {
     t
 }
 
-/// The step's loss and its parts (ce, lovasz, kl, background aux) for the progress line.
+/// The step's loss, and `[5]`: the loss, then its parts (ce, lovasz, kl, background aux) for
+/// the progress line, detached: one tensor, read back once (on a GPU every read is a round
+/// trip that waits for the device), after the backward pass and the update are queued.
 pub fn step_loss(
     cfg: &GroundedConfig,
     out: StepOut,
     target: &[u8],
     weights: &[f32; N_LABELS],
     rng: &mut Rng,
-) -> (Tensor<1>, [f64; 4]) {
+) -> (Tensor<1>, Tensor<1>) {
     use rayon::prelude::*;
     let t = &cfg.train;
     // Lovász over every voxel an agent class claims (truth or prediction) plus a uniform draw.
@@ -220,22 +222,32 @@ pub fn step_loss(
     let (ce, probs) = cross_entropy_and_probs(out.logits, target, weights, idx);
     let lov = lovasz_softmax(probs, &sel_t);
     let mut total = ce.clone() * t.ce_weight + lov.clone() * t.lovasz_weight;
-    let mut parts = [scalar(&ce), scalar(&lov), 0.0, 0.0];
+    let device = ce.device();
+    let zero = || Tensor::<1>::zeros([1], &device);
+    let mut parts = vec![ce.detach(), lov.detach(), zero(), zero()];
     if let Some(kl) = out.kl {
-        parts[2] = scalar(&kl);
+        parts[2] = kl.clone().detach();
         total = total + kl * t.kl_weight;
     }
     if let Some(bg) = out.background {
         let m = sel.len();
         let aux = bce_with_logits(take_rows(bg, sel).reshape([m]), &sel_t.iter().map(|&l| l == 1).collect::<Vec<_>>());
-        parts[3] = scalar(&aux);
+        parts[3] = aux.clone().detach();
         total = total + aux * t.background_aux_weight;
     }
-    (total, parts)
+    parts.insert(0, total.clone().detach());
+    (total, Tensor::cat(parts, 0))
 }
 
 fn scalar(t: &Tensor<1>) -> f64 {
     t.to_data().iter::<f32>().next().unwrap_or(f32::NAN) as f64
+}
+
+/// `step_loss`'s `[5]` read back: the loss and its four parts.
+fn read_parts(t: Tensor<1>) -> (f64, [f64; 4]) {
+    let v: Vec<f64> = t.into_data().iter::<f32>().map(|v| v as f64).collect();
+    let at = |i: usize| v.get(i).copied().unwrap_or(f64::NAN);
+    (at(0), [at(1), at(2), at(3), at(4)])
 }
 
 /// Cosine decay from `lr` to `lr_min` over `total` steps.
@@ -588,12 +600,8 @@ fn run<M: Net>(
             let _ = device.sync();
             let t_forward = step_t0.elapsed().as_secs_f64();
             let (loss, parts) = step_loss(cfg, out, &target, &weights, &mut rng);
-            let l = scalar(&loss);
+            let _ = device.sync();
             let t_loss = step_t0.elapsed().as_secs_f64();
-            if !l.is_finite() {
-                return Err(Diagnostic::error("E0907", format!("training diverged at step {} (loss {l})", pos.step))
-                    .help("lower the stage's `lr` in the config, or resume from the last checkpoint with `--resume`"));
-            }
             let grads = loss.backward();
             // Mixed precision: an overflow anywhere in the transformer's half-precision regions
             // reaches every gradient below it, the decoder's input layer's included; such a step
@@ -609,7 +617,13 @@ fn run<M: Net>(
                 let grads = GradientsParams::from_grads(grads, &model);
                 model = optim.step(cosine_lr(stage_cfg, pos.step, total), model, grads);
             }
-            // Only for the timings: the device would otherwise finish this step inside the next.
+            // The step's one read: it waits for the device to finish the step (the timings
+            // need that too). A diverged step's update is never saved: the run stops here.
+            let (l, parts) = read_parts(parts);
+            if !l.is_finite() {
+                return Err(Diagnostic::error("E0907", format!("training diverged at step {} (loss {l})", pos.step))
+                    .help("lower the stage's `lr` in the config, or resume from the last checkpoint with `--resume`"));
+            }
             let _ = device.sync();
             let t_done = step_t0.elapsed().as_secs_f64();
             step_phases.push([t_loaded, t_forward - t_loaded, t_loss - t_forward, t_done - t_loss]);
