@@ -222,21 +222,20 @@ pub fn step_loss(
     let (ce, probs) = cross_entropy_and_probs(out.logits, target, weights, idx);
     let lov = lovasz_softmax(probs, &sel_t);
     let mut total = ce.clone() * t.ce_weight + lov.clone() * t.lovasz_weight;
-    let device = ce.device();
-    let zero = || Tensor::<1>::zeros([1], &device);
-    let mut parts = vec![ce.detach(), lov.detach(), zero(), zero()];
+    let zero = Tensor::<1>::zeros([1], &ce.device());
+    let (mut kl_part, mut aux_part) = (zero.clone(), zero);
     if let Some(kl) = out.kl {
-        parts[2] = kl.clone().detach();
+        kl_part = kl.clone().detach();
         total = total + kl * t.kl_weight;
     }
     if let Some(bg) = out.background {
         let m = sel.len();
         let aux = bce_with_logits(take_rows(bg, sel).reshape([m]), &sel_t.iter().map(|&l| l == 1).collect::<Vec<_>>());
-        parts[3] = aux.clone().detach();
+        aux_part = aux.clone().detach();
         total = total + aux * t.background_aux_weight;
     }
-    parts.insert(0, total.clone().detach());
-    (total, Tensor::cat(parts, 0))
+    let parts = Tensor::cat(vec![total.clone().detach(), ce.detach(), lov.detach(), kl_part, aux_part], 0);
+    (total, parts)
 }
 
 fn scalar(t: &Tensor<1>) -> f64 {

@@ -128,51 +128,33 @@ pub fn attention_weights(scores: &Tensor<4>, pad: &Tensor<2, Bool>, scale: f32, 
     )))
 }
 
-/// The tasks' parts of `len` values: whole rows of `n`, about `CHUNK` values each; their
-/// lengths and first elements.
-fn parts(len: usize, n: usize) -> (Vec<usize>, Vec<usize>) {
-    let per = ((CHUNK / n.max(1)).max(1) * n).max(1);
-    let starts: Vec<usize> = (0..len).step_by(per).collect();
-    (starts.iter().map(|&start| per.min(len - start)).collect(), starts)
-}
-
-/// Rows of `n` per set, of `len` values over the sets of `keys`.
-fn rows_per_set(len: usize, n: usize, keys: &Keys) -> usize {
-    let sets = keys.pad.len() / n.max(1);
-    (len / n.max(1) / sets.max(1)).max(1)
-}
-
-/// The padding of the keys of flat row `r` (rows of `n` values; `n` rows per head, `heads`
-/// heads per set).
-fn row_pad(keys: &Keys, r: usize, n: usize, rows_per_set: usize) -> &[bool] {
-    let b = r / rows_per_set;
-    &keys.pad[b * n..(b + 1) * n]
-}
-
-/// `AttentionSoftmaxOps::attention_softmax` on the host (`scores` flat, rows of `n`).
-pub fn forward(scores: &[f32], n: usize, keys: &Keys) -> Vec<f32> {
-    let rows_per_set = rows_per_set(scores.len(), n, keys);
-    let (lens, starts) = parts(scores.len(), n);
+/// `len` values built on all cores, row by row (rows of `n`, whole rows per task, about `CHUNK`
+/// values each): `f(row, pad, out)` writes flat row `row`, whose keys' padding is `pad` (rows run
+/// set by set, `heads x n` rows per set).
+fn by_rows(len: usize, n: usize, keys: &Keys, f: impl Fn(usize, &[bool], &mut [f32]) + Sync) -> Vec<f32> {
+    let n = n.max(1);
+    let rows_per_set = (len / n / (keys.pad.len() / n).max(1)).max(1);
+    let per = (CHUNK / n).max(1) * n;
+    let lens: Vec<usize> = (0..len).step_by(per).map(|start| per.min(len - start)).collect();
     par_zeroed_parts(&lens, |task, out| {
-        let start = starts[task];
-        for (k, (o, s)) in out.chunks_exact_mut(n).zip(scores[start..].chunks_exact(n)).enumerate() {
-            let pad = row_pad(keys, start / n + k, n, rows_per_set);
-            softmax_row(s, pad, keys, o);
+        let r0 = task * per / n;
+        for (k, o) in out.chunks_exact_mut(n).enumerate() {
+            let set = (r0 + k) / rows_per_set;
+            f(r0 + k, &keys.pad[set * n..(set + 1) * n], o);
         }
     })
 }
 
+/// `AttentionSoftmaxOps::attention_softmax` on the host (`scores` flat, rows of `n`).
+pub fn forward(scores: &[f32], n: usize, keys: &Keys) -> Vec<f32> {
+    by_rows(scores.len(), n, keys, |r, pad, o| softmax_row(&scores[r * n..(r + 1) * n], pad, keys, o))
+}
+
 /// `AttentionSoftmaxOps::attention_softmax_backward` on the host.
 pub fn backward(y: &[f32], g: &[f32], n: usize, keys: &Keys) -> Vec<f32> {
-    let rows_per_set = rows_per_set(y.len(), n, keys);
-    let (lens, starts) = parts(y.len(), n);
-    par_zeroed_parts(&lens, |task, out| {
-        let start = starts[task];
-        let rows = out.chunks_exact_mut(n).zip(y[start..].chunks_exact(n)).zip(g[start..].chunks_exact(n));
-        for (k, ((o, y), g)) in rows.enumerate() {
-            let pad = row_pad(keys, start / n + k, n, rows_per_set);
-            softmax_grad_row(y, g, pad, keys.scale, o);
-        }
+    by_rows(y.len(), n, keys, |r, pad, o| {
+        let row = r * n..(r + 1) * n;
+        softmax_grad_row(&y[row.clone()], &g[row], pad, keys.scale, o)
     })
 }
 
