@@ -325,13 +325,18 @@ mod tests {
         a.iter().zip(b).fold(0f32, |m, (x, y)| m.max((x - y).abs())) / scale
     }
 
+    /// The decoder's transformer at width 32, two blocks, weights drawn with `seed`.
+    fn transformer(seed: u64) -> TransformerEncoder {
+        let device = super::super::cpu().autodiff();
+        device.seed(seed);
+        TransformerEncoderConfig::new(32, 64, 4, 2).with_dropout(0.0).with_norm_first(true).init(&device)
+    }
+
     /// A training step on the CPU (the layers here, with `softmax::attention_weights`) follows
     /// burn's transformer in values and gradients, to float rounding.
     #[test]
     fn full_precision_training_follows_burns_transformer() {
-        let device = super::super::cpu().autodiff();
-        device.seed(3);
-        let t = TransformerEncoderConfig::new(32, 64, 4, 2).with_dropout(0.0).with_norm_first(true).init(&device);
+        let t = transformer(3);
         let (y, gx, gw, gf) = run(&t, &Precision::Full);
         let (yb, gxb, gwb, gfb) = run_with(&t, |x, pad| t.forward(TransformerEncoderInput::new(x).mask_pad(pad)));
         assert!(rel(&y, &yb) < 1e-5);
@@ -341,9 +346,7 @@ mod tests {
 
     #[test]
     fn mixed_precision_follows_full_precision_in_values_and_gradients() {
-        let device = super::super::cpu().autodiff();
-        device.seed(7);
-        let t = TransformerEncoderConfig::new(32, 64, 4, 2).with_dropout(0.0).with_norm_first(true).init(&device);
+        let t = transformer(7);
         let (y, gx, gw, gf) = run(&t, &Precision::Full);
         let (ym, gxm, gwm, gfm) = run(&t, &Precision::Mixed(GradScale::default()));
         // f16 operands carry 11 bits: values and gradients within about 1e-3 of the largest
