@@ -1,6 +1,6 @@
 //! The learned backend's parts: the splat against a brute-force dense reference, gradients by
-//! finite differences, Lovász-softmax against a hand-computed case, shapes, padding invariance,
-//! checkpoint round trips (.bpk, safetensors) and the weights diagnostics.
+//! finite differences, Lovász-softmax against a hand-computed case and its definition, shapes,
+//! padding invariance, checkpoint round trips (.bpk, safetensors) and the weights diagnostics.
 
 #[path = "support/tmp.rs"]
 mod tmp;
@@ -9,7 +9,9 @@ use burn::prelude::*;
 use ndarray::Array3;
 use rocc::backend::grounded::config::GroundedConfig;
 use rocc::backend::grounded::latents::{self, Anchor, GBox};
-use rocc::backend::grounded::loss::{class_weights, lovasz_grad, lovasz_softmax, weighted_cross_entropy};
+use rocc::backend::grounded::loss::{
+    class_weights, lovasz_grad, lovasz_rows, lovasz_softmax, lovasz_weights, weighted_cross_entropy,
+};
 use rocc::backend::grounded::model::{Autoencoder, Generator, HostBatch};
 use rocc::backend::grounded::splat::{ActiveAnchors, PARAMS, Region, activate, splat};
 use rocc::backend::grounded::{Grounded, cpu, load_weights, save_safetensors};
@@ -250,6 +252,60 @@ fn lovasz_softmax_matches_a_hand_computed_case() {
     let got = lovasz_softmax(Tensor::<2>::from_data(TensorData::new(hard, [4, N_LABELS]), &device), &target);
     // class 0: IoU 1/2; class 1: IoU 2/3.
     assert!((got.into_scalar::<f32>() as f64 - ((1.0 - 0.5) + (1.0 - 2.0 / 3.0)) / 2.0).abs() < 1e-6);
+}
+
+/// Lovász weights by the definition: per class, rows by decreasing error (ties by row), then
+/// `lovasz_grad` of the truth bits in that order, each weight put back at its row.
+fn lovasz_weights_by_definition(probs: &[f32], target: &[u8], c: usize) -> Vec<f32> {
+    let err = |v: usize| ((target[v] as usize == c) as u8 as f32 - probs[v * N_LABELS + c]).abs();
+    let mut order: Vec<usize> = (0..target.len()).collect();
+    order.sort_by(|&a, &b| err(b).total_cmp(&err(a)).then(a.cmp(&b)));
+    let grad = lovasz_grad(&order.iter().map(|&v| target[v] as usize == c).collect::<Vec<_>>());
+    let mut w = vec![0f32; target.len()];
+    for (v, g) in order.into_iter().zip(grad) {
+        w[v] = g;
+    }
+    w
+}
+
+#[test]
+fn lovasz_weights_follow_the_definition_ties_included() {
+    let mut rng = Rng::new(11);
+    let n = 5_000;
+    // Probabilities on a coarse grid of 17 values: most errors tie with many others.
+    let probs: Vec<f32> = (0..n * N_LABELS).map(|_| rng.index(17) as f32 / 16.0).collect();
+    let target: Vec<u8> = (0..n).map(|_| [0, 0, 0, 1, 2, 5][rng.index(6)]).collect();
+    let present = [0, 1, 2, 5];
+    let (fg, w) = lovasz_weights(&probs, &target, &present);
+    for (i, &c) in present.iter().enumerate() {
+        let row = i * n..(i + 1) * n;
+        let truth: Vec<f32> = target.iter().map(|&t| (t as usize == c) as u8 as f32).collect();
+        assert_eq!(fg[row.clone()], truth[..], "class {c}: truth bits");
+        let want = lovasz_weights_by_definition(&probs, &target, c);
+        assert!(w[row.clone()].iter().zip(&want).all(|(a, b)| a.to_bits() == b.to_bits()), "class {c}: weights");
+        // The weights of a class are the steps of the Jaccard loss: they sum to 1.
+        assert!((w[row].iter().map(|&x| x as f64).sum::<f64>() - 1.0).abs() < 1e-4);
+    }
+    let (fg, w) = lovasz_weights(&[], &[], &present);
+    assert!(fg.is_empty() && w.is_empty());
+}
+
+#[test]
+fn lovasz_rows_are_the_claimed_voxels_and_the_draws() {
+    let mut rng = Rng::new(5);
+    let n = 100_000;
+    let target: Vec<u8> =
+        (0..n).map(|_| if rng.unit() < 0.05 { 2 + rng.index(7) as u8 } else { rng.index(2) as u8 }).collect();
+    let predicted: Vec<bool> = (0..n - 10).map(|_| rng.unit() < 0.03).collect();
+    let draws: Vec<usize> = (0..2_000).map(|_| rng.index(n)).chain([0, n - 1, n - 1, n + 7]).collect();
+    let got = lovasz_rows(&target, predicted.clone(), &draws);
+    let mut want: Vec<usize> =
+        (0..n).filter(|&v| target[v] >= 2 || predicted.get(v) == Some(&true)).chain(draws.iter().copied()).collect();
+    want.retain(|&v| v < n);
+    want.sort_unstable();
+    want.dedup();
+    assert_eq!(got, want);
+    assert!(got.len() > 7_000, "agents, predictions and draws: {}", got.len());
 }
 
 #[test]
@@ -731,4 +787,37 @@ fn bundled_configs_are_valid() {
 /// A directory for this test's outputs, removed when dropped.
 fn tempdir(name: &str) -> tmp::TempDir {
     tmp::TempDir::new("rocc-grounded", name)
+}
+
+/// A training step's loss on a GPU (tensor operations, the predicted-agent flags read back in
+/// the device's own bool layout) against the CPU's fused operations: on Mesa's software Vulkan
+/// here, on whatever adapter a `wgpu` build finds elsewhere.
+#[cfg(feature = "wgpu")]
+#[test]
+fn the_loss_on_a_gpu_matches_the_cpu() {
+    use rocc::backend::grounded::loss::{agent_predicted, cross_entropy_and_probs};
+    let mut rng = Rng::new(9);
+    let n = 20_000;
+    let logits: Vec<f32> = (0..n * N_LABELS).map(|_| (rng.normal() * 2.0) as f32).collect();
+    let target: Vec<u8> = (0..n).map(|_| [0, 0, 0, 1, 1, 2, 4, 7][rng.index(8)]).collect();
+    let w = [1.0, 0.5, 3.0, 1.0, 1.0, 9.0, 1.0, 1.0, 2.0];
+    let run = |device: Device| -> (Vec<usize>, f32, f32, Vec<f32>) {
+        let l = Tensor::<2>::from_data(TensorData::new(logits.clone(), [n, N_LABELS]), &device).require_grad();
+        let rows = lovasz_rows(&target, agent_predicted(&l), &[3, 17, 4_000]);
+        let sel: Vec<u8> = rows.iter().map(|&v| target[v]).collect();
+        let (ce, probs) = cross_entropy_and_probs(l.clone(), &target, &w, rows.clone());
+        let lov = lovasz_softmax(probs, &sel);
+        let (c, v) = (ce.clone().into_scalar::<f32>(), lov.clone().into_scalar::<f32>());
+        let grads = (ce + lov).backward();
+        (rows, c, v, l.grad(&grads).expect("the logits get a gradient").to_data().iter::<f32>().collect())
+    };
+    let (rows, ce, lov, g) = run(Device::wgpu(Default::default()).autodiff());
+    let (want_rows, want_ce, want_lov, want_g) = run(cpu().autodiff());
+    assert_eq!(rows, want_rows, "the Lovász rows (agents claimed by the truth or the argmax)");
+    assert!(rows.len() > n / 2, "random logits claim most voxels for an agent: {}", rows.len());
+    assert!((ce - want_ce).abs() < 1e-5 * want_ce.abs(), "cross-entropy {ce} against {want_ce}");
+    assert!((lov - want_lov).abs() < 1e-5 * want_lov.abs(), "Lovász {lov} against {want_lov}");
+    let scale = want_g.iter().fold(0f32, |m, x| m.max(x.abs()));
+    let diff = g.iter().zip(&want_g).fold(0f32, |m, (x, y)| m.max((x - y).abs()));
+    assert!(diff < 1e-4 * scale && scale > 0.0, "gradient differs by {}", diff / scale);
 }

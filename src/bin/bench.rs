@@ -729,6 +729,9 @@ fn main() {
     if args.iter().any(|a| a == "train") {
         learned::bench_train(&args);
     }
+    if args.iter().any(|a| a == "loss") {
+        learned::bench_loss(&args);
+    }
     if args.iter().any(|a| a == "splat") {
         splat::bench_splat(&args);
     }

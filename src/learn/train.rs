@@ -15,7 +15,8 @@ use crate::backend::grounded::attention::Precision;
 use crate::backend::grounded::config::{GroundedConfig, StageConfig};
 use crate::backend::grounded::latents::{self, GBox};
 use crate::backend::grounded::loss::{
-    agent_predicted, bce_with_logits, class_weights, cross_entropy_and_probs, kl_divergence, lovasz_softmax,
+    agent_predicted, bce_with_logits, class_weights, cross_entropy_and_probs, kl_divergence, lovasz_rows,
+    lovasz_softmax,
 };
 use crate::backend::grounded::model::{Autoencoder, Generator, HostBatch, bev_batch};
 use crate::backend::grounded::rows::take_rows;
@@ -209,16 +210,11 @@ pub fn step_loss(
     use rayon::prelude::*;
     let t = &cfg.train;
     // Lovász over every voxel an agent class claims (truth or prediction) plus a uniform draw.
-    let pred = agent_predicted(&out.logits);
     let n = target.len();
-    // Over every voxel of the batch (30.7 M for `paper` on full grids): on all cores, in order.
-    let mut idx: Vec<usize> =
-        (0..n).into_par_iter().filter(|&v| target[v] >= 2 || pred.get(v).copied().unwrap_or(false)).collect();
-    idx.extend((0..t.lovasz_samples.min(n)).map(|_| rng.index(n)));
-    idx.par_sort_unstable();
-    idx.dedup();
-    let sel_t: Vec<u8> = idx.iter().map(|&v| target[v]).collect();
-    let sel: Vec<i64> = idx.iter().map(|&v| v as i64).collect();
+    let draws: Vec<usize> = (0..t.lovasz_samples.min(n)).map(|_| rng.index(n)).collect();
+    let idx = lovasz_rows(target, agent_predicted(&out.logits), &draws);
+    let sel_t: Vec<u8> = idx.par_iter().map(|&v| target[v]).collect();
+    let sel: Vec<i64> = idx.par_iter().map(|&v| v as i64).collect();
     let (ce, probs) = cross_entropy_and_probs(out.logits, target, weights, idx);
     let lov = lovasz_softmax(probs, &sel_t);
     let mut total = ce.clone() * t.ce_weight + lov.clone() * t.lovasz_weight;

@@ -30,6 +30,7 @@ pub fn cross_entropy_and_probs(
     weights: &[f32; N_LABELS],
     rows: Vec<usize>,
 ) -> (Tensor<1>, Tensor<2>) {
+    use rayon::prelude::*;
     if logits.device() == Device::flex() {
         return cross_entropy::cross_entropy_and_rows(
             logits,
@@ -37,7 +38,7 @@ pub fn cross_entropy_and_probs(
             rows.into(),
         );
     }
-    let idx = rows.into_iter().map(|r| r as i64).collect();
+    let idx = rows.into_par_iter().map(|r| r as i64).collect();
     (weighted_cross_entropy(logits.clone(), target, weights), softmax(super::rows::take_rows(logits, idx), 1))
 }
 
@@ -49,10 +50,7 @@ pub fn weighted_cross_entropy_tensor_ops(logits: Tensor<2>, target: &[u8], weigh
     let device = logits.device();
     let n = target.len();
     let class = cross_entropy::class;
-    let mut counts = [0u64; N_LABELS];
-    for &t in target {
-        counts[class(t)] += 1;
-    }
+    let counts = class_counts(target);
     let total = counts.iter().zip(weights).map(|(&c, &w)| c as f64 * w as f64).sum::<f64>().max(1e-12) as f32;
     let per_class = Tensor::<1>::from_data(TensorData::new(weights.to_vec(), [N_LABELS]), &device);
     let mut sum: Option<Tensor<1>> = None;
@@ -72,63 +70,93 @@ pub fn weighted_cross_entropy_tensor_ops(logits: Tensor<2>, target: &[u8], weigh
     sum.unwrap_or_else(|| Tensor::zeros([1], &device)).neg() / total
 }
 
+/// Voxels per class of `target` (labels past the last class count as the last), on all cores:
+/// a serial count of 30.7 M labels (`paper` on full grids) holds a GPU step 50 ms.
+pub fn class_counts(target: &[u8]) -> [u64; N_LABELS] {
+    use rayon::prelude::*;
+    // A comparison count per class over a chunk in cache vectorises; one counter per voxel's
+    // class would wait on its own last store.
+    target
+        .par_chunks(1 << 17)
+        .map(|chunk| {
+            let mut c = [0u64; N_LABELS];
+            for (l, count) in c.iter_mut().enumerate().take(N_LABELS - 1) {
+                *count = chunk.iter().map(|&t| (t == l as u8) as u32).sum::<u32>() as u64;
+            }
+            c[N_LABELS - 1] = chunk.len() as u64 - c.iter().sum::<u64>();
+            c
+        })
+        .reduce(|| [0u64; N_LABELS], |a, b| std::array::from_fn(|i| a[i] + b[i]))
+}
+
 /// Gradient of the Lovász extension of the Jaccard loss for ground-truth bits sorted by
 /// decreasing error (Berman et al., Alg. 1).
 pub fn lovasz_grad(gt_sorted: &[bool]) -> Vec<f32> {
-    let total: f64 = gt_sorted.iter().filter(|&&g| g).count() as f64;
-    let mut out = Vec::with_capacity(gt_sorted.len());
-    let (mut inter, mut union_extra) = (0.0f64, 0.0f64);
-    let mut prev = 0.0f64;
-    for &g in gt_sorted {
-        if g {
-            inter += 1.0;
-        } else {
-            union_extra += 1.0;
-        }
-        // Jaccard loss of predicting the first i+1 as positive.
-        let jac = 1.0 - (total - inter) / (total + union_extra);
-        out.push((jac - prev) as f32);
-        prev = jac;
+    let mut grad = LovaszGrad::new(gt_sorted.iter().filter(|&&g| g).count());
+    gt_sorted.iter().map(|&g| grad.next(g)).collect()
+}
+
+/// `lovasz_grad` one sorted row at a time: the Jaccard loss of predicting the rows so far as
+/// positive, less its value before this row. Each value depends only on the counts so far, so a
+/// walk can start anywhere (`at`) with the same bits as one from the first row.
+struct LovaszGrad {
+    total: f64,
+    inter: f64,
+    union_extra: f64,
+    prev: f64,
+}
+
+impl LovaszGrad {
+    fn new(total: usize) -> Self {
+        LovaszGrad::at(total, 0, 0)
     }
-    out
+
+    /// After `inter` truth rows and `union_extra` others.
+    fn at(total: usize, inter: usize, union_extra: usize) -> Self {
+        let mut g = LovaszGrad { total: total as f64, inter: inter as f64, union_extra: union_extra as f64, prev: 0.0 };
+        if inter + union_extra > 0 {
+            g.prev = g.jaccard();
+        }
+        g
+    }
+
+    fn jaccard(&self) -> f64 {
+        1.0 - (self.total - self.inter) / (self.total + self.union_extra)
+    }
+
+    fn next(&mut self, g: bool) -> f32 {
+        if g {
+            self.inter += 1.0;
+        } else {
+            self.union_extra += 1.0;
+        }
+        let jac = self.jaccard();
+        let out = (jac - self.prev) as f32;
+        self.prev = jac;
+        out
+    }
 }
 
 /// Lovász-softmax over the rows of `probs` `[N, 9]`: mean over the classes present in `target`
 /// of the Lovász extension of 1 - IoU applied to the sorted errors |1[y = c] - p_c|.
 ///
-/// The sort runs on the host over packed keys (error bits inverted, then the row: descending
-/// error, ties by row, so the order never depends on the sort) for all classes at once; each
-/// row's Lovász weight goes back to the row's own place, so the device takes a weighted sum of
-/// the errors without gathering them into sorted order.
+/// The sort runs on the host (`lovasz_weights`); each row's Lovász weight goes back to the row's
+/// own place, so the device takes a weighted sum of the errors without gathering them into
+/// sorted order.
 pub fn lovasz_softmax(probs: Tensor<2>, target: &[u8]) -> Tensor<1> {
     use rayon::prelude::*;
     let device = probs.device();
     let n = target.len();
-    let host: Vec<f32> = probs.to_data().iter::<f32>().collect();
-    let present: Vec<usize> = (0..N_LABELS).filter(|&c| target.iter().any(|&t| t as usize == c)).collect();
+    let present: Vec<usize> = (0..N_LABELS).filter(|&c| target.par_iter().any(|&t| t as usize == c)).collect();
     if present.is_empty() {
         return Tensor::zeros([1], &device);
     }
-    // Row c of `fg` and `w`: class `present[c]`'s truth bits and each row's Lovász weight.
+    let data = probs.clone().into_data().convert::<f32>();
+    let (fg, w) = match data.as_slice::<f32>() {
+        Ok(host) => lovasz_weights(host, target, &present),
+        Err(_) => lovasz_weights(&data.iter::<f32>().collect::<Vec<_>>(), target, &present),
+    };
     let k = present.len();
-    let (mut fg, mut w) = (vec![0f32; k * n], vec![0f32; k * n]);
-    fg.par_chunks_mut(n).zip(w.par_chunks_mut(n)).zip(&present).for_each(|((fg, w), &c)| {
-        for (f, &t) in fg.iter_mut().zip(target) {
-            *f = (t as usize == c) as u8 as f32;
-        }
-        let mut keys: Vec<u64> = (0..n)
-            .map(|v| {
-                let e = (fg[v] - host.get(v * N_LABELS + c).copied().unwrap_or(0.0)).abs();
-                (u64::from(!e.to_bits()) << 32) | v as u64
-            })
-            .collect();
-        keys.sort_unstable();
-        let row = |k: &u64| (k & 0xffff_ffff) as usize;
-        let grad = lovasz_grad(&keys.iter().map(|k| target[row(k)] as usize == c).collect::<Vec<_>>());
-        for (k, g) in keys.iter().zip(grad) {
-            w[row(k)] = g;
-        }
-    });
     let cols = Tensor::<1, Int>::from_data(
         TensorData::new(present.iter().map(|&c| c as i64).collect::<Vec<_>>(), [k]),
         &device,
@@ -138,6 +166,119 @@ pub fn lovasz_softmax(probs: Tensor<2>, target: &[u8]) -> Tensor<1> {
     let pc = probs.select(1, cols).transpose();
     // Per class first: one f32 sum over every class at once loses digits at a million rows.
     super::rows::sum_rows((fg_t - pc).abs() * w_t).sum() / k as f32
+}
+
+/// The Lovász term's host side: for each class of `present` (row c of the two `[k, n]` outputs,
+/// classes on all cores), its truth bits and each row's Lovász weight, from `probs` `[n, 9]`
+/// read on the host.
+///
+/// Each class sorts packed keys: the error's bits inverted (non-negative floats order as their
+/// bits: descending error), then the row, then the row's truth bit, so ties go by row and the
+/// order never depends on the sort; the truth bit rides in the key, so the walk in sorted order
+/// reads nothing else at random.
+pub fn lovasz_weights(probs: &[f32], target: &[u8], present: &[usize]) -> (Vec<f32>, Vec<f32>) {
+    use rayon::prelude::*;
+    // Rows per task of the walk in sorted order.
+    const BLOCK: usize = 1 << 16;
+    let n = target.len();
+    assert!(n < 1 << 31, "{n} Lovász rows: a row and its truth bit share 32 bits of the sort key");
+    let k = present.len();
+    let (mut fg, mut w) = (vec![0f32; k * n], vec![0f32; k * n]);
+    if n == 0 {
+        return (fg, w);
+    }
+    // Classes side by side, and each on all cores: fewer classes than cores is the usual case.
+    fg.par_chunks_mut(n).zip(w.par_chunks_mut(n)).zip(present).for_each(|((fg, w), &c)| {
+        fg.par_iter_mut().zip(target).for_each(|(f, &t)| *f = (t as usize == c) as u8 as f32);
+        let mut keys: Vec<u64> = fg
+            .par_iter()
+            .enumerate()
+            .map(|(v, &f)| {
+                let e = (f - probs.get(v * N_LABELS + c).copied().unwrap_or(0.0)).abs();
+                (u64::from(!e.to_bits()) << 32) | ((v as u64) << 1) | (f != 0.0) as u64
+            })
+            .collect();
+        sort_keys(&mut keys);
+        // The walk in blocks: each starts from the truth rows of the blocks before it.
+        let truths: Vec<usize> = keys.par_chunks(BLOCK).map(|b| b.iter().filter(|&&k| k & 1 == 1).count()).collect();
+        let total = truths.iter().sum();
+        let mut sorted = vec![0f32; n];
+        sorted.par_chunks_mut(BLOCK).zip(keys.par_chunks(BLOCK)).enumerate().for_each(|(i, (out, keys))| {
+            let inter = truths[..i].iter().sum();
+            let mut grad = LovaszGrad::at(total, inter, i * BLOCK - inter);
+            for (o, &key) in out.iter_mut().zip(keys) {
+                *o = grad.next(key & 1 == 1);
+            }
+        });
+        for (key, g) in keys.into_iter().zip(sorted) {
+            w[(key as u32 >> 1) as usize] = g;
+        }
+    });
+    (fg, w)
+}
+
+/// Sorts distinct keys ascending, on all cores: one pass puts each key in the bucket of its top
+/// 16 bits, then the buckets sort side by side, each small enough for the cache.
+fn sort_keys(keys: &mut Vec<u64>) {
+    use rayon::prelude::*;
+    const DIGITS: usize = 1 << 16;
+    let bucket = |k: u64| (k >> 48) as usize;
+    if keys.len() < DIGITS {
+        return keys.sort_unstable();
+    }
+    let counts = keys
+        .par_chunks(1 << 18)
+        .map(|chunk| {
+            let mut c = vec![0usize; DIGITS];
+            for &k in chunk {
+                c[bucket(k)] += 1;
+            }
+            c
+        })
+        .reduce(|| vec![0usize; DIGITS], |a, b| a.iter().zip(&b).map(|(x, y)| x + y).collect());
+    let mut next = Vec::with_capacity(DIGITS);
+    let mut start = 0;
+    for &c in &counts {
+        next.push(start);
+        start += c;
+    }
+    let mut out = vec![0u64; keys.len()];
+    for &k in keys.iter() {
+        let b = bucket(k);
+        out[next[b]] = k;
+        next[b] += 1;
+    }
+    let mut rest = out.as_mut_slice();
+    let mut buckets = Vec::new();
+    for &c in counts.iter().filter(|&&c| c > 1) {
+        let (b, r) = std::mem::take(&mut rest).split_at_mut(c);
+        buckets.push(b);
+        rest = r;
+    }
+    buckets.into_par_iter().for_each(|b| b.sort_unstable());
+    *keys = out;
+}
+
+/// The rows the Lovász term sees, ascending: every voxel an agent class claims, in the truth or
+/// the prediction (`predicted`, one flag per voxel, reused as the mark), and the uniform `draws`.
+/// On all cores: full grids at batch 6 are 30.7 M voxels.
+pub fn lovasz_rows(target: &[u8], mut predicted: Vec<bool>, draws: &[usize]) -> Vec<usize> {
+    use rayon::prelude::*;
+    const CHUNK: usize = 1 << 16;
+    let n = target.len();
+    predicted.resize(n, false);
+    for &d in draws {
+        if let Some(p) = predicted.get_mut(d) {
+            *p = true;
+        }
+    }
+    let parts: Vec<Vec<usize>> = predicted
+        .par_chunks(CHUNK)
+        .zip(target.par_chunks(CHUNK))
+        .enumerate()
+        .map(|(i, (p, t))| (0..p.len()).filter(|&v| p[v] | (t[v] >= 2)).map(|v| i * CHUNK + v).collect())
+        .collect();
+    parts.concat()
 }
 
 /// Whether each row's argmax (the first largest value, as burn's) is an agent class (2 and
@@ -150,7 +291,7 @@ pub fn agent_predicted(logits: &Tensor<2>) -> Vec<bool> {
     use rayon::prelude::*;
     let logits = logits.clone().detach();
     if logits.device() != Device::flex() {
-        return logits.argmax(1).greater_equal_elem(2).to_data().iter::<bool>().collect();
+        return flags(&logits.argmax(1).greater_equal_elem(2).into_data());
     }
     let rows: Tensor<1> = Tensor::from_dispatch(<Dispatch as CrossEntropyOps>::agent_rows(logits.into_dispatch()));
     let rows = rows.into_data();
@@ -158,6 +299,27 @@ pub fn agent_predicted(logits: &Tensor<2>) -> Vec<bool> {
         Ok(r) => r.par_iter().map(|&v| v != 0.0).collect(),
         Err(_) => rows.iter::<f32>().map(|v| v != 0.0).collect(),
     }
+}
+
+/// A bool tensor read back, as flags, on all cores (burn's element iterator takes 70 ms for the
+/// 30.7 M flags of a `paper` batch).
+pub fn flags(data: &TensorData) -> Vec<bool> {
+    use burn::tensor::{BoolStore, DType};
+    use rayon::prelude::*;
+    let width = match data.dtype() {
+        DType::Bool(BoolStore::U32) => 4,
+        DType::Bool(_) => 1,
+        _ => return data.iter::<bool>().collect(),
+    };
+    const CHUNK: usize = 1 << 16;
+    let bytes = data.as_bytes();
+    let mut out = vec![false; bytes.len() / width];
+    out.par_chunks_mut(CHUNK).zip(bytes.par_chunks(CHUNK * width)).for_each(|(out, bytes)| {
+        for (o, b) in out.iter_mut().zip(bytes.chunks_exact(width)) {
+            *o = b.iter().any(|&x| x != 0);
+        }
+    });
+    out
 }
 
 /// KL(N(mu, exp(logvar)) || N(0, 1)), summed over channels, averaged over the rows.
@@ -192,4 +354,22 @@ pub fn class_weights(counts: &[u64; N_LABELS], power: f32, clip: f32, boost: &[f
         w[c] = raw as f32 * boost.get(c).copied().unwrap_or(1.0);
     }
     w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use burn::tensor::{BoolStore, DType};
+
+    #[test]
+    fn flags_read_every_bool_store() {
+        let v: Vec<bool> = (0..1000).map(|i| i % 3 == 0 || i % 7 == 1).collect();
+        let data = TensorData::new(v.clone(), [v.len()]);
+        assert_eq!(flags(&data), v);
+        for store in [BoolStore::U8, BoolStore::U32] {
+            let cast = data.clone().convert_dtype(DType::Bool(store));
+            assert_eq!(cast.dtype(), DType::Bool(store));
+            assert_eq!(flags(&cast), v, "{store:?}");
+        }
+    }
 }

@@ -18,7 +18,6 @@ fn precision(args: &[String]) -> Result<rocc::backend::grounded::attention::Prec
 /// seconds per step of the generator on a corpus compiled here (12 frames of the crowded
 /// junction), `cpu-small`, and `paper` when asked.
 pub fn bench_train(args: &[String]) {
-    use rocc::compile::{OccBackend, Stage};
     let kind: DeviceKind = match opt(args, "--device").unwrap_or("cpu").parse() {
         Ok(k) => k,
         Err(e) => return println!("  {e}"),
@@ -42,19 +41,9 @@ pub fn bench_train(args: &[String]) {
         precision.name()
     );
     let dir = std::env::temp_dir().join(format!("rocc-bench-train-{}", std::process::id()));
-    let corpus = dir.join("corpus");
-    let opts = Options {
-        stage: Stage::Occ,
-        frames: Some("0..12".into()),
-        previews: false,
-        backend: OccBackend::Procedural,
-        ..Options::default()
+    let Some(corpus) = corpus(&dir) else {
+        return println!("  the corpus did not compile");
     };
-    let r = batch::run(&[root().join("scenarios/ambulance_crowded_intersection.scn")], &corpus, &opts, true);
-    if !r.failures.is_empty() {
-        println!("  the corpus did not compile");
-        return;
-    }
     let mut names = vec!["cpu-small"];
     if args.iter().any(|a| a == "paper") {
         names.push("paper");
@@ -97,6 +86,77 @@ pub fn bench_train(args: &[String]) {
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// 12 frames of the crowded junction compiled to procedural occupancy under `dir`: the
+/// training benches' corpus.
+fn corpus(dir: &Path) -> Option<PathBuf> {
+    use rocc::compile::{OccBackend, Stage};
+    let corpus = dir.join("corpus");
+    let opts = Options {
+        stage: Stage::Occ,
+        frames: Some("0..12".into()),
+        previews: false,
+        backend: OccBackend::Procedural,
+        ..Options::default()
+    };
+    let r = batch::run(&[root().join("scenarios/ambulance_crowded_intersection.scn")], &corpus, &opts, true);
+    r.failures.is_empty().then_some(corpus)
+}
+
+/// `bench loss [--claimed F,G]`: the host side of a GPU training step's loss at `paper` scale
+/// (batch 6, full grids: 30.7 M voxels), part by part, on the labels of 6 frames compiled here
+/// and a share F of the voxels predicted as agents (a GPU step waits for this work between its
+/// forward and its backward pass).
+pub fn bench_loss(args: &[String]) {
+    use rocc::backend::grounded::loss::{class_counts, flags, lovasz_rows, lovasz_weights};
+    use rocc::backend::layout::N_LABELS;
+    let claimed: Vec<f64> =
+        opt(args, "--claimed").unwrap_or("0.01,0.1").split(',').filter_map(|s| s.parse().ok()).collect();
+    println!("== loss: the host side of a GPU step's loss, `paper` batch 6 on full grids (median of 5)");
+    let dir = std::env::temp_dir().join(format!("rocc-bench-loss-{}", std::process::id()));
+    let frames = corpus(&dir).and_then(|c| rocc::learn::data::scan(&c).ok()).unwrap_or_default();
+    let mut target = Vec::new();
+    for s in frames.iter().take(6) {
+        match rocc::learn::data::load(s) {
+            Ok(f) => target.extend(f.labels.iter().copied()),
+            Err(e) => return println!("  {e}"),
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    let n = target.len();
+    if n == 0 {
+        return println!("  the corpus did not compile");
+    }
+    let agents = target.iter().filter(|&&t| t >= 2).count();
+    println!("  {n} voxels, {:.2} % of them agents in the truth", 100.0 * agents as f64 / n as f64);
+    let mut rng = rocc::sample::Rng::new(1);
+    for f in claimed {
+        let predicted: Vec<bool> = (0..n).map(|_| rng.unit() < f).collect();
+        let read_back = burn::tensor::TensorData::new(predicted.clone(), [n]);
+        let draws: Vec<usize> = (0..20_000).map(|_| rng.index(n)).collect();
+        let t_flags = median(5, || drop(std::hint::black_box(flags(&read_back))));
+        let t_counts = median(5, || {
+            std::hint::black_box(class_counts(&target));
+        });
+        let mut rows = Vec::new();
+        let t_rows = median(5, || rows = lovasz_rows(&target, predicted.clone(), &draws));
+        let sel: Vec<u8> = rows.iter().map(|&v| target[v]).collect();
+        let present: Vec<usize> = (0..N_LABELS).filter(|&c| sel.iter().any(|&t| t as usize == c)).collect();
+        let probs: Vec<f32> = (0..sel.len() * N_LABELS).map(|_| rng.unit() as f32 / 4.5).collect();
+        let t_weights = median(5, || drop(std::hint::black_box(lovasz_weights(&probs, &sel, &present))));
+        println!(
+            "  predicted agents {:>4.1} %: flags read back {:.1} ms, class counts {:.1}, Lovász rows {:.1} (m = {}), Lovász weights ({} classes) {:.1}; {:.1} ms in all",
+            f * 100.0,
+            t_flags * 1e3,
+            t_counts * 1e3,
+            t_rows * 1e3,
+            rows.len(),
+            present.len(),
+            t_weights * 1e3,
+            (t_flags + t_counts + t_rows + t_weights) * 1e3
+        );
+    }
 }
 
 /// `bench grounded [--device cpu|wgpu|cuda] [--batch N] [--configs a,b] [--precision full|mixed]`:
