@@ -1,7 +1,8 @@
 //! Where two boxes touch, measured on the rolled-out boxes themselves, shared by the tests that
-//! check staged crashes (`tests/rollout.rs`: every impact type and point; `tests/ciren.rs`: the
-//! imported cases against their sources). Deliberately independent of `src/rollout/stage.rs`:
-//! sampling the boxes, not the stager's own geometry, so a stager bug cannot hide itself.
+//! check staged crashes (`tests/rollout_conflicts.rs`: every impact type and point;
+//! `tests/ciren.rs`: the imported cases against their sources). Deliberately independent of
+//! `src/rollout/stage.rs`: sampling the boxes, not the stager's own geometry, so a stager bug
+//! cannot hide itself.
 #![allow(dead_code)] // each test crate uses part of it
 
 use glam::DVec2;
