@@ -38,9 +38,10 @@ fn lovasz_softmax_matches_a_hand_computed_case() {
 }
 
 /// Lovász weights by the definition: per class, rows by decreasing error (ties by row), then
-/// `lovasz_grad` of the truth bits in that order, each weight put back at its row.
-fn lovasz_weights_by_definition(probs: &[f32], target: &[u8], c: usize) -> Vec<f32> {
-    let err = |v: usize| ((target[v] as usize == c) as u8 as f32 - probs[v * N_LABELS + c]).abs();
+/// `lovasz_grad` of the truth bits in that order, each weight put back at its row. `p`: the
+/// class's probability of each row.
+fn lovasz_weights_by_definition(p: &[f32], target: &[u8], c: usize) -> Vec<f32> {
+    let err = |v: usize| ((target[v] as usize == c) as u8 as f32 - p[v]).abs();
     let mut order: Vec<usize> = (0..target.len()).collect();
     order.sort_by(|&a, &b| err(b).total_cmp(&err(a)).then(a.cmp(&b)));
     let grad = lovasz_grad(&order.iter().map(|&v| target[v] as usize == c).collect::<Vec<_>>());
@@ -54,20 +55,24 @@ fn lovasz_weights_by_definition(probs: &[f32], target: &[u8], c: usize) -> Vec<f
 #[test]
 fn lovasz_weights_follow_the_definition_ties_included() {
     let mut rng = Rng::new(11);
-    let n = 5_000;
-    // Probabilities on a coarse grid of 17 values: most errors tie with many others.
-    let probs: Vec<f32> = (0..n * N_LABELS).map(|_| rng.index(17) as f32 / 16.0).collect();
-    let target: Vec<u8> = (0..n).map(|_| [0, 0, 0, 1, 2, 5][rng.index(6)]).collect();
     let present = [0, 1, 2, 5];
-    let (fg, w) = lovasz_weights(&probs, &target, &present);
-    for (i, &c) in present.iter().enumerate() {
-        let row = i * n..(i + 1) * n;
-        let truth: Vec<f32> = target.iter().map(|&t| (t as usize == c) as u8 as f32).collect();
-        assert_eq!(fg[row.clone()], truth[..], "class {c}: truth bits");
-        let want = lovasz_weights_by_definition(&probs, &target, c);
-        assert!(w[row.clone()].iter().zip(&want).all(|(a, b)| a.to_bits() == b.to_bits()), "class {c}: weights");
-        // The weights of a class are the steps of the Jaccard loss: they sum to 1.
-        assert!((w[row].iter().map(|&x| x as f64).sum::<f64>() - 1.0).abs() < 1e-4);
+    // Below and above the size where the sort turns to buckets and the walk to blocks; on a
+    // coarse grid of 17 probabilities most errors tie with many others.
+    for (n, coarse) in [(5_000, true), (200_000, true), (200_000, false)] {
+        let target: Vec<u8> = (0..n).map(|_| [0, 0, 0, 1, 2, 5][rng.index(6)]).collect();
+        let draw = |rng: &mut Rng| if coarse { rng.index(17) as f32 / 16.0 } else { rng.unit() as f32 };
+        let probs: Vec<f32> = (0..n * present.len()).map(|_| draw(&mut rng)).collect();
+        let (fg, w) = lovasz_weights(&probs, &target, &present);
+        for (i, &c) in present.iter().enumerate() {
+            let row = i * n..(i + 1) * n;
+            let truth: Vec<f32> = target.iter().map(|&t| (t as usize == c) as u8 as f32).collect();
+            assert_eq!(fg[row.clone()], truth[..], "class {c}: truth bits");
+            let want = lovasz_weights_by_definition(&probs[row.clone()], &target, c);
+            let same = w[row.clone()].iter().zip(&want).all(|(a, b)| a.to_bits() == b.to_bits());
+            assert!(same, "{n} rows, coarse {coarse}, class {c}: weights");
+            // The weights of a class are the steps of the Jaccard loss: they sum to 1.
+            assert!((w[row].iter().map(|&x| x as f64).sum::<f64>() - 1.0).abs() < 1e-4);
+        }
     }
     let (fg, w) = lovasz_weights(&[], &[], &present);
     assert!(fg.is_empty() && w.is_empty());

@@ -151,26 +151,28 @@ pub fn lovasz_softmax(probs: Tensor<2>, target: &[u8]) -> Tensor<1> {
     if present.is_empty() {
         return Tensor::zeros([1], &device);
     }
-    let data = probs.clone().into_data().convert::<f32>();
-    let (fg, w) = match data.as_slice::<f32>() {
-        Ok(host) => lovasz_weights(host, target, &present),
-        Err(_) => lovasz_weights(&data.iter::<f32>().collect::<Vec<_>>(), target, &present),
-    };
     let k = present.len();
     let cols = Tensor::<1, Int>::from_data(
         TensorData::new(present.iter().map(|&c| c as i64).collect::<Vec<_>>(), [k]),
         &device,
     );
+    // The present classes' columns, one row per class: only those cross, and each class's sort
+    // reads its own row in order.
+    let pc = probs.select(1, cols).transpose();
+    let data = pc.clone().into_data().convert::<f32>();
+    let (fg, w) = match data.as_slice::<f32>() {
+        Ok(host) => lovasz_weights(host, target, &present),
+        Err(_) => lovasz_weights(&data.iter::<f32>().collect::<Vec<_>>(), target, &present),
+    };
     let fg_t = Tensor::<2>::from_data(TensorData::new(fg, [k, n]), &device);
     let w_t = Tensor::<2>::from_data(TensorData::new(w, [k, n]), &device);
-    let pc = probs.select(1, cols).transpose();
     // Per class first: one f32 sum over every class at once loses digits at a million rows.
     super::rows::sum_rows((fg_t - pc).abs() * w_t).sum() / k as f32
 }
 
 /// The Lovász term's host side: for each class of `present` (row c of the two `[k, n]` outputs,
-/// classes on all cores), its truth bits and each row's Lovász weight, from `probs` `[n, 9]`
-/// read on the host.
+/// classes on all cores), its truth bits and each row's Lovász weight, from `probs` `[k, n]`
+/// (row c: class `present[c]`'s probability of each row) read on the host.
 ///
 /// Each class sorts packed keys: the error's bits inverted (non-negative floats order as their
 /// bits: descending error), then the row, then the row's truth bit, so ties go by row and the
@@ -178,85 +180,131 @@ pub fn lovasz_softmax(probs: Tensor<2>, target: &[u8]) -> Tensor<1> {
 /// reads nothing else at random.
 pub fn lovasz_weights(probs: &[f32], target: &[u8], present: &[usize]) -> (Vec<f32>, Vec<f32>) {
     use rayon::prelude::*;
+    use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
     // Rows per task of the walk in sorted order.
     const BLOCK: usize = 1 << 16;
     let n = target.len();
     assert!(n < 1 << 31, "{n} Lovász rows: a row and its truth bit share 32 bits of the sort key");
+    assert_eq!(probs.len(), present.len() * n, "one row of probabilities per present class");
     let k = present.len();
     let (mut fg, mut w) = (vec![0f32; k * n], vec![0f32; k * n]);
     if n == 0 {
         return (fg, w);
     }
     // Classes side by side, and each on all cores: fewer classes than cores is the usual case.
-    fg.par_chunks_mut(n).zip(w.par_chunks_mut(n)).zip(present).for_each(|((fg, w), &c)| {
+    let classes = fg.par_chunks_mut(n).zip(w.par_chunks_mut(n)).zip(probs.par_chunks(n).zip(present));
+    classes.for_each(|((fg, w), (p, &c))| {
         fg.par_iter_mut().zip(target).for_each(|(f, &t)| *f = (t as usize == c) as u8 as f32);
-        let mut keys: Vec<u64> = fg
+        let keys: Vec<u64> = fg
             .par_iter()
+            .zip(p)
             .enumerate()
-            .map(|(v, &f)| {
-                let e = (f - probs.get(v * N_LABELS + c).copied().unwrap_or(0.0)).abs();
+            .map(|(v, (&f, &p))| {
+                let e = (f - p).abs();
                 (u64::from(!e.to_bits()) << 32) | ((v as u64) << 1) | (f != 0.0) as u64
             })
             .collect();
-        sort_keys(&mut keys);
-        // The walk in blocks: each starts from the truth rows of the blocks before it.
+        let keys = sort_keys(keys);
+        // The walk in blocks, each from the truth rows of the blocks before it, each weight
+        // stored at its row (rows are distinct: plain stores, from every core).
         let truths: Vec<usize> = keys.par_chunks(BLOCK).map(|b| b.iter().filter(|&&k| k & 1 == 1).count()).collect();
         let total = truths.iter().sum();
-        let mut sorted = vec![0f32; n];
-        sorted.par_chunks_mut(BLOCK).zip(keys.par_chunks(BLOCK)).enumerate().for_each(|(i, (out, keys))| {
+        let at_row: Vec<AtomicU32> = (0..n).into_par_iter().map(|_| AtomicU32::new(0)).collect();
+        keys.par_chunks(BLOCK).enumerate().for_each(|(i, keys)| {
             let inter = truths[..i].iter().sum();
             let mut grad = LovaszGrad::at(total, inter, i * BLOCK - inter);
-            for (o, &key) in out.iter_mut().zip(keys) {
-                *o = grad.next(key & 1 == 1);
+            for &key in keys {
+                at_row[(key as u32 >> 1) as usize].store(grad.next(key & 1 == 1).to_bits(), Relaxed);
             }
         });
-        for (key, g) in keys.into_iter().zip(sorted) {
-            w[(key as u32 >> 1) as usize] = g;
-        }
+        w.par_iter_mut().zip(at_row).for_each(|(w, g)| *w = f32::from_bits(g.into_inner()));
     });
     (fg, w)
 }
 
-/// Sorts distinct keys ascending, on all cores: one pass puts each key in the bucket of its top
-/// 16 bits, then the buckets sort side by side, each small enough for the cache.
-fn sort_keys(keys: &mut Vec<u64>) {
+/// Sorts keys whose top 32 bits order them and whose low bits ascend within ties (rows in
+/// order), on all cores, with the result of a full sort: one pass puts each key in the bucket of
+/// its top 16 bits (each part of the input writes its own positions of each bucket, so the pass
+/// is stable), then the buckets, small enough for the cache, each sort on their next 16 bits by
+/// a stable radix sort of two 8-bit digits.
+fn sort_keys(keys: Vec<u64>) -> Vec<u64> {
     use rayon::prelude::*;
-    const DIGITS: usize = 1 << 16;
-    let bucket = |k: u64| (k >> 48) as usize;
-    if keys.len() < DIGITS {
-        return keys.sort_unstable();
+    use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+    const BUCKETS: usize = 1 << 16;
+    const PARTS: usize = 16;
+    let n = keys.len();
+    if n <= BUCKETS {
+        let mut keys = keys;
+        keys.sort_unstable();
+        return keys;
     }
-    let counts = keys
-        .par_chunks(1 << 18)
+    let bucket = |k: u64| (k >> 48) as usize;
+    let part = n.div_ceil(PARTS);
+    let counts: Vec<Vec<usize>> = keys
+        .par_chunks(part)
         .map(|chunk| {
-            let mut c = vec![0usize; DIGITS];
+            let mut c = vec![0usize; BUCKETS];
             for &k in chunk {
                 c[bucket(k)] += 1;
             }
             c
         })
-        .reduce(|| vec![0usize; DIGITS], |a, b| a.iter().zip(&b).map(|(x, y)| x + y).collect());
-    let mut next = Vec::with_capacity(DIGITS);
-    let mut start = 0;
-    for &c in &counts {
-        next.push(start);
-        start += c;
+        .collect();
+    // Part i's first position in bucket b: every key of a lower bucket, then bucket b's keys of
+    // the parts before i.
+    let mut starts = vec![vec![0usize; BUCKETS]; counts.len()];
+    let mut sizes = Vec::new();
+    let mut next = 0;
+    for b in 0..BUCKETS {
+        let first = next;
+        for (s, c) in starts.iter_mut().zip(&counts) {
+            s[b] = next;
+            next += c[b];
+        }
+        if next > first {
+            sizes.push(next - first);
+        }
     }
-    let mut out = vec![0u64; keys.len()];
-    for &k in keys.iter() {
-        let b = bucket(k);
-        out[next[b]] = k;
-        next[b] += 1;
-    }
+    let out: Vec<AtomicU64> = (0..n).into_par_iter().map(|_| AtomicU64::new(0)).collect();
+    keys.par_chunks(part).zip(starts).for_each(|(chunk, mut at)| {
+        for &k in chunk {
+            let b = bucket(k);
+            out[at[b]].store(k, Relaxed);
+            at[b] += 1;
+        }
+    });
+    let mut out: Vec<u64> = out.into_par_iter().map(AtomicU64::into_inner).collect();
+    let mut buckets = Vec::with_capacity(sizes.len());
     let mut rest = out.as_mut_slice();
-    let mut buckets = Vec::new();
-    for &c in counts.iter().filter(|&&c| c > 1) {
-        let (b, r) = std::mem::take(&mut rest).split_at_mut(c);
+    for size in sizes {
+        let (b, r) = std::mem::take(&mut rest).split_at_mut(size);
         buckets.push(b);
         rest = r;
     }
-    buckets.into_par_iter().for_each(|b| b.sort_unstable());
-    *keys = out;
+    buckets.into_par_iter().for_each(|b| {
+        if b.len() <= 64 {
+            return b.sort_unstable();
+        }
+        let mut tmp = vec![0u64; b.len()];
+        for shift in [32, 40] {
+            let digit = |k: u64| ((k >> shift) & 0xff) as usize;
+            let mut at = [0usize; 256];
+            for &k in b.iter() {
+                at[digit(k)] += 1;
+            }
+            let mut next = 0;
+            for a in at.iter_mut() {
+                (*a, next) = (next, next + *a);
+            }
+            for &k in b.iter() {
+                let d = digit(k);
+                tmp[at[d]] = k;
+                at[d] += 1;
+            }
+            b.copy_from_slice(&tmp);
+        }
+    });
+    out
 }
 
 /// The rows the Lovász term sees, ascending: every voxel an agent class claims, in the truth or

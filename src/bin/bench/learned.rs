@@ -143,7 +143,7 @@ pub fn bench_loss(args: &[String]) {
         let t_rows = median(5, || rows = lovasz_rows(&target, predicted.clone(), &draws));
         let sel: Vec<u8> = rows.iter().map(|&v| target[v]).collect();
         let present: Vec<usize> = (0..N_LABELS).filter(|&c| sel.iter().any(|&t| t as usize == c)).collect();
-        let probs: Vec<f32> = (0..sel.len() * N_LABELS).map(|_| rng.unit() as f32 / 4.5).collect();
+        let probs: Vec<f32> = (0..sel.len() * present.len()).map(|_| rng.unit() as f32 / 4.5).collect();
         let t_weights = median(5, || drop(std::hint::black_box(lovasz_weights(&probs, &sel, &present))));
         println!(
             "  predicted agents {:>4.1} %: flags read back {:.1} ms, class counts {:.1}, Lovász rows {:.1} (m = {}), Lovász weights ({} classes) {:.1}; {:.1} ms in all",
