@@ -474,6 +474,17 @@ fn checkpoints_round_trip_and_bad_weights_are_diagnosed() {
     save_safetensors(&g, &st).unwrap();
     let loaded = load_weights(Generator::new(&cfg, &device), &st).unwrap();
     assert_eq!(params(&loaded), params(&g));
+    // The same weights are the same bytes, in either format: parameter ids come from the
+    // model's structure, and the safetensors metadata has one entry (a hash map's order varies).
+    device.seed(3);
+    let again = dir.join("again.bpk");
+    Generator::new(&cfg, &device).save_file(&again).unwrap();
+    assert!(std::fs::read(&again).unwrap() == std::fs::read(&bpk).unwrap(), "a second .bpk of the same weights");
+    for i in 0..3 {
+        let st_again = dir.join(format!("again{i}.safetensors"));
+        save_safetensors(&g, &st_again).unwrap();
+        assert!(std::fs::read(&st_again).unwrap() == std::fs::read(&st).unwrap(), "safetensors {i}");
+    }
     // Through the backend: the `.ron` beside the weights is found.
     let backend = Grounded::load(&bpk, None).unwrap();
     assert!(rocc::backend::OccupancyBackend::name(&backend).starts_with("grounded-tiny-"));

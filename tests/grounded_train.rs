@@ -200,6 +200,7 @@ fn training_gives_the_same_weights_on_any_thread_count() {
         let opts = small_opts(&data, &config, dir.join(format!("t{threads}")), 2, Default::default());
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let report = pool.install(|| train(&opts)).unwrap();
+        let file = std::fs::read(&report.weights).unwrap();
         let g = load_weights(Generator::new(&config, &cpu()), &report.weights).unwrap();
         // Parameters of every part, in a fixed order.
         let mut all = Vec::new();
@@ -214,10 +215,14 @@ fn training_gives_the_same_weights_on_any_thread_count() {
         for c in &g.bev.convs {
             all.extend(c.weight.val().into_data().try_to_vec::<f32>().unwrap());
         }
-        all
+        (all, file)
     };
     let one = run(1);
-    assert_eq!(one, run(3), "3 threads");
-    assert_eq!(one, run(2), "2 threads");
+    for threads in [3, 2] {
+        let (params, file) = run(threads);
+        assert_eq!(one.0, params, "{threads} threads");
+        // The weights file too, byte for byte (parameter ids included).
+        assert!(one.1 == file, "{threads} threads: the .bpk bytes");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

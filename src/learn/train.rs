@@ -526,8 +526,11 @@ fn run<M: Net>(
                 c.iter().map(move |&n| ((n as f64 + 1.0) / t).ln() as f32).collect::<Vec<_>>()
             })
             .collect();
-        model.decoder_mut().layer_bias =
-            burn::module::Param::from_tensor(Tensor::from_data(TensorData::new(prior, [NZ, N_LABELS]), &device));
+        // The parameter keeps its id (`ids.rs`: the same bytes for the same weights).
+        let bias = &mut model.decoder_mut().layer_bias;
+        let id = bias.id;
+        *bias = burn::module::Param::from_tensor(Tensor::from_data(TensorData::new(prior, [NZ, N_LABELS]), &device));
+        bias.id = id;
     }
     let mut optim = AdamConfig::new().init();
     let state_path = ck.join(format!("{stage}-state.ron"));

@@ -27,6 +27,7 @@ pub mod guard;
 pub mod head;
 pub mod heap;
 mod host_read;
+mod ids;
 mod infer;
 pub mod latents;
 pub mod loss;
@@ -140,7 +141,11 @@ pub fn load_weights<M: Module + burn::store::ModuleSnapshot>(module: M, path: &P
 
 /// Save `module` as safetensors (tensor names = module paths).
 pub fn save_safetensors<M: Module + burn::store::ModuleSnapshot>(module: &M, path: &Path) -> Result<(), String> {
-    let mut store = burn::store::SafetensorsStore::from_file(path);
+    // One metadata entry: burn keeps its entries in a hash map, whose order (and so the file's
+    // bytes) changes from process to process.
+    let mut store = burn::store::SafetensorsStore::from_file(path)
+        .clear_metadata()
+        .metadata("producer", concat!("rocc ", env!("CARGO_PKG_VERSION")));
     module.save_into(&mut store).map_err(|e| e.to_string())
 }
 

@@ -273,14 +273,15 @@ pub struct AeOut {
 impl Autoencoder {
     pub fn new(cfg: &GroundedConfig, device: &Device) -> Self {
         let s: usize = cfg.encoder_samples() * N_LABELS;
-        Autoencoder {
+        let model = Autoencoder {
             encoder: LatentEncoder {
                 l1: LinearConfig::new(s + ANCHOR_FEATS, cfg.encoder.hidden).init(device),
                 l2: LinearConfig::new(cfg.encoder.hidden, 2 * cfg.latent_dim).init(device),
                 latent_dim: cfg.latent_dim,
             },
             decoder: Decoder::new(cfg, device),
-        }
+        };
+        super::ids::stable(model, "autoencoder")
     }
 
     /// The encoder's input for a batch: per latent the one-hot samples of `labels[b]`.
@@ -423,7 +424,7 @@ impl Generator {
         } else {
             (None, None)
         };
-        Generator {
+        let model = Generator {
             bev: BevEncoder { convs },
             cond1: LinearConfig::new(f + ANCHOR_FEATS, cfg.bev.hidden).init(device),
             cond2: LinearConfig::new(cfg.bev.hidden, cfg.latent_dim).init(device),
@@ -431,7 +432,8 @@ impl Generator {
             bg_hidden,
             bg_out,
             stride: cfg.bev_stride(),
-        }
+        };
+        super::ids::stable(model, "generator")
     }
 
     fn features(&self, bev: Tensor<4>) -> Tensor<4> {
