@@ -456,6 +456,24 @@ fn params(g: &Generator) -> Vec<f32> {
 }
 
 #[test]
+fn parameter_ids_are_distinct_and_the_same_on_every_build() {
+    use burn::module::list_param_ids;
+    let (cfg, device) = (tiny(), cpu());
+    let ids = |g: Vec<burn::module::ParamId>| g.into_iter().map(|id| id.val()).collect::<Vec<_>>();
+    let generator = ids(list_param_ids(&Generator::new(&cfg, &device)));
+    assert_eq!(generator, ids(list_param_ids(&Generator::new(&cfg, &device))));
+    let autoencoder = ids(list_param_ids(&Autoencoder::new(&cfg, &device)));
+    // An optimiser tells parameters apart by id: within a model and across the two (the
+    // generator's decoder can start from the autoencoder's, ids included).
+    let mut all: Vec<u64> = generator.iter().chain(&autoencoder).copied().collect();
+    let n = all.len();
+    all.sort_unstable();
+    all.dedup();
+    assert_eq!(all.len(), n, "{n} parameters");
+    assert!(generator.len() > 20 && autoencoder.len() > 10);
+}
+
+#[test]
 fn checkpoints_round_trip_and_bad_weights_are_diagnosed() {
     let cfg = tiny();
     let device = cpu();
