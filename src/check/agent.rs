@@ -250,16 +250,7 @@ impl Checker {
     /// rollout starts the replay when it fires.
     fn track_trigger(&mut self, w: &ast::Trigger, order: &[&str]) -> Option<Option<Goal>> {
         let start_when = Some(self.trigger(w, order)?);
-        Some(Some(Goal {
-            speed: None,
-            lateral: Lateral::HoldLane,
-            stop: None,
-            reverse: None,
-            turn: None,
-            start_after: 0.0,
-            start_when,
-            stop_span: Span::default(),
-        }))
+        Some(Some(Goal { start_when, ..Goal::default() }))
     }
 
     fn track(

@@ -21,16 +21,7 @@ impl Checker {
         order: &[&str],
         me: &ast::Ident,
     ) -> Option<Option<Goal>> {
-        let mut out = Goal {
-            speed: None,
-            lateral: Lateral::HoldLane,
-            stop: None,
-            turn: None,
-            start_after: 0.0,
-            start_when: None,
-            reverse: None,
-            stop_span: Span::default(),
-        };
+        let mut out = Goal::default();
         let mut ok = true;
         let mut seen: BTreeMap<&str, Span> = BTreeMap::new();
         let walker = motion == Motion::Holonomic;

@@ -429,6 +429,22 @@ pub struct Goal<V = Dist> {
     pub stop_span: Span,
 }
 
+/// The empty goal: hold the lane at the initial speed, from the start.
+impl<V> Default for Goal<V> {
+    fn default() -> Self {
+        Goal {
+            speed: None,
+            lateral: Lateral::HoldLane,
+            stop: None,
+            turn: None,
+            start_after: 0.0,
+            start_when: None,
+            reverse: None,
+            stop_span: Span::default(),
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Lateral {
     HoldLane,

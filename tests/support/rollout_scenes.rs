@@ -135,16 +135,7 @@ pub struct Spec {
 pub const CAR: [f64; 3] = [4.6, 1.85, 1.5];
 
 pub fn goal() -> Goal<f64> {
-    Goal {
-        speed: None,
-        lateral: Lateral::HoldLane,
-        stop: None,
-        turn: None,
-        start_after: 0.0,
-        start_when: None,
-        reverse: None,
-        stop_span: Default::default(),
-    }
+    Goal::default()
 }
 
 pub fn car(name: &'static str, pose: Pose, speed: f64, g: Option<Goal<f64>>) -> Spec {
