@@ -214,7 +214,8 @@ pub fn step_loss(
     let draws: Vec<usize> = (0..t.lovasz_samples.min(n)).map(|_| rng.index(n)).collect();
     let idx = lovasz_rows(target, agent_predicted(&out.logits), &draws);
     let sel_t: Vec<u8> = idx.par_iter().map(|&v| target[v]).collect();
-    let sel: Vec<i64> = idx.par_iter().map(|&v| v as i64).collect();
+    // The background head's rows, only where there is one (the rows move into the loss).
+    let sel: Option<Vec<i64>> = out.background.is_some().then(|| idx.par_iter().map(|&v| v as i64).collect());
     let (ce, probs) = cross_entropy_and_probs(out.logits, target, weights, idx);
     let lov = lovasz_softmax(probs, &sel_t);
     let mut total = ce.clone() * t.ce_weight + lov.clone() * t.lovasz_weight;
@@ -224,7 +225,7 @@ pub fn step_loss(
         kl_part = kl.clone().detach();
         total = total + kl * t.kl_weight;
     }
-    if let Some(bg) = out.background {
+    if let (Some(bg), Some(sel)) = (out.background, sel) {
         let m = sel.len();
         let aux = bce_with_logits(take_rows(bg, sel).reshape([m]), &sel_t.iter().map(|&l| l == 1).collect::<Vec<_>>());
         aux_part = aux.clone().detach();

@@ -144,10 +144,9 @@ impl LovaszGrad {
 /// own place, so the device takes a weighted sum of the errors without gathering them into
 /// sorted order.
 pub fn lovasz_softmax(probs: Tensor<2>, target: &[u8]) -> Tensor<1> {
-    use rayon::prelude::*;
     let device = probs.device();
     let n = target.len();
-    let present: Vec<usize> = (0..N_LABELS).filter(|&c| target.par_iter().any(|&t| t as usize == c)).collect();
+    let present = present_classes(target);
     if present.is_empty() {
         return Tensor::zeros([1], &device);
     }
@@ -168,6 +167,12 @@ pub fn lovasz_softmax(probs: Tensor<2>, target: &[u8]) -> Tensor<1> {
     let w_t = Tensor::<2>::from_data(TensorData::new(w, [k, n]), &device);
     // Per class first: one f32 sum over every class at once loses digits at a million rows.
     super::rows::sum_rows((fg_t - pc).abs() * w_t).sum() / k as f32
+}
+
+/// The classes that label some row of `target`, ascending: the ones the Lovász term averages.
+pub fn present_classes(target: &[u8]) -> Vec<usize> {
+    use rayon::prelude::*;
+    (0..N_LABELS).filter(|&c| target.par_iter().any(|&t| t as usize == c)).collect()
 }
 
 /// The Lovász term's host side: for each class of `present` (row c of the two `[k, n]` outputs,

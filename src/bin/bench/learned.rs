@@ -109,8 +109,7 @@ fn corpus(dir: &Path) -> Option<PathBuf> {
 /// and a share F of the voxels predicted as agents (a GPU step waits for this work between its
 /// forward and its backward pass).
 pub fn bench_loss(args: &[String]) {
-    use rocc::backend::grounded::loss::{class_counts, flags, lovasz_rows, lovasz_weights};
-    use rocc::backend::layout::N_LABELS;
+    use rocc::backend::grounded::loss::{class_counts, flags, lovasz_rows, lovasz_weights, present_classes};
     let claimed: Vec<f64> =
         opt(args, "--claimed").unwrap_or("0.01,0.1").split(',').filter_map(|s| s.parse().ok()).collect();
     println!("== loss: the host side of a GPU step's loss, `paper` batch 6 on full grids (median of 5)");
@@ -142,7 +141,7 @@ pub fn bench_loss(args: &[String]) {
         let mut rows = Vec::new();
         let t_rows = median(5, || rows = lovasz_rows(&target, predicted.clone(), &draws));
         let sel: Vec<u8> = rows.iter().map(|&v| target[v]).collect();
-        let present: Vec<usize> = (0..N_LABELS).filter(|&c| sel.iter().any(|&t| t as usize == c)).collect();
+        let present = present_classes(&sel);
         let probs: Vec<f32> = (0..sel.len() * present.len()).map(|_| rng.unit() as f32 / 4.5).collect();
         let t_weights = median(5, || drop(std::hint::black_box(lovasz_weights(&probs, &sel, &present))));
         println!(
