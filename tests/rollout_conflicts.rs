@@ -25,7 +25,12 @@ fn conflict(at_fault: usize, struck: usize, impact: Impact, point: Point, at: Op
 /// Run a staged conflict (agent 0 strikes agent 1) and check side, time, face, and that the pair
 /// parts within the impact's window and slides to rest.
 fn check_conflict(specs: Vec<Spec>, map: &Map, impact: Impact, point: Point, at: f64) -> Tracks {
-    let t = run(specs, vec![conflict(0, 1, impact, point, Some(at))], map, 12.0);
+    check_conflict_for(specs, map, impact, point, at, 12.0)
+}
+
+/// `check_conflict` over a clip of `secs`.
+fn check_conflict_for(specs: Vec<Spec>, map: &Map, impact: Impact, point: Point, at: f64, secs: f64) -> Tracks {
+    let t = run(specs, vec![conflict(0, 1, impact, point, Some(at))], map, secs);
     let rec = t.impacts.first().unwrap_or_else(|| panic!("{impact:?} {point:?}: no impact"));
     let f = rec.frame;
     let when = f as f64 / t.rate;
@@ -72,7 +77,9 @@ fn rear_end_hits_the_requested_rear_side_and_bystanders_keep_clear() {
         let striker = car("striker", on(&m, l, 30.0, 0.0), 14.0, None);
         let victim = car("victim", on(&m, l, 80.0, 0.0), 6.0, None);
         let follower = car("follower", on(&m, l, 5.0, 0.0), 12.0, None);
-        let t = check_conflict(vec![striker, victim, follower], &m, Impact::RearEnd, point, 3.0);
+        // 16 s: the follower, 25 m back at 12 m/s, sees the crash and slows while the wrecks
+        // slide, then draws up to where they rest.
+        let t = check_conflict_for(vec![striker, victim, follower], &m, Impact::RearEnd, point, 3.0, 16.0);
         // The wrecks slide where the impulse sends them; the follower stops behind them or
         // passes where they left room, touching neither.
         assert!(t.first_contact(2).is_none(), "{point:?}: the follower ran into the wreck: {:?}", t.contacts);

@@ -486,6 +486,28 @@ fn of_two_committed_cars_the_one_that_can_still_stop_gives_way() {
     assert!(overlaps(t, &[]).is_empty());
 }
 
+/// A wreck sliding to rest in a junction is seen from the impact on: the van coming toward it
+/// slows from then, never speeds up toward it, and stops short of it within its braking
+/// limits. Passed over while it slid, the van sped up from 6.1 to 8.3 m/s and stopped at
+/// -46.6 m/s2 once the wreck had come to rest.
+#[test]
+fn drivers_brake_for_a_wreck_sliding_to_rest() {
+    let text =
+        std::fs::read_to_string("tests/rollout-cases/angle-crash-wreck-in-junction-van-brakes-late.scn").expect("case");
+    let f = front_of(&text);
+    let t = &f.tracks;
+    let van = t.agents.iter().position(|a| a.name == "traffic_2").expect("van");
+    let hit = t.contacts.first().expect("the crash").frame;
+    let dt = 1.0 / t.rate;
+    let v = &t.speeds[van];
+    let faster = (hit + 1..t.frames).map(|f| v[f] - v[f - 1]).fold(f64::NEG_INFINITY, f64::max);
+    assert!(faster <= 1e-9, "the van speeds up toward the wreck by {faster:.3} m/s in a frame");
+    let hardest = (hit + 1..t.frames).map(|f| (v[f - 1] - v[f]) / dt).fold(0.0, f64::max);
+    let lim = rocc::rollout::limits(t.agents[van].class, t.agents[van].motion);
+    assert!(hardest <= lim.brake_max, "the van brakes at {hardest:.1} m/s2, past its {}", lim.brake_max);
+    assert!(t.first_contact(van).is_none(), "the van meets the wreck: {:?}", t.contacts);
+}
+
 /// A roundabout: a car already on the ring goes before one entering, and the one entering
 /// follows it in once it is past, instead of waiting till it has left the ring. First come,
 /// first served put the entering car first (it was nearer the stretch the two share), and the

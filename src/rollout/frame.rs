@@ -88,6 +88,9 @@ pub(crate) struct Facts {
     pub(crate) sirens: Vec<usize>,
     /// Per agent, this frame: the emergency vehicle it makes way for (`siren_for`).
     pub(crate) siren_for: Vec<Option<Yield>>,
+    /// This frame: each body moving on from an impact, with the pose its slide ends at
+    /// (`Sim::rest_pose`), for `Sim::wrecks_ahead`.
+    pub(crate) sliding: Vec<(usize, DVec2, f64)>,
 }
 
 /// Where a run starts and what it keeps (`Sim::keep_states`, `Sim::resume`).
@@ -225,6 +228,7 @@ impl<'a, 'b> Sim<'a, 'b> {
                     .filter(|&i| actors[i].emergency && matches!(actors[i].drive, Drive::Mover))
                     .collect(),
                 siren_for: vec![None; actors.len()],
+                sliding: vec![],
             },
             wreck: Wrecks::new(actors),
             any_trigger: actors.iter().any(|a| a.trigger.is_some() || !a.phases.is_empty()),
@@ -328,6 +332,15 @@ impl<'a, 'b> Sim<'a, 'b> {
             {
                 self.facts.near.push(Near::new(st, a, dir, y.0.is_some()));
             }
+            self.facts.sliding.clear();
+            if self.wreck.any {
+                for j in 0..self.actors.len() {
+                    if self.wreck.moving(j) {
+                        let (pos, yaw) = self.rest_pose(j);
+                        self.facts.sliding.push((j, pos, yaw));
+                    }
+                }
+            }
             sc.index.along.clear();
             for i in 0..self.actors.len() {
                 self.next[i] = self.step(&mut sc, i, t, f);
@@ -373,12 +386,16 @@ impl<'a, 'b> Sim<'a, 'b> {
     /// the passed agent drives on as it would, and the passer stops short (`Sim::brake_across`).
     #[inline]
     pub(crate) fn exempt(&self, i: usize, j: usize) -> bool {
-        self.wreck.moving(i)
-            || self.wreck.moving(j)
-            || self.confs.iter().enumerate().any(|(n, k)| {
-                ((k.af == i && k.st == j) || (k.af == j && k.st == i))
-                    && !(self.latched[n] && matches!(k.near, Some(crate::rollout::agent::Near::Ttc(_))))
-            })
+        self.wreck.moving(i) || self.wreck.moving(j) || self.conflict_pair(i, j)
+    }
+
+    /// `i` and `j` are a conflict's pair, free to come close (see `exempt`).
+    #[inline]
+    pub(crate) fn conflict_pair(&self, i: usize, j: usize) -> bool {
+        self.confs.iter().enumerate().any(|(n, k)| {
+            ((k.af == i && k.st == j) || (k.af == j && k.st == i))
+                && !(self.latched[n] && matches!(k.near, Some(crate::rollout::agent::Near::Ttc(_))))
+        })
     }
 
     /// The state of agent `i` at `t + dt`, from everyone's state at `t` (frame `f - 1`).

@@ -14,6 +14,7 @@ pub(crate) mod reverse;
 pub(crate) mod settle;
 pub(crate) mod siren;
 pub(crate) mod slow;
+pub(crate) mod wrecks;
 
 use crate::geom::{Obb, wrap_angle};
 use crate::rollout::agent::{Lat, State, StopGoal};
@@ -332,7 +333,9 @@ impl Sim<'_, '_> {
             let p = self.cur[j].pos;
             a.path.frenet_near(p, st.s + (p - st.pos).dot(fwd), window, st.s, reach)
         }));
-        sc.cand.iter().zip(sc.proj.iter()).fold(Constraint::FREE, |c, (&j, &at)| c.and(self.constraint(s, j, at)))
+        let c =
+            sc.cand.iter().zip(sc.proj.iter()).fold(Constraint::FREE, |c, (&j, &at)| c.and(self.constraint(s, j, at)));
+        c.and(self.wrecks_ahead(s, window, reach))
     }
 
     // A striker stops dead where it meets its target (the latch): there it stands in our

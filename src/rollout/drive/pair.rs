@@ -129,11 +129,17 @@ impl Constraint {
 impl Sim<'_, '_> {
     /// What agent `j`, its centre at `at` on our route (`Path::frenet_near`), asks of our step `s`.
     pub(crate) fn constraint(&self, s: &Step, j: usize, at: Foot<DVec2>) -> Constraint {
+        self.constraint_of(s, j, &self.cur[j], self.facts.dirs[j], at)
+    }
+
+    /// What agent `j` asks of our step `s` in state `o` (its unit heading `dir`): as it is now
+    /// (`constraint`), or where a wreck's slide will leave it (`Sim::wrecks_ahead`).
+    pub(crate) fn constraint_of(&self, s: &Step, j: usize, o: &State, dir: DVec2, at: Foot<DVec2>) -> Constraint {
         let Foot { s: sj, d: lj, beyond, dir: th } = at;
         let Step { a, st, look, named, .. } = *s;
-        let (o, b) = (&self.cur[j], &self.actors[j]);
+        let b = &self.actors[j];
         // cos and sin of the other's heading relative to the path's.
-        let (cr, sr) = (self.facts.dirs[j].dot(th), th.perp_dot(self.facts.dirs[j]));
+        let (cr, sr) = (dir.dot(th), th.perp_dot(dir));
         let ext_lon = b.hl * cr.abs() + b.hw * sr.abs();
         let ext_lat = b.hl * sr.abs() + b.hw * cr.abs();
         // The one we queue behind, while it is on our way: once a vehicle has turned off,

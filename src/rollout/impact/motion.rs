@@ -9,7 +9,7 @@
 
 use crate::geom::{Obb, wrap_angle};
 use crate::rollout::Tracks;
-use crate::rollout::agent::{Conf, State};
+use crate::rollout::agent::{Actor, Conf, State};
 use crate::rollout::frame::Sim;
 use crate::rollout::impact::bodies::{Slide, Window};
 use crate::rollout::impact::model::{Body, Coefficients, resolve};
@@ -73,19 +73,29 @@ impl Sim<'_, '_> {
     /// Body `i`'s state one frame on from `st`, sliding; updates its slide.
     fn slide_from(&mut self, i: usize, st: State) -> State {
         let Some(s) = self.wreck.slide[i] else { return st };
-        let (a, dt) = (&self.actors[i], self.dt);
-        let dv = TYRE_FRICTION * G * dt;
-        let speed = s.vel.length();
-        let vel = if speed <= dv { DVec2::ZERO } else { s.vel * (1.0 - dv / speed) };
-        // Friction spread over the footprint resists the spin about the radius of gyration.
-        let gyration = ((a.hl * a.hl + a.hw * a.hw) / 3.0).sqrt().max(0.1);
-        let dw = dv / gyration;
-        let omega = if s.omega.abs() <= dw { 0.0 } else { s.omega - dw * s.omega.signum() };
-        let pos = st.pos + (s.vel + vel) * (0.5 * dt);
-        let yaw = wrap_angle(st.yaw + 0.5 * (s.omega + omega) * dt);
-        let moving = speed > 0.0 || s.omega != 0.0;
-        self.wreck.slide[i] = Some(Slide { vel, omega, moving });
-        State { pos, yaw, v: vel.dot(DVec2::from_angle(yaw)), frozen: true, ..st }
+        let (next, pos, yaw) = slide_step(&self.actors[i], s, st.pos, st.yaw, self.dt);
+        self.wreck.slide[i] = Some(next);
+        State { pos, yaw, v: next.vel.dot(DVec2::from_angle(yaw)), frozen: true, ..st }
+    }
+
+    /// Where body `i`, moving on from an impact, comes to rest if nothing stops it first: its
+    /// slide (`slide_step`) run on to its end. What the drivers round it brake for
+    /// (`Sim::wrecks_ahead`).
+    pub(crate) fn rest_pose(&self, i: usize) -> (DVec2, f64) {
+        let (a, st) = (&self.actors[i], &self.cur[i]);
+        let (mut s, mut pos, mut yaw) = match self.wreck.slide[i] {
+            Some(s) => (s, st.pos, st.yaw),
+            None => return (st.pos, st.yaw),
+        };
+        // Each step takes `TYRE_FRICTION * G * dt` off the speed and a share of it off the spin:
+        // a 60 m/s slide stops within 9 s; the bound only guards against a non-finite one.
+        for _ in 0..(30.0 / self.dt) as usize {
+            if s.vel == DVec2::ZERO && s.omega == 0.0 {
+                break;
+            }
+            (s, pos, yaw) = slide_step(a, s, pos, yaw, self.dt);
+        }
+        (pos, yaw)
     }
 
     /// Resolve the impact of `i` and `j` (the normal from `i` into `j`) with coefficients `k`:
@@ -258,6 +268,21 @@ impl Sim<'_, '_> {
             .map_or(AfterImpact::default(), |c| c.c.after);
         Hit { coefficients: coefficients(&after), conflict: None }
     }
+}
+
+/// One frame of a slide from `pos`, `yaw`: the linear speed falls by `TYRE_FRICTION * G * dt`,
+/// the spin by as much about the box's radius of gyration (friction spread over the
+/// footprint); the pose moves on by the mean of the two frames' rates.
+fn slide_step(a: &Actor, s: Slide, pos: DVec2, yaw: f64, dt: f64) -> (Slide, DVec2, f64) {
+    let dv = TYRE_FRICTION * G * dt;
+    let speed = s.vel.length();
+    let vel = if speed <= dv { DVec2::ZERO } else { s.vel * (1.0 - dv / speed) };
+    let gyration = ((a.hl * a.hl + a.hw * a.hw) / 3.0).sqrt().max(0.1);
+    let dw = dv / gyration;
+    let omega = if s.omega.abs() <= dw { 0.0 } else { s.omega - dw * s.omega.signum() };
+    let moving = speed > 0.0 || s.omega != 0.0;
+    let next = Slide { vel, omega, moving };
+    (next, pos + (s.vel + vel) * (0.5 * dt), wrap_angle(yaw + 0.5 * (s.omega + omega) * dt))
 }
 
 /// The least speed, m/s, at which two bodies overlapping by `depth` metres must part to come
