@@ -55,7 +55,15 @@ impl Sim<'_, '_> {
             // In our lane, not to our right (moving right would be moving toward it: one
             // passing on our right in the next lane drew the car in the inner lane over into its
             // way); or coming toward us in the next lane on a two-lane road.
-            let (lo, hi) = if cos > 0.0 { (-0.5, a.lane_hw) } else { (0.0, 3.0 * a.lane_hw) };
+            // Once over for it, we stay over till it has passed, wherever across it passes: it
+            // swings out of our lane to get by, and a car that took that for leave to go on
+            // steered back into its way (tests/rollout-cases/ambulance-passes-a-car-pulled-over-for-it.scn).
+            let over_for = self.facts.siren_for[i].is_some_and(|y| y.to == e);
+            let (lo, hi) = match (cos > 0.0, over_for) {
+                (true, false) => (-0.5, a.lane_hw),
+                (true, true) => (-0.5, f64::INFINITY),
+                _ => (0.0, 3.0 * a.lane_hw),
+            };
             if beyond > 0.5 || le - a.d0 < lo || le - a.d0 > hi {
                 continue;
             }
