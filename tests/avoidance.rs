@@ -76,6 +76,31 @@ fn a_car_waits_for_an_oncoming_car_then_passes_the_wreck() {
     assert!(end.x > t.poses[wreck][0].x + 10.0, "the car is not past the wreck\n{tr}");
 }
 
+/// A pass over the line into a lane going our way waits while a vehicle there is beside us:
+/// the car crosses the line only once the bus's rear is ahead of its front, then gets past.
+#[test]
+fn a_car_waits_for_a_bus_beside_it_then_passes_the_wreck() {
+    let f = front_of("tests/rollout-cases/car-waits-for-a-bus-beside-it-to-pass-a-wreck.scn");
+    let t = &f.tracks;
+    let (car, wreck, bus) = (idx(t, "car"), idx(t, "wreck"), idx(t, "bus"));
+    let tr = trace(t, car);
+    assert_eq!(touches(t, car, wreck), None, "{tr}");
+    assert_eq!(touches(t, car, bus), None, "{tr}");
+    // The road runs along x; the inner lane is to the left (+y) of the car's.
+    let (line, [l, w, _]) = (t.poses[car][0].y + 1.75, t.agents[car].size);
+    let [bl, ..] = t.agents[bus].size;
+    let over = (0..t.frames)
+        .find(|&f| {
+            let p = t.poses[car][f];
+            p.y + 0.5 * l * p.yaw.sin().abs() + 0.5 * w * p.yaw.cos() > line
+        })
+        .unwrap_or_else(|| panic!("the car never moves over\n{tr}"));
+    let (p, b) = (t.poses[car][over], t.poses[bus][over]);
+    assert!(b.x - bl / 2.0 > p.x + l / 2.0, "over the line at frame {over} beside the bus at {:.1}\n{tr}", b.x);
+    let end = t.poses[car][t.frames - 1];
+    assert!(end.x > t.poses[wreck][0].x + 10.0, "the car is not past the wreck\n{tr}");
+}
+
 #[test]
 fn a_car_stops_behind_a_wreck_that_leaves_no_room() {
     let f = front_of("tests/rollout-cases/car-stops-behind-a-wreck-across-the-road.scn");

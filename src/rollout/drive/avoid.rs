@@ -8,6 +8,7 @@ use crate::rollout::agent::Blocking;
 use crate::rollout::drive::overtake::{MOVER_CLEARANCE, pass_time};
 use crate::rollout::drive::{PASS_CLEARANCE, PASS_LAT_RATE};
 use crate::rollout::frame::Sim;
+use crate::rollout::junction::dry_run::swing;
 use crate::rollout::kinematics::slip_tan;
 use crate::rollout::path::Foot;
 use glam::DVec2;
@@ -24,6 +25,9 @@ const EDGE_CLEAR: f64 = 0.1;
 const ONCOMING_GAP_S: f64 = 3.0;
 /// Distance beyond the move's own length at which a pass sets out, m.
 const SET_OUT_M: f64 = 5.0;
+/// How far behind us a vehicle in the lane a pass moves into is looked at, m: beyond the gap
+/// any speed on a road asks (`Sim::beside_clear`).
+const BESIDE_BEHIND_M: f64 = 120.0;
 
 impl Blocking {
     /// Whether it reaches into the offsets `lo..hi` of our route.
@@ -81,7 +85,7 @@ impl Sim<'_, '_> {
         let (elo, ehi) =
             if side > 0.0 { (a.d0 + a.lane_hw, target + a.hw + m) } else { (target - a.hw - m, a.d0 - a.lane_hw) };
         let over = if side > 0.0 { st.off + a.hw > a.d0 + a.lane_hw } else { st.off - a.hw < a.d0 - a.lane_hw };
-        if elo >= ehi || over || self.oncoming_clear(i, (elo, ehi), far, v_obs) {
+        if elo >= ehi || over || (self.oncoming_clear(i, (elo, ehi), far, v_obs) && self.beside_clear(i, (elo, ehi))) {
             Some(Avoid { target: Some(target), standoff })
         } else {
             Some(Avoid { target: None, standoff })
@@ -167,6 +171,53 @@ impl Sim<'_, '_> {
         let near = within.clone().map(|b| b.sj - b.ext_lon).fold(f64::INFINITY, f64::min);
         let v_obs = within.map(|b| b.v).fold(0.0, f64::max);
         Some((target, need, far, near, v_obs))
+    }
+
+    /// A pass's target offset `tg` for vehicle `i`, kept to its own lane while the band it would
+    /// move into over the line is not clear beside it (`beside_clear`); with the body already
+    /// over the line it goes on (whoever comes up behind in that lane follows it), as `avoid`.
+    pub(crate) fn within_lane_while_beside(&self, i: usize, tg: f64) -> f64 {
+        let (a, st) = (&self.actors[i], &self.cur[i]);
+        let m = BAND_MARGIN;
+        let edge = (a.lane_hw - a.hw - m).max(0.0);
+        let (lo, hi) = (a.d0 - edge, a.d0 + edge);
+        let (band, over) = if tg > hi {
+            ((a.d0 + a.lane_hw, tg + a.hw + m), st.off + a.hw > a.d0 + a.lane_hw)
+        } else if tg < lo {
+            ((tg - a.hw - m, a.d0 - a.lane_hw), st.off - a.hw < a.d0 - a.lane_hw)
+        } else {
+            return tg;
+        };
+        if over || self.beside_clear(i, band) { tg } else { tg.clamp(lo, hi) }
+    }
+
+    /// Whether no vehicle going our way in the offsets `band` of vehicle `i`'s route (the ends of
+    /// its box swinging out in a bend included) is beside us, or behind us nearer than a lane
+    /// change's gap acceptance asks (`Sim::alongside`): a pass over the line moves into its
+    /// lane. One ahead of our front is followed once we are over. An ambulance nudging past a
+    /// stopped motorcycle on a curve put its front corner on the tail of a bus beside it in
+    /// the next lane (tests/rollout-cases/ambulance-passes-beside-a-bus-on-a-curve.scn).
+    fn beside_clear(&self, i: usize, band: (f64, f64)) -> bool {
+        let (a, st) = (&self.actors[i], &self.cur[i]);
+        let fwd = self.facts.dirs[i];
+        self.facts.near.iter().enumerate().all(|(k, n)| {
+            if k == i || !self.actors[k].vehicle || self.actors[k].blocker || n.dir.dot(fwd) < 0.5 {
+                return true;
+            }
+            let ahead = (n.pos - st.pos).dot(fwd);
+            // Its rear clear ahead of our front, or farther behind than any gap asked below.
+            if ahead - n.hl > a.hl + 1.0 || ahead + n.hl < -a.hl - BESIDE_BEHIND_M {
+                return true;
+            }
+            let Foot { s: sk, d: lk, beyond, .. } = a.path.frenet(n.pos, st.s + ahead);
+            let out = swing(n.hl, a.path.curvature(sk).abs());
+            if beyond > 0.5 || lk + n.hw + out < band.0 || lk - n.hw - out > band.1 {
+                return true;
+            }
+            let behind = (st.s - a.hl) - (sk + n.hl);
+            let need = 2.0 + 0.8 * n.v + (n.v - st.v).max(0.0).powi(2) / 6.0;
+            behind >= need
+        })
     }
 
     /// Whether no vehicle coming toward vehicle `i` in the offsets `band` of its route would

@@ -268,7 +268,7 @@ impl Sim<'_, '_> {
                 // A goal phase that pulls over: onto the shoulder, as for a siren.
                 a.pull
             } else if let Some(tg) = self.pass_offset(i, look) {
-                tg
+                self.within_lane_while_beside(i, tg)
             } else {
                 // The frame of the states read now (`t`), for the angle of an open door.
                 let now = (t / self.dt).round() as usize;
