@@ -322,15 +322,20 @@ impl Sim<'_, '_> {
             && in_sweep
             && ds > 0.0
             && let Some(bd) = &a.bend
-            && let Some(at) = self
-                .held_at(j)
-                .into_iter()
-                .chain([*o])
-                .filter_map(|q| bd.meets(&b.obb(&q).grown(SLICE_MARGIN), st.s, sweep_hi))
-                .reduce(f64::min)
-                // One still moving, too close to stop for within our braking: we are
-                // committed (as to a junction zone), and it sees our box.
-                .filter(|&at| o.v < 0.5 || st.v * st.v <= 2.0 * lim.brake_max * (at - st.s - a.hl))
+            && let Some(at) = {
+                // One still moving, too close to stop for within our braking: we are committed
+                // (as to a junction zone), and it sees our box. So is where one will stand
+                // once it holds: a prediction, which it keeps short of us. A van braking to
+                // hold short of a zone for an ambulance dropped below 0.5 m/s 1.2 s in and its
+                // hold ahead was found 0.1 m from the front of a van committed to its right
+                // turn, which stopped at -56 m/s2
+                // (tests/rollout-cases/van-turning-right-meets-the-hold-of-one-giving-way.scn).
+                let can_stop = |at: f64| st.v * st.v <= 2.0 * lim.brake_max * (at - st.s - a.hl);
+                let meets = |q: &State| bd.meets(&b.obb(q).grown(SLICE_MARGIN), st.s, sweep_hi);
+                let held = self.held_at(j).and_then(|q| meets(&q)).filter(|&at| can_stop(at));
+                let now = meets(o).filter(|&at| o.v < 0.5 || can_stop(at));
+                held.into_iter().chain(now).reduce(f64::min)
+            }
         {
             way.in_cur = true;
             way.swept = true;
