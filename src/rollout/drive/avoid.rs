@@ -6,6 +6,7 @@
 
 use crate::rollout::agent::Blocking;
 use crate::rollout::drive::overtake::{MOVER_CLEARANCE, pass_time};
+use crate::rollout::drive::pair::lane_change_gap;
 use crate::rollout::drive::{PASS_CLEARANCE, PASS_LAT_RATE};
 use crate::rollout::frame::Sim;
 use crate::rollout::junction::dry_run::swing;
@@ -72,7 +73,6 @@ impl Sim<'_, '_> {
         // Steering out from a standstill takes more than the slip angle's run (the heading has
         // to build up first).
         let standoff = 1.5 * need / slip_tan(a) + 2.0;
-        let side = (target - a.d0).signum();
         // Set out so as to be over before car-following toward it slows us (the reference moves
         // over at `PASS_LAT_RATE`), not a long way back in the oncoming lane.
         // Closing on a slow mover, at the speed we close in.
@@ -82,14 +82,23 @@ impl Sim<'_, '_> {
         }
         // Within our lane, or with the body already over the line: go. Short of the line a pass
         // that has set out still turns back for oncoming traffic.
-        let (elo, ehi) =
-            if side > 0.0 { (a.d0 + a.lane_hw, target + a.hw + m) } else { (target - a.hw - m, a.d0 - a.lane_hw) };
-        let over = if side > 0.0 { st.off + a.hw > a.d0 + a.lane_hw } else { st.off - a.hw < a.d0 - a.lane_hw };
-        if elo >= ehi || over || (self.oncoming_clear(i, (elo, ehi), far, v_obs) && self.beside_clear(i, (elo, ehi))) {
-            Some(Avoid { target: Some(target), standoff })
-        } else {
-            Some(Avoid { target: None, standoff })
-        }
+        let go = match self.over_the_line(i, target) {
+            None => true,
+            Some((band, over)) => over || (self.oncoming_clear(i, band, far, v_obs) && self.beside_clear(i, band)),
+        };
+        Some(Avoid { target: go.then_some(target), standoff })
+    }
+
+    /// Where a pass to offset `tg` takes vehicle `i`'s box (and the band margin) over its lane's
+    /// line: the offsets beyond the line it moves into, and whether its body is over the line
+    /// already; `None` where the pass stays within the lane.
+    fn over_the_line(&self, i: usize, tg: f64) -> Option<((f64, f64), bool)> {
+        let (a, st) = (&self.actors[i], &self.cur[i]);
+        let m = BAND_MARGIN;
+        let left = (tg - a.d0).signum() > 0.0;
+        let (lo, hi) = if left { (a.d0 + a.lane_hw, tg + a.hw + m) } else { (tg - a.hw - m, a.d0 - a.lane_hw) };
+        let over = if left { st.off + a.hw > a.d0 + a.lane_hw } else { st.off - a.hw < a.d0 - a.lane_hw };
+        (lo < hi).then_some(((lo, hi), over))
     }
 
     /// Every obstacle within `look` ahead of vehicle `i` (or beside it, till its rear is a metre
@@ -177,18 +186,14 @@ impl Sim<'_, '_> {
     /// move into over the line is not clear beside it (`beside_clear`); with the body already
     /// over the line it goes on (whoever comes up behind in that lane follows it), as `avoid`.
     pub(crate) fn within_lane_while_beside(&self, i: usize, tg: f64) -> f64 {
-        let (a, st) = (&self.actors[i], &self.cur[i]);
-        let m = BAND_MARGIN;
-        let edge = (a.lane_hw - a.hw - m).max(0.0);
-        let (lo, hi) = (a.d0 - edge, a.d0 + edge);
-        let (band, over) = if tg > hi {
-            ((a.d0 + a.lane_hw, tg + a.hw + m), st.off + a.hw > a.d0 + a.lane_hw)
-        } else if tg < lo {
-            ((tg - a.hw - m, a.d0 - a.lane_hw), st.off - a.hw < a.d0 - a.lane_hw)
-        } else {
-            return tg;
-        };
-        if over || self.beside_clear(i, band) { tg } else { tg.clamp(lo, hi) }
+        match self.over_the_line(i, tg) {
+            Some((band, over)) if !over && !self.beside_clear(i, band) => {
+                let a = &self.actors[i];
+                let edge = (a.lane_hw - a.hw - BAND_MARGIN).max(0.0);
+                tg.clamp(a.d0 - edge, a.d0 + edge)
+            }
+            _ => tg,
+        }
     }
 
     /// Whether no vehicle going our way in the offsets `band` of vehicle `i`'s route (the ends of
@@ -214,9 +219,7 @@ impl Sim<'_, '_> {
             if beyond > 0.5 || lk + n.hw + out < band.0 || lk - n.hw - out > band.1 {
                 return true;
             }
-            let behind = (st.s - a.hl) - (sk + n.hl);
-            let need = 2.0 + 0.8 * n.v + (n.v - st.v).max(0.0).powi(2) / 6.0;
-            behind >= need
+            (st.s - a.hl) - (sk + n.hl) >= lane_change_gap(n.v, st.v)
         })
     }
 

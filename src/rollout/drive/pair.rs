@@ -15,6 +15,13 @@ use crate::rollout::kinematics::{band_front, band_meets};
 use crate::rollout::path::Foot;
 use glam::DVec2;
 
+/// The gap a lateral move into another lane accepts between the one behind (at `back` m/s)
+/// and the one ahead (at `front`), m: 2 m, 0.8 s of the follower's speed, and a term for the
+/// speed it closes in at.
+pub(crate) fn lane_change_gap(back: f64, front: f64) -> f64 {
+    2.0 + 0.8 * back + (back - front).max(0.0).powi(2) / 6.0
+}
+
 /// Agent `i`'s step as the pair loop reads it: settled before the loop, read-only in it.
 #[derive(Clone, Copy)]
 pub(crate) struct Step<'s> {
@@ -191,7 +198,7 @@ impl Sim<'_, '_> {
                 let v_j = o.v * cr;
                 let g = ds.abs() - a.hl - ext_lon;
                 let (back, front) = if ds < 0.0 { (v_j, st.v) } else { (st.v, v_j) };
-                if g < 2.0 + 0.8 * back + (back - front).max(0.0).powi(2) / 6.0 {
+                if g < lane_change_gap(back, front) {
                     c.side_blocked = true;
                 }
             }

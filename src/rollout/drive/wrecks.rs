@@ -19,20 +19,20 @@ impl Sim<'_, '_> {
     pub(crate) fn wrecks_ahead(&self, s: &Step, window: (f64, f64), reach: f64) -> Constraint {
         let Step { i, a, st, look, shortest, .. } = *s;
         let mut c = Constraint::FREE;
-        if self.facts.sliding.is_empty() {
+        if self.facts.sliding.is_empty() || self.wreck.moving(i) {
             return c;
         }
         let fwd = self.facts.dirs[i];
         for &(j, rest, rest_yaw) in &self.facts.sliding {
-            if j == i || self.wreck.moving(i) || self.conflict_pair(i, j) {
+            if j == i || self.conflict_pair(i, j) {
                 continue;
             }
             let b = &self.actors[j];
             let now = self.cur[j];
+            let r = look + a.radius + b.radius;
             let poses = [(now.pos, now.yaw, self.facts.dirs[j]), (rest, rest_yaw, DVec2::from_angle(rest_yaw))];
             for (pos, yaw, dir) in poses {
                 let dp = pos - st.pos;
-                let r = look + a.radius + b.radius;
                 if dp.length_squared() > r * r {
                     continue;
                 }
