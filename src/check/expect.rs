@@ -7,8 +7,10 @@ use super::scenario::*;
 use super::units::Dim;
 use super::{Checker, MAX_SPEED_MS, word};
 use crate::diag::Diagnostic;
+use crate::source::Span;
 use crate::syntax::ast;
 use crate::syntax::fmt::expectation;
+use serde::{Deserialize, Serialize};
 
 impl Checker {
     /// Every expectation checked; `None` when one of them (or the agents they name) is wrong.
@@ -188,4 +190,39 @@ impl Checker {
         );
         None
     }
+}
+
+// ---- the checked expectations (re-exported by `scenario`) ----
+
+/// One checked expectation: agents are indices into `Scenario::agents` (= track indices), the
+/// window is in seconds within the clip.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Expect {
+    pub what: ExpectWhat,
+    pub from: f64,
+    pub to: f64,
+    /// The line as written, canonically formatted: the name the report and the snapshot use.
+    pub text: String,
+    #[serde(skip)]
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ExpectWhat {
+    /// The boxes of `a` and `b` overlap; `side` is on `b`'s box.
+    Contact { a: usize, b: usize, side: Option<Point> },
+    /// No two boxes overlap (or not these two).
+    NoContact { pair: Option<(usize, usize)> },
+    /// The least distance between the two boxes over the window, m.
+    Gap { a: usize, b: usize, at_least: bool, metres: f64 },
+    /// Comes to a stop with its front short of `landmark` on `lane`, and never passes it.
+    Stopped { agent: usize, lane: LaneId, landmark: Landmark },
+    /// Its front passes `landmark` on `lane` within the window.
+    Reach { agent: usize, lane: LaneId, landmark: Landmark },
+    /// Its speed within the window, m/s.
+    Speed { agent: usize, at_least: bool, ms: f64 },
+    /// Its front passes the stop line of `lane` within the window while that lane's signal
+    /// shows `light`.
+    Enters { agent: usize, lane: LaneId, light: Light },
 }

@@ -8,6 +8,7 @@ use super::{Checker, lane_count, word};
 use crate::diag::{Diagnostic, did_you_mean};
 use crate::source::Span;
 use crate::syntax::ast;
+use serde::{Deserialize, Serialize};
 
 /// A parking lane's width unless stated, m.
 pub const PARKING_WIDTH_M: f64 = 2.5;
@@ -340,4 +341,49 @@ impl Checker {
         }
         ok
     }
+}
+
+// ---- kerbside places and reversing (re-exported by `scenario`; road/parking.rs, rollout/drive/reverse.rs) ----
+
+/// Parking lanes and driveways along a road's kerbs.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Kerbside {
+    pub parking: Vec<ParkingLane>,
+    pub driveways: Vec<Driveway>,
+}
+
+impl Kerbside {
+    pub fn is_empty(&self) -> bool {
+        self.parking.is_empty() && self.driveways.is_empty()
+    }
+}
+
+/// A parking lane along the kerb of an arm's in-lanes or out-lanes, between the paving and the
+/// sidewalk.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ParkingLane {
+    pub arm: Arm,
+    pub dir: Dir,
+    /// Its width, m.
+    pub width: f64,
+}
+
+/// A driveway across the sidewalk on the kerb of an arm's in-lanes or out-lanes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Driveway {
+    pub name: String,
+    pub arm: Arm,
+    pub dir: Dir,
+    /// Its centre's distance along the arm from the road's centre, m.
+    pub at: f64,
+}
+
+/// Where a reverse goal ends.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Reverse {
+    /// Straight back along its heading, this far (m).
+    Dist(f64),
+    /// Rear first into this lane, ending aligned with it, facing its direction of travel.
+    Into(LaneId),
 }

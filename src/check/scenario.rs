@@ -290,6 +290,10 @@ pub use super::posture::Posture;
 
 pub use super::body::{Body, DOORS, Door, DoorMove};
 
+pub use super::expect::{Expect, ExpectWhat};
+
+pub use super::kerb::{Driveway, Kerbside, ParkingLane, Reverse};
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Agent {
     pub name: String,
@@ -756,84 +760,4 @@ pub struct Phase<V = Dist> {
     /// `lateral change_lane SIDE` (vehicles): moves to the next lane of its road from its start.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub change: Option<Side>,
-}
-
-// ---- expectations (`expect { ... }`) ----
-
-/// One checked expectation: agents are indices into `Scenario::agents` (= track indices), the
-/// window is in seconds within the clip.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Expect {
-    pub what: ExpectWhat,
-    pub from: f64,
-    pub to: f64,
-    /// The line as written, canonically formatted: the name the report and the snapshot use.
-    pub text: String,
-    #[serde(skip)]
-    pub span: Span,
-}
-
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ExpectWhat {
-    /// The boxes of `a` and `b` overlap; `side` is on `b`'s box.
-    Contact { a: usize, b: usize, side: Option<Point> },
-    /// No two boxes overlap (or not these two).
-    NoContact { pair: Option<(usize, usize)> },
-    /// The least distance between the two boxes over the window, m.
-    Gap { a: usize, b: usize, at_least: bool, metres: f64 },
-    /// Comes to a stop with its front short of `landmark` on `lane`, and never passes it.
-    Stopped { agent: usize, lane: LaneId, landmark: Landmark },
-    /// Its front passes `landmark` on `lane` within the window.
-    Reach { agent: usize, lane: LaneId, landmark: Landmark },
-    /// Its speed within the window, m/s.
-    Speed { agent: usize, at_least: bool, ms: f64 },
-    /// Its front passes the stop line of `lane` within the window while that lane's signal
-    /// shows `light`.
-    Enters { agent: usize, lane: LaneId, light: Light },
-}
-
-// ---- kerbside places and reversing (check/kerb.rs, road/parking.rs, rollout/drive/reverse.rs) ----
-
-/// Parking lanes and driveways along a road's kerbs.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Kerbside {
-    pub parking: Vec<ParkingLane>,
-    pub driveways: Vec<Driveway>,
-}
-
-impl Kerbside {
-    pub fn is_empty(&self) -> bool {
-        self.parking.is_empty() && self.driveways.is_empty()
-    }
-}
-
-/// A parking lane along the kerb of an arm's in-lanes or out-lanes, between the paving and the
-/// sidewalk.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ParkingLane {
-    pub arm: Arm,
-    pub dir: Dir,
-    /// Its width, m.
-    pub width: f64,
-}
-
-/// A driveway across the sidewalk on the kerb of an arm's in-lanes or out-lanes.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Driveway {
-    pub name: String,
-    pub arm: Arm,
-    pub dir: Dir,
-    /// Its centre's distance along the arm from the road's centre, m.
-    pub at: f64,
-}
-
-/// Where a reverse goal ends.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Reverse {
-    /// Straight back along its heading, this far (m).
-    Dist(f64),
-    /// Rear first into this lane, ending aligned with it, facing its direction of travel.
-    Into(LaneId),
 }
