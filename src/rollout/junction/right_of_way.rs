@@ -20,6 +20,11 @@ pub(crate) const YIELD_BRAKE: f64 = 0.75;
 /// one giving way to it arrives there for that one not to hold, s.
 pub(crate) const CLEAR_MARGIN_S: f64 = 1.0;
 
+/// How far short of a vehicle's side a walker halted on the road stays to let it pass, m.
+pub(crate) const STEP_CLEAR: f64 = 0.3;
+/// Below this speed a walker on the road counts as halted, m/s.
+const HALTED: f64 = 0.1;
+
 impl Sim<'_, '_> {
     /// The right-of-way rule for agent `i`: how far its front may still go (to its stop line, or
     /// short of the zone it shares with another vehicle's junction path) while it gives way, or,
@@ -255,17 +260,22 @@ impl Sim<'_, '_> {
         first.then_some(rem)
     }
 
-    /// A walker at the kerb (`Actor::kerb`) waits there while a vehicle whose route crosses its
-    /// walk could not stop comfortably before it; once its front is on the road, or too close to
-    /// the kerb to stop, it goes on (vehicles yield to a walker on the road).
+    /// A walker about to cross (`Actor::kerb`) waits while a vehicle whose route crosses its walk
+    /// could not stop comfortably before it: at the kerb, and, halted on the road by something
+    /// else, short of each lane it has not yet stepped into (`STEP_CLEAR` from that vehicle's
+    /// side), so it does not step out of its stand in front of a car that cannot stop
+    /// (tests/rollout-cases/walker-halted-on-the-road-waits-for-a-sedan.scn). Walking on the
+    /// road, or too close to the kerb to stop, it goes on (vehicles yield to a walker on the road).
     pub(crate) fn kerb_hold(&self, i: usize, kerb: f64, t: f64) -> Option<f64> {
         let (a, st) = (&self.actors[i], &self.cur[i]);
         if !a.active(st, t) {
             return None;
         }
-        let rem = kerb - (st.s + a.hl);
+        let front = st.s + a.hl;
+        let on_road = front > kerb;
         let firm = if st.give_way { a.lim.brake_max } else { a.lim.brake };
-        if !can_stop(st.v, rem, firm) {
+        let goes_on = if on_road { st.v > HALTED } else { !can_stop(st.v, kerb - front, firm) };
+        if goes_on {
             return None;
         }
         let end = a.path.length() - 2.0;
@@ -277,37 +287,46 @@ impl Sim<'_, '_> {
         let half = 0.5 * (end - kerb);
         let clear = a.hw + 1.0;
         let walk = a.goal_speed(st).max(0.5);
-        let waits = (0..self.actors.len()).any(|j| {
-            let (b, o) = (&self.actors[j], &self.cur[j]);
+        let mut hold: Option<f64> = None;
+        for (j, (b, o)) in self.actors.iter().zip(&self.cur).enumerate() {
             if j == i || !b.vehicle || !matches!(b.drive, Drive::Mover) || o.frozen {
-                return false;
+                continue;
             }
             let fwd = DVec2::from_angle(o.yaw);
             let Foot { s: sj, d: lj, beyond, .. } = b.path.frenet(mid, o.s + (mid - o.pos).dot(fwd));
             let ahead = sj - o.s;
             if beyond > 0.5 || lj.abs() > half + b.hw + clear || ahead < -(b.hl + clear) {
-                return false;
+                continue;
             }
             let room = ahead - b.hl - clear;
             let brake = if self.striking(j, t) { 0.0 } else { b.lim.brake };
             if room > 0.0 && o.v * o.v <= 2.0 * brake * room {
-                return false;
+                continue;
             }
-            // It could not stop: wait only if it would pass while we are in its lane (its path
-            // meets our walk at `s_x`), with a second's margin either side.
+            // Where its path meets our walk (`s_x`), and where our front stops for it: at the
+            // kerb, or on the road short of its side (past that, in its lane, we go on).
             let (x, _) = b.path.point(sj, 0.0);
             let Foot { s: s_x, .. } = a.path.frenet(x, s_mid);
+            let side = s_x - b.hw;
+            if on_road && front >= side {
+                continue;
+            }
+            let rem = if on_road { side - STEP_CLEAR - front } else { kerb - front }.max(0.0);
+            // It could not stop: wait only if it would pass while we are in its lane, with a
+            // second's margin either side.
             let lane = b.hw + clear;
-            let t_in = (s_x - lane - (st.s + a.hl)).max(0.0) / walk;
+            let t_in = (s_x - lane - front).max(0.0) / walk;
             let t_out = (s_x + lane - (st.s - a.hl)).max(0.0) / walk;
             let (t_arr, t_gone) = if o.v < 0.1 {
                 (if room <= 0.0 { 0.0 } else { f64::INFINITY }, f64::INFINITY)
             } else {
                 (room.max(0.0) / o.v, (ahead + b.hl + clear) / o.v)
             };
-            t_arr < t_out + 1.0 && t_gone > t_in - 1.0
-        });
-        waits.then_some(rem.max(0.0))
+            if t_arr < t_out + 1.0 && t_gone > t_in - 1.0 {
+                hold = Some(hold.map_or(rem, |h: f64| h.min(rem)));
+            }
+        }
+        hold
     }
 
     /// Where agent `j`, holding (at its line, short of a zone), will stand: as now, its front
