@@ -296,6 +296,7 @@ impl Sim<'_, '_> {
         let mut way = Way { in_cur, gap, swept: false, band_lo, band_hi, touch_rem: f64::INFINITY };
         self.sweep_hits(s, x, in_sweep, &mut way);
         self.turned_box(s, x, &mut way);
+        self.bent_box(s, x, &mut way);
         self.bent_band(s, x, &mut way);
         self.oncoming_over_sweep(s, x, v_lon, &mut way);
         way
@@ -386,15 +387,7 @@ impl Sim<'_, '_> {
             // left turn), in the band though its frame puts it beside. A corner that projected
             // onto our path where it is lies in the band ahead of us counts too.
             if !way.in_cur {
-                let fwd = DVec2::from_angle(st.yaw);
-                for q in b.obb(o).corners() {
-                    let Foot { s: sq, d: dq, beyond, .. } = a.path.frenet_dir(q, st.s + (q - st.pos).dot(fwd));
-                    let ahead = sq - st.s - a.hl;
-                    if beyond <= 0.0 && dq > way.band_lo && dq < way.band_hi && ahead > 0.0 {
-                        way.gap = if way.in_cur { way.gap.min(ahead) } else { ahead };
-                        way.in_cur = true;
-                    }
-                }
+                self.corner_in_band(s, x, way);
             }
             // That part alongside us, not ahead: the frame at its projection is turned by our
             // bend, which can put a corner of a box driving straight beside us into our band.
@@ -411,11 +404,38 @@ impl Sim<'_, '_> {
                 way.in_cur = lo_c < way.band_hi && hi_c > way.band_lo;
             }
         }
-        // Where our path bends between here and a turned box, the straight frame at its
-        // projection misplaces it (a bus driving straight past our right turn lies in the
-        // band there, and clear of it on the road): our band is laid along the path itself,
-        // a metre at a time, and only a box it meets counts, from where it first meets it.
-        // How far on our band is laid for it, where our path bends before that.
+    }
+
+    /// A box lying along its lane on a bend: the straight frame at its foot puts all of it
+    /// beside its lane's line, but its ends lie toward the bend's outside by hl^2 k / 2 (a bus
+    /// standing pulled over on a curve of 60 m reaches 0.3 m over the line, and an ambulance
+    /// passing toward it ran a corner into it:
+    /// tests/rollout-cases/ambulance-passes-toward-a-bus-pulled-over-on-a-curve.scn). Beside the
+    /// band by less than that swing, a corner found in the band ahead of us counts.
+    fn bent_box(&self, s: &Step, x: &Other, way: &mut Way) {
+        let Other { b, sj, lj, sr, ext_lat, is_named, .. } = *x;
+        if way.in_cur || way.swept || is_named || way.gap <= 0.0 || sr.abs() > 0.05 {
+            return;
+        }
+        let reach = swing(b.hl, s.a.path.curvature(sj).abs());
+        if reach > 0.02 && lj - ext_lat < way.band_hi + reach && lj + ext_lat > way.band_lo - reach {
+            self.corner_in_band(s, x, way);
+        }
+    }
+
+    /// The nearest corner of `x`'s box that lies, projected onto our path where it is, in the
+    /// band ahead of our front: the box is then in our way from there.
+    fn corner_in_band(&self, s: &Step, x: &Other, way: &mut Way) {
+        let Step { a, st, .. } = *s;
+        let fwd = DVec2::from_angle(st.yaw);
+        for q in x.b.obb(x.o).corners() {
+            let Foot { s: sq, d: dq, beyond, .. } = a.path.frenet_dir(q, st.s + (q - st.pos).dot(fwd));
+            let ahead = sq - st.s - a.hl;
+            if beyond <= 0.0 && dq > way.band_lo && dq < way.band_hi && ahead > 0.0 {
+                way.gap = if way.in_cur { way.gap.min(ahead) } else { ahead };
+                way.in_cur = true;
+            }
+        }
     }
 
     /// Our band laid along the path itself where it bends before `x` (the straight frame at its
