@@ -438,8 +438,10 @@ impl Sim<'_, '_> {
         }
     }
 
-    /// Our band laid along the path itself where it bends before `x` (the straight frame at its
-    /// projection misplaces it).
+    /// Our band laid along the path itself where it bends before a turned box `x`: the straight
+    /// frame at its projection misplaces it (a bus driving straight past our right turn lies in
+    /// the band there, and clear of it on the road), so the band is laid a metre at a time, and
+    /// only a box it meets counts, from where it first meets it.
     fn bent_band(&self, s: &Step, x: &Other, way: &mut Way) {
         let Step { a, st, cur_lo, cur_hi, .. } = *s;
         let Other { o, b, sj, lj, sr, ext_lon, ext_lat, is_named, .. } = *x;
