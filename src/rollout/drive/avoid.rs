@@ -24,6 +24,9 @@ const EDGE_CLEAR: f64 = 0.1;
 /// Time an oncoming vehicle must still be away from the end of the pass when we would be past
 /// it, s.
 const ONCOMING_GAP_S: f64 = 3.0;
+/// How far beyond the end of what a pass clears a slow mover in its band is taken into the same
+/// pass, m.
+const CHAIN_M: f64 = 12.0;
 /// Distance beyond the move's own length at which a pass sets out, m.
 const SET_OUT_M: f64 = 5.0;
 /// How far behind us a vehicle in the lane a pass moves into is looked at, m: beyond the gap
@@ -156,20 +159,31 @@ impl Sim<'_, '_> {
         let band =
             |tg: f64| if side > 0.0 { (a.d0 - a.hw - m, tg + a.hw + m) } else { (tg - a.hw - m, a.d0 + a.hw + m) };
         let mut target = a.d0;
+        // What the pass takes in: what stands in the band it sweeps, and a slow mover there only
+        // within `CHAIN_M` of what it clears already, from the nearest in our lane on; one
+        // farther on is followed, not passed in the same move (a car passing a slow car
+        // took in a slow one 30 m on in the next lane, found that pass off the paving and
+        // swung to the other side, through the one it was passing:
+        // `straight_road_regressions`, tests/rollout_properties.rs).
+        let mut reach = seen.iter().filter(|b| b.meets(band(a.d0))).map(|b| b.sj - b.ext_lon).fold(f64::MAX, f64::min);
+        let taken = |b: &Blocking, reach: f64, target: f64| {
+            b.meets(band(target)) && (b.v <= 0.0 || b.sj - b.ext_lon <= reach + CHAIN_M)
+        };
         // Each obstacle cleared may put the next one (a taper's cones) in the band: a few
         // rounds settle it.
         for _ in 0..6 {
             let next = seen
                 .iter()
-                .filter(|b| b.meets(band(target)))
+                .filter(|b| taken(b, reach, target))
                 .map(|b| b.lj + side * (b.ext_lat + a.hw + if b.v > 0.0 { MOVER_CLEARANCE } else { PASS_CLEARANCE }))
                 .fold(target, |t, d| if side > 0.0 { t.max(d) } else { t.min(d) });
+            reach = seen.iter().filter(|b| taken(b, reach, target)).map(|b| b.sj + b.ext_lon).fold(reach, f64::max);
             if next == target {
                 break;
             }
             target = next;
         }
-        let within = seen.iter().filter(|b| b.meets(band(target)));
+        let within = seen.iter().filter(|b| taken(b, reach, target));
         let (lo, hi) =
             within.clone().fold((a.d0 - OPEN_SHIFT, a.d0 + OPEN_SHIFT), |(l, h), b| (l.max(b.lo), h.min(b.hi)));
         if target - a.hw < lo + EDGE_CLEAR || target + a.hw > hi - EDGE_CLEAR {
@@ -194,6 +208,36 @@ impl Sim<'_, '_> {
             }
             _ => tg,
         }
+    }
+
+    /// A pass's offset `tg` for vehicle `i` (or its way back to its lane) short of every vehicle
+    /// level with it on the side it moves to: the move never closes on one to under
+    /// `PASS_CLEARANCE`, and one already closer holds its offset. A pass that lost its side
+    /// beside the slow car it was passing (one farther on took that lane) swung to the car's
+    /// other side, through it (`straight_road_regressions`, tests/rollout_properties.rs).
+    pub(crate) fn clear_of_beside(&self, i: usize, tg: f64) -> f64 {
+        let (a, st) = (&self.actors[i], &self.cur[i]);
+        let fwd = self.facts.dirs[i];
+        let side = tg - st.d;
+        if side == 0.0 {
+            return tg;
+        }
+        let mut tg = tg;
+        for (k, n) in self.facts.near.iter().enumerate() {
+            let ahead = (n.pos - st.pos).dot(fwd);
+            if k == i || !self.actors[k].vehicle || ahead.abs() > a.hl + n.radius + 1.0 {
+                continue;
+            }
+            let Foot { s: sk, d: lk, beyond, dir: th } = a.path.frenet_dir(n.pos, st.s + ahead);
+            let (cr, sr) = (n.dir.dot(th).abs(), th.perp_dot(n.dir).abs());
+            let (ext_lon, ext_lat) = (n.hl * cr + n.hw * sr, n.hl * sr + n.hw * cr);
+            if beyond > 0.5 || (sk - st.s).abs() > a.hl + ext_lon + 0.5 || side * (lk - st.d) <= 0.0 {
+                continue;
+            }
+            let limit = lk - side.signum() * (ext_lat + a.hw + PASS_CLEARANCE);
+            tg = if side > 0.0 { tg.min(limit.max(st.d)) } else { tg.max(limit.min(st.d)) };
+        }
+        tg
     }
 
     /// Whether no vehicle going our way in the offsets `band` of vehicle `i`'s route (the ends of

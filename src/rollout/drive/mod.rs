@@ -274,7 +274,7 @@ impl Sim<'_, '_> {
                 let now = (t / self.dt).round() as usize;
                 let avoid = self.avoid(i, look, now, &mut sc.blocking);
                 standoff = avoid.map_or(0.0, |v| if v.target.is_none() { v.standoff } else { 0.0 });
-                avoid.and_then(|v| v.target).unwrap_or(a.d0)
+                self.clear_of_beside(i, avoid.and_then(|v| v.target).unwrap_or(a.d0))
             };
             pass_target = Some(tg);
             d_next = st.d + (tg - st.d).clamp(-PASS_LAT_RATE * dt, PASS_LAT_RATE * dt);
