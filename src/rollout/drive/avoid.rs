@@ -172,12 +172,13 @@ impl Sim<'_, '_> {
         // Each obstacle cleared may put the next one (a taper's cones) in the band: a few
         // rounds settle it.
         for _ in 0..6 {
-            let next = seen
-                .iter()
-                .filter(|b| taken(b, reach, target))
-                .map(|b| b.lj + side * (b.ext_lat + a.hw + if b.v > 0.0 { MOVER_CLEARANCE } else { PASS_CLEARANCE }))
-                .fold(target, |t, d| if side > 0.0 { t.max(d) } else { t.min(d) });
-            reach = seen.iter().filter(|b| taken(b, reach, target)).map(|b| b.sj + b.ext_lon).fold(reach, f64::max);
+            let (mut next, mut far) = (target, reach);
+            for b in seen.iter().filter(|b| taken(b, reach, target)) {
+                let d = b.lj + side * (b.ext_lat + a.hw + if b.v > 0.0 { MOVER_CLEARANCE } else { PASS_CLEARANCE });
+                next = if side > 0.0 { next.max(d) } else { next.min(d) };
+                far = far.max(b.sj + b.ext_lon);
+            }
+            reach = far;
             if next == target {
                 break;
             }
@@ -228,9 +229,7 @@ impl Sim<'_, '_> {
             if k == i || !self.actors[k].vehicle || ahead.abs() > a.hl + n.radius + 1.0 {
                 continue;
             }
-            let Foot { s: sk, d: lk, beyond, dir: th } = a.path.frenet_dir(n.pos, st.s + ahead);
-            let (cr, sr) = (n.dir.dot(th).abs(), th.perp_dot(n.dir).abs());
-            let (ext_lon, ext_lat) = (n.hl * cr + n.hw * sr, n.hl * sr + n.hw * cr);
+            let (Foot { s: sk, d: lk, beyond, .. }, ext_lon, ext_lat) = self.on_route(i, k, ahead);
             if beyond > 0.5 || (sk - st.s).abs() > a.hl + ext_lon + 0.5 || side * (lk - st.d) <= 0.0 {
                 continue;
             }
