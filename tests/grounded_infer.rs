@@ -107,6 +107,55 @@ fn host_labels_are_the_argmax_of_the_logits() {
     assert!(moved > 1000, "the residual moved {moved} labels: the test would prove little");
 }
 
+/// A device that binds less than a frame's logits (Mesa's software Vulkan: 128 MiB; a frame's are
+/// 184 MB) labels the grid a strip of rows at a time, from one decoder pass: the labels are
+/// those of the whole grid's argmax, for the generator (background head speaking) and the
+/// autoencoder.
+#[test]
+fn labels_in_strips_are_the_labels_of_the_whole_grid() {
+    use rocc::backend::grounded::model::{Autoencoder, bev_batch};
+    use rocc::backend::grounded::splat::Region;
+    use rocc::backend::grounded::strips::{labels, rows_per_strip};
+    use rocc::backend::grounded::{HostBatch, latents};
+    let cfg = grounded_tiny::tiny();
+    let device = cpu();
+    device.seed(12);
+    let mut model = Generator::new(&cfg, &device);
+    let loud = burn::module::Initializer::Uniform { min: -20.0, max: 20.0 };
+    let (f, nz) = (cfg.bev_features(), rocc::backend::layout::NZ);
+    model.bg_out = Some(burn::nn::conv::Conv2dConfig::new([f, nz], [1, 1]).with_initializer(loud).init(&device));
+    let (m0, a0) = bev(150..250);
+    let (m1, a1) = bev(100..300);
+    let frames = [
+        (vec![gbox(VEHICLE, 5.0, 0.5, 4.5, 0.3), gbox(PEDESTRIAN, -30.0, 6.0, 0.6, 1.2)], &m0, &a0),
+        (vec![gbox(VEHICLE, -8.0, 40.0, 9.0, 0.0), gbox(VEHICLE, 44.0, -3.0, 4.0, 1.0)], &m1, &a1),
+    ];
+    let hb = HostBatch::new(frames.iter().map(|(b, m, _)| latents::build(&cfg, b, m)).collect());
+    let bev = bev_batch(&frames.iter().map(|(_, m, a)| (*m, *a)).collect::<Vec<_>>());
+    let whole = model.labels(bev.clone(), &hb, Region::full());
+    // A row of 2 frames' logits is 0.9 MB: a 5 MiB buffer takes 5 rows a strip. 7 and 160 rows
+    // leave an uneven last strip.
+    let rows = rows_per_strip(2, Some(5 << 20));
+    assert_eq!(rows, 5);
+    let prep = model.prepare(bev.clone(), &hb, Region::full());
+    for rows in [rows, 7, 160] {
+        let strips = labels(2, rows, |r| model.region_out(&prep, &hb, r).logits);
+        let differ = strips.iter().zip(&whole).filter(|(a, b)| a != b).count();
+        assert_eq!((strips.len(), differ), (whole.len(), 0), "{rows} rows a strip");
+    }
+    let classes = |v: &[u8]| (0..9u8).filter(|c| v.contains(c)).count();
+    assert!(classes(&whole) >= 3, "the scene's labels would prove little");
+
+    let ae = Autoencoder::new(&cfg, &device);
+    // The autoencoder reads the generator's labels as its ground truth.
+    let truth = rocc::backend::grounded::Grounded::from_model(cfg.clone(), model, "t").predict(&frames[0].0, &m0, &a0);
+    let hb1 = HostBatch::new(vec![latents::build(&cfg, &frames[0].0, &m0)]);
+    let enc = Autoencoder::encoder_input(&cfg, &hb1, &[&truth]);
+    let logits = ae.forward(enc.clone(), &hb1, Region::full(), None).logits;
+    let argmax: Vec<u8> = logits.argmax(1).to_data().iter::<i64>().map(|l| l as u8).collect();
+    assert_eq!(ae.labels_in_strips(enc, &hb1, 33), argmax, "the autoencoder's strips differ");
+}
+
 /// Weights of the tiny model in `dir` (`generator.bpk` with its `.ron`).
 fn weights(dir: &Path) -> PathBuf {
     let cfg = grounded_tiny::tiny();

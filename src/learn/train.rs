@@ -13,7 +13,9 @@
 use super::data::{self, Frame, Sample};
 use crate::backend::grounded::attention::Precision;
 use crate::backend::grounded::config::{GroundedConfig, StageConfig};
+use crate::backend::grounded::device::largest_buffer;
 use crate::backend::grounded::latents::{self, GBox};
+use crate::backend::grounded::load_weights;
 use crate::backend::grounded::loss::{
     agent_predicted, bce_with_logits, class_weights, cross_entropy_and_probs, kl_divergence, lovasz_rows,
     lovasz_softmax,
@@ -21,7 +23,7 @@ use crate::backend::grounded::loss::{
 use crate::backend::grounded::model::{Autoencoder, Generator, HostBatch, bev_batch};
 use crate::backend::grounded::rows::take_rows;
 use crate::backend::grounded::splat::Region;
-use crate::backend::grounded::{load_weights, logits_to_labels};
+use crate::backend::grounded::strips::rows_per_strip;
 use crate::backend::layout::{N_LABELS, NX, NY, NZ};
 use crate::diag::Diagnostic;
 use crate::eval::occ::{OccScorer, OccScores};
@@ -155,7 +157,9 @@ impl Net for Autoencoder {
     fn predict(&self, cfg: &GroundedConfig, frame: &Frame) -> Array3<u8> {
         let hb = HostBatch::new(vec![anchors(cfg, frame)]);
         let enc = Autoencoder::encoder_input(cfg, &hb, &[&frame.labels]);
-        logits_to_labels(self.forward(enc, &hb, Region::full(), None).logits)
+        let rows = rows_per_strip(1, largest_buffer(&self.decoder.layer_bias.val().device()));
+        let labels = self.labels_in_strips(enc, &hb, rows);
+        Array3::from_shape_vec((NX, NY, NZ), labels).unwrap_or_else(|_| Array3::zeros((NX, NY, NZ)))
     }
 }
 
@@ -644,6 +648,8 @@ fn run<M: Net>(
             }
         }
         pos = Position { epoch: epoch + 1, batch: 0, step: pos.step };
+        // Saved before validation: a validation the device cannot run loses no training.
+        save(&model, &optim, pos)?;
         let valid = model.valid();
         let scores = if val.is_empty() {
             None
@@ -667,12 +673,12 @@ fn run<M: Net>(
             })
         });
         reports.push(rep);
-        save(&model, &optim, pos)?;
     }
     pb.finish_and_clear();
     // A time-boxed run that stopped mid-epoch still gets a validation line.
     if reports.last().is_none_or(|r| r.epoch != pos.epoch || pos.batch != 0) && pos.step > 0 {
         let per_step = run_t0.elapsed().as_secs_f64() / (pos.step - first_step).max(1) as f64;
+        save(&model, &optim, pos)?;
         let valid = model.valid();
         let scores = if val.is_empty() {
             None
@@ -686,7 +692,6 @@ fn run<M: Net>(
             ));
         }
         reports.push(EpochReport { epoch: pos.epoch + 1, steps: 0, mean_loss: f64::NAN, seconds: 0.0, val: scores });
-        save(&model, &optim, pos)?;
     }
     if let Some(line) = step_summary(&step_phases) {
         say(line);

@@ -158,12 +158,20 @@ pub fn encode(t: &TransformerEncoder, x: Tensor<3>, pad: Tensor<2, Bool>, precis
         Precision::Full if x.is_tracked() && x.device() == Device::flex() => {
             t.layers.iter().fold(x, |x, l| layer(l, x, &pad, None))
         }
+        // A device that cannot hold the whole score matrix runs the layers here, by query blocks.
+        Precision::Full if query_rows(x.dims()[0] * heads(t), x.dims()[1], &x.device()) < x.dims()[1] => {
+            t.layers.iter().fold(x, |x, l| layer(l, x, &pad, None))
+        }
         Precision::Full => t.forward(TransformerEncoderInput::new(x).mask_pad(pad)),
         Precision::Mixed(scale) => {
             let half = Some(scale.value());
             t.layers.iter().fold(x, |x, l| layer(l, x, &pad, half))
         }
     }
+}
+
+fn heads(t: &TransformerEncoder) -> usize {
+    t.layers.first().map_or(1, |l| l.mha.n_heads)
 }
 
 /// One encoder layer, laid out as burn's `TransformerEncoderLayer::forward` (so the two share
@@ -246,11 +254,13 @@ fn self_attention(m: &MultiHeadAttention, x: Tensor<3>, pad: &Tensor<2, Bool>, h
     let split = |t: Tensor<3>| t.reshape([b, n, m.n_heads, m.d_k]).swap_dims(1, 2);
     let merge = |t: Tensor<4>| t.swap_dims(1, 2).reshape([b, n, width]);
     let scale = (m.d_k as f32).sqrt();
+    let rows = query_rows(b * m.n_heads, n, &x.device());
     match half {
         None => {
             let heads = |lin: &Linear| split(lin.forward(x.clone()));
             let (q, k, v) = (heads(&m.query), heads(&m.key), heads(&m.value));
-            let context = weights(q.matmul(k.transpose()), Some(scale)).matmul(v);
+            let kt = k.transpose();
+            let context = by_query_rows(q, rows, |q| weights(q.matmul(kt.clone()), Some(scale)).matmul(v.clone()));
             m.output.forward(merge(context))
         }
         Some(s) => {
@@ -258,11 +268,35 @@ fn self_attention(m: &MultiHeadAttention, x: Tensor<3>, pad: &Tensor<2, Bool>, h
             let x = h.into(x);
             let heads = |lin: &Linear| split(h.linear(lin, x.clone()));
             let (q, k, v) = (heads(&m.query), heads(&m.key), heads(&m.value));
-            let scores = q.div_scalar(scale).matmul(k.transpose()).cast(FloatDType::F32);
-            let p = weights(scores, None).cast(FloatDType::F16);
-            h.out(h.linear(&m.output, merge(p.matmul(v))))
+            let kt = k.transpose();
+            let context = by_query_rows(q, rows, |q| {
+                let scores = q.div_scalar(scale).matmul(kt.clone()).cast(FloatDType::F32);
+                weights(scores, None).cast(FloatDType::F16).matmul(v.clone())
+            });
+            h.out(h.linear(&m.output, merge(context)))
         }
     }
+}
+
+/// Query rows per block of `n` keys over `sets` (sets x heads), such that a block's f32 scores
+/// fit the device's largest buffer (`strips::SHARE` of it): `n` where the whole square fits.
+fn query_rows(sets: usize, n: usize, device: &Device) -> usize {
+    let Some(max) = super::device::largest_buffer(device) else { return n };
+    let per_row = (sets.max(1) * n.max(1) * 4) as f64;
+    ((max as f64 * super::strips::SHARE / per_row).floor() as usize).clamp(1, n.max(1))
+}
+
+/// `attend` (queries `[b, heads, rows, d]` -> their context) over blocks of `rows` queries,
+/// concatenated: each query's scores, softmax and weighted sum are its own, so the blocks give
+/// what one pass gives; a device whose buffers cannot hold a set's whole score matrix (`paper`:
+/// 6 heads x 4096^2 in f32, 403 MB) runs it block by block.
+fn by_query_rows(q: Tensor<4>, rows: usize, attend: impl Fn(Tensor<4>) -> Tensor<4>) -> Tensor<4> {
+    let [b, h, n, d] = q.dims();
+    if rows >= n {
+        return attend(q);
+    }
+    let blocks = (0..n).step_by(rows.max(1)).map(|s| attend(q.clone().slice([0..b, 0..h, s..(s + rows).min(n), 0..d])));
+    Tensor::cat(blocks.collect(), 2)
 }
 
 #[cfg(test)]
@@ -385,5 +419,45 @@ mod tests {
         assert_eq!(vec(y.clone()), vec(x.clone()));
         let g = x.grad(&(y * 2.0).sum().backward()).unwrap();
         assert_eq!(vec(g), vec![2048.0; 4]);
+    }
+
+    /// Attention by blocks of query rows gives the values and gradients of one pass over the
+    /// whole score matrix (padded keys masked, as the decoder's sets are).
+    #[test]
+    fn query_blocks_give_the_whole_matrix_values_and_gradients() {
+        let device = super::super::cpu().autodiff();
+        let (b, h, n, d) = (2, 3, 11, 4);
+        let t = |salt: u32| {
+            let v: Vec<f32> = (0..b * h * n * d)
+                .map(|i| ((i as u32 + salt).wrapping_mul(2654435761) % 2000) as f32 / 1000.0 - 1.0)
+                .collect();
+            Tensor::<4>::from_data(TensorData::new(v, [b, h, n, d]), &device).require_grad()
+        };
+        let (q, k, v) = (t(1), t(2), t(3));
+        let pad: Vec<bool> = (0..b * n).map(|i| i % n >= n - 2 * (i / n) - 1).collect();
+        let pad = Tensor::<2, Bool>::from_data(TensorData::new(pad, [b, n]), &device).reshape([b, 1, 1, n]);
+        let attend =
+            |q: Tensor<4>| softmax(q.matmul(k.clone().transpose()).mask_fill(pad.clone(), -1e9), 3).matmul(v.clone());
+        let w = t(4).detach();
+        let run = |rows: usize| {
+            let out = by_query_rows(q.clone(), rows, attend);
+            let grads = (out.clone() * w.clone()).sum().backward();
+            let g = |x: &Tensor<4>| vec(x.grad(&grads).expect("a gradient"));
+            (vec(out), g(&q), g(&k), g(&v))
+        };
+        let whole = run(n);
+        for rows in [1, 3, 5] {
+            let blocks = run(rows);
+            for (name, a, e) in [
+                ("values", &blocks.0, &whole.0),
+                ("dq", &blocks.1, &whole.1),
+                ("dk", &blocks.2, &whole.2),
+                ("dv", &blocks.3, &whole.3),
+            ] {
+                let err = a.iter().zip(e).fold(0f32, |m, (x, y)| m.max((x - y).abs()));
+                assert!(err < 1e-6, "{rows} rows: {name} differ by {err}");
+            }
+        }
+        assert!(whole.2.iter().any(|x| x.abs() > 1e-3), "the key gradient would prove little");
     }
 }

@@ -95,3 +95,14 @@ impl DeviceKind {
         }
     }
 }
+
+/// The largest buffer `device` allocates and binds, in bytes (`None` on the CPU, which has no such
+/// limit): what `strips` sizes inference by.
+pub fn largest_buffer(device: &Device) -> Option<u64> {
+    #[cfg(any(feature = "wgpu", feature = "cuda"))]
+    if let burn::backend::DispatchDevice::Cube(d) = device.as_dispatch() {
+        return Some(d.client().properties().memory.max_page_size);
+    }
+    let _ = device;
+    None
+}

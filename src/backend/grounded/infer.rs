@@ -6,11 +6,12 @@
 //! against single frames). On a GPU the
 //! device work runs under `guard::guarded`, so a device failure is a diagnostic.
 
+use super::device::largest_buffer;
 use super::guard::guarded;
 use super::model::{HostBatch, bev_batch};
 use super::splat::Region;
-use super::{GBox, Grounded, latents};
-use crate::backend::layout::{N_LABELS, NX, NY, NZ};
+use super::{GBox, Grounded, latents, strips};
+use crate::backend::layout::{NX, NY, NZ};
 use crate::backend::{OccInput, Occupancy, OccupancyBackend};
 use crate::diag::Diagnostic;
 use ndarray::Array3;
@@ -68,9 +69,12 @@ impl Grounded {
         let mut hb = HostBatch::new(sets);
         hb.set_by_set = true;
         let bev = bev_batch(&frames.iter().map(|f| (f.masks, f.aux)).collect::<Vec<_>>());
-        let labels: Vec<u8> = if self.device().is_gpu() {
-            let out = self.model.forward(bev, &hb, Region::full());
-            out.logits.argmax(1).to_data().iter::<i64>().map(|l| l.clamp(0, N_LABELS as i64 - 1) as u8).collect()
+        // The model's own device decides (a model trained on a GPU is validated there).
+        let device = self.model.decoder.layer_bias.val().device();
+        let labels: Vec<u8> = if device != burn::prelude::Device::flex() {
+            let rows = strips::rows_per_strip(hb.b(), largest_buffer(&device));
+            let prep = self.model.prepare(bev, &hb, Region::full());
+            strips::labels(hb.b(), rows, |r| self.model.region_out(&prep, &hb, r).logits)
         } else {
             // The same labels without the grid-sized tensors (`head`).
             self.model.labels(bev, &hb, Region::full())

@@ -36,6 +36,7 @@ mod par;
 pub mod rows;
 pub mod softmax;
 pub mod splat;
+pub mod strips;
 
 pub use config::GroundedConfig;
 pub use device::DeviceKind;
@@ -43,13 +44,12 @@ pub use infer::FrameIn;
 pub use latents::{Anchor, GBox};
 pub use model::{Autoencoder, BEV_CHANNELS, Generator, HostBatch};
 
-use super::layout::{N_LABELS, NX, NY, NZ, class_label};
+use super::layout::class_label;
 use crate::diag::Diagnostic;
 use crate::view::EgoBox;
 use attention::Precision;
 use burn::module::Module;
 use burn::prelude::*;
-use ndarray::Array3;
 use std::path::{Path, PathBuf};
 
 impl GBox {
@@ -232,12 +232,6 @@ impl Grounded {
     pub fn files(&self) -> Option<(&Path, &Path)> {
         self.files.as_ref().map(|(w, c)| (w.as_path(), c.as_path()))
     }
-}
-
-/// Per-voxel argmax of full-grid logits `[NX * NY * NZ, 9]` as a (400, 400, 32) label grid.
-pub fn logits_to_labels(logits: Tensor<2>) -> Array3<u8> {
-    let v: Vec<u8> = logits.argmax(1).to_data().iter::<i64>().map(|l| l.clamp(0, N_LABELS as i64 - 1) as u8).collect();
-    Array3::from_shape_vec((NX, NY, NZ), v).unwrap_or_else(|_| Array3::zeros((NX, NY, NZ)))
 }
 
 fn missing_weights(path: &Path) -> Diagnostic {

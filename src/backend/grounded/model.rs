@@ -230,8 +230,13 @@ impl Decoder {
 
     /// Latents -> the splatted Gaussians of `region` [b * voxels, 9], without the layer bias.
     pub fn splatted(&self, latents: Tensor<3>, hb: &HostBatch, region: Region) -> Tensor<2> {
-        let device = latents.device();
-        let raw = self.raw(latents, hb);
+        self.splat_raw(self.raw(latents, hb), hb, region)
+    }
+
+    /// `raw`'s Gaussians -> the splat of `region` (no layer bias): one transformer pass serves
+    /// every strip of a grid (`strips`).
+    pub fn splat_raw(&self, raw: Tensor<2>, hb: &HostBatch, region: Region) -> Tensor<2> {
+        let device = raw.device();
         let (rows, aa, labels) = self.active(hb, region);
         let b = hb.b();
         if rows.is_empty() {
@@ -297,8 +302,8 @@ impl Autoencoder {
         out
     }
 
-    /// `noise` [b * q * C] (standard normal) samples the posterior; `None` takes its mean.
-    pub fn forward(&self, enc_in: Vec<f32>, hb: &HostBatch, region: Region, noise: Option<Vec<f32>>) -> AeOut {
+    /// The posterior of every latent: `(mu, logvar)`, each `[b, q, C]`.
+    fn posterior(&self, enc_in: Vec<f32>, hb: &HostBatch) -> (Tensor<3>, Tensor<3>) {
         let device = self.decoder.layer_bias.val().device();
         let (b, q, c) = (hb.b(), hb.q, self.encoder.latent_dim);
         let s = enc_in.len() / (b * q).max(1);
@@ -306,7 +311,23 @@ impl Autoencoder {
         let x = Tensor::cat(vec![x, hb.feats_tensor(&device)], 2);
         let h = self.encoder.l2.forward(gelu(self.encoder.l1.forward(x)));
         let mu = h.clone().slice([0..b, 0..q, 0..c]);
-        let logvar = h.slice([0..b, 0..q, c..2 * c]).clamp(-8.0, 8.0);
+        (mu, h.slice([0..b, 0..q, c..2 * c]).clamp(-8.0, 8.0))
+    }
+
+    /// Labels of the whole grid from the posterior means, `[b * NX * NY * NZ]`, splatted a strip
+    /// of `rows` grid rows at a time (`strips`).
+    pub fn labels_in_strips(&self, enc_in: Vec<f32>, hb: &HostBatch, rows: usize) -> Vec<u8> {
+        let raw = self.decoder.raw(self.posterior(enc_in, hb).0, hb);
+        super::strips::labels(hb.b(), rows, |r| {
+            self.decoder.splat_raw(raw.clone(), hb, r) + self.decoder.bias_grid(hb.b() * r.ni * r.nj)
+        })
+    }
+
+    /// `noise` [b * q * C] (standard normal) samples the posterior; `None` takes its mean.
+    pub fn forward(&self, enc_in: Vec<f32>, hb: &HostBatch, region: Region, noise: Option<Vec<f32>>) -> AeOut {
+        let device = self.decoder.layer_bias.val().device();
+        let (b, q, c) = (hb.b(), hb.q, self.encoder.latent_dim);
+        let (mu, logvar) = self.posterior(enc_in, hb);
         let z = match noise {
             Some(eps) => {
                 let eps = Tensor::<3>::from_data(TensorData::new(eps, [b, q, c]), &device);
@@ -446,21 +467,26 @@ impl Generator {
 
     /// `bev` is the frames' `bev_batch`.
     pub fn forward(&self, bev: Vec<f32>, hb: &HostBatch, region: Region) -> GenOut {
+        self.region_out(&self.prepare(bev, hb, region), hb, region)
+    }
+
+    /// `forward` of `region` from a pass `prepare`d for it (or for a region holding it).
+    pub fn region_out(&self, prep: &Prepared, hb: &HostBatch, region: Region) -> GenOut {
         let b = hb.b();
-        let parts = self.parts(bev, hb, region);
-        let Some(r) = parts.residual else {
-            let logits = parts.splatted + self.decoder.bias_grid(b * region.ni * region.nj);
+        let splatted = self.decoder.splat_raw(prep.raw.clone(), hb, region);
+        let Some(r) = prep.residual.clone() else {
+            let logits = splatted + self.decoder.bias_grid(b * region.ni * region.nj);
             return GenOut { logits, background: None };
         };
-        let device = parts.splatted.device();
-        let cols = feature_columns(region, b, parts.residual_rect, self.stride);
+        let device = splatted.device();
+        let cols = feature_columns(region, b, prep.residual_rect, self.stride);
         let nc = cols.len();
         let r = take_rows(r, cols).reshape([nc * NZ, 1]);
         let bias = self.decoder.layer_bias.val();
         let logits = if device == Device::flex() {
-            head::head(parts.splatted, bias, r.clone())
+            head::head(splatted, bias, r.clone())
         } else {
-            head::head_tensor_ops(parts.splatted, bias, r.clone())
+            head::head_tensor_ops(splatted, bias, r.clone())
         };
         GenOut { logits, background: Some(r) }
     }
@@ -470,17 +496,19 @@ impl Generator {
     /// none of the grid-sized tensors of `forward` is built. For a model on the CPU.
     pub fn labels(&self, bev: Vec<f32>, hb: &HostBatch, region: Region) -> Vec<u8> {
         let b = hb.b();
-        let parts = self.parts(bev, hb, region);
+        let prep = self.prepare(bev, hb, region);
+        let splatted = self.decoder.splat_raw(prep.raw, hb, region);
         let host = |t: Tensor<2>| t.into_data().try_into_vec::<f32>().unwrap_or_default();
         let bias = host(self.decoder.layer_bias.val());
-        let residual = parts.residual.map(|r| (host(r), feature_columns(region, b, parts.residual_rect, self.stride)));
+        let residual = prep.residual.map(|r| (host(r), feature_columns(region, b, prep.residual_rect, self.stride)));
         let residual = residual.as_ref().map(|(r, cols)| head::Residual { values: r, columns: cols });
-        head::labels(&host(parts.splatted), &bias, residual)
+        head::labels(&host(splatted), &bias, residual)
     }
 
-    /// Everything `forward` computes before the grid: the splat (no bias) and the background
-    /// head's residual at feature resolution.
-    fn parts(&self, bev: Vec<f32>, hb: &HostBatch, region: Region) -> GenParts {
+    /// Everything `forward` computes before the grid: the decoder's Gaussians and the background
+    /// head's residual at feature resolution (over the feature pixels `region` reads on the
+    /// CPU, the whole map on a GPU).
+    pub fn prepare(&self, bev: Vec<f32>, hb: &HostBatch, region: Region) -> Prepared {
         let device = self.decoder.layer_bias.val().device();
         let b = hb.b();
         let x = Tensor::<4>::from_data(TensorData::new(bev, [b, BEV_CHANNELS, GRID, GRID]), &device);
@@ -519,7 +547,7 @@ impl Generator {
         let wts = Tensor::<3>::from_data(TensorData::new(wts, [n / 4, 4, 1]), &device);
         let sampled = (sampled.reshape([n / 4, 4, f]) * wts).sum_dim(1).reshape([b, hb.q, f]);
         let z = self.cond2.forward(gelu(self.cond1.forward(Tensor::cat(vec![sampled, hb.feats_tensor(&device)], 2))));
-        let splatted = self.decoder.splatted(z, hb, region);
+        let raw = self.decoder.raw(z, hb);
         // The background head at feature resolution, on the CPU over the feature pixels the
         // region's columns read (a GPU runs it over the whole map).
         let rect = if device == Device::flex() {
@@ -535,7 +563,7 @@ impl Generator {
             }
             _ => None,
         };
-        GenParts { splatted, residual, residual_rect: rect }
+        Prepared { raw, residual, residual_rect: rect }
     }
 }
 
@@ -595,10 +623,11 @@ fn cropped_conv(conv: &Conv2d, x: Tensor<4>, rect: FeatureRect) -> Tensor<4> {
     y.slice([0..b, 0..o, r0 - s0..r0 - s0 + nr, c0 - s1..c0 - s1 + nc])
 }
 
-/// What the generator computes before the grid (`Generator::parts`).
-struct GenParts {
-    /// [b * voxels, 9], no layer bias.
-    splatted: Tensor<2>,
+/// What the generator computes before the grid (`Generator::prepare`): it serves the region it
+/// was prepared for and any region inside it.
+pub struct Prepared {
+    /// The decoder's raw Gaussians (`Decoder::raw`).
+    raw: Tensor<2>,
     /// The background head's residual per feature pixel of `residual_rect` and layer, `[pixels, NZ]`.
     residual: Option<Tensor<2>>,
     /// The feature pixels `residual` covers (`[b * rows * columns]` of them).

@@ -126,7 +126,9 @@ other work, or use another device.
         title: "a buffer beyond the device's limits",
         explanation: "One tensor of the learned backend is larger than the device lets a single buffer be\n\
 (wgpu's `max_buffer_size` and `max_storage_buffer_binding_size`; cubecl says `can't allocate\n\
-buffer of size: N`). This depends on the size of one forward pass, not on free memory: lower\n\
+buffer of size: N`). This depends on the size of one forward pass, not on free memory.\n\
+Inference splits the grid's logits and the attention's scores to the device's limit; the\n\
+decoder's Gaussians of a pass and a training step's crop are not split: lower\n\
 `--grounded-batch` (compile) or the config's `batch` or `train.crop` (train), or use a device\n\
 with larger limits (`--device cuda`).
 
