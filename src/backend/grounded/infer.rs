@@ -49,7 +49,7 @@ impl Grounded {
             return Ok(parts.into_iter().flatten().collect());
         }
         let mut out = Vec::with_capacity(frames.len());
-        for c in frames.chunks(self.batch) {
+        for c in frames.chunks(self.pass_frames()) {
             out.extend(guarded(|| self.forward_labels(c))?);
         }
         Ok(out)
@@ -57,7 +57,14 @@ impl Grounded {
 
     /// Frames one `predict_frames` call should get to keep the device busy.
     fn frames_per_call(&self) -> usize {
-        if self.device().is_gpu() { self.batch } else { self.batch * rayon::current_num_threads() }
+        if self.device().is_gpu() { self.pass_frames() } else { self.batch * rayon::current_num_threads() }
+    }
+
+    /// Frames per forward pass on a GPU: `batch`, fewer where the device's largest buffer cannot
+    /// hold a pass's decoder Gaussians (`strips::frames_per_pass`).
+    fn pass_frames(&self) -> usize {
+        let device = self.model.decoder.layer_bias.val().device();
+        strips::frames_per_pass(self.batch, &self.config, largest_buffer(&device))
     }
 
     /// One forward pass over `frames`.

@@ -4,7 +4,9 @@
 //! rows after another from one pass of the decoder, each strip's logits within the device's
 //! limit. A device that binds a whole batch's logits takes it in one strip.
 
-use super::splat::Region;
+use super::config::GroundedConfig;
+use super::splat::layout::COLS;
+use super::splat::{PARAMS, Region};
 use crate::backend::layout::{N_LABELS, NX, NY, NZ};
 use burn::prelude::*;
 
@@ -19,6 +21,17 @@ pub fn rows_per_strip(b: usize, max_bytes: Option<u64>) -> usize {
     let Some(max) = max_bytes else { return NX };
     let row = (b.max(1) * NY * NZ * N_LABELS * 4) as f64;
     ((max as f64 * SHARE / row).floor() as usize).clamp(1, NX)
+}
+
+/// Frames per inference pass: `batch`, fewer where one pass's Gaussians would exceed `SHARE` of
+/// the device's largest buffer. They are the largest tensors a pass does not split: at most
+/// `latents x max_gaussians` a frame, in rows of `PARAMS` floats (the decoder's output) or of
+/// `COLS` (the table the splat reads), `paper` 40.9 MB a frame at `COLS`.
+pub fn frames_per_pass(batch: usize, cfg: &GroundedConfig, max_bytes: Option<u64>) -> usize {
+    let batch = batch.max(1);
+    let Some(max) = max_bytes else { return batch };
+    let frame = (cfg.latents * cfg.max_gaussians() * PARAMS.max(COLS) * 4) as f64;
+    ((max as f64 * SHARE / frame).floor() as usize).clamp(1, batch)
 }
 
 /// Labels `[b * NX * NY * NZ]` (frame by frame, standard layout) from `logits`, which returns a
@@ -52,6 +65,18 @@ mod tests {
         assert_eq!(rows, 65);
         assert!((4 * rows * NY * NZ * N_LABELS * 4) as f64 <= (128u64 << 20) as f64 * SHARE);
         assert_eq!(rows_per_strip(64, Some(1 << 20)), 1);
+    }
+
+    #[test]
+    fn a_pass_takes_the_frames_whose_gaussians_fit() {
+        let paper: GroundedConfig = ron::from_str(include_str!("../../../configs/paper.ron")).unwrap();
+        let small: GroundedConfig = ron::from_str(include_str!("../../../configs/cpu-small.ron")).unwrap();
+        // 4,096 latents x 96 Gaussians x 26 floats: 40.9 MB a frame; 2 fit in 90 % of 128 MiB.
+        assert_eq!(frames_per_pass(4, &paper, Some(128 << 20)), 2);
+        assert_eq!(frames_per_pass(4, &paper, None), 4);
+        assert_eq!(frames_per_pass(4, &paper, Some(1 << 20)), 1);
+        assert_eq!(frames_per_pass(4, &small, Some(128 << 20)), 4);
+        assert_eq!(frames_per_pass(0, &small, None), 1);
     }
 
     #[test]

@@ -127,10 +127,10 @@ other work, or use another device.
         explanation: "One tensor of the learned backend is larger than the device lets a single buffer be\n\
 (wgpu's `max_buffer_size` and `max_storage_buffer_binding_size`; cubecl says `can't allocate\n\
 buffer of size: N`). This depends on the size of one forward pass, not on free memory.\n\
-Inference splits the grid's logits and the attention's scores to the device's limit; the\n\
-decoder's Gaussians of a pass and a training step's crop are not split: lower\n\
-`--grounded-batch` (compile) or the config's `batch` or `train.crop` (train), or use a device\n\
-with larger limits (`--device cuda`).
+Inference fits itself to the device's limit (the grid in strips of rows, attention in blocks\n\
+of queries, fewer frames a pass); a training step's crop is not split: lower the config's\n\
+`batch` or `train.crop` (train) or `--grounded-batch` (compile), or use a device with larger\n\
+limits (`--device cuda`).
 
     rocc train generator --data nuplan/train --config configs/paper.ron --out paper --device wgpu
     // error where one splat buffer of batch 6 exceeds the adapter's limit: lower `batch` or `train.crop`",
