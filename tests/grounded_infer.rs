@@ -7,8 +7,11 @@
 mod grounded_tiny;
 
 use ndarray::Array3;
+use rocc::backend::grounded::config::GroundedConfig;
 use rocc::backend::grounded::guard::{classify, guarded};
-use rocc::backend::grounded::{DeviceKind, FrameIn, GBox, Generator, Grounded, cpu};
+use rocc::backend::grounded::model::bev_batch;
+use rocc::backend::grounded::splat::Region;
+use rocc::backend::grounded::{DeviceKind, FrameIn, GBox, Generator, Grounded, HostBatch, cpu, latents};
 use rocc::backend::layout::{PEDESTRIAN, VEHICLE};
 use rocc::raster::layout::{CH_DRIVABLE, GRID, N_AUX, N_MASKS};
 use std::path::{Path, PathBuf};
@@ -31,6 +34,22 @@ fn bev(road: std::ops::Range<usize>) -> (Array3<i8>, Array3<i32>) {
 
 fn gbox(label: u8, x: f64, y: f64, l: f64, yaw: f64) -> GBox {
     GBox { label, x, y, z: 0.8, l, w: 1.9, h: 1.6, yaw }
+}
+
+type FrameBoxes<'a> = (Vec<GBox>, &'a Array3<i8>, &'a Array3<i32>);
+
+/// The host batch and BEV of `frames` for the model's forward pass.
+fn model_input(cfg: &GroundedConfig, frames: &[FrameBoxes]) -> (HostBatch, Vec<f32>) {
+    let hb = HostBatch::new(frames.iter().map(|(b, m, _)| latents::build(cfg, b, m)).collect());
+    (hb, bev_batch(&frames.iter().map(|(_, m, a)| (*m, *a)).collect::<Vec<_>>()))
+}
+
+/// A background head that speaks (its output layer is zero-initialised), loud enough to move
+/// voxels between free and background.
+fn loud_background(model: &mut Generator, cfg: &GroundedConfig) {
+    let (f, nz) = (cfg.bev_features(), rocc::backend::layout::NZ);
+    let loud = burn::module::Initializer::Uniform { min: -20.0, max: 20.0 };
+    model.bg_out = Some(burn::nn::conv::Conv2dConfig::new([f, nz], [1, 1]).with_initializer(loud).init(&cpu()));
 }
 
 #[test]
@@ -71,9 +90,6 @@ fn a_batch_of_three_frames_gives_the_labels_of_three_single_frames() {
 /// logits, bit for bit, including the background head's gated residual (here not zero).
 #[test]
 fn host_labels_are_the_argmax_of_the_logits() {
-    use rocc::backend::grounded::model::bev_batch;
-    use rocc::backend::grounded::splat::Region;
-    use rocc::backend::grounded::{HostBatch, latents};
     let cfg = grounded_tiny::tiny();
     let device = cpu();
     device.seed(8);
@@ -84,8 +100,7 @@ fn host_labels_are_the_argmax_of_the_logits() {
         (vec![gbox(VEHICLE, 5.0, 0.5, 4.5, 0.3), gbox(PEDESTRIAN, 3.0, 6.0, 0.6, 1.2)], &m0, &a0),
         (vec![gbox(VEHICLE, -8.0, 1.0, 9.0, 0.0)], &m1, &a1),
     ];
-    let hb = HostBatch::new(frames.iter().map(|(b, m, _)| latents::build(&cfg, b, m)).collect());
-    let bev = bev_batch(&frames.iter().map(|(_, m, a)| (*m, *a)).collect::<Vec<_>>());
+    let (hb, bev) = model_input(&cfg, &frames);
     let region = Region { i0: 150, j0: 170, ni: 60, nj: 50 };
     let argmax = |m: &Generator| -> Vec<u8> {
         let logits = m.forward(bev.clone(), &hb, region).logits;
@@ -95,12 +110,7 @@ fn host_labels_are_the_argmax_of_the_logits() {
     let without = model.labels(bev.clone(), &hb, region);
     assert_eq!(without.len(), 2 * region.voxels());
     assert_eq!(differ(&without, &argmax(&model)), 0, "labels differ from the logits' argmax");
-    // A background head that speaks (its output layer is zero-initialised), loud enough to move
-    // voxels between free and background.
-    let f = cfg.bev_features();
-    let nz = rocc::backend::layout::NZ;
-    let loud = burn::module::Initializer::Uniform { min: -20.0, max: 20.0 };
-    model.bg_out = Some(burn::nn::conv::Conv2dConfig::new([f, nz], [1, 1]).with_initializer(loud).init(&device));
+    loud_background(&mut model, &cfg);
     let with = model.labels(bev.clone(), &hb, region);
     assert_eq!(differ(&with, &argmax(&model)), 0, "labels differ from the logits' argmax");
     let moved = differ(&with, &without);
@@ -113,25 +123,20 @@ fn host_labels_are_the_argmax_of_the_logits() {
 /// autoencoder.
 #[test]
 fn labels_in_strips_are_the_labels_of_the_whole_grid() {
-    use rocc::backend::grounded::model::{Autoencoder, bev_batch};
-    use rocc::backend::grounded::splat::Region;
+    use rocc::backend::grounded::model::Autoencoder;
     use rocc::backend::grounded::strips::{labels, rows_per_strip};
-    use rocc::backend::grounded::{HostBatch, latents};
     let cfg = grounded_tiny::tiny();
     let device = cpu();
     device.seed(12);
     let mut model = Generator::new(&cfg, &device);
-    let loud = burn::module::Initializer::Uniform { min: -20.0, max: 20.0 };
-    let (f, nz) = (cfg.bev_features(), rocc::backend::layout::NZ);
-    model.bg_out = Some(burn::nn::conv::Conv2dConfig::new([f, nz], [1, 1]).with_initializer(loud).init(&device));
+    loud_background(&mut model, &cfg);
     let (m0, a0) = bev(150..250);
     let (m1, a1) = bev(100..300);
     let frames = [
         (vec![gbox(VEHICLE, 5.0, 0.5, 4.5, 0.3), gbox(PEDESTRIAN, -30.0, 6.0, 0.6, 1.2)], &m0, &a0),
         (vec![gbox(VEHICLE, -8.0, 40.0, 9.0, 0.0), gbox(VEHICLE, 44.0, -3.0, 4.0, 1.0)], &m1, &a1),
     ];
-    let hb = HostBatch::new(frames.iter().map(|(b, m, _)| latents::build(&cfg, b, m)).collect());
-    let bev = bev_batch(&frames.iter().map(|(_, m, a)| (*m, *a)).collect::<Vec<_>>());
+    let (hb, bev) = model_input(&cfg, &frames);
     let whole = model.labels(bev.clone(), &hb, Region::full());
     // A row of 2 frames' logits is 0.9 MB: a 5 MiB buffer takes 5 rows a strip. 7 and 160 rows
     // leave an uneven last strip.
