@@ -319,7 +319,6 @@ fn io_err(what: &str, path: &Path, e: impl std::fmt::Display) -> Diagnostic {
         .help("check that the output directory is writable and the disk not full")
 }
 
-/// A batch's frames loading on their own thread.
 /// A batch ready for its step: the step's random stream (after the region's draw), the region,
 /// its ground truth in the splat's order and the step's host input.
 struct Batch {

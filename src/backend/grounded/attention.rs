@@ -154,12 +154,12 @@ fn grad_times<const D: usize>(t: Tensor<D>, k: f32) -> Tensor<D> {
 /// The transformer over `x` `[b, n, width]` with padded latents `pad` `[b, n]` masked out.
 pub fn encode(t: &TransformerEncoder, x: Tensor<3>, pad: Tensor<2, Bool>, precision: &Precision) -> Tensor<3> {
     match precision {
-        // A training step on the CPU runs the layers here, for their fused attention weights.
-        Precision::Full if x.is_tracked() && x.device() == Device::flex() => {
-            t.layers.iter().fold(x, |x, l| layer(l, x, &pad, None))
-        }
-        // A device that cannot hold the whole score matrix runs the layers here, by query blocks.
-        Precision::Full if query_rows(x.dims()[0] * heads(t), x.dims()[1], &x.device()) < x.dims()[1] => {
+        // The layers run here for a training step on the CPU (their fused attention weights) and
+        // on a device that cannot hold a whole score matrix (attention by query blocks).
+        Precision::Full
+            if (x.is_tracked() && x.device() == Device::flex())
+                || query_rows(x.dims()[0] * heads(t), x.dims()[1], &x.device()) < x.dims()[1] =>
+        {
             t.layers.iter().fold(x, |x, l| layer(l, x, &pad, None))
         }
         Precision::Full => t.forward(TransformerEncoderInput::new(x).mask_pad(pad)),
@@ -279,11 +279,9 @@ fn self_attention(m: &MultiHeadAttention, x: Tensor<3>, pad: &Tensor<2, Bool>, h
 }
 
 /// Query rows per block of `n` keys over `sets` (sets x heads), such that a block's f32 scores
-/// fit the device's largest buffer (`strips::SHARE` of it): `n` where the whole square fits.
+/// fit the device's largest buffer (`strips::fitting`): `n` where the whole square fits.
 fn query_rows(sets: usize, n: usize, device: &Device) -> usize {
-    let Some(max) = super::device::largest_buffer(device) else { return n };
-    let per_row = (sets.max(1) * n.max(1) * 4) as f64;
-    ((max as f64 * super::strips::SHARE / per_row).floor() as usize).clamp(1, n.max(1))
+    super::strips::fitting(super::device::largest_buffer(device), sets.max(1) * n.max(1) * 4, n)
 }
 
 /// `attend` (queries `[b, heads, rows, d]` -> their context) over blocks of `rows` queries,

@@ -15,12 +15,19 @@ use burn::prelude::*;
 /// scores).
 pub const SHARE: f64 = 0.9;
 
+/// How many units of `unit_bytes` fit in `SHARE` of a largest buffer of `max_bytes`, between 1
+/// and `most` (`most` where the device has no limit): the one sizing rule of every pass run in
+/// blocks (strips, frames a pass, attention's query blocks).
+pub fn fitting(max_bytes: Option<u64>, unit_bytes: usize, most: usize) -> usize {
+    let most = most.max(1);
+    let Some(max) = max_bytes else { return most };
+    ((max as f64 * SHARE / unit_bytes.max(1) as f64).floor() as usize).clamp(1, most)
+}
+
 /// Grid rows per strip for `b` frames on a device whose largest buffer is `max_bytes` (`None`:
 /// no limit, the whole grid).
 pub fn rows_per_strip(b: usize, max_bytes: Option<u64>) -> usize {
-    let Some(max) = max_bytes else { return NX };
-    let row = (b.max(1) * NY * NZ * N_LABELS * 4) as f64;
-    ((max as f64 * SHARE / row).floor() as usize).clamp(1, NX)
+    fitting(max_bytes, b.max(1) * NY * NZ * N_LABELS * 4, NX)
 }
 
 /// Frames per inference pass: `batch`, fewer where one pass's Gaussians would exceed `SHARE` of
@@ -28,10 +35,7 @@ pub fn rows_per_strip(b: usize, max_bytes: Option<u64>) -> usize {
 /// `latents x max_gaussians` a frame, in rows of `PARAMS` floats (the decoder's output) or of
 /// `COLS` (the table the splat reads), `paper` 40.9 MB a frame at `COLS`.
 pub fn frames_per_pass(batch: usize, cfg: &GroundedConfig, max_bytes: Option<u64>) -> usize {
-    let batch = batch.max(1);
-    let Some(max) = max_bytes else { return batch };
-    let frame = (cfg.latents * cfg.max_gaussians() * PARAMS.max(COLS) * 4) as f64;
-    ((max as f64 * SHARE / frame).floor() as usize).clamp(1, batch)
+    fitting(max_bytes, cfg.latents * cfg.max_gaussians() * PARAMS.max(COLS) * 4, batch)
 }
 
 /// Labels `[b * NX * NY * NZ]` (frame by frame, standard layout) from `logits`, which returns a
