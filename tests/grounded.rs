@@ -5,6 +5,7 @@
 #[path = "support/tmp.rs"]
 mod tmp;
 
+use burn::nn::transformer::TransformerEncoderInput;
 use burn::prelude::*;
 use ndarray::Array3;
 use rocc::backend::grounded::config::GroundedConfig;
@@ -349,6 +350,91 @@ fn model_shapes_and_padding_invariance() {
     let pred = Grounded::from_model(cfg.clone(), g, "t").predict(&[car(5.0, 0.0, 4.5)], &masks, &aux);
     assert_eq!(pred.dim(), (NX, NY, NZ));
     assert!(pred.iter().all(|&l| (l as usize) < N_LABELS));
+}
+
+/// A training batch gets the logits of its frames alone and, for a loss summed over its frames,
+/// the gradients of their losses summed, and every real latent gets the Gaussians of burn's
+/// transformer over the padded batch: each latent set passes the transformer alone at its own
+/// length (`Decoder::raw`), padding changes nothing, an empty set included.
+#[test]
+fn a_batch_gets_the_values_and_gradients_of_its_frames_alone() {
+    let cfg = tiny();
+    let device = cpu().autodiff();
+    let (masks, aux) = bev_with_road();
+    let sets = vec![
+        latents::build(&cfg, &[car(5.0, 0.0, 4.5), car(-30.0, 1.0, 12.0)], &masks),
+        Vec::new(),
+        latents::build(&cfg, &[car(-3.0, 1.0, 4.0)], &Array3::zeros((N_MASKS, GRID, GRID))),
+        latents::build(&cfg, &[], &masks),
+    ];
+    let lens: Vec<usize> = sets.iter().map(Vec::len).collect();
+    assert!(lens[0] > lens[3] && lens[3] > lens[2] && lens[2] > 0, "sets of distinct lengths: {lens:?}");
+    let g = Generator::new(&cfg, &device);
+    let region = Region { i0: 150, j0: 150, ni: 100, nj: 100 };
+    let per = region.voxels() * N_LABELS;
+    let mut rng = Rng::new(11);
+    let w: Vec<f32> = (0..sets.len() * per).map(|_| rng.normal() as f32).collect();
+    // Logits and the gradients of sum(logits * w) for the frames `which`, in one batch.
+    let run = |which: &[usize]| {
+        let hb = HostBatch::new(which.iter().map(|&i| sets[i].clone()).collect());
+        let bev = rocc::backend::grounded::model::bev_batch(&vec![(&masks, &aux); which.len()]);
+        let logits = g.forward(bev, &hb, region).logits;
+        let wt: Vec<f32> = which.iter().flat_map(|&i| w[i * per..(i + 1) * per].iter().copied()).collect();
+        let wt = Tensor::<2>::from_data(TensorData::new(wt, [which.len() * region.voxels(), N_LABELS]), &device);
+        let grads = (logits.clone() * wt).sum().backward();
+        // None where nothing reaches the parameter (the empty set has no Gaussian).
+        let host = |t: Option<Tensor<2>>| t.map(|t| t.to_data().iter::<f32>().collect::<Vec<f32>>());
+        let layer = &g.decoder.transformer.layers[0];
+        let grads = [
+            host(layer.mha.query.weight.val().grad(&grads)),
+            host(layer.pwff.linear_inner.weight.val().grad(&grads)),
+            host(g.decoder.input.weight.val().grad(&grads)),
+            host(g.decoder.head.weight.val().grad(&grads)),
+            host(g.cond1.weight.val().grad(&grads)),
+        ];
+        (logits.to_data().iter::<f32>().collect::<Vec<f32>>(), grads)
+    };
+    let (batch, batch_grads) = run(&[0, 1, 2, 3]);
+    let rel = |a: &[f32], b: &[f32]| {
+        let scale = b.iter().fold(0f32, |m, x| m.max(x.abs()));
+        (scale, a.iter().zip(b).fold(0f32, |m, (x, y)| m.max((x - y).abs())) / scale)
+    };
+    let mut summed: Vec<Vec<f32>> = vec![Vec::new(); batch_grads.len()];
+    for i in 0..sets.len() {
+        let (alone, grads) = run(&[i]);
+        let (_, err) = rel(&batch[i * per..(i + 1) * per], &alone);
+        assert!(err < 1e-5, "frame {i}: its logits in the batch differ by {err} of the largest");
+        for (s, g) in summed.iter_mut().zip(grads.into_iter().flatten()) {
+            if s.is_empty() {
+                *s = g;
+            } else {
+                s.iter_mut().zip(g).for_each(|(s, g)| *s += g);
+            }
+        }
+    }
+    // Against burn's transformer over the padded batch with the padding masked: every real
+    // latent's Gaussians.
+    let d = &g.decoder;
+    let hb = HostBatch::new(sets.clone());
+    let (b, q, gs) = (hb.b(), hb.q, cfg.max_gaussians());
+    let z: Vec<f32> = (0..b * q * cfg.latent_dim).map(|_| rng.normal() as f32).collect();
+    let z = Tensor::<3>::from_data(TensorData::new(z, [b, q, cfg.latent_dim]), &device);
+    let ours: Vec<f32> = d.raw(z.clone(), &hb).to_data().iter::<f32>().collect();
+    let x = d.input.forward(Tensor::cat(vec![z, hb.feats_tensor(&device)], 2));
+    let y = d.transformer.forward(TransformerEncoderInput::new(x).mask_pad(hb.pad_tensor(&device)));
+    let reference: Vec<f32> = d.head.forward(y).to_data().iter::<f32>().collect();
+    let cols = gs * PARAMS;
+    let real = |v: &[f32]| -> Vec<f32> {
+        (0..b).flat_map(|i| v[i * q * cols..(i * q + sets[i].len()) * cols].to_vec()).collect()
+    };
+    let (scale, err) = rel(&real(&ours), &real(&reference));
+    assert!(scale > 0.0 && err < 1e-5, "the real latents' Gaussians differ by {err} of the largest");
+    let names = ["attention query", "feed-forward", "decoder input", "decoder head", "cond1"];
+    for ((name, a), b) in names.iter().zip(&batch_grads).zip(&summed) {
+        let a = a.as_ref().expect("the batch's gradient");
+        let (scale, err) = rel(a, b);
+        assert!(scale > 0.0 && err < 1e-4, "{name}: gradients differ by {err} of the largest");
+    }
 }
 
 /// The generator's input: masks 0/1, aux scaled per channel, frame after frame; a frame whose

@@ -1,6 +1,6 @@
 //! Inference: boxes and BEV of frames -> per-voxel labels, several frames per forward pass.
 //!
-//! Every frame's latent set passes the transformer alone at its own length (`set_by_set`); the
+//! Every frame's latent set passes the transformer alone at its own length (`Decoder::raw`); the
 //! other layers work row by row. So labels do not depend on `--grounded-batch` or on which frames
 //! share a pass (on the CPU they are byte-identical; tests/grounded.rs checks a batch of 3
 //! against single frames). On a GPU the
@@ -73,8 +73,7 @@ impl Grounded {
             return Vec::new();
         }
         let sets: Vec<_> = frames.iter().map(|f| latents::build(&self.config, &f.boxes, f.masks)).collect();
-        let mut hb = HostBatch::new(sets);
-        hb.set_by_set = true;
+        let hb = HostBatch::new(sets);
         let bev = bev_batch(&frames.iter().map(|f| (f.masks, f.aux)).collect::<Vec<_>>());
         // The model's own device decides (a model trained on a GPU is validated there).
         let device = self.model.decoder.layer_bias.val().device();

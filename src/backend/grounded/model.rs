@@ -43,16 +43,9 @@ pub struct DecoderShape {
     pub max_scale: f32,
     pub window: usize,
     pub budgets: [usize; N_LABELS],
-    pub heads: usize,
     /// Where the transformer computes its matrix products (`--precision`).
     pub precision: Precision,
 }
-
-/// The largest attention-score tensor (bytes) the decoder builds at once: beyond it the batch's
-/// latent sets pass the transformer one at a time (the same arithmetic per set, since sets never
-/// attend to each other), which keeps `paper` (6 heads x 4096^2 scores per frame) inside a GPU
-/// buffer at batch 6.
-const ATTENTION_BYTES: usize = 512 << 20;
 
 impl DecoderShape {
     pub fn new(cfg: &GroundedConfig) -> Self {
@@ -63,7 +56,6 @@ impl DecoderShape {
             max_scale: cfg.max_scale(),
             window: cfg.gaussians.window,
             budgets: std::array::from_fn(|l| budget(cfg, l as u8)),
-            heads: cfg.decoder.heads,
             precision: Precision::Full,
         }
     }
@@ -73,16 +65,12 @@ impl DecoderShape {
 #[derive(Clone, Debug)]
 pub struct HostBatch {
     pub anchors: Vec<Vec<Anchor>>,
-    /// Padded length (the longest set; padding changes nothing, see `Decoder::forward`).
+    /// Padded length (the longest set; padding changes nothing, see `Decoder::raw`).
     pub q: usize,
     /// [b * q * ANCHOR_FEATS]
     pub feats: Vec<f32>,
     /// [b * q], true = padding.
     pub pad: Vec<bool>,
-    /// Each set passes the transformer alone at its own length (inference: a frame's labels do
-    /// not depend on the frames batched with it, since nothing of another set's length reaches
-    /// its arithmetic).
-    pub set_by_set: bool,
 }
 
 impl HostBatch {
@@ -100,7 +88,7 @@ impl HostBatch {
             // visible (it emits nothing: only real anchors get Gaussians).
             pad.extend((set.len()..q).map(|i| !(set.is_empty() && i == 0)));
         }
-        HostBatch { anchors, q, feats, pad, set_by_set: false }
+        HostBatch { anchors, q, feats, pad }
     }
 
     pub fn b(&self) -> usize {
@@ -160,28 +148,29 @@ impl Decoder {
         }
     }
 
-    /// Latents [b, q, C] -> raw Gaussian parameters [b * q * G, PARAMS]. Padded latents are
-    /// masked out of attention, so how far a set is padded does not change the real latents'
-    /// outputs.
+    /// Latents [b, q, C] -> raw Gaussian parameters [b * q * G, PARAMS].
+    ///
+    /// Each set passes the transformer alone at its own length (sets never attend to each
+    /// other): a frame's outputs do not depend on the frames batched with it, no score matrix
+    /// holds more than one set (`paper`: 6 heads x 4096^2,
+    /// inside a GPU buffer at batch 6), and nothing is spent on padding, where sets within a batch
+    /// vary (the bench corpus's at `paper`: 830 to 2,846 latents; padding them all to the longest
+    /// costs up to 4x the attention's arithmetic). The padding's outputs are zeros, which no
+    /// Gaussian reads (`active`).
     pub fn raw(&self, latents: Tensor<3>, hb: &HostBatch) -> Tensor<2> {
         let device = latents.device();
         let x = self.input.forward(Tensor::cat(vec![latents, hb.feats_tensor(&device)], 2));
         let pad = hb.pad_tensor(&device);
-        let (b, q) = (hb.b(), hb.q);
-        let x = if hb.set_by_set || (b > 1 && b * self.shape.heads * q * q * 4 > ATTENTION_BYTES) {
-            let width = x.dims()[2];
-            let per_set = (0..b).map(|i| {
-                // Set by set at its own length (an empty set keeps its one visible slot).
-                let len = if hb.set_by_set { hb.anchors[i].len().max(1) } else { q };
-                let xi = x.clone().slice([i..i + 1, 0..len]);
-                let pi = pad.clone().slice([i..i + 1, 0..len]);
-                let y = encode(&self.transformer, xi, pi, &self.shape.precision);
-                if len < q { Tensor::cat(vec![y, Tensor::zeros([1, q - len, width], &device)], 1) } else { y }
-            });
-            Tensor::cat(per_set.collect(), 0)
-        } else {
-            encode(&self.transformer, x, pad, &self.shape.precision)
-        };
+        let (b, q, width) = (hb.b(), hb.q, x.dims()[2]);
+        let per_set = (0..b).map(|i| {
+            // An empty set keeps its one visible slot.
+            let len = hb.anchors[i].len().max(1);
+            let xi = x.clone().slice([i..i + 1, 0..len]);
+            let pi = pad.clone().slice([i..i + 1, 0..len]);
+            let y = encode(&self.transformer, xi, pi, &self.shape.precision);
+            if len < q { Tensor::cat(vec![y, Tensor::zeros([1, q - len, width], &device)], 1) } else { y }
+        });
+        let x = Tensor::cat(per_set.collect(), 0);
         let out = self.head.forward(x);
         out.reshape([hb.b() * hb.q * self.shape.gaussians, PARAMS])
     }
