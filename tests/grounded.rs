@@ -267,6 +267,13 @@ fn fused_head_matches_the_tensor_formulation() {
     }
 }
 
+/// The largest magnitude of `reference`, and the largest difference of `a` from it relative to
+/// that.
+fn rel(a: &[f32], reference: &[f32]) -> (f32, f32) {
+    let scale = reference.iter().fold(0f32, |m, x| m.max(x.abs()));
+    (scale, a.iter().zip(reference).fold(0f32, |m, (x, y)| m.max((x - y).abs())) / scale)
+}
+
 fn bev_with_road() -> (Array3<i8>, Array3<i32>) {
     let mut masks = Array3::<i8>::zeros((N_MASKS, GRID, GRID));
     // A 10 m wide road along x.
@@ -395,10 +402,6 @@ fn a_batch_gets_the_values_and_gradients_of_its_frames_alone() {
         (logits.to_data().iter::<f32>().collect::<Vec<f32>>(), grads)
     };
     let (batch, batch_grads) = run(&[0, 1, 2, 3]);
-    let rel = |a: &[f32], b: &[f32]| {
-        let scale = b.iter().fold(0f32, |m, x| m.max(x.abs()));
-        (scale, a.iter().zip(b).fold(0f32, |m, (x, y)| m.max((x - y).abs())) / scale)
-    };
     let mut summed: Vec<Vec<f32>> = vec![Vec::new(); batch_grads.len()];
     for i in 0..sets.len() {
         let (alone, grads) = run(&[i]);
@@ -526,8 +529,7 @@ fn a_crop_gets_the_logits_and_gradients_of_the_whole_grid() {
     pairs.push(("cond1".into(), g2(g.cond1.weight.val())));
     pairs.push(("layer bias".into(), g2(g.decoder.layer_bias.val())));
     for (name, (a, b)) in pairs {
-        let scale = b.iter().fold(0f32, |m, x| m.max(x.abs()));
-        let err = a.iter().zip(&b).fold(0f32, |m, (x, y)| m.max((x - y).abs())) / scale;
+        let (scale, err) = rel(&a, &b);
         assert!(scale > 0.0 && err < 1e-5, "{name}: gradients differ by {err} of the largest");
     }
 }

@@ -152,11 +152,11 @@ impl Decoder {
     ///
     /// Each set passes the transformer alone at its own length (sets never attend to each
     /// other): a frame's outputs do not depend on the frames batched with it, no score matrix
-    /// holds more than one set (`paper`: 6 heads x 4096^2,
-    /// inside a GPU buffer at batch 6), and nothing is spent on padding, where sets within a batch
-    /// vary (the bench corpus's at `paper`: 830 to 2,846 latents; padding them all to the longest
-    /// costs up to 4x the attention's arithmetic). The padding's outputs are zeros, which no
-    /// Gaussian reads (`active`).
+    /// holds more than one set (`paper`: 6 heads x 4096^2, inside a GPU buffer at batch 6), and
+    /// nothing is spent on padding, where sets within a batch vary (the bench corpus's at
+    /// `paper`: 830 to 2,846 latents; padding them all to the longest costs up to 4x the
+    /// attention's arithmetic). The padding's outputs are zeros, which no Gaussian reads
+    /// (`active`).
     pub fn raw(&self, latents: Tensor<3>, hb: &HostBatch) -> Tensor<2> {
         let device = latents.device();
         let x = self.input.forward(Tensor::cat(vec![latents, hb.feats_tensor(&device)], 2));
