@@ -3,6 +3,7 @@
 //! (`data`) — and a `GroundedConfig`. Out: weights (`.bpk`) with their config, checkpoints,
 //! per-epoch validation under the shared scorer (`train`).
 
+pub mod adam;
 pub mod data;
 pub mod train;
 

@@ -29,7 +29,7 @@ use crate::diag::Diagnostic;
 use crate::eval::occ::{OccScorer, OccScores};
 use crate::sample::Rng;
 use burn::module::Module;
-use burn::optim::{AdamConfig, GradientsParams};
+use burn::optim::GradientsParams;
 use burn::prelude::*;
 use burn::store::ModuleSnapshot;
 use ndarray::Array3;
@@ -574,7 +574,7 @@ fn run<M: Net>(
         *bias = burn::module::Param::from_tensor(Tensor::from_data(TensorData::new(prior, [NZ, N_LABELS]), &device));
         bias.id = id;
     }
-    let mut optim = AdamConfig::new().init();
+    let mut optim = super::adam::FusedAdam::init();
     let state_path = ck.join(format!("{stage}-state.ron"));
     let (model_ck, optim_ck) = (ck.join(format!("{stage}-model.bpk")), ck.join(format!("{stage}-optim.bpk")));
     let mut pos = Position::default();
