@@ -1,9 +1,11 @@
-//! The decoder's transformer, in full or mixed precision. Full precision is burn's own
-//! `TransformerEncoder::forward`. Mixed precision (`--precision mixed`, meant for GPUs with
-//! tensor cores) runs every matrix product of the transformer — the projections, the attention's
-//! scores and weighted sums, the feed-forward — on half-precision (f16) operands with f32
-//! accumulation; the norms, the softmax, the activation and the residual sums stay in f32 (what
-//! PyTorch's autocast does).
+//! The decoder's transformer, in full or mixed precision, over several sets of latents at once
+//! (`Sets`). Its layer is burn's `TransformerEncoderLayer::forward` written out (bit for bit
+//! burn's on one padded batch, a test checks), so that the row-wise layers run once over every
+//! set's rows and the attention within each set. Mixed precision (`--precision mixed`, meant
+//! for GPUs with tensor cores) runs every matrix product of the transformer — the projections,
+//! the attention's scores and weighted sums, the feed-forward — on half-precision (f16) operands
+//! with f32 accumulation; the norms, the softmax, the activation and the residual sums stay in
+//! f32 (what PyTorch's autocast does).
 //!
 //! Half precision cannot hold the small gradients that reach the transformer (its smallest
 //! normal number is 6.1e-5), so the gradient is scaled up by `GradScale` where it enters each
@@ -15,7 +17,7 @@ use burn::nn::Linear;
 use burn::nn::activation::Activation;
 use burn::nn::attention::MultiHeadAttention;
 use burn::nn::transformer::PositionWiseFeedForward;
-use burn::nn::transformer::{TransformerEncoder, TransformerEncoderInput, TransformerEncoderLayer};
+use burn::nn::transformer::{TransformerEncoder, TransformerEncoderLayer};
 use burn::prelude::*;
 use burn::tensor::FloatDType;
 use burn::tensor::activation::{quiet_softmax, softmax};
@@ -25,7 +27,7 @@ use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 /// Where the decoder's transformer computes its matrix products.
 #[derive(Clone, Debug, Default)]
 pub enum Precision {
-    /// Everything in f32: burn's transformer, bit for bit.
+    /// Everything in f32: the operations of burn's transformer.
     #[default]
     Full,
     /// The transformer's products on f16 operands, with the gradient scale they share.
@@ -151,35 +153,66 @@ fn grad_times<const D: usize>(t: Tensor<D>, k: f32) -> Tensor<D> {
     t.detach() + (scaled.clone() - scaled.detach())
 }
 
-/// The transformer over `x` `[b, n, width]` with padded latents `pad` `[b, n]` masked out.
-pub fn encode(t: &TransformerEncoder, x: Tensor<3>, pad: Tensor<2, Bool>, precision: &Precision) -> Tensor<3> {
-    match precision {
-        // The layers run here for a training step on the CPU (their fused attention weights) and
-        // on a device that cannot hold a whole score matrix (attention by query blocks).
-        Precision::Full
-            if (x.is_tracked() && x.device() == Device::flex())
-                || query_rows(x.dims()[0] * heads(t), x.dims()[1], &x.device()) < x.dims()[1] =>
+/// The sets of latents a transformer pass attends within. Every layer but the attention works
+/// row by row, so it runs once over all rows; the attention's scores, softmax and weighted sums
+/// stay within each set.
+pub struct Sets {
+    /// Each set's rows of `x` along its second axis, and its key mask `[b, len]` (true: not a
+    /// latent) where it has padding.
+    groups: Vec<(std::ops::Range<usize>, Option<Tensor<2, Bool>>)>,
+}
+
+impl Sets {
+    /// `x` `[b, n, width]`: each of the `b` rows one set, its padded latents masked by `pad`
+    /// `[b, n]`.
+    pub fn padded(pad: Tensor<2, Bool>) -> Self {
+        Sets { groups: vec![(0..pad.dims()[1], Some(pad))] }
+    }
+
+    /// `x` `[1, N, width]`: sets of `lens` rows one after another, no padding.
+    pub fn ragged(lens: &[usize]) -> Self {
+        let starts = lens.iter().scan(0, |s, &len| {
+            *s += len;
+            Some(*s - len)
+        });
+        Sets { groups: starts.zip(lens).map(|(start, &len)| (start..start + len, None)).collect() }
+    }
+
+    /// `f(q, k, v, mask)` per set, the results in the sets' order along the second axis.
+    fn each(
+        &self,
+        q: Tensor<3>,
+        k: Tensor<3>,
+        v: Tensor<3>,
+        f: impl Fn(Tensor<3>, Tensor<3>, Tensor<3>, Option<&Tensor<2, Bool>>) -> Tensor<3>,
+    ) -> Tensor<3> {
+        let [b, n, w] = q.dims();
+        if let [(rows, mask)] = self.groups.as_slice()
+            && *rows == (0..n)
         {
-            t.layers.iter().fold(x, |x, l| layer(l, x, &pad, None))
+            return f(q, k, v, mask.as_ref());
         }
-        Precision::Full => t.forward(TransformerEncoderInput::new(x).mask_pad(pad)),
-        Precision::Mixed(scale) => {
-            let half = Some(scale.value());
-            t.layers.iter().fold(x, |x, l| layer(l, x, &pad, half))
-        }
+        let part = |t: &Tensor<3>, r: &std::ops::Range<usize>| t.clone().slice([0..b, r.clone(), 0..w]);
+        let out = self.groups.iter().map(|(r, mask)| f(part(&q, r), part(&k, r), part(&v, r), mask.as_ref()));
+        Tensor::cat(out.collect(), 1)
     }
 }
 
-fn heads(t: &TransformerEncoder) -> usize {
-    t.layers.first().map_or(1, |l| l.mha.n_heads)
+/// The transformer over `x` (its sets as `sets` lays them out).
+pub fn encode(t: &TransformerEncoder, x: Tensor<3>, sets: &Sets, precision: &Precision) -> Tensor<3> {
+    let half = match precision {
+        Precision::Full => None,
+        Precision::Mixed(scale) => Some(scale.value()),
+    };
+    t.layers.iter().fold(x, |x, l| layer(l, x, sets, half))
 }
 
 /// One encoder layer, laid out as burn's `TransformerEncoderLayer::forward` (so the two share
 /// parameters and checkpoints); `half` = the gradient scale of the half-precision region, `None`
 /// for f32.
-fn layer(l: &TransformerEncoderLayer, x: Tensor<3>, pad: &Tensor<2, Bool>, half: Option<f32>) -> Tensor<3> {
+fn layer(l: &TransformerEncoderLayer, x: Tensor<3>, sets: &Sets, half: Option<f32>) -> Tensor<3> {
     let r = if l.norm_first { l.norm_2.forward(x.clone()) } else { x.clone() };
-    let mut x = x + l.dropout.forward(self_attention(&l.mha, r, pad, half));
+    let mut x = x + l.dropout.forward(self_attention(&l.mha, r, sets, half));
     let r = if l.norm_first {
         l.norm_1.forward(x.clone())
     } else {
@@ -233,11 +266,12 @@ impl Half {
     }
 }
 
-fn self_attention(m: &MultiHeadAttention, x: Tensor<3>, pad: &Tensor<2, Bool>, half: Option<f32>) -> Tensor<3> {
-    let [b, n, width] = x.dims();
+fn self_attention(m: &MultiHeadAttention, x: Tensor<3>, sets: &Sets, half: Option<f32>) -> Tensor<3> {
+    let [b, _, width] = x.dims();
     // The softmax (and the mask before it) in f32 in both precisions; `scale` divides the
     // scores first.
-    let weights = |scores: Tensor<4>, scale: Option<f32>| {
+    let weights = |scores: Tensor<4>, pad: Option<&Tensor<2, Bool>>, scale: Option<f32>| {
+        let n = scores.dims()[3];
         let fused = (!m.quiet_softmax)
             .then(|| super::softmax::attention_weights(&scores, pad, scale.unwrap_or(1.0), m.min_float as f32))
             .flatten();
@@ -246,34 +280,40 @@ fn self_attention(m: &MultiHeadAttention, x: Tensor<3>, pad: &Tensor<2, Bool>, h
                 Some(k) => scores.div_scalar(k),
                 None => scores,
             };
-            let s = s.mask_fill(pad.clone().reshape([b, 1, 1, n]), m.min_float);
+            let s = match pad {
+                Some(pad) => s.mask_fill(pad.clone().reshape([b, 1, 1, n]), m.min_float),
+                None => s,
+            };
             if m.quiet_softmax { quiet_softmax(s, 3) } else { softmax(s, 3) }
         });
         m.dropout.forward(w)
     };
-    let split = |t: Tensor<3>| t.reshape([b, n, m.n_heads, m.d_k]).swap_dims(1, 2);
-    let merge = |t: Tensor<4>| t.swap_dims(1, 2).reshape([b, n, width]);
     let scale = (m.d_k as f32).sqrt();
-    let rows = query_rows(b * m.n_heads, n, &x.device());
+    // One set's queries, keys and values `[b, n, width]` -> its context `[b, n, width]`.
+    let attend = |q: Tensor<3>, k: Tensor<3>, v: Tensor<3>, pad: Option<&Tensor<2, Bool>>| {
+        let n = q.dims()[1];
+        let split = |t: Tensor<3>| t.reshape([b, n, m.n_heads, m.d_k]).swap_dims(1, 2);
+        let (q, kt, v) = (split(q), split(k).transpose(), split(v));
+        let rows = query_rows(b * m.n_heads, n, &q.device());
+        let context = by_query_rows(q, rows, |q| match half {
+            None => weights(q.matmul(kt.clone()), pad, Some(scale)).matmul(v.clone()),
+            Some(_) => {
+                let scores = q.div_scalar(scale).matmul(kt.clone()).cast(FloatDType::F32);
+                weights(scores, pad, None).cast(FloatDType::F16).matmul(v.clone())
+            }
+        });
+        context.swap_dims(1, 2).reshape([b, n, width])
+    };
     match half {
         None => {
-            let heads = |lin: &Linear| split(lin.forward(x.clone()));
-            let (q, k, v) = (heads(&m.query), heads(&m.key), heads(&m.value));
-            let kt = k.transpose();
-            let context = by_query_rows(q, rows, |q| weights(q.matmul(kt.clone()), Some(scale)).matmul(v.clone()));
-            m.output.forward(merge(context))
+            let (q, k, v) = (m.query.forward(x.clone()), m.key.forward(x.clone()), m.value.forward(x));
+            m.output.forward(sets.each(q, k, v, attend))
         }
         Some(s) => {
             let h = Half(s);
             let x = h.into(x);
-            let heads = |lin: &Linear| split(h.linear(lin, x.clone()));
-            let (q, k, v) = (heads(&m.query), heads(&m.key), heads(&m.value));
-            let kt = k.transpose();
-            let context = by_query_rows(q, rows, |q| {
-                let scores = q.div_scalar(scale).matmul(kt.clone()).cast(FloatDType::F32);
-                weights(scores, None).cast(FloatDType::F16).matmul(v.clone())
-            });
-            h.out(h.linear(&m.output, merge(context)))
+            let (q, k, v) = (h.linear(&m.query, x.clone()), h.linear(&m.key, x.clone()), h.linear(&m.value, x));
+            h.out(h.linear(&m.output, sets.each(q, k, v, attend)))
         }
     }
 }
@@ -300,7 +340,7 @@ fn by_query_rows(q: Tensor<4>, rows: usize, attend: impl Fn(Tensor<4>) -> Tensor
 #[cfg(test)]
 mod tests {
     use super::*;
-    use burn::nn::transformer::TransformerEncoderConfig;
+    use burn::nn::transformer::{TransformerEncoderConfig, TransformerEncoderInput};
 
     fn input(device: &Device, b: usize, n: usize, w: usize) -> (Tensor<3>, Tensor<2, Bool>) {
         let x: Vec<f32> =
@@ -324,7 +364,7 @@ mod tests {
                 TransformerEncoderConfig::new(16, 32, 4, 2).with_dropout(0.0).with_norm_first(norm_first).init(&device);
             let (x, pad) = input(&device, 2, 7, 16);
             let burn = t.forward(TransformerEncoderInput::new(x.clone()).mask_pad(pad.clone()));
-            let here = t.layers.iter().fold(x, |x, l| layer(l, x, &pad, None));
+            let here = t.layers.iter().fold(x, |x, l| layer(l, x, &Sets::padded(pad.clone()), None));
             assert_eq!(vec(burn), vec(here), "norm_first {norm_first}");
         }
     }
@@ -332,7 +372,7 @@ mod tests {
     /// Values and gradients of `encode` in `precision`, for an upstream gradient as small as a
     /// training step's (1e-6 per element).
     fn run(t: &TransformerEncoder, precision: &Precision) -> (Vec<f32>, Vec<f32>, Vec<f32>, Vec<f32>) {
-        run_with(t, |x, pad| encode(t, x, pad, precision))
+        run_with(t, |x, pad| encode(t, x, &Sets::padded(pad), precision))
     }
 
     /// `run` through `forward`.
@@ -391,6 +431,50 @@ mod tests {
         // Without the scale the gradients drown in f16's subnormals: the scale is what keeps them.
         let (_, _, gw1, _) = run(&t, &Precision::Mixed(GradScale::starting_at(0)));
         assert!(rel(&gw1, &gw) > 10.0 * rel(&gwm, &gw), "{} vs {}", rel(&gw1, &gw), rel(&gwm, &gw));
+    }
+
+    /// Sets laid one after another (`Sets::ragged`, the decoder's batch) give each set's values
+    /// and input gradients alone, and the weights' gradients summed over the sets, in both
+    /// precisions.
+    #[test]
+    fn ragged_sets_give_each_set_alone() {
+        let t = transformer(5);
+        let device = super::super::cpu().autodiff();
+        let lens = [5, 9, 1];
+        let mask = |n: usize| Tensor::<2, Bool>::from_data(TensorData::new(vec![false; n], [1, n]), &device);
+        let (x, _) = input(&device, 1, 15, 32);
+        let w = x.clone().cos() * 1e-3;
+        let run = |x: Tensor<3>, w: Tensor<3>, sets: &Sets, precision: &Precision| {
+            let x = x.require_grad();
+            let y = encode(&t, x.clone(), sets, precision);
+            let grads = (y.clone() * w).sum().backward();
+            let gw = t.layers[1].mha.value.weight.val().grad(&grads).unwrap();
+            (vec(y), vec(x.grad(&grads).unwrap()), vec(gw))
+        };
+        for precision in [Precision::Full, Precision::Mixed(GradScale::default())] {
+            let (y, gx, gw) = run(x.clone(), w.clone(), &Sets::ragged(&lens), &precision);
+            let (mut y1, mut gx1, mut gw1) = (Vec::new(), Vec::new(), vec![0f32; gw.len()]);
+            let mut start = 0;
+            for n in lens {
+                let part = |t: &Tensor<3>| t.clone().slice([0..1, start..start + n]);
+                let (y, gx, gw) = run(part(&x), part(&w), &Sets::padded(mask(n)), &precision);
+                y1.extend(y);
+                gx1.extend(gx);
+                gw1.iter_mut().zip(gw).for_each(|(a, b)| *a += b);
+                start += n;
+            }
+            // f16 operands: the products' rounding depends on the matrix's size at 11 bits.
+            let (what, tol) = match precision {
+                Precision::Full => ("full", 1e-5),
+                Precision::Mixed(_) => ("mixed", 3e-3),
+            };
+            assert!(rel(&y, &y1) < tol, "{what}: values differ by {}", rel(&y, &y1));
+            assert!(rel(&gx, &gx1) < tol, "{what}: input gradients differ by {}", rel(&gx, &gx1));
+            assert!(rel(&gw, &gw1) < tol, "{what}: weight gradients differ by {}", rel(&gw, &gw1));
+            // Attention across sets would change the first set's values by far more.
+            let (whole, _, _) = run(x.clone(), w.clone(), &Sets::padded(mask(15)), &precision);
+            assert!(rel(&whole, &y1) > 10.0 * tol, "{what}: one set of all rows is not the three sets");
+        }
     }
 
     #[test]

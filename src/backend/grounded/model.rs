@@ -9,7 +9,7 @@
 //! - `Generator`: BEV (18 + 7 channels) -> 2D CNN -> each latent samples its feature bilinearly
 //!   at its anchor -> latent -> decoder; plus the gated background residual head.
 
-use super::attention::{Precision, encode};
+use super::attention::{Precision, Sets, encode};
 use super::config::GroundedConfig;
 use super::latents::{ANCHOR_FEATS, Anchor, budget, encoder_input};
 use super::rows::{repeat_rows, take_rows};
@@ -95,6 +95,20 @@ impl HostBatch {
         self.anchors.len()
     }
 
+    /// Each set's rows in the decoder (`Decoder::raw`): its latents, or the one visible slot of
+    /// an empty set.
+    pub fn lens(&self) -> Vec<usize> {
+        self.anchors.iter().map(|a| a.len().max(1)).collect()
+    }
+
+    /// Where each set's rows start in the decoder's output.
+    pub fn starts(&self) -> impl Iterator<Item = usize> + '_ {
+        self.anchors.iter().scan(0, |s, a| {
+            *s += a.len().max(1);
+            Some(*s - a.len().max(1))
+        })
+    }
+
     pub fn feats_tensor(&self, device: &Device) -> Tensor<3> {
         Tensor::from_data(TensorData::new(self.feats.clone(), [self.b(), self.q, ANCHOR_FEATS]), device)
     }
@@ -148,31 +162,25 @@ impl Decoder {
         }
     }
 
-    /// Latents [b, q, C] -> raw Gaussian parameters [b * q * G, PARAMS].
+    /// Latents [b, q, C] -> raw Gaussian parameters [N * G, PARAMS], the sets' latents one after
+    /// another (`HostBatch::starts`; N = the sum of `HostBatch::lens`).
     ///
-    /// Each set passes the transformer alone at its own length (sets never attend to each
-    /// other): a frame's outputs do not depend on the frames batched with it, no score matrix
-    /// holds more than one set (`paper`: 6 heads x 4096^2, inside a GPU buffer at batch 6), and
-    /// nothing is spent on padding, where sets within a batch vary (the bench corpus's at
-    /// `paper`: 830 to 2,846 latents; padding them all to the longest costs up to 4x the
-    /// attention's arithmetic). The padding's outputs are zeros, which no Gaussian reads
-    /// (`active`).
+    /// Each set passes the decoder at its own length and attends within itself alone: the sets'
+    /// rows run one after another through the row-wise layers (one pass for the batch) and each
+    /// set's attention is its own (`Sets::ragged`). A frame's outputs do not depend on the frames
+    /// batched with it, no score matrix holds more than one set (`paper`: 6 heads x 4096^2,
+    /// inside a GPU buffer at batch 6), and nothing is spent on padding, where sets within a
+    /// batch vary (the bench corpus's at `paper`: 830 to 2,846 latents; padding them all to the
+    /// longest costs up to 4x the attention's arithmetic).
     pub fn raw(&self, latents: Tensor<3>, hb: &HostBatch) -> Tensor<2> {
         let device = latents.device();
-        let x = self.input.forward(Tensor::cat(vec![latents, hb.feats_tensor(&device)], 2));
-        let pad = hb.pad_tensor(&device);
-        let (b, q, width) = (hb.b(), hb.q, x.dims()[2]);
-        let per_set = (0..b).map(|i| {
-            // An empty set keeps its one visible slot.
-            let len = hb.anchors[i].len().max(1);
-            let xi = x.clone().slice([i..i + 1, 0..len]);
-            let pi = pad.clone().slice([i..i + 1, 0..len]);
-            let y = encode(&self.transformer, xi, pi, &self.shape.precision);
-            if len < q { Tensor::cat(vec![y, Tensor::zeros([1, q - len, width], &device)], 1) } else { y }
-        });
-        let x = Tensor::cat(per_set.collect(), 0);
-        let out = self.head.forward(x);
-        out.reshape([hb.b() * hb.q * self.shape.gaussians, PARAMS])
+        let x = Tensor::cat(vec![latents, hb.feats_tensor(&device)], 2);
+        let lens = hb.lens();
+        let rows =
+            Tensor::cat(lens.iter().enumerate().map(|(i, &len)| x.clone().slice([i..i + 1, 0..len])).collect(), 1);
+        let y = encode(&self.transformer, self.input.forward(rows), &Sets::ragged(&lens), &self.shape.precision);
+        let n: usize = lens.iter().sum();
+        self.head.forward(y).reshape([n * self.shape.gaussians, PARAMS])
     }
 
     /// Active Gaussians of the batch that can reach `region`: row indices into `raw` and their
@@ -185,7 +193,7 @@ impl Decoder {
         let mut rows = Vec::new();
         let mut labels = Vec::new();
         let mut aa = ActiveAnchors::default();
-        for (b, set) in hb.anchors.iter().enumerate() {
+        for ((b, set), start) in hb.anchors.iter().enumerate().zip(hb.starts()) {
             for (q, a) in set.iter().enumerate() {
                 let v = a.voxel();
                 if v[0] < lo_i || v[0] > hi_i || v[1] < lo_j || v[1] > hi_j {
@@ -194,7 +202,7 @@ impl Decoder {
                 let n = self.shape.budgets[(a.label as usize).min(N_LABELS - 1)];
                 let (c, s) = (a.yaw.cos() as f32, a.yaw.sin() as f32);
                 for k in 0..n {
-                    rows.push(((b * hb.q + q) * g + k) as i64);
+                    rows.push(((start + q) * g + k) as i64);
                     labels.push((a.label as usize).min(N_LABELS - 1) as i64);
                     aa.pos.push(v);
                     aa.cos.push(c);

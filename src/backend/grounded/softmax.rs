@@ -112,12 +112,20 @@ impl<B: Backend + AttentionSoftmaxOps, C: CheckpointStrategy> AttentionSoftmaxOp
 /// The attention weights of a training step's `scores` `[b, heads, n, n]` on the CPU through
 /// `AttentionSoftmaxOps`; `None` elsewhere (untracked, or on a GPU), where burn's formulation
 /// runs.
-pub fn attention_weights(scores: &Tensor<4>, pad: &Tensor<2, Bool>, scale: f32, fill: f32) -> Option<Tensor<4>> {
+pub fn attention_weights(
+    scores: &Tensor<4>,
+    pad: Option<&Tensor<2, Bool>>,
+    scale: f32,
+    fill: f32,
+) -> Option<Tensor<4>> {
     if !scores.is_tracked() || scores.device() != Device::flex() || scores.dtype() != DType::F32 {
         return None;
     }
-    let pad: Arc<[bool]> = pad.to_data().try_to_vec::<bool>().ok()?.into();
     let [b, _, _, n] = scores.dims();
+    let pad: Arc<[bool]> = match pad {
+        Some(pad) => pad.to_data().try_to_vec::<bool>().ok()?.into(),
+        None => vec![false; b * n].into(),
+    };
     if pad.len() != b * n {
         return None;
     }
@@ -265,7 +273,7 @@ mod tests {
         let run = |fused: bool| {
             let s = Tensor::<4>::from_data(TensorData::new(x.clone(), [b, h, n, n]), &device).require_grad();
             let y = if fused {
-                attention_weights(&s, &pad_t, scale, fill).expect("a tracked CPU tensor takes the fused path")
+                attention_weights(&s, Some(&pad_t), scale, fill).expect("a tracked CPU tensor takes the fused path")
             } else {
                 softmax(s.clone().div_scalar(scale).mask_fill(pad_t.clone().reshape([b, 1, 1, n]), fill), 3)
             };
@@ -283,6 +291,6 @@ mod tests {
         assert!(g[..set2].iter().any(|&v| v.abs() > 1e-4));
         // Untracked (inference), the operation is not taken.
         let plain = Tensor::<4>::from_data(TensorData::new(x.clone(), [b, h, n, n]), &super::super::cpu());
-        assert!(attention_weights(&plain, &pad_t, scale, fill).is_none());
+        assert!(attention_weights(&plain, Some(&pad_t), scale, fill).is_none());
     }
 }
