@@ -361,7 +361,7 @@ fn model_shapes_and_padding_invariance() {
 
 /// A training batch gets the logits of its frames alone and, for a loss summed over its frames,
 /// the gradients of their losses summed, and every real latent gets the Gaussians of burn's
-/// transformer over the padded batch: each latent set passes the transformer alone at its own
+/// transformer over the padded batch: each latent set attends within itself alone at its own
 /// length (`Decoder::raw`), padding changes nothing, an empty set included.
 #[test]
 fn a_batch_gets_the_values_and_gradients_of_its_frames_alone() {
@@ -433,7 +433,7 @@ fn a_batch_gets_the_values_and_gradients_of_its_frames_alone() {
     };
     assert_eq!(ours.len(), hb.lens().iter().sum::<usize>() * cols, "no row for padding");
     let padded: Vec<usize> = (0..b).map(|i| i * q).collect();
-    let (scale, err) = rel(&real(&ours, &hb.starts().collect::<Vec<_>>()), &real(&reference, &padded));
+    let (scale, err) = rel(&real(&ours, &hb.starts()), &real(&reference, &padded));
     assert!(scale > 0.0 && err < 1e-5, "the real latents' Gaussians differ by {err} of the largest");
     let names = ["attention query", "feed-forward", "decoder input", "decoder head", "cond1"];
     for ((name, a), b) in names.iter().zip(&batch_grads).zip(&summed) {

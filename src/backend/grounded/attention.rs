@@ -171,11 +171,7 @@ impl Sets {
 
     /// `x` `[1, N, width]`: sets of `lens` rows one after another, no padding.
     pub fn ragged(lens: &[usize]) -> Self {
-        let starts = lens.iter().scan(0, |s, &len| {
-            *s += len;
-            Some(*s - len)
-        });
-        Sets { groups: starts.zip(lens).map(|(start, &len)| (start..start + len, None)).collect() }
+        Sets { groups: starts(lens).into_iter().zip(lens).map(|(start, &len)| (start..start + len, None)).collect() }
     }
 
     /// `f(q, k, v, mask)` per set, the results in the sets' order along the second axis.
@@ -196,6 +192,16 @@ impl Sets {
         let out = self.groups.iter().map(|(r, mask)| f(part(&q, r), part(&k, r), part(&v, r), mask.as_ref()));
         Tensor::cat(out.collect(), 1)
     }
+}
+
+/// Where each of sets of `lens` rows starts when they lie one after another.
+pub fn starts(lens: &[usize]) -> Vec<usize> {
+    lens.iter()
+        .scan(0, |s, &len| {
+            *s += len;
+            Some(*s - len)
+        })
+        .collect()
 }
 
 /// The transformer over `x` (its sets as `sets` lays them out).

@@ -1,7 +1,7 @@
 //! Inference: boxes and BEV of frames -> per-voxel labels, several frames per forward pass.
 //!
-//! Every frame's latent set passes the transformer alone at its own length (`Decoder::raw`); the
-//! other layers work row by row. So labels do not depend on `--grounded-batch` or on which frames
+//! Every frame's latent set passes the decoder at its own length and attends within itself alone
+//! (`Decoder::raw`); the other layers work row by row. So labels do not depend on `--grounded-batch` or on which frames
 //! share a pass (on the CPU they are byte-identical; tests/grounded.rs checks a batch of 3
 //! against single frames). On a GPU the
 //! device work runs under `guard::guarded`, so a device failure is a diagnostic.

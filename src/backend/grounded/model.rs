@@ -102,11 +102,8 @@ impl HostBatch {
     }
 
     /// Where each set's rows start in the decoder's output.
-    pub fn starts(&self) -> impl Iterator<Item = usize> + '_ {
-        self.anchors.iter().scan(0, |s, a| {
-            *s += a.len().max(1);
-            Some(*s - a.len().max(1))
-        })
+    pub fn starts(&self) -> Vec<usize> {
+        super::attention::starts(&self.lens())
     }
 
     pub fn feats_tensor(&self, device: &Device) -> Tensor<3> {
